@@ -1,0 +1,24 @@
+"""gpsaccel: Kalman filtering lessons built on filterpy.
+
+The calibration core (reports 000, 001, 003)::
+
+    import numpy as np, gpsaccel
+    model = gpsaccel.CalibrationModel()             # report 000's numbers
+    run = gpsaccel.simulate(model, np.random.default_rng(0))
+    result = gpsaccel.run_multirate(model, run.z)   # filterpy; method="information" for the other form
+"""
+
+from gpsaccel.filters.multirate import MultirateResult, run_multirate
+from gpsaccel.filters.schedule import Schedule
+from gpsaccel.models.calibration import CalibrationModel
+from gpsaccel.simulation import Realization, simulate
+
+__all__ = [
+    "CalibrationModel",
+    "MultirateResult",
+    "Realization",
+    "Schedule",
+    "run_multirate",
+    "simulate",
+]
+__version__ = "0.1.0"

@@ -1,0 +1,119 @@
+"""Argument checks shared by every public entry point.
+
+Each helper raises :class:`ValueError` whose message starts with the argument's name and says what
+was expected, so a student reading a traceback knows which argument to fix.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from numbers import Integral, Real
+
+import numpy as np
+
+#: Relative tolerance used when a duration must be a whole number of intervals (30 % 0.2 != 0 in
+#: floating point, but 30 / 0.2 is 150 to within a few ulps).
+MULTIPLE_RTOL = 1e-9
+
+
+def positive_float(name: str, value: object) -> float:
+    """``value`` as a finite float > 0."""
+    if isinstance(value, bool) or not isinstance(value, Real):
+        raise ValueError(f"{name} must be a positive number, got {value!r}")
+    out = float(value)
+    if not math.isfinite(out) or out <= 0.0:
+        raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+    return out
+
+
+def finite_float(name: str, value: object) -> float:
+    """``value`` as a finite float."""
+    if isinstance(value, bool) or not isinstance(value, Real):
+        raise ValueError(f"{name} must be a number, got {value!r}")
+    out = float(value)
+    if not math.isfinite(out):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+    return out
+
+
+def integer(name: str, value: object, minimum: int | None = None) -> int:
+    """``value`` as an int (a float with an integral value is refused: 40.0 is a slip, not a count)."""
+    if isinstance(value, bool) or not isinstance(value, Integral):
+        raise ValueError(f"{name} must be an integer, got {value!r}")
+    out = int(value)
+    if minimum is not None and out < minimum:
+        raise ValueError(f"{name} must be an integer >= {minimum}, got {out}")
+    return out
+
+
+def choice(name: str, value: object, choices: Iterable[str]) -> str:
+    """``value`` if it is one of ``choices``."""
+    options = tuple(choices)
+    if value not in options:
+        raise ValueError(f"{name} must be one of {', '.join(map(repr, options))}; got {value!r}")
+    return str(value)
+
+
+def whole_multiple(name: str, total: float, step: float, step_name: str) -> int:
+    """Number of ``step`` intervals in ``total``; ValueError unless it is whole (to MULTIPLE_RTOL)."""
+    ratio = total / step
+    n = round(ratio)
+    if n < 1 or abs(ratio - n) > MULTIPLE_RTOL * max(1.0, abs(ratio)):
+        raise ValueError(
+            f"{name} = {total!r} must be a whole multiple of {step_name} = {step!r} "
+            f"(got {ratio!r} intervals)"
+        )
+    return int(n)
+
+
+def finite_array(name: str, value: object, shape: tuple[int | None, ...] | None = None,
+                 allow_nan: bool = False) -> np.ndarray:
+    """``value`` as a float array of ``shape`` (None entries match any length), all finite.
+
+    With ``allow_nan`` a NaN is accepted (it means "not measured"); +-inf never is.
+    """
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be an array of numbers: {exc}") from None
+    if shape is not None:
+        ok = arr.ndim == len(shape) and all(
+            want is None or want == got for want, got in zip(shape, arr.shape, strict=False)
+        )
+        if not ok:
+            want = " x ".join("n" if s is None else str(s) for s in shape)
+            raise ValueError(f"{name} must have shape ({want}), got {arr.shape}")
+    if np.isinf(arr).any():
+        raise ValueError(f"{name} contains an infinite value; a finite number is required")
+    if not allow_nan and np.isnan(arr).any():
+        raise ValueError(f"{name} contains NaN; a finite number is required")
+    return arr
+
+
+def spd_matrix(name: str, value: object, n: int | None = None, rtol: float = 1e-10) -> np.ndarray:
+    """``value`` as an n x n symmetric positive definite float matrix.
+
+    A scalar is accepted for n == 1.  Symmetry is checked to ``rtol`` of the largest element;
+    positive definiteness by a Cholesky factorisation.
+    """
+    arr = np.array(value, dtype=float)
+    if arr.ndim == 0 and n in (None, 1):
+        arr = arr.reshape(1, 1)
+    if arr.ndim != 2 or arr.shape[0] != arr.shape[1] or (n is not None and arr.shape[0] != n):
+        want = f"{n} x {n}" if n is not None else "square"
+        raise ValueError(f"{name} must be a {want} matrix, got shape {arr.shape}")
+    if not np.isfinite(arr).all():
+        raise ValueError(f"{name} contains NaN or inf; a finite matrix is required")
+    scale = max(np.abs(arr).max(), np.finfo(float).tiny)
+    asym = np.abs(arr - arr.T).max()
+    if asym > rtol * scale:
+        raise ValueError(f"{name} must be symmetric (largest |A - A^T| = {asym:.3g})")
+    try:
+        np.linalg.cholesky(arr)
+    except np.linalg.LinAlgError:
+        eig = np.linalg.eigvalsh(arr).min()
+        raise ValueError(
+            f"{name} must be positive definite (smallest eigenvalue {eig:.3g})"
+        ) from None
+    return arr

@@ -1,0 +1,163 @@
+"""Statistics of filter consistency: NEES, NIS, chi-square bounds, z-scores, family-wise thresholds.
+
+One module for every system in the package (calibration, ship, cooperative localization) and for
+the homework checkers, so a bound means the same thing everywhere.
+
+Notation
+--------
+For an error e with claimed covariance P (n states), the normalised estimation error squared is
+``NEES = eᵀ P⁻¹ e``; for an innovation r = z − H x̄ with covariance S = H M Hᵀ + V (p components)
+the normalised innovation squared is ``NIS = rᵀ S⁻¹ r``.  For a consistent filter NEES ~ χ²(n) and
+NIS ~ χ²(p).  Averaged over N independent Monte Carlo runs, N·ε̄ ~ χ²(N·n), which gives the
+two-sided (1 − α) acceptance interval of the course:
+
+    r1 = χ²⁻¹(α/2; N·n) / N,    r2 = χ²⁻¹(1 − α/2; N·n) / N.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+from gpsaccel import _validation as _v
+
+
+def chi2_bounds(dof: int, n_runs: int = 1, alpha: float = 0.05) -> tuple[float, float]:
+    """Two-sided (1 − alpha) bounds for the N-run average of a χ²(dof) statistic.
+
+    Returns ``(r1, r2) = (χ²⁻¹(α/2; N·dof) / N, χ²⁻¹(1 − α/2; N·dof) / N)``.
+    """
+    dof = _v.integer("dof", dof, minimum=1)
+    n_runs = _v.integer("n_runs", n_runs, minimum=1)
+    alpha = _probability("alpha", alpha)
+    k = n_runs * dof
+    return (float(stats.chi2.ppf(alpha / 2, k) / n_runs),
+            float(stats.chi2.ppf(1 - alpha / 2, k) / n_runs))
+
+
+def normalized_squared(v: np.ndarray, C: np.ndarray) -> np.ndarray:
+    """``vᵀ C⁻¹ v`` over leading axes: v (..., n), C (..., n, n) → (...).
+
+    Solved through a Cholesky factor, never an explicit inverse.  Components of ``v`` that are NaN
+    (not measured) are dropped together with their rows and columns of C, so the statistic then has
+    fewer degrees of freedom; use :func:`dof_of` for that count.
+    """
+    v = np.asarray(v, dtype=float)
+    C = np.asarray(C, dtype=float)
+    if C.shape != v.shape + v.shape[-1:]:
+        raise ValueError(f"C must have shape {v.shape + v.shape[-1:]} to match v, got {C.shape}")
+    finite = np.isfinite(v)
+    if finite.all():
+        L = np.linalg.cholesky(C)
+        y = np.linalg.solve(L, v[..., None])[..., 0]
+        return np.einsum("...i,...i->...", y, y)
+    out = np.empty(v.shape[:-1])
+    flat_v = v.reshape(-1, v.shape[-1])
+    flat_C = C.reshape(-1, *C.shape[-2:])
+    flat_out = out.reshape(-1)
+    for i, (vi, Ci) in enumerate(zip(flat_v, flat_C, strict=True)):
+        m = np.isfinite(vi)
+        flat_out[i] = 0.0 if not m.any() else float(vi[m] @ np.linalg.solve(Ci[np.ix_(m, m)], vi[m]))
+    return out
+
+
+def dof_of(v: np.ndarray) -> np.ndarray:
+    """Degrees of freedom of :func:`normalized_squared` for each vector: its finite components."""
+    return np.isfinite(np.asarray(v, dtype=float)).sum(axis=-1)
+
+
+def nees(errors: np.ndarray, P: np.ndarray) -> np.ndarray:
+    """Normalised estimation error squared ``eᵀ P⁻¹ e``; errors (..., n), P (..., n, n)."""
+    return normalized_squared(errors, P)
+
+
+def nis(residuals: np.ndarray, S: np.ndarray) -> np.ndarray:
+    """Normalised innovation squared ``rᵀ S⁻¹ r``; residuals (..., p), S (..., p, p).
+
+    NaN components (not measured) are left out, see :func:`normalized_squared`.
+    """
+    return normalized_squared(residuals, S)
+
+
+def fraction_inside(values: np.ndarray, bounds: tuple[float, float]) -> float:
+    """Fraction of ``values`` inside the closed interval ``bounds`` (NaN counts as outside)."""
+    values = np.asarray(values, dtype=float)
+    lo, hi = bounds
+    return float(np.mean((values >= lo) & (values <= hi)))
+
+
+def z_threshold(alpha: float, n_tests: int) -> float:
+    """|z| beyond which a two-sided test fails, Bonferroni-corrected for ``n_tests`` tests.
+
+    The family-wise false-alarm rate of the ``n_tests`` tests together is then at most ``alpha``.
+    """
+    alpha = _probability("alpha", alpha)
+    n_tests = _v.integer("n_tests", n_tests, minimum=1)
+    return float(stats.norm.isf(alpha / (2 * n_tests)))
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """One line of a consistency report: the worst |z| of a statistic over time and its verdict.
+
+    Attributes
+    ----------
+    name : what was tested, e.g. ``"e_ave[δv]"``.
+    max_abs_z : largest |z-score| over the tested times (sampling-error units).
+    where : a human-readable location of that largest value (time in s, element).
+    threshold : the |z| beyond which the test fails (family-wise alpha over n_tests).
+    n_tests : how many individual z-scores the family holds.
+    alpha : the family-wise false-alarm rate.
+    """
+
+    name: str
+    max_abs_z: float
+    where: str
+    threshold: float
+    n_tests: int
+    alpha: float
+
+    @property
+    def passed(self) -> bool:
+        return bool(self.max_abs_z <= self.threshold)
+
+
+def verdict_from_z(name: str, z: np.ndarray, labels: callable, alpha: float = 0.01) -> Verdict:
+    """Build a :class:`Verdict` from an array of z-scores.
+
+    ``labels(index_tuple) -> str`` turns the location of the largest |z| into text.  NaN z-scores
+    (a statistic with zero theoretical spread, e.g. an unobservable element) are skipped.
+    """
+    z = np.asarray(z, dtype=float)
+    valid = np.isfinite(z)
+    n = int(valid.sum())
+    if n == 0:
+        raise ValueError(f"z for {name!r} has no finite element")
+    absz = np.where(valid, np.abs(z), -1.0)
+    idx = np.unravel_index(int(np.argmax(absz)), z.shape)
+    return Verdict(name, float(absz[idx]), labels(idx), z_threshold(alpha, n), n, alpha)
+
+
+def format_verdicts(verdicts: list[Verdict]) -> str:
+    """A fixed-width table of verdicts, one per line, as the CLI prints it."""
+    width = max([len(v.name) for v in verdicts] + [9])
+    head = f"{'statistic':<{width}}  {'max|z|':>8}  {'bound':>6}  {'tests':>6}  {'verdict':<7}  where"
+    lines = [head, "-" * len(head)]
+    for v in verdicts:
+        lines.append(
+            f"{v.name:<{width}}  {v.max_abs_z:8.2f}  {v.threshold:6.2f}  {v.n_tests:6d}  "
+            f"{'pass' if v.passed else 'FAIL':<7}  {v.where}"
+        )
+    return "\n".join(lines)
+
+
+def _probability(name: str, value: object) -> float:
+    p = _v.finite_float(name, value)
+    if not 0.0 < p < 1.0:
+        raise ValueError(f"{name} must be a probability strictly between 0 and 1, got {value!r}")
+    if math.isclose(p, 1.0):
+        raise ValueError(f"{name} must be < 1, got {value!r}")
+    return p

@@ -1,0 +1,108 @@
+"""Every figure of the course reports, by report: ``gpsaccel figures --report 000|...|all``.
+
+Each report has a module ``gpsaccel.figures.rNNN`` with
+
+* ``TITLE``: the report's one-line title,
+* ``DEFAULT_RUNS``: the Monte Carlo size the report used (the CLI's default for ``--runs``),
+* ``figures(runs: int, seed: int) -> Iterator[ReportFigure]``: draws the report's figures in order,
+  computing what they share once.
+
+The drawing itself lives in :mod:`gpsaccel.plots` (kinds of figure reused everywhere); a report
+module only says which figure is which.  :func:`write_figures` saves PNGs named
+``r{report}-fig{number}-{slug}.png`` and an ``index.html`` with the captions.
+"""
+
+from __future__ import annotations
+
+import html
+import importlib
+import importlib.util
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+from matplotlib.figure import Figure
+
+#: Every report of the course, in reading order, with the module that draws it.
+REPORT_MODULES = {
+    "000": "gpsaccel.figures.r000",
+    "001": "gpsaccel.figures.r001",
+    "003": "gpsaccel.figures.r003",
+    "002": "gpsaccel.figures.r002",
+    "004": "gpsaccel.figures.r004",
+}
+
+
+@dataclass
+class ReportFigure:
+    """One drawn figure of a report.  ``number`` is e.g. ``"07"``, ``"03b"``, ``"10a"``."""
+
+    report: str
+    number: str
+    slug: str
+    caption: str
+    figure: Figure
+
+    @property
+    def filename(self) -> str:
+        return f"r{self.report}-fig{self.number}-{self.slug}.png"
+
+
+def available_reports() -> list[str]:
+    """The reports the package covers so far (those whose figure module exists)."""
+    return [r for r, mod in REPORT_MODULES.items() if importlib.util.find_spec(mod) is not None]
+
+
+def report_module(report: str):
+    """The figure module of ``report``; ValueError naming the reports available."""
+    if report not in available_reports():
+        raise ValueError(f"report must be one of {', '.join(available_reports())} or 'all'; "
+                         f"got {report!r}")
+    return importlib.import_module(REPORT_MODULES[report])
+
+
+def write_figures(reports: list[str], out: Path | str, runs: int | None = None, seed: int = 0,
+                  dpi: int = 110) -> list[Path]:
+    """Draw ``reports`` into ``out`` as PNG plus ``index.html``; returns the PNG paths.
+
+    ``runs`` overrides each report's Monte Carlo size (``DEFAULT_RUNS``) when given.
+    """
+    import matplotlib.pyplot as plt
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    written: list[tuple[str, ReportFigure, Path]] = []
+    for report in reports:
+        module = report_module(report)
+        n = module.DEFAULT_RUNS if runs is None else runs
+        for fig in module.figures(n, seed):
+            path = out / fig.filename
+            fig.figure.savefig(path, dpi=dpi)
+            plt.close(fig.figure)
+            fig.figure = None  # drawn and saved; keep only the caption
+            written.append((module.TITLE, fig, path))
+    _write_index(out / "index.html", written, runs, seed)
+    return [p for _, _, p in written]
+
+
+def _write_index(path: Path, written: list, runs: int | None, seed: int) -> None:
+    parts = ["<!doctype html><meta charset='utf-8'><title>gpsaccel figures</title>",
+             "<style>body{font-family:sans-serif;max-width:1000px;margin:auto}"
+             "figure{margin:2em 0}img{max-width:100%}</style>",
+             f"<h1>gpsaccel: the reports' figures</h1><p>seed {seed}"
+             f"{'' if runs is None else f', {runs} Monte Carlo runs'}</p>"]
+    title = None
+    for report_title, fig, png in written:
+        if report_title != title:
+            title = report_title
+            parts.append(f"<h2>Report {fig.report}: {html.escape(title)}</h2>")
+        parts.append(f"<figure><img src='{png.name}' alt='{html.escape(fig.slug)}'>"
+                     f"<figcaption><b>Figure {fig.number}.</b> {html.escape(fig.caption)}"
+                     f"</figcaption></figure>")
+    path.write_text("\n".join(parts) + "\n", encoding="utf-8")
+
+
+def iter_report(report: str, runs: int | None = None, seed: int = 0) -> Iterator[ReportFigure]:
+    """Draw one report's figures without saving them (for notebooks)."""
+    module = report_module(report)
+    return module.figures(module.DEFAULT_RUNS if runs is None else runs, seed)

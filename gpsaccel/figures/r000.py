@@ -1,0 +1,56 @@
+"""Report 000 (MAE 271A, 10,000-run Monte Carlo): figures 1-7.
+
+Figures 1-6 are one realization (seed ``seed``) filtered by filterpy under the multirate driver,
+with the error-model truth as report 000's code builds it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import numpy as np
+
+from gpsaccel import plots
+from gpsaccel.figures import ReportFigure
+from gpsaccel.filters.multirate import run_multirate
+from gpsaccel.models.calibration import CalibrationModel
+from gpsaccel.simulation import simulate
+
+TITLE = "GPS-aided accelerometer calibration (MAE 271A, 10,000-run Monte Carlo)"
+DEFAULT_RUNS = 10_000
+
+
+def single_run(seed: int, model: CalibrationModel | None = None):
+    """(model, realization, filterpy result) of report 000's single run."""
+    model = CalibrationModel() if model is None else model
+    run = simulate(model, np.random.default_rng(seed), truth="error-model")
+    return model, run, run_multirate(model, run.z)
+
+
+def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
+    model, run, res = single_run(seed)
+    e = run.x_gps - res.x_post
+    sd = res.sigma
+    names = [("01", "position-error", "Position error p − p̂ with ±1σ", "m"),
+             ("02", "velocity-error", "Velocity error v − v̂ with ±1σ", "m/s"),
+             ("03", "bias-error", "Bias error b − b̂ with ±1σ", "m/s²")]
+    for i, (num, slug, cap, unit) in enumerate(names):
+        fig = plots.error_band(res.t_gps, e[:, i], sd[:, i], label=cap.split(" with")[0],
+                               unit=unit, title=cap)
+        yield ReportFigure("000", num, slug, cap + f" (one realization, seed {seed}).", fig)
+    last = res.t_gps >= res.t_gps[-1] - 10.0
+    fig = plots.error_band(res.t_gps[last], e[last, 2], sd[last, 2], label="b − b̂", unit="m/s²",
+                           title="Bias error, last 10 s")
+    yield ReportFigure("000", "03b", "bias-error-zoom",
+                       "Bias error b − b̂ with ±1σ, the last 10 s zoomed.", fig)
+    gps = run.gps_steps
+    series = [("04", "position-estimate", "Position estimate p̂ = p_c + δp̂ against the truth",
+               run.p, run.p_c[gps] + res.x_post[:, 0], "position p", "m"),
+              ("05", "velocity-estimate", "Velocity estimate v̂ = v_c + δv̂ against the truth",
+               run.v, run.v_c[gps] + res.x_post[:, 1], "velocity v", "m/s"),
+              ("06", "bias-estimate", "Bias estimate b̂ against the true bias",
+               np.full_like(run.t, run.b), res.x_post[:, 2], "bias b", "m/s²")]
+    for num, slug, cap, truth, est, q, unit in series:
+        fig = plots.estimate_vs_truth(run.t, truth, res.t_gps, est, quantity=q, unit=unit,
+                                      title=cap)
+        yield ReportFigure("000", num, slug, cap + f" (seed {seed}).", fig)
