@@ -54,12 +54,12 @@ class Comparison:
     rows: tuple[ComparisonRow, ...]
 
     def __str__(self) -> str:
-        head = f"{'filter':<24} {'max|dx|/sigma':>14} {'max|dP|/sqrt(PiiPjj)':>21} {'time (ms)':>10}"
+        head = f"{'filter':<30} {'max|dx|/sigma':>14} {'max|dP|/sqrt(PiiPjj)':>21} {'time (ms)':>10}"
         lines = [head, "-" * len(head),
-                 f"{self.reference + ' (reference)':<24} {'0':>14} {'0':>21} "
+                 f"{self.reference + ' (reference)':<30} {'0':>14} {'0':>21} "
                  f"{1e3 * self.reference_seconds:10.1f}"]
         for r in self.rows:
-            lines.append(f"{r.name:<24} {r.max_dx_sigma:14.3e} {r.max_dP_rel:21.3e} "
+            lines.append(f"{r.name:<30} {r.max_dx_sigma:14.3e} {r.max_dP_rel:21.3e} "
                          f"{1e3 * r.seconds:10.1f}")
         return "\n".join(lines)
 
