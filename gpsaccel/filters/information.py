@@ -3,7 +3,7 @@ r"""A hand-written Kalman filter with the reports' information-form update.
 Written by hand on purpose: it is the comparison for filterpy's covariance (Joseph) form.  The
 equations are those of report 000, section 3.5.1::
 
-    propagation   x̄_{k+1} = Φ x̂_k                  M_{k+1} = Φ P_k Φᵀ + Γ W Γᵀ
+    propagation   x̄_{k+1} = Φ x̂_k (+ B u_k)        M_{k+1} = Φ P_k Φᵀ + Γ W Γᵀ
     update        P_k = (M_k⁻¹ + Hᵀ V⁻¹ H)⁻¹        K_k = P_k Hᵀ V⁻¹
                   x̂_k = x̄_k + K_k (z_k − H x̄_k)    r_k = z_k − H x̄_k
 
@@ -29,20 +29,29 @@ class InformationFilter:
     V : (p, p) measurement-noise covariance.
     x0 : (n,) a priori mean at the first step.
     M0 : (n, n) a priori covariance at the first step.
+    B : (n, m) control-input matrix of a known input u (optional), as filterpy's ``B``.
     """
 
     def __init__(self, Phi: np.ndarray, Q: np.ndarray, H: np.ndarray, V: np.ndarray,
-                 x0: np.ndarray, M0: np.ndarray) -> None:
-        self.Phi, self.Q, self.H, self.V = Phi, Q, H, V
+                 x0: np.ndarray, M0: np.ndarray, B: np.ndarray | None = None) -> None:
+        self.Phi, self.Q, self.H, self.V, self.B = Phi, Q, H, V, B
         self.x = np.asarray(x0, dtype=float).reshape(-1, 1)   # x̄ or x̂, whichever is latest
         self.P = np.asarray(M0, dtype=float).copy()            # M or P, whichever is latest
         self.x_bar, self.M = self.x.copy(), self.P.copy()
         self.K = np.zeros((self.x.shape[0], H.shape[0]))
         self.y = np.zeros((H.shape[0], 1))
 
-    def predict(self) -> None:
-        """x̄ = Φ x̂,  M = Φ P Φᵀ + Q."""
+    def predict(self, u: np.ndarray | None = None, B: np.ndarray | None = None) -> None:
+        """x̄ = Φ x̂ (+ B u with a known input u),  M = Φ P Φᵀ + Q.
+
+        ``B`` overrides the filter's own ``B`` for this call (filterpy's signature).
+        """
+        B = self.B if B is None else B
         self.x = self.Phi @ self.x
+        if u is not None:
+            if B is None:
+                raise ValueError("u was given but the filter has no control-input matrix B")
+            self.x = self.x + B @ np.asarray(u, dtype=float).reshape(-1, 1)
         self.P = self.Phi @ self.P @ self.Phi.T + self.Q
         self.x_bar, self.M = self.x, self.P
 

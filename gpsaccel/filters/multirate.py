@@ -8,6 +8,11 @@ Any linear-Gaussian model with the course's matrices runs through it: it needs `
   set up by ``model.kalman_filter()``;
 * ``method="information"``: the hand-written :class:`~gpsaccel.filters.information.InformationFilter`.
 
+Known input.  A model with a control-input matrix ``B`` (n, m) can be driven by a known input
+sequence ``u`` (n_steps, m): the prediction from fast step k to k + 1 is then
+``x̄_{k+1} = Φ x̂_k + B u_k`` (the covariance propagation M = Φ P Φᵀ + Q does not change, a known
+input adds no uncertainty).  Without ``u`` the prediction is x̄ = Φ x̂, as before.
+
 Missing data.  ``z`` has one row per update epoch of the schedule.  A NaN element means that
 component was not measured: the update uses only the finite components (the matching rows of H and
 the rows and columns of V).  A row that is entirely NaN is an outage: the filter only propagates,
@@ -93,18 +98,40 @@ class MultirateResult:
 
 
 def make_filter(model: LinearGaussianModel, method: str):
-    """The filter object for ``method``, initialised at (x0, M0) from the model."""
+    """The filter object for ``method``, initialised at (x0, M0) from the model.
+
+    A model with a control-input matrix ``B`` hands it to the information form too (filterpy's
+    ``KalmanFilter`` gets it from ``model.kalman_filter()``).
+    """
     _v.choice("method", method, METHODS)
     if method == "filterpy":
         return model.kalman_filter()
-    return InformationFilter(model.Phi, model.Q, model.H, model.V, model.x0, model.M0)
+    return InformationFilter(model.Phi, model.Q, model.H, model.V, model.x0, model.M0,
+                             B=getattr(model, "B", None))
+
+
+def _known_input(model: LinearGaussianModel, u: np.ndarray | None, n_steps: int,
+                 n: int) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """(B, u) checked against each other and the grid; (None, None) without an input."""
+    if u is None:
+        return None, None
+    B = getattr(model, "B", None)
+    if B is None:
+        raise ValueError("u was given but the model has no control-input matrix B")
+    B = np.asarray(B, dtype=float)
+    if B.ndim != 2 or B.shape[0] != n:
+        raise ValueError(f"model.B must have shape ({n}, m), got {B.shape}")
+    u = _v.finite_array("u", u, (n_steps, B.shape[1]))
+    return B, u
 
 
 def run_multirate(model: LinearGaussianModel, z: np.ndarray, method: str = "filterpy",
-                  schedule: Schedule | None = None) -> MultirateResult:
+                  schedule: Schedule | None = None,
+                  u: np.ndarray | None = None) -> MultirateResult:
     """Filter measurements ``z`` (n_epochs, p) taken on ``schedule`` (default ``model.schedule()``).
 
-    At every fast step the filter predicts with Φ and Q; at each epoch it updates with the
+    At every fast step the filter predicts with Φ and Q (and ``B u_k`` when a known input ``u``,
+    (n_steps, m), is given; the model must then have ``B``); at each epoch it updates with the
     components that the schedule delivers and that are finite in ``z``.
     """
     method = _v.choice("method", method, METHODS)
@@ -114,8 +141,17 @@ def run_multirate(model: LinearGaussianModel, z: np.ndarray, method: str = "filt
     if schedule.dim_z != p:
         raise ValueError(f"schedule delivers {schedule.dim_z} components but H has {p} rows")
     z = _v.finite_array("z", z, (schedule.n_epochs, p), allow_nan=True)
+    B, u = _known_input(model, u, schedule.n_steps, n)
 
     kf = make_filter(model, method)
+
+    def predict(k: int) -> None:
+        """From fast step k to k + 1."""
+        if u is None:
+            kf.predict()
+        else:
+            kf.predict(u=u[k].reshape(-1, 1), B=B)
+
     n_epochs, n_fast = schedule.n_epochs, schedule.n_steps + 1
     x_prior = np.empty((n_epochs, n))
     M = np.empty((n_epochs, n, n))
@@ -132,7 +168,7 @@ def run_multirate(model: LinearGaussianModel, z: np.ndarray, method: str = "filt
     x_fast[0], M_fast[0] = kf.x[:, 0], kf.P
     for i, epoch_step in enumerate(schedule.steps):
         while step < epoch_step:
-            kf.predict()
+            predict(step)
             step += 1
             x_fast[step], M_fast[step] = kf.x[:, 0], kf.P
         x_prior[i], M[i] = kf.x[:, 0], kf.P
@@ -144,7 +180,7 @@ def run_multirate(model: LinearGaussianModel, z: np.ndarray, method: str = "filt
             K[i][:, rows] = kf.K
         x_post[i], P[i] = kf.x[:, 0], kf.P
     while step < schedule.n_steps:  # propagate past the last epoch, if the grid goes on
-        kf.predict()
+        predict(step)
         step += 1
         x_fast[step], M_fast[step] = kf.x[:, 0], kf.P
 
