@@ -161,3 +161,144 @@ def _probability(name: str, value: object) -> float:
     if math.isclose(p, 1.0):
         raise ValueError(f"{name} must be < 1, got {value!r}")
     return p
+
+
+# --------------------------------------------------------------------------------------------
+# z-scores of ensemble statistics: how far a Monte Carlo statistic is from its theoretical value,
+# in units of its own sampling error.  Where the sampling distribution is known exactly (a sample
+# mean of Gaussians, a sample variance, an ensemble NEES/NIS) the z-score is the exact probability
+# integral transform z = Φ⁻¹(F(x)), so |z| > z_threshold(α, n) has false-alarm rate α exactly
+# (Bonferroni); where it is not (a sample covariance off the diagonal, a cross moment) the
+# z-score divides by the exact standard deviation and relies on the central limit theorem.
+# --------------------------------------------------------------------------------------------
+
+
+def z_from_chi2(x: np.ndarray, dof: np.ndarray | int) -> np.ndarray:
+    """Standard-normal z-score of a χ²(dof) statistic ``x``: z = Φ⁻¹(F_χ²(x; dof)).
+
+    Exact (not the √(2·dof) normal approximation): z ~ N(0, 1) when x ~ χ²(dof).  Both tails
+    are computed from their own side (``sf`` above the median, ``cdf`` below) so z stays accurate
+    far out, where 1 − F would round to 0.
+    """
+    x = np.asarray(x, dtype=float)
+    dof = np.asarray(dof, dtype=float)
+    upper = x > stats.chi2.median(dof)
+    z_up = stats.norm.isf(stats.chi2.sf(x, dof))
+    z_lo = stats.norm.ppf(stats.chi2.cdf(x, dof))
+    return np.where(upper, z_up, z_lo)
+
+
+def z_sample_mean(mean: np.ndarray, variance: np.ndarray, n_runs: int,
+                  expected: np.ndarray | float = 0.0) -> np.ndarray:
+    """z of a sample mean of ``n_runs`` draws: (mean − expected) / √(variance / N).
+
+    Exact N(0, 1) when the draws are Gaussian with that ``variance``.  Where ``variance`` is 0
+    (a quantity that cannot vary) the z-score is NaN, which :func:`verdict_from_z` skips.
+    """
+    n_runs = _v.integer("n_runs", n_runs, minimum=1)
+    se = np.sqrt(np.asarray(variance, dtype=float) / n_runs)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(se > 0, (np.asarray(mean, dtype=float) - expected) / se, np.nan)
+
+
+def z_sample_variance(s2: np.ndarray, variance: np.ndarray, n_runs: int) -> np.ndarray:
+    """z of an unbiased sample variance s² (N − 1 divisor) of N Gaussian draws of ``variance``.
+
+    (N − 1) s² / σ² ~ χ²(N − 1) exactly, so z = :func:`z_from_chi2` of it.  NaN where σ² = 0.
+    """
+    n_runs = _v.integer("n_runs", n_runs, minimum=2)
+    variance = np.asarray(variance, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = (n_runs - 1) * np.asarray(s2, dtype=float) / variance
+    return np.where(variance > 0, z_from_chi2(np.nan_to_num(x), n_runs - 1), np.nan)
+
+
+def sample_covariance_se(C: np.ndarray, n_runs: int) -> np.ndarray:
+    """Standard error of each element of an unbiased sample covariance of N Gaussian vectors.
+
+    For true covariance C (..., n, n): Var(Ĉ_ab) = (C_ab² + C_aa C_bb) / (N − 1), exactly.
+    """
+    n_runs = _v.integer("n_runs", n_runs, minimum=2)
+    C = np.asarray(C, dtype=float)
+    d = np.diagonal(C, axis1=-2, axis2=-1)
+    return np.sqrt((C**2 + d[..., :, None] * d[..., None, :]) / (n_runs - 1))
+
+
+def z_sample_covariance(C_hat: np.ndarray, C: np.ndarray, n_runs: int) -> np.ndarray:
+    """z of every element of an unbiased sample covariance Ĉ (..., n, n) against the truth C.
+
+    Diagonal: exact, through χ²(N − 1) (:func:`z_sample_variance`).  Off the diagonal:
+    (Ĉ_ab − C_ab) / :func:`sample_covariance_se` (central limit theorem).  NaN where the
+    standard error is 0.
+    """
+    C_hat = np.asarray(C_hat, dtype=float)
+    C = np.asarray(C, dtype=float)
+    se = sample_covariance_se(C, n_runs)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = np.where(se > 0, (C_hat - C) / se, np.nan)
+    n = C.shape[-1]
+    idx = np.arange(n)
+    z[..., idx, idx] = z_sample_variance(C_hat[..., idx, idx], C[..., idx, idx], n_runs)
+    return z
+
+
+def cross_moment_se(var_a: np.ndarray, var_b: np.ndarray, n_runs: int,
+                    centered: bool = False) -> np.ndarray:
+    """Standard error of the ensemble mean of a·b for independent zero-mean a, b.
+
+    Uncentered, (1/N) Σ a_l b_l: √(var_a var_b / N).  Centered on the sample mean of ``a``,
+    (1/N) Σ (a_l − ā) b_l (the reports' orthogonality check): √((N − 1) var_a var_b) / N.
+    Both exact.  ``var_a`` and ``var_b`` broadcast against each other.
+    """
+    n_runs = _v.integer("n_runs", n_runs, minimum=2)
+    prod = np.asarray(var_a, dtype=float) * np.asarray(var_b, dtype=float)
+    return np.sqrt((n_runs - 1) * prod) / n_runs if centered else np.sqrt(prod / n_runs)
+
+
+def z_ensemble_normalized_squared(mean_stat: np.ndarray, dof: int, n_runs: int) -> np.ndarray:
+    """z of an N-run ensemble average of a χ²(dof) statistic (NEES with dof = n, NIS with p).
+
+    N·ε̄ ~ χ²(N·dof) exactly; z = :func:`z_from_chi2`.  At ε̄ = :func:`chi2_bounds` (r1 or r2)
+    for a given α, z = ∓Φ⁻¹(1 − α/2): the course's bounds and this z-score are one test.
+    """
+    dof = _v.integer("dof", dof, minimum=1)
+    n_runs = _v.integer("n_runs", n_runs, minimum=1)
+    return z_from_chi2(n_runs * np.asarray(mean_stat, dtype=float), n_runs * dof)
+
+
+@dataclass(frozen=True)
+class ConsistencyReport:
+    """Verdicts of several families of tests, with one family-wise false-alarm rate for all.
+
+    Each of the ``len(verdicts)`` rows was tested at ``alpha / len(verdicts)`` (Bonferroni over
+    its own tests inside the row), so a consistent filter fails *some* row with probability at
+    most ``alpha``.  ``str(report)`` is the table the CLI prints.
+    """
+
+    title: str
+    verdicts: tuple[Verdict, ...]
+    alpha: float
+
+    @property
+    def passed(self) -> bool:
+        """True when every row passed."""
+        return all(v.passed for v in self.verdicts)
+
+    @property
+    def failed(self) -> list[Verdict]:
+        """The rows that failed."""
+        return [v for v in self.verdicts if not v.passed]
+
+    def __getitem__(self, name: str) -> Verdict:
+        for v in self.verdicts:
+            if v.name == name:
+                return v
+        raise KeyError(f"no verdict named {name!r}; have {[v.name for v in self.verdicts]}")
+
+    def __str__(self) -> str:
+        n = len(self.verdicts)
+        head = (f"{self.title}\nfamily-wise false-alarm rate {self.alpha:g} for the whole table "
+                f"({n} rows, each at {self.alpha / n:.3g}, Bonferroni over its tests)")
+        verdict = "all statistics within their sampling error" if self.passed else \
+            f"{len(self.failed)} of {n} rows FAIL: " + ", ".join(v.name for v in self.failed)
+        return f"{head}\n{format_verdicts(list(self.verdicts))}\n{verdict}"
