@@ -78,15 +78,18 @@ def estimate_vs_truth(t_truth: np.ndarray, truth: np.ndarray, t_est: np.ndarray,
 
 def state_grid(t: np.ndarray, values: np.ndarray, *, title: str, ylabel: str,
                names: Sequence[str] | None = None, bands: np.ndarray | None = None,
-               fig: Figure | None = None) -> Figure:
+               units: Sequence[str] | None = None, fig: Figure | None = None) -> Figure:
     """A 3x3 (or n x n) grid of the elements of a matrix over time: values (n_t, n, n).
 
     ``bands`` (same shape), if given, is drawn as ±band around zero (e.g. two standard errors).
+    Each panel's y label is ``ylabel`` in the unit of its element: the product of the units of
+    states i and j (``units`` per state; the calibration states' units by default).
     """
     n = values.shape[1]
     names = names or [s for s, _ in CALIBRATION_STATES][:n]
+    units = units or [u for _, u in CALIBRATION_STATES][:n]
     fig = fig or Figure(figsize=STYLE["grid_figsize"], layout="constrained")
-    grid = fig.subplots(n, n, sharex=True)
+    grid = fig.subplots(n, n, sharex=True, squeeze=False)
     for i in range(n):
         for j in range(n):
             ax = grid[i, j]
@@ -98,8 +101,253 @@ def state_grid(t: np.ndarray, values: np.ndarray, *, title: str, ylabel: str,
             ax.set_title(f"({names[i]}, {names[j]})", fontsize="small")
             ax.grid(True, alpha=0.3)
             ax.tick_params(labelsize="x-small")
-            if i == n - 1:
-                ax.set_xlabel("time (s)")
+            ax.set_xlabel("time (s)", fontsize="x-small")
+            ax.set_ylabel(f"{ylabel} ({product_unit(units[i], units[j])})", fontsize="x-small")
     fig.suptitle(title)
-    fig.supylabel(ylabel)
     return fig
+
+
+# --------------------------------------------------------------------------------------------------
+# Units of products of states (elements of P, of E[e x̂ᵀ]) and stacked panels.
+
+_UNIT_POWERS = {"m": (1, 0), "m/s": (1, -1), "m/s²": (1, -2), "s": (0, 1), "": (0, 0)}
+_SUPERSCRIPT = {1: "", 2: "²", 3: "³", 4: "⁴"}
+
+
+def product_unit(u1: str, u2: str) -> str:
+    """The unit of the product of two calibration quantities, e.g. ("m", "m/s²") -> "m²/s²"."""
+    m = _UNIT_POWERS[u1][0] + _UNIT_POWERS[u2][0]
+    s = _UNIT_POWERS[u1][1] + _UNIT_POWERS[u2][1]
+    num = "1" if m == 0 else "m" + _SUPERSCRIPT[m]
+    return num if s == 0 else f"{num}/s{_SUPERSCRIPT[-s]}"
+
+
+def panels(n: int, fig: Figure | None = None, *, title: str = "",
+           height: float = 2.3) -> tuple[Figure, list[Axes]]:
+    """``n`` stacked axes sharing the time axis, on ``fig`` (cleared) or on a new figure."""
+    if fig is None:
+        fig = Figure(figsize=(STYLE["figsize"][0], 0.8 + height * n), layout="constrained")
+    axs = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
+    if title:
+        fig.suptitle(title)
+    return fig, list(axs)
+
+
+def _state_label(i: int, prefix: str = "") -> tuple[str, str]:
+    name, unit = CALIBRATION_STATES[i]
+    return f"{prefix}{name}", unit
+
+
+# --------------------------------------------------------------------------------------------------
+# One realization: the sensors (report 001, figures 1-5)
+
+def time_series(t: np.ndarray, series: Sequence[tuple[np.ndarray, str, str]], *, title: str = "",
+                marker: str | None = None, fig: Figure | None = None) -> Figure:
+    """Stacked panels, one signal each: ``series`` = [(values, quantity, unit), ...] over ``t`` (s)."""
+    fig, axs = panels(len(series), fig, title=title)
+    for ax, (values, quantity, unit) in zip(axs, series, strict=True):
+        if marker:
+            ax.plot(t, values, marker, color=STYLE["estimate"], ms=3)
+        else:
+            ax.plot(t, values, color=STYLE["estimate"], lw=1.0)
+        finish(ax, "", "time (s)" if ax is axs[-1] else "", f"{quantity} ({unit})")
+    return fig
+
+
+def truth_kinematics(run, *, fig: Figure | None = None) -> Figure:
+    """The true acceleration, velocity and position of one realization ``run`` (a Realization)."""
+    return time_series(run.t, [(run.a, "a", "m/s²"), (run.v, "v", "m/s"), (run.p, "p", "m")],
+                       title="Truth: acceleration, velocity, position", fig=fig)
+
+
+def accelerometer_drift(run, *, fig: Figure | None = None) -> Figure:
+    """What integrating the accelerometer alone does: p_c − p and v_c − v over time (= −δp, −δv)."""
+    return time_series(run.t, [(run.p_c - run.p, "p_c − p", "m"), (run.v_c - run.v, "v_c − v", "m/s")],
+                       title="Accelerometer-integrated minus truth", fig=fig)
+
+
+def gps_minus_accelerometer(run, *, with_truth: bool = False, fig: Figure | None = None) -> Figure:
+    """The filter's measurement z = GPS − accelerometer at the GPS times (dots).
+
+    With ``with_truth`` the quantity it measures, δp = p − p_c and δv = v − v_c, is drawn as a line
+    underneath: the dots scatter about it by the GPS noise.
+    """
+    fig, axs = panels(2, fig, title=("Truth − accelerometer against GPS − accelerometer"
+                                     if with_truth else "GPS minus accelerometer"))
+    for i, ax in enumerate(axs):
+        name, unit = _state_label(i)
+        if with_truth:
+            ax.plot(run.t, run.x[:, i], color=STYLE["truth"], lw=1.2,
+                    label=f"{name} = truth − accelerometer")
+        ax.plot(run.t_gps, run.z[:, i], ".", color=STYLE["estimate"], ms=3,
+                label=f"z{i + 1} = GPS − accelerometer")
+        finish(ax, "", "time (s)" if i == 1 else "", f"{name} ({unit})", legend=with_truth)
+    return fig
+
+
+def gps_noise(run, *, fig: Figure | None = None) -> Figure:
+    """GPS minus truth: the GPS noise η (white, N(0, V)) at the GPS times."""
+    return time_series(run.t_gps, [(run.gps_p - run.p[run.gps_steps], "η_p = GPS p − p", "m"),
+                                   (run.gps_v - run.v[run.gps_steps], "η_v = GPS v − v", "m/s")],
+                       title="GPS minus truth (the GPS noise)", marker=".", fig=fig)
+
+
+# --------------------------------------------------------------------------------------------------
+# One realization filtered (reports 000 figures 1-6, 001 figures 6-10, 003 figures 2-3)
+
+def errors_with_sigma(run, result, states: Sequence[int] = (0, 1, 2), k: float = 1.0, *,
+                      title: str = "Estimation errors with the filter's ±σ",
+                      between_fixes: bool = False, shade: tuple[float, float] | None = None,
+                      fig: Figure | None = None) -> Figure:
+    """Errors x − x̂ of one run (Realization ``run``, MultirateResult ``result``) with ±kσ, stacked.
+
+    ``between_fixes`` also draws the a priori ±kσ on the accelerometer grid (the saw-tooth between
+    GPS fixes) and the error of the propagated estimate there; ``shade`` = (t0, t1) marks an
+    interval (a GPS outage).
+    """
+    fig, axs = panels(len(states), fig, title=title)
+    e = run.x_gps - result.x_post
+    for ax, i in zip(axs, states, strict=True):
+        name, unit = _state_label(i)
+        if between_fixes:
+            sd_fast = np.sqrt(result.M_fast[:, i, i])
+            ax.plot(result.t, run.x[:, i] - result.x_fast[:, i], color=STYLE["error"], lw=0.6,
+                    alpha=0.5, label="error between fixes")
+            ax.plot(result.t, k * sd_fast, color=STYLE["bound"], lw=0.6, alpha=0.6)
+            ax.plot(result.t, -k * sd_fast, color=STYLE["bound"], lw=0.6, alpha=0.6)
+        error_band(result.t_gps, e[:, i], result.sigma[:, i], k, label=f"{name} − {name}̂",
+                   unit=unit, ax=ax)
+        if shade is not None:
+            ax.axvspan(*shade, color=STYLE["measurement"], alpha=0.3, lw=0, label="no GPS")
+            ax.legend(loc="best", fontsize="small")
+        if ax is not axs[-1]:
+            ax.set_xlabel("")
+    return fig
+
+
+def estimates_with_truth(run, result, states: Sequence[int] = (0, 1, 2), *,
+                         title: str = "Estimates against the truth",
+                         fig: Figure | None = None) -> Figure:
+    """Total estimates p̂ = p_c + δp̂, v̂ = v_c + δv̂, b̂ at the GPS times against the truth, stacked."""
+    fig, axs = panels(len(states), fig, title=title)
+    gps = run.gps_steps
+    totals = [(run.p, run.p_c[gps] + result.x_post[:, 0], "position p", "m"),
+              (run.v, run.v_c[gps] + result.x_post[:, 1], "velocity v", "m/s"),
+              (np.full_like(run.t, run.b), result.x_post[:, 2], "bias b", "m/s²")]
+    for ax, i in zip(axs, states, strict=True):
+        truth, est, quantity, unit = totals[i]
+        estimate_vs_truth(run.t, truth, result.t_gps, est, quantity=quantity, unit=unit, ax=ax)
+        if ax is not axs[-1]:
+            ax.set_xlabel("")
+    return fig
+
+
+def error_comparison(run, result, *, fig: Figure | None = None) -> Figure:
+    """|error| of the accelerometer alone, of the GPS alone and of the filter, on a log scale.
+
+    Position and velocity: accelerometer-only |p − p_c|, GPS-only |η|, filter |p − p̂|.
+    """
+    fig, axs = panels(2, fig, title="Errors of the estimates against the sensors' own errors")
+    e = run.x_gps - result.x_post
+    for i, ax in enumerate(axs):
+        name, unit = _state_label(i)
+        ax.semilogy(run.t, np.abs(run.x[:, i]), color=STYLE["truth"], lw=1.0,
+                    label=f"accelerometer alone |{name}|")
+        ax.semilogy(run.t_gps, np.abs(run.eta[:, i]), ".", color=STYLE["measurement"], ms=3,
+                    label="GPS alone |η|")
+        ax.semilogy(result.t_gps, np.abs(e[:, i]), color=STYLE["error"], lw=1.0,
+                    label=f"filter |{name} − {name}̂|")
+        ax.semilogy(result.t_gps, result.sigma[:, i], color=STYLE["bound"], ls="--", lw=1.0,
+                    label="filter σ")
+        finish(ax, "", "time (s)" if i == 1 else "", f"|{name} error| ({unit})")
+    return fig
+
+
+def gains(result, *, title: str = "Kalman gains over time", fig: Figure | None = None) -> Figure:
+    """Every element K_ij of the gain at the update epochs (MultirateResult ``result``), a grid."""
+    n, p = result.K.shape[1:]
+    fig = fig or Figure(figsize=(9.0, 7.0), layout="constrained")
+    grid = fig.subplots(n, p, sharex=True, squeeze=False)
+    z_units = [u for _, u in CALIBRATION_STATES[:p]]
+    for i in range(n):
+        name, unit = CALIBRATION_STATES[i]
+        for j in range(p):
+            ax = grid[i, j]
+            ax.plot(result.t_meas, result.K[:, i, j], color=STYLE["estimate"], lw=1.0)
+            gain_unit = _ratio_unit(unit, z_units[j])
+            finish(ax, f"K{i + 1}{j + 1}: {name} from z{j + 1}", "time (s)",
+                   f"K{i + 1}{j + 1} ({gain_unit})", legend=False)
+    fig.suptitle(title)
+    return fig
+
+
+def _ratio_unit(u1: str, u2: str) -> str:
+    """Unit of quantity u1 per quantity u2 (a gain), e.g. ("m/s²", "m") -> "1/s²"."""
+    m = _UNIT_POWERS[u1][0] - _UNIT_POWERS[u2][0]
+    s = _UNIT_POWERS[u1][1] - _UNIT_POWERS[u2][1]
+    num = "1" if m == 0 else "m" + _SUPERSCRIPT[m]
+    if s == 0:
+        return "–" if m == 0 else num
+    return f"{num}·s{_SUPERSCRIPT[s]}" if s > 0 else f"{num}/s{_SUPERSCRIPT[-s]}"
+
+
+# --------------------------------------------------------------------------------------------------
+# Ensembles (report 000 figure 7, 001 figures 10b-12, 003 figures 4-6)
+
+def matrix_lines(t: np.ndarray, values: np.ndarray, *, title: str, quantity: str,
+                 ax: Axes | None = None) -> Figure:
+    """All n² elements of a matrix over time on one axes (report 000's figure 7): values (n_t, n, n).
+
+    The elements have different units; each legend entry names its own.
+    """
+    fig, ax = axes(ax, figsize=(8.5, 4.5))
+    n = values.shape[1]
+    for i in range(n):
+        for j in range(n):
+            unit = product_unit(CALIBRATION_STATES[i][1], CALIBRATION_STATES[j][1])
+            ax.plot(t, values[:, i, j], lw=1.0, label=f"({i + 1},{j + 1}) [{unit}]")
+    finish(ax, title, "time (s)", f"{quantity} (element's unit, see legend)", legend=False)
+    ax.legend(loc="best", fontsize="x-small", ncol=3)
+    return fig
+
+
+def system_diagram(ax: Axes | None = None) -> Figure:
+    """Report 003's figure 1: truth, sensors, the difference z and the Kalman filter, as blocks."""
+    fig, ax = axes(ax, figsize=(9.0, 4.2))
+    ax.set_xlim(0, 10)
+    ax.set_ylim(0, 5)
+    ax.set_axis_off()
+    boxes = {
+        "truth": (0.2, 2.1, "vehicle\na(t) = A sin(ωt)"),
+        "acc": (3.0, 3.4, "accelerometer 200 Hz\na_c = a + b + w"),
+        "gps": (3.0, 0.8, "GPS 5 Hz\np + η_p, v + η_v"),
+        "int": (5.6, 3.4, "Euler integration\np_c, v_c"),
+        "kf": (5.6, 0.8, "Kalman filter\nx = [δp, δv, b]"),
+        "out": (8.2, 2.1, "p̂ = p_c + δp̂\nv̂ = v_c + δv̂\nb̂"),
+    }
+    width, height = 2.0, 0.95
+    for key, (x, y, text) in boxes.items():
+        ax.add_patch(_box(x, y, width, height, key))
+        ax.text(x + width / 2, y + height / 2, text, ha="center", va="center", fontsize="small")
+
+    def arrow(x0, y0, x1, y1, text="", dy=0.12):
+        ax.annotate("", (x1, y1), (x0, y0), arrowprops={"arrowstyle": "->", "lw": 1.2})
+        if text:
+            ax.text((x0 + x1) / 2, (y0 + y1) / 2 + dy, text, ha="center", fontsize="x-small")
+
+    arrow(2.2, 2.8, 3.0, 3.85, "a(t)")
+    arrow(2.2, 2.4, 3.0, 1.25, "p, v")
+    arrow(5.0, 3.85, 5.6, 3.85, "a_c")
+    arrow(6.6, 3.4, 6.6, 1.75, "p_c, v_c (subtract)", dy=0.0)
+    arrow(5.0, 1.25, 5.6, 1.25, "z = GPS − [p_c, v_c]", dy=-0.35)
+    arrow(7.6, 1.25, 8.2, 2.3, "x̂")
+    arrow(7.6, 3.85, 8.2, 2.8, "p_c, v_c")
+    ax.set_title("System diagram: GPS-aided accelerometer calibration")
+    return fig
+
+
+def _box(x: float, y: float, w: float, h: float, key: str):
+    from matplotlib.patches import FancyBboxPatch
+
+    face = {"kf": "#dbe9f6", "out": "#e8f4e0"}.get(key, "#f3f3f3")
+    return FancyBboxPatch((x, y), w, h, boxstyle="round,pad=0.05", fc=face, ec=STYLE["truth"])
