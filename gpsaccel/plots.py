@@ -287,8 +287,10 @@ def _ratio_unit(u1: str, u2: str) -> str:
     s = _UNIT_POWERS[u1][1] - _UNIT_POWERS[u2][1]
     num = "1" if m == 0 else "m" + _SUPERSCRIPT[m]
     if s == 0:
-        return "–" if m == 0 else num
-    return f"{num}·s{_SUPERSCRIPT[s]}" if s > 0 else f"{num}/s{_SUPERSCRIPT[-s]}"
+        return "1" if m == 0 else num
+    if s > 0:
+        return f"s{_SUPERSCRIPT[s]}" if m == 0 else f"{num}·s{_SUPERSCRIPT[s]}"
+    return f"{num}/s{_SUPERSCRIPT[-s]}"
 
 
 # --------------------------------------------------------------------------------------------------
@@ -314,8 +316,8 @@ def matrix_lines(t: np.ndarray, values: np.ndarray, *, title: str, quantity: str
 def system_diagram(ax: Axes | None = None) -> Figure:
     """Report 003's figure 1: truth, sensors, the difference z and the Kalman filter, as blocks."""
     fig, ax = axes(ax, figsize=(9.0, 4.2))
-    ax.set_xlim(0, 10)
-    ax.set_ylim(0, 5)
+    ax.set_xlim(0, 10.4)
+    ax.set_ylim(0.3, 4.6)
     ax.set_axis_off()
     boxes = {
         "truth": (0.2, 2.1, "vehicle\na(t) = A sin(ωt)"),
@@ -330,18 +332,18 @@ def system_diagram(ax: Axes | None = None) -> Figure:
         ax.add_patch(_box(x, y, width, height, key))
         ax.text(x + width / 2, y + height / 2, text, ha="center", va="center", fontsize="small")
 
-    def arrow(x0, y0, x1, y1, text="", dy=0.12):
+    def arrow(x0, y0, x1, y1, text="", dx=0.0, dy=0.12, ha="center"):
         ax.annotate("", (x1, y1), (x0, y0), arrowprops={"arrowstyle": "->", "lw": 1.2})
         if text:
-            ax.text((x0 + x1) / 2, (y0 + y1) / 2 + dy, text, ha="center", fontsize="x-small")
+            ax.text((x0 + x1) / 2 + dx, (y0 + y1) / 2 + dy, text, ha=ha, fontsize="x-small")
 
-    arrow(2.2, 2.8, 3.0, 3.85, "a(t)")
-    arrow(2.2, 2.4, 3.0, 1.25, "p, v")
+    arrow(2.2, 2.8, 3.0, 3.85, "a(t)", dx=-0.25)
+    arrow(2.2, 2.4, 3.0, 1.25, "p, v", dx=-0.25, dy=-0.2)
     arrow(5.0, 3.85, 5.6, 3.85, "a_c")
-    arrow(6.6, 3.4, 6.6, 1.75, "p_c, v_c (subtract)", dy=0.0)
-    arrow(5.0, 1.25, 5.6, 1.25, "z = GPS − [p_c, v_c]", dy=-0.35)
-    arrow(7.6, 1.25, 8.2, 2.3, "x̂")
-    arrow(7.6, 3.85, 8.2, 2.8, "p_c, v_c")
+    arrow(6.6, 3.4, 6.6, 1.75, "p_c, v_c\n(z = GPS − [p_c, v_c])", dx=-0.1, dy=0.0, ha="right")
+    arrow(5.0, 1.25, 5.6, 1.25, "GPS")
+    arrow(7.6, 1.25, 8.2, 2.3, "δp̂, δv̂, b̂", dx=0.35, dy=-0.3)
+    arrow(7.6, 3.85, 8.2, 2.8, "p_c, v_c", dx=0.35, dy=0.1)
     ax.set_title("System diagram: GPS-aided accelerometer calibration")
     return fig
 
