@@ -54,6 +54,34 @@ def _cmd_figures(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_lessons(args: argparse.Namespace) -> int:
+    """Execute the lessons top to bottom; with --html also render them (figures embedded)."""
+    import time
+
+    from gpsaccel.lessons import execute, lessons_dir, render_html
+
+    paths = sorted(lessons_dir().glob("*.ipynb"))
+    if args.only:
+        paths = [p for p in paths if any(p.name.startswith(o) for o in args.only)]
+    if not paths:
+        raise ValueError(f"--only: no lesson in {lessons_dir()} starts with {args.only}")
+    if args.runs is not None and args.runs < 2:
+        raise ValueError(f"--runs must be >= 2, got {args.runs}")
+    total = 0.0
+    for path in paths:
+        t0 = time.perf_counter()
+        if args.html:
+            target = render_html([path], args.html, runs=args.runs)[0]
+        else:
+            execute(path, runs=args.runs)
+            target = None
+        seconds = time.perf_counter() - t0
+        total += seconds
+        print(f"{path.name:<40} {seconds:6.1f} s" + (f"  -> {target}" if target else ""))
+    print(f"{len(paths)} lessons executed in {total:.1f} s")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     from gpsaccel.simulation import TRUTHS
 
@@ -78,6 +106,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--runs", type=int, default=None, help="Monte Carlo runs (report's default)")
     p.add_argument("--seed", type=int, default=0)
     p.set_defaults(func=_cmd_figures)
+
+    p = sub.add_parser("lessons", help="execute the Jupyter lessons; --html DIR renders them")
+    p.add_argument("--html", type=Path, default=None, help="folder for the rendered HTML")
+    p.add_argument("--runs", type=int, default=None,
+                   help="ensemble size for every lesson (GPSACCEL_LESSON_RUNS; default: each "
+                        "lesson's full size)")
+    p.add_argument("--only", nargs="*", default=None, metavar="NN",
+                   help="only the lessons whose file name starts with these (e.g. 03 06)")
+    p.set_defaults(func=_cmd_lessons)
 
     # Further sub-commands register here (montecarlo, check, lessons, ...).
     return parser
