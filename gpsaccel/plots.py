@@ -353,3 +353,60 @@ def _box(x: float, y: float, w: float, h: float, key: str):
 
     face = {"kf": "#dbe9f6", "out": "#e8f4e0"}.get(key, "#f3f3f3")
     return FancyBboxPatch((x, y), w, h, boxstyle="round,pad=0.05", fc=face, ec=STYLE["truth"])
+
+
+def actual_vs_claimed(stats, baseline=None, states: Sequence[int] = (0, 1, 2), *,
+                      title: str = "Actual error against what the filter claims",
+                      labels: tuple[str, str] = ("mistaken filter", "correct filter"),
+                      fig: Figure | None = None) -> Figure:
+    """Exact RMS actual error and claimed σ over time (log scale), one panel per state.
+
+    ``stats`` and ``baseline`` are :class:`gpsaccel.errata.ErrorStatistics`; |mean error| is drawn
+    dotted where it is not negligible (a bias the filter does not know of).
+    """
+    fig, axs = panels(len(states), fig, title=title)
+    for ax, i in zip(axs, states, strict=True):
+        name, unit = _state_label(i)
+        if baseline is not None:
+            ax.semilogy(baseline.t, baseline.rms[:, i], color=STYLE["truth"], lw=1.0,
+                        label=f"{labels[1]}: RMS error")
+        ax.semilogy(stats.t, stats.rms[:, i], color=STYLE["error"], lw=1.4,
+                    label=f"{labels[0]}: RMS error")
+        ax.semilogy(stats.t, stats.claimed_sigma[:, i], color=STYLE["bound"], ls="--", lw=1.2,
+                    label=f"{labels[0]}: claimed σ")
+        mean = np.abs(stats.mean[:, i])
+        if mean.max() > 1e-3 * stats.rms[:, i].max():
+            ax.semilogy(stats.t, mean, color=STYLE["estimate"], ls=":", lw=1.2,
+                        label=f"{labels[0]}: |mean error|")
+        finish(ax, "", "time (s)" if ax is axs[-1] else "", f"{name} error ({unit})")
+    return fig
+
+
+# --------------------------------------------------------------------------------------------------
+# Chi-square consistency tests (NEES/NIS of any system)
+
+def chi2_band(t: np.ndarray, values: np.ndarray, bounds: tuple[float, float], *,
+              statistic: str = "NEES", dof: int | None = None, n_runs: int | None = None,
+              title: str = "", log: bool = False, ax: Axes | None = None) -> Figure:
+    """An N-run average of a χ² statistic over time (s) against its two-sided bounds (r1, r2).
+
+    Points inside the bounds are drawn in the estimate colour, points outside in the error colour;
+    the legend gives the fraction inside.  ``dof`` draws the expected value; ``log`` a log y-axis
+    (for a statistic that runs off by orders of magnitude).
+    """
+    fig, ax = axes(ax)
+    values = np.asarray(values, dtype=float)
+    lo, hi = bounds
+    inside = (values >= lo) & (values <= hi)
+    runs = f", N = {n_runs}" if n_runs else ""
+    ax.plot(t[inside], values[inside], ".", color=STYLE["estimate"], ms=2.5,
+            label=f"{statistic} average{runs}: {inside.mean():.1%} inside")
+    ax.plot(t[~inside], values[~inside], ".", color=STYLE["error"], ms=2.5, label="outside")
+    ax.axhline(lo, color=STYLE["bound"], ls="--", lw=1.0, label=f"r1 = {lo:.3g}, r2 = {hi:.3g}")
+    ax.axhline(hi, color=STYLE["bound"], ls="--", lw=1.0)
+    if dof is not None:
+        ax.axhline(dof, color=STYLE["truth"], ls=":", lw=0.8, label=f"expected {dof}")
+    if log:
+        ax.set_yscale("log")
+    finish(ax, title, "time (s)", f"average {statistic} (1)")
+    return fig
