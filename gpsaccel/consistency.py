@@ -129,13 +129,14 @@ def verdict_from_z(name: str, z: np.ndarray, labels: callable, alpha: float = 0.
     """Build a :class:`Verdict` from an array of z-scores.
 
     ``labels(index_tuple) -> str`` turns the location of the largest |z| into text.  NaN z-scores
-    (a statistic with zero theoretical spread, e.g. an unobservable element) are skipped.
+    (a statistic with zero theoretical spread, e.g. an unobservable element) are skipped; an
+    infinite z-score is a test like any other (it fails).
     """
     z = np.asarray(z, dtype=float)
-    valid = np.isfinite(z)
+    valid = ~np.isnan(z)
     n = int(valid.sum())
     if n == 0:
-        raise ValueError(f"z for {name!r} has no finite element")
+        raise ValueError(f"z for {name!r} has no element that is not NaN")
     absz = np.where(valid, np.abs(z), -1.0)
     idx = np.unravel_index(int(np.argmax(absz)), z.shape)
     return Verdict(name, float(absz[idx]), labels(idx), z_threshold(alpha, n), n, alpha)
@@ -179,13 +180,20 @@ def z_from_chi2(x: np.ndarray, dof: np.ndarray | int) -> np.ndarray:
     Exact (not the √(2·dof) normal approximation): z ~ N(0, 1) when x ~ χ²(dof).  Both tails
     are computed from their own side (``sf`` above the median, ``cdf`` below) so z stays accurate
     far out, where 1 − F would round to 0.
+
+    Beyond |z| ≈ 37 the tail probability underflows; there the Wilson–Hilferty transform
+    z ≈ ((x/k)^(1/3) − 1 + 2/(9k)) / √(2/(9k)) takes over, so a grossly inconsistent statistic
+    gets a large finite z (and still fails) rather than ±inf (x = 0 gives −inf).
     """
     x = np.asarray(x, dtype=float)
     dof = np.asarray(dof, dtype=float)
     upper = x > stats.chi2.median(dof)
-    z_up = stats.norm.isf(stats.chi2.sf(x, dof))
-    z_lo = stats.norm.ppf(stats.chi2.cdf(x, dof))
-    return np.where(upper, z_up, z_lo)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = np.where(upper, stats.norm.isf(stats.chi2.sf(x, dof)),
+                     stats.norm.ppf(stats.chi2.cdf(x, dof)))
+        c = 2.0 / (9.0 * dof)
+        wilson_hilferty = (np.cbrt(x / dof) - 1.0 + c) / np.sqrt(c)
+    return np.where(np.isinf(z) & (x > 0), wilson_hilferty, z)  # x = 0 stays at −inf
 
 
 def z_sample_mean(mean: np.ndarray, variance: np.ndarray, n_runs: int,
