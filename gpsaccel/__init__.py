@@ -6,18 +6,23 @@ The calibration core (reports 000, 001, 003)::
     model = gpsaccel.CalibrationModel()             # report 000's numbers
     run = gpsaccel.simulate(model, np.random.default_rng(0))
     result = gpsaccel.run_multirate(model, run.z)   # filterpy; method="information" for the other form
+    mc = gpsaccel.monte_carlo(model, 10_000)        # the reports' Monte Carlo, as arrays
+    print(mc.consistency())                         # each statistic against its sampling error
 """
 
 from gpsaccel.filters.multirate import MultirateResult, run_multirate
 from gpsaccel.filters.schedule import Schedule
 from gpsaccel.models.calibration import CalibrationModel
+from gpsaccel.montecarlo import MonteCarloResult, monte_carlo
 from gpsaccel.simulation import Realization, simulate
 
 __all__ = [
     "CalibrationModel",
+    "MonteCarloResult",
     "MultirateResult",
     "Realization",
     "Schedule",
+    "monte_carlo",
     "run_multirate",
     "simulate",
 ]

@@ -1,0 +1,633 @@
+r"""The Monte Carlo validation of the calibration filter, as the reports ran it, but as arrays.
+
+Reports 000, 001 and 003 check their filter on an ensemble of N realizations (10,000; 5,000):
+
+* the ensemble-mean error ``e_ave(t_i) = (1/N) Σ_l e^l(t_i)`` (should be ≈ 0), with
+  ``e^l = x^l − x̂^l``;
+* the sample error variance ``P_ave(t_i) = 1/(N − 1) Σ_l (e^l − e_ave)(e^l − e_ave)ᵀ`` (should be
+  ≈ the filter's P(t_i));
+* orthogonality ``(1/N) Σ_l (e^l − e_ave) x̂^lᵀ`` (should be ≈ 0);
+* independence of the residuals ``(1/N) Σ_l r^l(t_i) r^l(t_m)ᵀ`` (≈ 0 for t_m ≠ t_i).
+
+:func:`monte_carlo` computes exactly these statistics (and the ensemble NEES and NIS) and
+:meth:`MonteCarloResult.consistency` says how far each is from theory in units of its own sampling
+error (:mod:`gpsaccel.consistency`), with pass/fail at a stated family-wise false-alarm rate.
+
+Why it is fast: the ensemble is filtered as arrays
+-----------------------------------------------------
+The gains and covariances of this problem do not depend on the data.  So the covariance recursion
+runs once, per GPS epoch (the fast steps between fixes only predict):
+
+    M_0 = M0;   S_i = H M_i Hᵀ + V;   K_i = M_i Hᵀ S_i⁻¹;
+    P_i = (I − K_i H) M_i (I − K_i H)ᵀ + K_i V K_iᵀ          (Joseph form, as filterpy)
+    M_{i+1} = Φ_N P_i Φ_Nᵀ + Q_N,   Φ_N = Φ^N,   Q_N = Σ_{k=0}^{N−1} Φ^k Γ W Γᵀ Φ^kᵀ
+
+with N = ``gps_every`` (40) accelerometer steps per GPS interval, and the means of all the
+realizations of a block go through the same K_i at once::
+
+    r_i = z_i − H x̄_i,   x̂_i = x̄_i + K_i r_i,   x̄_{i+1} = Φ_N x̂_i.
+
+These are the filterpy filter's own equations; its 40 predictions per interval compose to Φ_N and
+Q_N up to rounding.  The tests run filterpy (:func:`gpsaccel.run_multirate`) once per realization
+on the measurements this module draws and find the same statistics to 1e-10.
+
+The 200 Hz noise, represented exactly
+-------------------------------------
+The truth of the error model is x_{j+1} = Φ x_j + Γ w_j with w_j ~ N(0, W) at every
+accelerometer step.  Over one GPS interval only the sum matters::
+
+    x_{i+1} = Φ_N x_i + u_i,   u_i = Σ_{k=0}^{N−1} Φ^{N−1−k} Γ w_{iN+k} ~ N(0, Q_N).
+
+With Φ^j Γ = −[Δt²(j + ½), Δt, 0]ᵀ, Q_N = W [[Δt⁴ N(4N² − 1)/12, Δt³ N²/2, 0],
+[Δt³ N²/2, N Δt², 0], [0, 0, 0]]: a 2-D Gaussian per interval, drawn through its Cholesky factor.
+A realization therefore costs 3 + 2(n_gps − 1) + 2 n_gps = 605 standard normals on the defaults
+(x_0, u_i, GPS noise η_i), not the 6,000 accelerometer samples; the law of (x_i, z_i) at the GPS
+epochs, which is all the filter and the statistics see, is exactly the same.
+
+The kinematic truth (reports 001/003)
+-------------------------------------
+With ``truth="kinematic"`` the true p, v are the closed forms of a(t) = A sin ωt while the
+accelerometer is integrated by Euler's rule.  By linearity the true error state is the error-model
+state *plus a deterministic path* that does not depend on the draw at all::
+
+    x_kin(t_i) = x_em(t_i) + d(t_i),   d = [p_cf − p_Euler, v_cf − v_Euler, 0](t_i)
+
+where p_cf, v_cf are the closed forms from p0 = v0 = 0 and p_Euler, v_Euler the Euler integrals of
+the samples a(t_j) from 0 (:func:`truth_offset`).  d is what the Euler error model leaves out (the
+accelerometer samples a(t_j), the velocity integrates a over the interval).  The filter is linear,
+so the ensemble-mean error is then not zero but the filter's error on d alone,
+:attr:`MonteCarloResult.predicted_mean_error`; the engine shows it and the verdict flags it.
+
+Random draws, reproducible and mergeable
+----------------------------------------
+Run number l uses row ``l mod BLOCK_RUNS`` of the block ``b = l // BLOCK_RUNS``, whose standard
+normals come from ``numpy.random.default_rng(SeedSequence(seed, spawn_key=(b,)))`` — the b-th
+child of ``SeedSequence(seed)`` — drawn as an array of shape (rows, 605) in C order, so a row does
+not depend on how many rows are drawn.  Run l is therefore the same realization whatever
+``n_runs``, ``chunk_size``, executor or number of workers.  Each chunk returns its sums (count,
+means, centred co-moments, Σ r rᵀ, Σ NEES, Σ NIS) and chunks merge in order (Chan et al.'s
+pairwise update), so memory does not grow with ``n_runs`` and the statistics depend on the chunking
+only through floating-point rounding (≪ 1e-12 relative).  These draws are *not* those of
+:func:`gpsaccel.simulate` (a different random stream, and no per-step noise): use
+:func:`realizations` to get the engine's measurements and truths.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections import deque
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from gpsaccel import _validation as _v
+from gpsaccel.consistency import (
+    ConsistencyReport,
+    chi2_bounds,
+    cross_moment_se,
+    fraction_inside,
+    sample_covariance_se,
+    verdict_from_z,
+    z_ensemble_normalized_squared,
+    z_sample_covariance,
+    z_sample_mean,
+)
+from gpsaccel.executors import resolve_executor
+from gpsaccel.models.calibration import CalibrationModel
+from gpsaccel.simulation import TRUTHS, euler_integrate
+
+#: Runs per random block: one ``SeedSequence`` child each, and the largest array pass.
+BLOCK_RUNS = 1000
+
+#: Names of the calibration error state, for labels.
+STATE_NAMES = ("δp", "δv", "b")
+STATE_UNITS = ("m", "m/s", "m/s²")
+
+
+# ------------------------------------------------------------------------------ the plan
+@dataclass(frozen=True, eq=False)
+class EnsemblePlan:
+    """Everything a worker needs to filter a block: data-independent, small, picklable.
+
+    Shapes with n = n_gps epochs: K (n, 3, 2), P and M (n, 3, 3), S (n, 2, 2); Phi_N, Q_N (3, 3);
+    L0 (3, 3) Cholesky factor of M0; LQ (3, 3) of Q_N (its third row and column are zero);
+    LV (2, 2) of V; offset (n, 3) the deterministic part of the truth (zero for the error model);
+    X (n, 3, 3) the covariance of the true error state; Xhat (n, 3, 3) the covariance of x̂;
+    P_chol_inv, S_chol_inv (n, 3, 3), (n, 2, 2): inverses of the Cholesky factors of P and S.
+    """
+
+    truth: str
+    n_gps: int
+    t: np.ndarray
+    H: np.ndarray
+    Phi_N: np.ndarray
+    Q_N: np.ndarray
+    L0: np.ndarray
+    LQ: np.ndarray
+    LV: np.ndarray
+    M: np.ndarray
+    K: np.ndarray
+    P: np.ndarray
+    S: np.ndarray
+    P_chol_inv: np.ndarray
+    S_chol_inv: np.ndarray
+    X: np.ndarray
+    Xhat: np.ndarray
+    offset: np.ndarray
+    x0: np.ndarray
+
+    @property
+    def n_normals(self) -> int:
+        """Standard normals per realization: x_0 (3), u_i (2 per interval), η_i (2 per epoch)."""
+        return 3 + 2 * (self.n_gps - 1) + 2 * self.n_gps
+
+
+def gps_interval_noise(model: CalibrationModel) -> tuple[np.ndarray, np.ndarray]:
+    """(Φ_N, Q_N): one GPS interval of N = gps_every accelerometer steps, composed exactly.
+
+    Φ_N = Φ^N and Q_N = Σ_{k=0}^{N−1} Φ^k Γ W Γᵀ Φ^kᵀ, the covariance of the summed accelerometer
+    noise u_i (see the module docstring for its closed form), by the same recursion as N filter
+    predictions: Q ← Φ Q Φᵀ + ΓWΓᵀ.
+    """
+    Phi, Q1 = model.Phi, model.Q
+    Phi_N, Q_N = np.eye(3), np.zeros((3, 3))
+    for _ in range(model.gps_every):
+        Phi_N = Phi @ Phi_N
+        Q_N = Phi @ Q_N @ Phi.T + Q1
+    return Phi_N, Q_N
+
+
+def truth_offset(model: CalibrationModel, truth: str) -> np.ndarray:
+    """(n_gps, 3) deterministic part d(t_i) of the true error state under ``truth``.
+
+    Zero for ``"error-model"``.  For ``"kinematic"``: d = [p_cf − p_E, v_cf − v_E, 0] at the GPS
+    times, with p_cf(t) = (A/ω) t − A/ω² sin ωt, v_cf(t) = A/ω (1 − cos ωt) (closed forms from rest
+    at 0) and p_E, v_E the Euler integrals of a(t_j) from 0 (m, m/s).
+    """
+    truth = _v.choice("truth", truth, TRUTHS)
+    if truth == "error-model":
+        return np.zeros((model.n_gps, 3))
+    t = model.t_imu
+    p_e, v_e = euler_integrate(model.acceleration(t), model.dt, 0.0, 0.0)
+    p_cf, v_cf = model.position(t, 0.0, 0.0), model.velocity(t, 0.0)
+    gps = np.arange(model.n_gps) * model.gps_every
+    return np.column_stack([(p_cf - p_e)[gps], (v_cf - v_e)[gps], np.zeros(model.n_gps)])
+
+
+def plan(model: CalibrationModel, truth: str = "error-model") -> EnsemblePlan:
+    """The gains, covariances, noise factors and truth offset of ``model`` (see module docstring).
+
+    Besides the filter's M, K, P, S it propagates the covariance X of the true error state
+    (X_0 = M0, X_{i+1} = Φ_N X_i Φ_Nᵀ + Q_N) and the covariance of the estimate,
+    Cov x̂_i = Cov x̄_i + K_i S_i K_iᵀ with Cov x̄_0 = 0, Cov x̄_{i+1} = Φ_N Cov x̂_i Φ_Nᵀ (the
+    residual r_i is uncorrelated with x̄_i); for a consistent filter Cov x̂ = X − P.  Built from
+    products, not from the difference X − P, so it is exactly zero where x̂ cannot vary (the bias
+    estimate at t = 0).
+    """
+    if not isinstance(model, CalibrationModel):
+        raise ValueError(f"model must be a CalibrationModel, got {type(model).__name__}")
+    truth = _v.choice("truth", truth, TRUTHS)
+    n = model.n_gps
+    H, V, I3 = model.H, model.V, np.eye(3)
+    Phi_N, Q_N = gps_interval_noise(model)
+    M = np.empty((n, 3, 3))
+    K = np.empty((n, 3, 2))
+    P = np.empty((n, 3, 3))
+    S = np.empty((n, 2, 2))
+    X = np.empty((n, 3, 3))
+    Xhat = np.empty((n, 3, 3))
+    Mi, Xi, Cbar = model.M0.copy(), model.M0.copy(), np.zeros((3, 3))
+    for i in range(n):
+        if i > 0:
+            Mi = Phi_N @ P[i - 1] @ Phi_N.T + Q_N
+            Xi = Phi_N @ X[i - 1] @ Phi_N.T + Q_N
+            Cbar = Phi_N @ Xhat[i - 1] @ Phi_N.T
+        M[i], X[i] = Mi, Xi
+        S[i] = H @ Mi @ H.T + V
+        K[i] = Mi @ H.T @ np.linalg.inv(S[i])
+        IKH = I3 - K[i] @ H
+        P[i] = IKH @ Mi @ IKH.T + K[i] @ V @ K[i].T
+        Xhat[i] = Cbar + K[i] @ S[i] @ K[i].T
+    LQ = np.zeros((3, 3))
+    LQ[:2, :2] = np.linalg.cholesky(Q_N[:2, :2])  # Q_N has no bias part: Γ's third entry is 0
+    return EnsemblePlan(truth, n, model.t_gps, H, Phi_N, Q_N, np.linalg.cholesky(model.M0), LQ,
+                        np.linalg.cholesky(V), M, K, P, S, np.linalg.inv(np.linalg.cholesky(P)),
+                        np.linalg.inv(np.linalg.cholesky(S)),
+                        X, Xhat, truth_offset(model, truth), np.asarray(model.x0, dtype=float))
+
+
+# ------------------------------------------------------------------------------ draws and filter
+def _standard_normals(seed: int, n_normals: int, start: int, stop: int) -> np.ndarray:
+    """Rows ``start:stop`` (global run indices) of the standard normals, block by block."""
+    parts = []
+    for b in range(start // BLOCK_RUNS, (stop - 1) // BLOCK_RUNS + 1):
+        lo = max(start, b * BLOCK_RUNS) - b * BLOCK_RUNS
+        hi = min(stop, (b + 1) * BLOCK_RUNS) - b * BLOCK_RUNS
+        rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(b,)))
+        parts.append(rng.standard_normal((hi, n_normals))[lo:])
+    return parts[0] if len(parts) == 1 else np.concatenate(parts)
+
+
+def _filter_block(pl: EnsemblePlan, xi: np.ndarray) -> dict[str, np.ndarray]:
+    """Truth, measurements and the filter's estimates for each row of standard normals ``xi``.
+
+    Returns arrays laid out (epoch, component, run) so that every step is one small matrix times
+    a (component, run) array: x (n, 3, m) true error state, z (n, 2, m), x_prior and x_hat
+    (n, 3, m), r (n, 2, m) residuals.
+    """
+    m, n = xi.shape[0], pl.n_gps
+    xiT = np.ascontiguousarray(xi.T)  # (n_normals, m)
+    nu = 3 + 2 * (n - 1)
+    x = np.empty((n, 3, m))
+    x[0] = pl.L0 @ xiT[:3]  # x_0 ~ N(0, M0)
+    u = pl.LQ[:, :2] @ xiT[3:nu].reshape(n - 1, 2, m)  # u_i ~ N(0, Q_N), (n − 1, 3, m)
+    for i in range(1, n):  # error-model truth at the GPS epochs: x_{i+1} = Φ_N x_i + u_i
+        x[i] = pl.Phi_N @ x[i - 1] + u[i - 1]
+    x += pl.offset[:, :, None]  # + d(t_i), the kinematic truth's deterministic part (or 0)
+    z = pl.H @ x + pl.LV @ xiT[nu:].reshape(n, 2, m)  # z_i = H x_i + η_i
+    x_prior = np.empty((n, 3, m))
+    x_hat = np.empty((n, 3, m))
+    r = np.empty((n, 2, m))
+    x_prior[0] = pl.x0[:, None]
+    for i in range(n):
+        if i > 0:
+            x_prior[i] = pl.Phi_N @ x_hat[i - 1]  # x̄_i = Φ_N x̂_{i−1}
+        r[i] = z[i] - pl.H @ x_prior[i]  # r_i = z_i − H x̄_i
+        x_hat[i] = x_prior[i] + pl.K[i] @ r[i]  # x̂_i = x̄_i + K_i r_i
+    return {"x": x, "z": z, "x_prior": x_prior, "x_hat": x_hat, "r": r}
+
+
+@dataclass(frozen=True, eq=False)
+class Realizations:
+    """The engine's realizations ``runs`` (global run indices), for checking it against filterpy.
+
+    x_gps (m, n_gps, 3): the true error state at the GPS times; z (m, n_gps, 2) the measurement
+    (m, m/s); x_prior, x_hat (m, n_gps, 3) and residuals (m, n_gps, 2) the engine's filter.
+    """
+
+    runs: np.ndarray
+    t: np.ndarray
+    x_gps: np.ndarray
+    z: np.ndarray
+    x_prior: np.ndarray
+    x_hat: np.ndarray
+    residuals: np.ndarray
+
+
+def realizations(model: CalibrationModel, start: int, stop: int, seed: int = 0,
+                 truth: str = "error-model") -> Realizations:
+    """Runs ``start`` .. ``stop − 1`` of the ensemble ``monte_carlo(model, ..., seed, truth)`` uses.
+
+    Feed ``z[l]`` to :func:`gpsaccel.run_multirate` to run filterpy on realization l; its
+    ``x_gps[l] − x_post`` is the error the engine accumulated for that run.
+    """
+    seed = _v.integer("seed", seed, minimum=0)
+    start = _v.integer("start", start, minimum=0)
+    stop = _v.integer("stop", stop, minimum=start + 1)
+    pl = plan(model, truth)
+    out = _filter_block(pl, _standard_normals(seed, pl.n_normals, start, stop))
+    runs_first = {k: np.ascontiguousarray(v.transpose(2, 0, 1)) for k, v in out.items()}
+    return Realizations(np.arange(start, stop), pl.t, runs_first["x"], runs_first["z"],
+                        runs_first["x_prior"], runs_first["x_hat"], runs_first["r"])
+
+
+# ------------------------------------------------------------------------------ mergeable sums
+@dataclass(eq=False)
+class EnsembleSums:
+    """Sufficient statistics of a set of runs; two sets merge with :meth:`merge`.
+
+    n : runs.  mean_e, mean_xhat (n_gps, 3) and mean_r (n_gps, 2): means.
+    C_ee, C_ex (n_gps, 3, 3): centred co-moments Σ (e − ē)(e − ē)ᵀ, Σ (e − ē)(x̂ − x̂̄)ᵀ.
+    rr (2 n_gps, 2 n_gps): Σ r rᵀ over the stacked residuals [r_0; r_1; ...].
+    nees, nis (n_gps,): Σ eᵀ P⁻¹ e and Σ rᵀ S⁻¹ r.
+    """
+
+    n: int
+    mean_e: np.ndarray
+    mean_xhat: np.ndarray
+    mean_r: np.ndarray
+    C_ee: np.ndarray
+    C_ex: np.ndarray
+    rr: np.ndarray
+    nees: np.ndarray
+    nis: np.ndarray
+
+    @classmethod
+    def of_block(cls, pl: EnsemblePlan, block: dict[str, np.ndarray]) -> EnsembleSums:
+        """The sums of one block from :func:`_filter_block` (arrays laid out (epoch, comp, run))."""
+        xh, r = block["x_hat"], block["r"]
+        e = block["x"] - xh
+        m = e.shape[2]
+        mean_e, mean_x = e.mean(axis=2), xh.mean(axis=2)
+        ec = e - mean_e[:, :, None]
+        xc = xh - mean_x[:, :, None]
+        ecT = ec.transpose(0, 2, 1)
+        C_ee = ec @ ecT
+        C_ex = ec @ xc.transpose(0, 2, 1)
+        y = pl.P_chol_inv @ e  # eᵀ P⁻¹ e = |L⁻¹ e|² with P = L Lᵀ
+        s = pl.S_chol_inv @ r
+        rf = r.reshape(-1, m)  # rows: r_0[p], r_0[v], r_1[p], ...
+        return cls(m, mean_e, mean_x, r.mean(axis=2), C_ee, C_ex, rf @ rf.T,
+                   np.einsum("iam,iam->i", y, y), np.einsum("iam,iam->i", s, s))
+
+    def merge(self, other: EnsembleSums) -> EnsembleSums:
+        """The sums of both sets (Chan, Golub & LeVeque's pairwise update of the co-moments)."""
+        n = self.n + other.n
+        fa, fb = self.n / n, other.n / n
+        de = other.mean_e - self.mean_e
+        dx = other.mean_xhat - self.mean_xhat
+        w = self.n * other.n / n
+        return EnsembleSums(
+            n,
+            self.mean_e + fb * de,
+            self.mean_xhat + fb * dx,
+            fa * self.mean_r + fb * other.mean_r,
+            self.C_ee + other.C_ee + w * de[:, :, None] * de[:, None, :],
+            self.C_ex + other.C_ex + w * de[:, :, None] * dx[:, None, :],
+            self.rr + other.rr,
+            self.nees + other.nees,
+            self.nis + other.nis,
+        )
+
+
+def _chunk_sums(pl: EnsemblePlan, seed: int, start: int, stop: int) -> EnsembleSums:
+    """Sums of runs ``start:stop``, one random block (≤ BLOCK_RUNS runs) at a time, merged in order.
+
+    Module-level and picklable: this is what an executor runs.
+    """
+    acc = None
+    lo = start
+    while lo < stop:
+        hi = min(stop, (lo // BLOCK_RUNS + 1) * BLOCK_RUNS)
+        part = EnsembleSums.of_block(pl, _filter_block(pl, _standard_normals(seed, pl.n_normals,
+                                                                             lo, hi)))
+        acc = part if acc is None else acc.merge(part)
+        lo = hi
+    return acc
+
+
+# ------------------------------------------------------------------------------ the result
+@dataclass(frozen=True, eq=False)
+class MonteCarloResult:
+    """The ensemble statistics of :func:`monte_carlo`.  Units: m, m/s, m/s² and their products.
+
+    Attributes (n = n_gps epochs, 151 on the defaults)
+    ----------
+    n_runs, seed, truth : what was run.
+    t : (n,) GPS times (s).
+    e_ave : (n, 3) ensemble-mean error (1/N) Σ e, e = x − x̂.
+    P_ave : (n, 3, 3) sample error covariance with the N − 1 divisor (reports' Eq. 16).
+    P : (n, 3, 3) the filter's a posteriori covariance.
+    orthogonality : (n, 3, 3) (1/N) Σ (e − e_ave) x̂ᵀ (reports' Eq. 17).
+    residual_correlation : (n, n, 2, 2) (1/N) Σ r(t_i) r(t_m)ᵀ for every pair (i, m) (Eq. 18);
+        e.g. report 000's r(30 s) r(29.8 s)ᵀ is ``residual_correlation[-1, -2]``.
+    residual_mean : (n, 2) (1/N) Σ r.
+    S : (n, 2, 2) the residual covariance H M Hᵀ + V.
+    nees, nis : (n,) ensemble averages of eᵀ P⁻¹ e and rᵀ S⁻¹ r.
+    estimate_covariance : (n, 3, 3) the theoretical covariance of x̂ (for orthogonality's error).
+    predicted_mean_error : (n, 3) the mean error theory predicts for this truth: zero for the
+        error model, the filter's error on the deterministic path d for the kinematic truth.
+    """
+
+    n_runs: int
+    seed: int
+    truth: str
+    t: np.ndarray
+    e_ave: np.ndarray
+    P_ave: np.ndarray
+    P: np.ndarray
+    orthogonality: np.ndarray
+    residual_correlation: np.ndarray
+    residual_mean: np.ndarray
+    S: np.ndarray
+    nees: np.ndarray
+    nis: np.ndarray
+    estimate_covariance: np.ndarray
+    predicted_mean_error: np.ndarray
+    model: CalibrationModel = field(repr=False)
+
+    @property
+    def sigma(self) -> np.ndarray:
+        """(n, 3) the filter's standard deviations √diag P."""
+        return np.sqrt(np.diagonal(self.P, axis1=1, axis2=2))
+
+    @property
+    def e_ave_se(self) -> np.ndarray:
+        """(n, 3) standard error of e_ave for a consistent filter, √(diag P / N)."""
+        return self.sigma / np.sqrt(self.n_runs)
+
+    @property
+    def P_ave_se(self) -> np.ndarray:
+        """(n, 3, 3) standard error of each element of P_ave, √((P_ab² + P_aa P_bb)/(N − 1)).
+
+        At t = 0 for P_ave[δp, δp]: 0.990 · √(2/9999) = 0.014 m² on report 000's numbers.
+        """
+        return sample_covariance_se(self.P, self.n_runs)
+
+    @property
+    def orthogonality_se(self) -> np.ndarray:
+        """(n, 3, 3) standard error of the orthogonality matrix, √((N − 1) P_aa Cov x̂_bb) / N."""
+        d_e = np.diagonal(self.P, axis1=1, axis2=2)
+        d_x = np.diagonal(self.estimate_covariance, axis1=1, axis2=2)
+        return cross_moment_se(d_e[:, :, None], d_x[:, None, :], self.n_runs, centered=True)
+
+    def residual_correlation_se(self) -> np.ndarray:
+        """(n, n, 2, 2) standard error of residual_correlation off the diagonal (i ≠ m),
+        √(S_i,aa S_m,bb / N) for independent residuals."""
+        d = np.diagonal(self.S, axis1=1, axis2=2)
+        return cross_moment_se(d[:, None, :, None], d[None, :, None, :], self.n_runs)
+
+    def z_scores(self) -> dict[str, np.ndarray]:
+        """z-scores of every statistic against theory for a consistent filter (NaN: no spread).
+
+        Keys: ``e_ave`` (n, 3), ``P_ave`` (n, 3, 3), ``orthogonality`` (n, 3, 3),
+        ``residual_correlation`` (n, n, 2, 2), NaN on and above the diagonal i ≤ m so that every
+        pair counts once, ``nees`` and ``nis`` (n,).  See :mod:`gpsaccel.consistency`.
+        """
+        N = self.n_runs
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ortho = np.where(self.orthogonality_se > 0,
+                             self.orthogonality / self.orthogonality_se, np.nan)
+            rz = self.residual_correlation / self.residual_correlation_se()
+        n = self.t.size
+        rz[np.triu_indices(n)] = np.nan  # keep pairs t_m < t_i only
+        return {
+            "e_ave": z_sample_mean(self.e_ave, np.diagonal(self.P, axis1=1, axis2=2), N),
+            "P_ave": z_sample_covariance(self.P_ave, self.P, N),
+            "orthogonality": ortho,
+            "residual_correlation": rz,
+            "nees": z_ensemble_normalized_squared(self.nees, 3, N),
+            "nis": z_ensemble_normalized_squared(self.nis, 2, N),
+        }
+
+    def consistency(self, alpha: float = 0.01) -> ConsistencyReport:
+        """Verdicts on every statistic, family-wise false-alarm rate ``alpha`` for the table.
+
+        Rows: e_ave per state; P_ave − P per diagonal element (exact χ²) and off the diagonal;
+        orthogonality (9 elements); residual whiteness (every pair t_m < t_i, 4 elements each);
+        ensemble NEES (χ²(3N)) and NIS (χ²(2N)).  Each row reports its largest |z| over time with
+        its location and value; it fails when that exceeds the Bonferroni bound of its own tests
+        at ``alpha / rows``.
+        """
+        z = self.z_scores()
+        t, N = self.t, self.n_runs
+        rows = 11
+        a = _probability_alpha(alpha) / rows
+        se_e, se_P, se_o = self.e_ave_se, self.P_ave_se, self.orthogonality_se
+        verdicts = []
+        for k, (s, u) in enumerate(zip(STATE_NAMES, STATE_UNITS, strict=True)):
+            verdicts.append(verdict_from_z(
+                f"e_ave[{s}]", z["e_ave"][:, k],
+                lambda i, k=k, u=u: f"t = {t[i[0]]:g} s: e_ave = {self.e_ave[i[0], k]:.3g} {u} "
+                                    f"(SE {se_e[i[0], k]:.2g}, predicted "
+                                    f"{self.predicted_mean_error[i[0], k]:.3g})",
+                a))
+        dP = self.P_ave - self.P
+        for k, s in enumerate(STATE_NAMES):
+            verdicts.append(verdict_from_z(
+                f"P_ave−P[{s},{s}]", z["P_ave"][:, k, k],
+                lambda i, k=k: f"t = {t[i[0]]:g} s: P_ave − P = {dP[i[0], k, k]:.3g} "
+                               f"(P {self.P[i[0], k, k]:.3g}, SE {se_P[i[0], k, k]:.2g})",
+                a))
+        off = z["P_ave"].copy()
+        idx = np.arange(3)
+        off[:, idx, idx] = np.nan
+        off[:, 1, 0] = off[:, 2, 0] = off[:, 2, 1] = np.nan  # symmetric: count each pair once
+        verdicts.append(verdict_from_z(
+            "P_ave−P off-diagonal", off,
+            lambda i: f"t = {t[i[0]]:g} s, ({STATE_NAMES[i[1]]},{STATE_NAMES[i[2]]}): "
+                      f"{dP[i]:.3g} (SE {se_P[i]:.2g})",
+            a))
+        verdicts.append(verdict_from_z(
+            "orthogonality", z["orthogonality"],
+            lambda i: f"t = {t[i[0]]:g} s, ({STATE_NAMES[i[1]]},{STATE_NAMES[i[2]]}): "
+                      f"{self.orthogonality[i]:.3g} (SE {se_o[i]:.2g})",
+            a))
+        rc = self.residual_correlation
+        verdicts.append(verdict_from_z(
+            "residual whiteness", z["residual_correlation"],
+            lambda i: f"r({t[i[0]]:g} s)[{'pv'[i[2]]}] r({t[i[1]]:g} s)[{'pv'[i[3]]}]: "
+                      f"{rc[i]:.3g}",
+            a))
+        for name, key, dof in (("NEES", "nees", 3), ("NIS", "nis", 2)):
+            vals = getattr(self, key)
+            bounds = chi2_bounds(dof, N, 0.05)
+            inside = fraction_inside(vals, bounds)
+            verdicts.append(verdict_from_z(
+                f"{name} (χ²({dof}N)/N)", z[key],
+                lambda i, vals=vals, bounds=bounds, inside=inside:
+                    f"t = {t[i[0]]:g} s: {vals[i[0]]:.4g}; {inside:.0%} of epochs inside the "
+                    f"95% bounds [{bounds[0]:.4g}, {bounds[1]:.4g}]",
+                a))
+        assert len(verdicts) == rows
+        title = (f"Monte Carlo consistency: {N} runs, truth {self.truth}, seed {self.seed}, "
+                 f"{t.size} GPS epochs")
+        return ConsistencyReport(title, tuple(verdicts), float(alpha))
+
+
+def _probability_alpha(alpha: object) -> float:
+    a = _v.finite_float("alpha", alpha)
+    if not 0.0 < a < 1.0:
+        raise ValueError(f"alpha must be a probability strictly between 0 and 1, got {alpha!r}")
+    return a
+
+
+# ------------------------------------------------------------------------------ the engine
+def _chunks(n_runs: int, chunk_size: int) -> Iterator[tuple[int, int]]:
+    for lo in range(0, n_runs, chunk_size):
+        yield lo, min(n_runs, lo + chunk_size)
+
+
+def _progress_bar(progress: bool, total: int, desc: str):
+    from tqdm.auto import tqdm
+
+    enabled = bool(progress) and sys.stderr is not None and sys.stderr.isatty()
+    return tqdm(total=total, desc=desc, unit="run", disable=not enabled, leave=False)
+
+
+def monte_carlo(model: CalibrationModel, n_runs: int, seed: int = 0, truth: str = "error-model",
+                chunk_size: int | None = None, executor: object = None,
+                progress: bool = True) -> MonteCarloResult:
+    """The reports' Monte Carlo validation of the calibration filter, as arrays, streamed.
+
+    Parameters
+    ----------
+    model : the :class:`~gpsaccel.models.calibration.CalibrationModel`.
+    n_runs : ensemble size N (≥ 2).
+    seed : non-negative integer; run l is the same realization for every n_runs, chunk_size and
+        executor (see the module docstring; the stream differs from :func:`gpsaccel.simulate`'s).
+    truth : ``"error-model"`` (report 000) or ``"kinematic"`` (reports 001/003), as in
+        :func:`gpsaccel.simulate`.
+    chunk_size : runs per task submitted to the executor (default :data:`BLOCK_RUNS`).  Memory
+        per task is about 10 kB per run up to BLOCK_RUNS runs; results do not depend on it beyond
+        rounding.
+    executor : None (in this process), any :class:`concurrent.futures.Executor` (a process pool,
+        ``dask.distributed.Client(...).get_executor()``), or a specification understood by
+        :func:`gpsaccel.executors.resolve_executor` (``"processes"``, ``"dask-local"``,
+        ``"tcp://host:port"``), which is then opened and closed here.
+    progress : show a tqdm bar (only when stderr is a terminal).
+
+    Returns a :class:`MonteCarloResult`; ``result.consistency()`` gives the verdicts.
+    """
+    if not isinstance(model, CalibrationModel):
+        raise ValueError(f"model must be a CalibrationModel, got {type(model).__name__}")
+    n_runs = _v.integer("n_runs", n_runs, minimum=2)
+    seed = _v.integer("seed", seed, minimum=0)
+    truth = _v.choice("truth", truth, TRUTHS)
+    chunk_size = BLOCK_RUNS if chunk_size is None else _v.integer("chunk_size", chunk_size,
+                                                                  minimum=1)
+    pl = plan(model, truth)
+    resolved = resolve_executor(executor)  # ValueError naming ``executor`` for anything else
+    with resolved as ex:
+        window = 1 if resolved.max_workers == 1 else 2 * max(2, resolved.max_workers or 2)
+        sums = _run_ordered(ex, pl, seed, n_runs, chunk_size, window,
+                            _progress_bar(progress, n_runs, f"monte carlo ({truth})"))
+    return _result(model, pl, sums, seed)
+
+
+def _run_ordered(ex, pl: EnsemblePlan, seed: int, n_runs: int, chunk_size: int, window: int,
+                 bar) -> EnsembleSums:
+    """Submit chunks with at most ``window`` in flight; merge results in chunk order."""
+    pending: deque = deque()
+    chunks = _chunks(n_runs, chunk_size)
+    acc = None
+    try:
+        for lo, hi in chunks:
+            pending.append(ex.submit(_chunk_sums, pl, seed, lo, hi))
+            while len(pending) >= window:
+                acc = _take(pending.popleft(), acc, bar)
+        while pending:
+            acc = _take(pending.popleft(), acc, bar)
+    finally:
+        for f in pending:
+            f.cancel()
+        bar.close()
+    return acc
+
+
+def _take(future, acc: EnsembleSums | None, bar) -> EnsembleSums:
+    part = future.result()
+    bar.update(part.n)
+    return part if acc is None else acc.merge(part)
+
+
+def _result(model: CalibrationModel, pl: EnsemblePlan, s: EnsembleSums,
+            seed: int) -> MonteCarloResult:
+    N, n = s.n, pl.n_gps
+    rc = (s.rr / N).reshape(n, 2, n, 2).transpose(0, 2, 1, 3)
+    predicted = _predicted_mean_error(pl)
+    return MonteCarloResult(
+        n_runs=N, seed=seed, truth=pl.truth, t=pl.t.copy(), e_ave=s.mean_e,
+        P_ave=s.C_ee / (N - 1), P=pl.P.copy(), orthogonality=s.C_ex / N,
+        residual_correlation=np.ascontiguousarray(rc), residual_mean=s.mean_r, S=pl.S.copy(),
+        nees=s.nees / N, nis=s.nis / N, estimate_covariance=pl.Xhat.copy(),
+        predicted_mean_error=predicted, model=model)
+
+
+def _predicted_mean_error(pl: EnsemblePlan) -> np.ndarray:
+    """The filter's error on the deterministic part of the truth alone (all noise set to 0)."""
+    if not np.any(pl.offset):
+        return np.zeros((pl.n_gps, 3))
+    out = _filter_block(pl, np.zeros((1, pl.n_normals)))
+    return (out["x"] - out["x_hat"])[:, :, 0]
