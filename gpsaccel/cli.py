@@ -82,6 +82,14 @@ def _cmd_lessons(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_coop(args: argparse.Namespace) -> int:
+    """Report 002: NEES/NIS of the LKF, EKF and UKF over Monte Carlo sets, and the course log."""
+    from gpsaccel.coop_montecarlo import summary
+
+    print(summary(n_runs=args.runs, n_sets=args.sets, seed=args.seed, alpha=args.alpha))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     from gpsaccel.simulation import TRUTHS
 
@@ -115,6 +123,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--only", nargs="*", default=None, metavar="NN",
                    help="only the lessons whose file name starts with these (e.g. 03 06)")
     p.set_defaults(func=_cmd_lessons)
+
+    p = sub.add_parser("coop", help="cooperative localization (report 002): NEES/NIS table")
+    p.add_argument("--runs", type=int, default=50, help="truth runs per set (default 50)")
+    p.add_argument("--sets", type=int, default=5, help="independent sets (default 5)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--alpha", type=float, default=0.05, help="test level (default 0.05)")
+    p.set_defaults(func=_cmd_coop)
 
     # Further sub-commands register here (montecarlo, check, lessons, ...).
     return parser
