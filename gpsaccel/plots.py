@@ -410,3 +410,43 @@ def chi2_band(t: np.ndarray, values: np.ndarray, bounds: tuple[float, float], *,
         ax.set_yscale("log")
     finish(ax, title, "time (s)", f"average {statistic} (1)")
     return fig
+
+
+# --------------------------------------------------------------------------------------------------
+# Overlaid signals in stacked panels and x–y tracks (the ship, report 004)
+
+#: How each role is drawn by :func:`overlay_panels` and :func:`track`.
+_ROLE_STYLE = {
+    "measurement": {"ls": "none", "marker": "+", "ms": 3, "color": STYLE["measurement"]},
+    "truth": {"lw": 1.4, "color": STYLE["truth"]},
+    "estimate": {"lw": 1.0, "color": STYLE["estimate"]},
+    "error": {"lw": 1.0, "color": STYLE["error"]},
+    "bound": {"lw": 1.0, "ls": "--", "color": STYLE["bound"]},
+    "alternative": {"lw": 1.0, "ls": "--", "color": "#2ca02c"},
+}
+
+
+def overlay_panels(panels_: Sequence[tuple[str, str, Sequence[tuple]]], *, title: str = "",
+                   xlabel: str = "time (s)", fig: Figure | None = None) -> Figure:
+    """Stacked panels, several signals each: ``panels_`` = [(quantity, unit, lines), ...].
+
+    ``lines`` = [(t, values, label, role), ...]; ``role`` is one of ``measurement`` (markers),
+    ``truth``, ``estimate``, ``error``, ``bound``, ``alternative`` (lines in the house colours).
+    """
+    fig, axs = panels(len(panels_), fig, title=title)
+    for ax, (quantity, unit, lines) in zip(axs, panels_, strict=True):
+        for t, values, label, role in lines:
+            ax.plot(t, values, label=label, **_ROLE_STYLE[role])
+        finish(ax, "", xlabel if ax is axs[-1] else "", f"{quantity} ({unit})")
+    return fig
+
+
+def track(tracks: Sequence[tuple[np.ndarray, np.ndarray, str, str]], *, title: str = "",
+          unit: str = "m", ax: Axes | None = None) -> Figure:
+    """x–y tracks with equal axes: ``tracks`` = [(x, y, label, role), ...] (roles as above)."""
+    fig, ax = axes(ax, figsize=(7.5, 5.0))
+    for x, y, label, role in tracks:
+        ax.plot(x, y, label=label, **_ROLE_STYLE[role])
+    ax.set_aspect("equal", adjustable="datalim")
+    finish(ax, title, f"x ({unit})", f"y ({unit})")
+    return fig
