@@ -450,3 +450,53 @@ def track(tracks: Sequence[tuple[np.ndarray, np.ndarray, str, str]], *, title: s
     ax.set_aspect("equal", adjustable="datalim")
     finish(ax, title, f"x ({unit})", f"y ({unit})")
     return fig
+
+
+def ensemble_mean_error(mc, *, sigma: bool = False, k: float = 1.0,
+                        title: str | None = None, fig: Figure | None = None) -> Figure:
+    """Ensemble-mean error e_ave over time (a :class:`gpsaccel.montecarlo.MonteCarloResult`).
+
+    Shaded: ±2 standard errors 2σ/√N, where e_ave of a consistent filter stays 95 % of the time.
+    Dotted: the mean error theory predicts (zero for the error-model truth; the filter's error on
+    the Euler integration error for the closed-form truth).  With ``sigma`` also the filter's
+    ±kσ (what report 003 draws).
+    """
+    title = title or f"Ensemble-mean error, N = {mc.n_runs:,} ({mc.truth} truth)"
+    fig, axs = panels(3, fig, title=title)
+    se = mc.e_ave_se
+    for i, ax in enumerate(axs):
+        name, unit = _state_label(i)
+        ax.fill_between(mc.t, -2 * se[:, i], 2 * se[:, i], color=STYLE["band"], alpha=0.25, lw=0,
+                        label="±2σ/√N")
+        if sigma:
+            ax.plot(mc.t, k * mc.sigma[:, i], color=STYLE["bound"], ls="--", lw=1.0,
+                    label=f"±{k:g}σ (filter)" if k != 1 else "±σ (filter)")
+            ax.plot(mc.t, -k * mc.sigma[:, i], color=STYLE["bound"], ls="--", lw=1.0)
+        if np.any(mc.predicted_mean_error[:, i] != 0):
+            ax.plot(mc.t, mc.predicted_mean_error[:, i], color=STYLE["truth"], ls=":", lw=1.2,
+                    label="predicted mean")
+        ax.plot(mc.t, mc.e_ave[:, i], color=STYLE["error"], lw=1.0, label="e_ave")
+        finish(ax, "", "time (s)" if i == 2 else "", f"e_ave {name} ({unit})")
+    return fig
+
+
+def pave_minus_p(mc, *, grid: bool = True, title: str | None = None,
+                 fig: Figure | None = None) -> Figure:
+    """P_ave − P over time: a 3x3 grid with ±2 standard errors of P_ave shaded (``grid``), or all
+    nine elements on one axes as report 000's figure 7."""
+    title = title or f"P_ave − P, N = {mc.n_runs:,} ({mc.truth} truth)"
+    diff = mc.P_ave - mc.P
+    if not grid:
+        if fig is not None:
+            return matrix_lines(mc.t, diff, title=title, quantity="P_ave − P", ax=fig.add_subplot())
+        return matrix_lines(mc.t, diff, title=title, quantity="P_ave − P")
+    return state_grid(mc.t, diff, title=title + "; shaded ±2 s.e.", ylabel="P_ave − P",
+                      bands=2 * mc.P_ave_se, fig=fig)
+
+
+def orthogonality(mc, *, title: str | None = None, fig: Figure | None = None) -> Figure:
+    """The orthogonality matrix (1/N) Σ (e − e_ave) x̂ᵀ over time, 3x3, ±2 standard errors shaded."""
+    title = title or (f"Orthogonality (1/N) Σ (e − e_ave) x̂ᵀ, N = {mc.n_runs:,} ({mc.truth} "
+                      f"truth); shaded ±2 s.e.")
+    return state_grid(mc.t, mc.orthogonality, title=title, ylabel="E[e x̂ᵀ]",
+                      bands=2 * mc.orthogonality_se, fig=fig)
