@@ -1,0 +1,28 @@
+"""Homework checkers for the report-000 calibration filter.
+
+Two checks, one kind of answer (a :class:`Report` of :class:`Finding` s with stable codes)::
+
+    from gpsaccel import check
+    print(check.model_matrices(Phi=Phi, Gamma=Gamma, H=H, V=V, W=W, M0=M0))
+    print(check.submission("my_filter.py"))       # the file defines kalman_filter(z) -> (x_hat, P)
+
+:func:`assert_model_matrices` and :func:`assert_submission` raise ``AssertionError`` with the
+findings instead, for a grader's test cell (nbgrader, otter-grader).  The known mistakes and their
+codes are in :mod:`gpsaccel.check.catalogue`; ``gpsaccel check PATH ...`` checks many files.
+"""
+
+from gpsaccel.check.catalogue import codes
+from gpsaccel.check.matrices import assert_model_matrices, model_matrices
+from gpsaccel.check.report import Finding, Report
+from gpsaccel.check.submission import TOLERANCE, assert_submission, submission
+
+__all__ = [
+    "TOLERANCE",
+    "Finding",
+    "Report",
+    "assert_model_matrices",
+    "assert_submission",
+    "codes",
+    "model_matrices",
+    "submission",
+]

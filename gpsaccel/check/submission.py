@@ -1,0 +1,566 @@
+r"""Check a student's whole filter: run it on simulated data, compare, diagnose, test consistency.
+
+The student's file defines ``kalman_filter(z) -> (x_hat, P)`` for the report-000 problem: ``z`` is
+the (n_gps, 2) array of GPS-minus-accelerometer measurements [δp, δv] (m, m/s), ``x_hat`` the
+(n_gps, 3) a posteriori estimates of [δp, δv, b] and ``P`` the (n_gps, 3, 3) a posteriori
+covariances, at the GPS times t = 0, 0.2, ..., 30 s.
+
+What :func:`submission` does
+----------------------------
+1. Simulates ``n_runs`` realizations from ``numpy.random.default_rng(seed)`` with the error-model
+   truth (:func:`gpsaccel.simulate`), so it knows the true state of each.
+2. Runs the student's file in a separate Python process (``python -m gpsaccel.check._runner``)
+   with a time limit; a crash, an endless loop, wrong shapes, NaN, lists, a flood of prints each
+   become a finding, never an exception here.
+3. Compares P and x̂ with the optimal filter on the same data.  Distances are in units of the
+   optimal σ = √diag P_ref::
+
+       d_P = max |P_ij − P_ref,ij| / (σ_i σ_j)     d_x = max |x̂_i − x̂_ref,i| / σ_i
+
+   (max over runs, GPS times and elements).  The filter **passes** when both are at most
+   :data:`TOLERANCE` = 1e-6 on every realization.  The problem has one optimal filter, so every
+   correct form passes (covariance, information or Joseph update; filterpy or by hand; a filter
+   that steps only at GPS times with Φ⁴⁰ and the 40-step process noise): they agree to ~1e-11 σ,
+   while the smallest effect of a catalogued mistake (phi-sign on P) is 3e-4 σ.
+4. Diagnoses a failing filter against the catalogue (:mod:`gpsaccel.check.catalogue`): P does not
+   depend on the data, so P is matched first against every covariance mistake and every
+   combination of up to three that touch different ingredients; then x̂ against the matched
+   entry with each combination of the mean mistakes.  A match (both within the tolerance) is
+   reported under its code; a right P with a wrong x̂ that matches nothing is a gain or residual
+   mistake; a P that matches nothing is located (t = 0 or the propagation).
+5. Tests consistency over the runs with the student's own P, to show what a mistake does:
+   the ensemble-mean error (z = ē_i √N / √P_ii at every time and state) and the ensemble-average
+   NEES (N·ε̄ ~ χ²(3N) at every time), each as a family of two-sided tests with a family-wise
+   false-alarm rate ``alpha`` (Bonferroni over the times and states).  For a correct filter the
+   two together raise a false alarm with probability at most 2·alpha.  These are reported as
+   warnings (or notes when they hold): they never decide ``passed``, the comparison does.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+from scipy import stats
+
+from gpsaccel import _validation as _v
+from gpsaccel.check import catalogue as cat
+from gpsaccel.check.report import Report
+from gpsaccel.consistency import chi2_bounds, format_verdicts, verdict_from_z
+from gpsaccel.models.calibration import CalibrationModel
+from gpsaccel.simulation import simulate
+
+#: Largest distance (units of the optimal σ) at which P and x̂ count as equal; also the distance
+#: within which a catalogue entry counts as matching.
+TOLERANCE = 1e-6
+
+#: Characters of the student's printed output kept in a finding.
+OUTPUT_KEEP = 1500
+
+#: Printed output (characters) beyond which the check warns about prints.
+OUTPUT_WARN = 20_000
+
+STATE = ("δp", "δv", "b")
+
+
+# ---------------------------------------------------------------------------------- the data
+@dataclass(frozen=True, eq=False)
+class Problem:
+    """The realizations a check runs on, and the optimal filter's answer on them.
+
+    z : (n_runs, n_gps, 2) measurements; x_true : (n_runs, n_gps, 3) true error states.
+    x_ref : (n_runs, n_gps, 3) optimal x̂; P_ref : (n_gps, 3, 3) optimal P; sd : √diag P_ref.
+    """
+
+    model: CalibrationModel
+    seed: int
+    z: np.ndarray
+    x_true: np.ndarray
+    x_ref: np.ndarray
+    P_ref: np.ndarray
+    sd: np.ndarray
+
+
+def make_problem(model: CalibrationModel, n_runs: int, seed: int) -> Problem:
+    rng = np.random.default_rng(seed)
+    runs = [simulate(model, rng) for _ in range(n_runs)]
+    z = np.stack([r.z for r in runs])
+    x_true = np.stack([r.x_gps for r in runs])
+    x_ref, P_ref = cat.reference(model).apply(z)
+    sd = np.sqrt(np.diagonal(P_ref, axis1=1, axis2=2))
+    return Problem(model, seed, z, x_true, x_ref, P_ref, sd)
+
+
+@lru_cache(maxsize=4)
+def _default_problem(n_runs: int, seed: int) -> Problem:
+    return make_problem(CalibrationModel(), n_runs, seed)
+
+
+def _problem(model: CalibrationModel | None, n_runs: int, seed: int) -> Problem:
+    if model is None:
+        return _default_problem(n_runs, seed)
+    return make_problem(model, n_runs, seed)
+
+
+# ---------------------------------------------------------------------- running the student
+@dataclass(frozen=True)
+class StudentRun:
+    """What came back from the student's process.
+
+    x, P : (n_runs, n_gps, 3) and (n_runs, n_gps, 3, 3), NaN where nothing came back (None if the
+        process wrote no result).
+    status : the runner's status (see :mod:`gpsaccel.check._runner`).
+    timed_out : the process was killed at the time limit; runs_done : runs finished by then.
+    output : the tail of what the student's code printed (stdout and stderr); output_chars : its
+        full length.  returncode : the process's exit code.  seconds : wall-clock time.
+    """
+
+    x: np.ndarray | None
+    P: np.ndarray | None
+    status: dict
+    timed_out: bool
+    runs_done: int
+    output: str
+    output_chars: int
+    returncode: int | None
+    seconds: float
+
+
+def _tail(path: Path, keep: int) -> tuple[str, int]:
+    size = path.stat().st_size if path.exists() else 0
+    with open(path, "rb") as f:
+        if size > keep * 4:
+            f.seek(size - keep * 4)
+        text = f.read().decode("utf-8", errors="replace")
+    return text[-keep:], size
+
+
+def run_student(path: Path, z: np.ndarray, timeout: float) -> StudentRun:
+    """Run ``kalman_filter`` of the file ``path`` on every ``z[r]`` in a child process."""
+    t0 = time.perf_counter()
+    with tempfile.TemporaryDirectory(prefix="gpsaccel-check-") as tmp:
+        tmp = Path(tmp)
+        inp, out, prog, log = (tmp / "input.npz", tmp / "output.npz", tmp / "progress.txt",
+                               tmp / "output.txt")
+        np.savez(inp, z=z)
+        prog.touch()
+        env = dict(os.environ, MPLBACKEND="Agg", PYTHONHASHSEED="0", PYTHONIOENCODING="utf-8")
+        cmd = [sys.executable, "-m", "gpsaccel.check._runner", str(path), str(inp), str(out),
+               str(prog)]
+        work = tmp / "cwd"
+        work.mkdir()
+        timed_out = False
+        with open(log, "wb") as logf:
+            proc = subprocess.Popen(cmd, stdout=logf, stderr=subprocess.STDOUT,
+                                    stdin=subprocess.DEVNULL, cwd=work, env=env,
+                                    start_new_session=True)
+            try:
+                proc.wait(timeout=timeout)
+            except subprocess.TimeoutExpired:
+                timed_out = True
+                _kill(proc)
+        runs_done = len(prog.read_text(encoding="utf-8").split())
+        text, chars = _tail(log, OUTPUT_KEEP)
+        x = P = None
+        status: dict = {}
+        if out.exists():
+            with np.load(out) as data:
+                x, P = data["x"], data["P"]
+                status = json.loads(str(data["status"]))
+        return StudentRun(x, P, status, timed_out, runs_done, text, chars, proc.returncode,
+                          time.perf_counter() - t0)
+
+
+def _kill(proc: subprocess.Popen) -> None:
+    """Kill the child and whatever it started (its own session, so only its processes)."""
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        proc.kill()
+    proc.wait()
+
+
+# --------------------------------------------------------------------------- the findings
+def _where(sd: np.ndarray, t: np.ndarray, idx: tuple[int, ...], kind: str) -> str:
+    if kind == "x":
+        r, i, s = idx
+        return f"run {r}, t = {t[i]:g} s, {STATE[s]}"
+    i, a, b = idx[-3:]
+    return f"t = {t[i]:g} s, element P{a + 1}{b + 1}"
+
+
+def _run_findings(report: Report, run: StudentRun, timeout: float, n_runs: int,
+                  shape: tuple[int, int]) -> bool:
+    """Findings about the process itself; True when there are results to examine."""
+    n_gps = shape[0]
+    st = run.status
+    problem = st.get("problem")
+    if run.output_chars > OUTPUT_WARN:
+        report.add("prints-a-lot", f"Your code printed {run.output_chars:,} characters during the "
+                   f"check ({n_runs} runs). Remove debug prints from kalman_filter: they slow it "
+                   f"down and bury the messages that matter. The last lines were:\n"
+                   + _indent_tail(run.output, 6), "warning")
+    if run.timed_out:
+        done = run.runs_done
+        rate = (f" (≈ {timeout / done:.2g} s per run, {n_runs} runs needed)" if done else "")
+        report.add("timeout", f"Your kalman_filter did not finish within the time limit of "
+                   f"{timeout:g} s: it completed {done} of {n_runs} runs{rate}. "
+                   + ("It never returned once: look for a loop whose condition never changes "
+                      "(e.g. while k < n without k += 1) or input() waiting for a keyboard."
+                      if done == 0 else "It is too slow: 6000 accelerometer steps per run "
+                      "should take well under a second."))
+        return False
+    if not st:
+        report.add("crashed", f"The Python process running your file ended without a result "
+                   f"(exit code {run.returncode}). Does your file call os._exit(), or use a lot "
+                   f"of memory? Its last output:\n" + _indent_tail(run.output, 8))
+        return False
+    if problem is None:
+        _returned_notes(report, st)
+        return True
+    kind = problem["kind"]
+    if kind == "import-error":
+        report.add("import-error", "Your file raises an error when it is imported (before "
+                   "kalman_filter is called); the traceback ends with:\n"
+                   + _indent(problem["traceback"]))
+    elif kind == "no-kalman-filter":
+        found = problem.get("found")
+        report.add("no-kalman-filter", "Your file does not define a function kalman_filter(z)"
+                   + (f" (kalman_filter is a {found['type']}, not a function)" if found else "")
+                   + ". Functions it defines: " + (", ".join(problem["callables"]) or "none")
+                   + ". Name your filter kalman_filter, taking z and returning (x_hat, P).")
+    elif kind == "exception":
+        report.add("exception", f"kalman_filter(z) raised an exception on run {problem['run']}; "
+                   f"the traceback ends with:\n" + _indent(problem["traceback"]))
+    elif kind == "return-value":
+        ret = problem["returned"]
+        shape_text = f" of shape {tuple(ret['shape'])}" if ret.get("shape") else ""
+        length = problem.get("length")
+        report.add("return-value", f"kalman_filter(z) must return a pair (x_hat, P); it returned "
+                   f"a {ret['type']}{shape_text}"
+                   + (f" with {length} items" if length is not None else "")
+                   + ". End it with: return x_hat, P.")
+    elif kind == "not-numeric":
+        report.add("not-numeric", f"{problem['name']} returned by kalman_filter is not an array "
+                   f"of numbers ({problem['returned']['type']}): np.array({problem['name']}, "
+                   f"dtype=float) fails with: {problem['error']}.")
+    elif kind == "wrong-shape":
+        report.add("wrong-shape", _shape_message(tuple(problem["x_hat"]), tuple(problem["P"]),
+                                                 n_gps))
+    else:  # a kind this version does not know: say what the runner said
+        report.add("runner", f"The check could not run your filter: {problem}")
+    return False
+
+
+def _returned_notes(report: Report, st: dict) -> None:
+    ret = st.get("returned", {})
+    for name in ("x_hat", "P"):
+        typ = ret.get(name, {}).get("type", "")
+        if typ in ("builtins.list", "builtins.tuple"):
+            report.add("returns-list", f"{name} is a Python {typ.split('.')[-1]}; it was "
+                       f"converted with np.array({name}, dtype=float). Returning numpy arrays "
+                       f"is expected (np.array(...) at the end of your function).", "note")
+        elif typ == "numpy.matrix":
+            report.add("returns-list", f"{name} is a numpy.matrix; it was converted to an "
+                       f"array. numpy.matrix is deprecated: use numpy arrays and @.", "note")
+
+
+def _shape_message(xs: tuple, Ps: tuple, n_gps: int) -> str:
+    want_x, want_P = (n_gps, 3), (n_gps, 3, 3)
+    parts = [f"kalman_filter must return x_hat of shape {want_x} and P of shape {want_P} (one "
+             f"row per GPS time t = 0, 0.2, ..., 30 s); it returned x_hat {xs} and P {Ps}."]
+    if xs == (3, n_gps):
+        parts.append("x_hat looks transposed: one row per GPS time, one column per state.")
+    elif xs == (n_gps, 3, 1):
+        parts.append("x_hat has a trailing axis of length 1 (filterpy's kf.x is a 3x1 column): "
+                     "store kf.x[:, 0] or x.ravel().")
+    elif len(xs) == 2 and xs[1] == 3 and xs[0] == (n_gps - 1) * 40 + 1:
+        parts.append("x_hat has one row per accelerometer step; return the GPS times only "
+                     "(every 40th row: x[::40]).")
+    elif len(xs) == 2 and xs[1] == 3 and xs[0] in (n_gps - 1, n_gps + 1):
+        parts.append(f"x_hat has {xs[0]} rows: the GPS times include t = 0 and t = 30 s "
+                     f"({n_gps} rows).")
+    if Ps == (n_gps, 3):
+        parts.append("P looks like the diagonal only (or the standard deviations): return the "
+                     "full 3x3 covariance at each GPS time.")
+    elif Ps == (3, 3, n_gps):
+        parts.append("P has time last (MATLAB's P(:,:,k)); numpy puts it first: P[k] is 3x3.")
+    return " ".join(parts)
+
+
+def _indent(text: str, n: int = 6) -> str:
+    return "\n".join(" " * n + line for line in text.splitlines())
+
+
+def _indent_tail(text: str, lines: int) -> str:
+    return _indent("\n".join(text.rstrip().splitlines()[-lines:]) or "(nothing)")
+
+
+def _value_findings(report: Report, x: np.ndarray, P: np.ndarray, t: np.ndarray) -> bool:
+    """NaN/inf in what came back; True when everything is finite."""
+    for name, arr in (("x_hat", x), ("P", P)):
+        bad = ~np.isfinite(arr)
+        if bad.any():
+            runs = np.flatnonzero(bad.reshape(bad.shape[0], -1).any(axis=1))
+            first = np.argwhere(bad[runs[0]])[0]
+            what = "NaN" if np.isnan(arr).any() else "inf"
+            report.add("nan-output", f"{name} contains {what} in {runs.size} of {arr.shape[0]} "
+                       f"runs; in run {runs[0]} first at t = {t[first[0]]:g} s (row {first[0]}). "
+                       f"Likely causes: an array made with np.empty and never filled at that "
+                       f"row, a division by zero, or the inverse of a singular matrix.")
+            return False
+    return True
+
+
+def _dist_P(P: np.ndarray, P_ref: np.ndarray, sd: np.ndarray) -> np.ndarray:
+    """|P − P_ref| / (σ_i σ_j), elementwise (P may have leading axes)."""
+    return np.abs(P - P_ref) / (sd[:, :, None] * sd[:, None, :])
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """The catalogue entries that reproduce the student's (x̂, P), or the nearest P entry."""
+
+    covariance: tuple[cat.Mistake, ...] | None
+    mean: tuple[cat.Mistake, ...] | None
+    nearest: tuple[cat.Mistake, ...] | None
+    nearest_distance: float
+
+
+def diagnose(P_student: np.ndarray, x_student: np.ndarray, problem: Problem,
+             tol: float = TOLERANCE, max_combined: int = 3) -> Diagnosis:
+    """Match (x̂, P) of the student (all runs) against the catalogue; see the module docstring."""
+    model, sd = problem.model, problem.sd
+    cov = cat.covariance_mistakes(model)
+    combos: list[tuple[cat.Mistake, ...]] = [()]
+    for k in range(1, max_combined + 1):
+        combos += list(cat.combinations(cov, k))
+    filters = [cat.build(model, c) for c in combos]
+    _, M, P = cat.batch_gains(filters)
+    prior = np.array([f.output == "prior" for f in filters])
+    P_out = np.where(prior[:, None, None, None], M, P)
+    # every run's P against every candidate: max over runs, times and elements
+    d = np.zeros(len(combos))
+    for r in range(P_student.shape[0]):
+        d = np.maximum(d, _dist_P(P_student[r][None], P_out, sd).reshape(len(combos), -1)
+                       .max(axis=1))
+    order = np.argsort(d, kind="stable")
+    means = cat.mean_mistakes(model)
+    mean_combos = [()] + [(m,) for m in means] + list(cat.combinations(means, 2))
+    matching = [int(c) for c in order if d[c] <= tol]
+    for c in matching:
+        for mc in mean_combos:
+            x, _ = cat.build(model, combos[c] + mc).apply(problem.z)
+            if np.max(np.abs(x_student - x) / sd) <= tol:
+                return Diagnosis(combos[c], mc, None, float(d[c]))
+    if matching:
+        return Diagnosis(combos[matching[0]], None, None, float(d[matching[0]]))
+    best = int(order[0])
+    return Diagnosis(None, None, combos[best], float(d[best]))
+
+
+def _comparison(report: Report, problem: Problem, x: np.ndarray, P: np.ndarray,
+                tol: float) -> tuple[bool, bool]:
+    t = problem.model.t_gps
+    dP = _dist_P(P, problem.P_ref[None], problem.sd)
+    dx = np.abs(x - problem.x_ref) / problem.sd
+    iP = np.unravel_index(int(np.argmax(dP)), dP.shape)
+    ix = np.unravel_index(int(np.argmax(dx)), dx.shape)
+    spread = _dist_P(P, P[:1], problem.sd).max()
+    report.details.update({
+        "max_dP_sigma": float(dP.max()), "max_dP_where": _where(problem.sd, t, iP, "P"),
+        "max_dx_sigma": float(dx.max()), "max_dx_where": _where(problem.sd, t, ix, "x"),
+        "P_spread_over_runs_sigma": float(spread), "tolerance_sigma": tol,
+    })
+    report.tables.append(
+        f"against the optimal filter on {x.shape[0]} runs (units of the optimal σ, tolerance "
+        f"{tol:g}):\n"
+        f"  max |ΔP|/(σσ) = {dP.max():.3g}  at {_where(problem.sd, t, iP, 'P')}\n"
+        f"  max |Δx̂|/σ   = {dx.max():.3g}  at {_where(problem.sd, t, ix, 'x')}")
+    if spread > tol:
+        report.add("p-depends-on-data", f"Your P changes from run to run (by up to {spread:.3g} "
+                   f"σσ). In a linear Kalman filter P depends only on Φ, Q, H, V and M0, never on "
+                   f"the measurements: compute P without z.", "warning")
+    return bool(dP.max() <= tol), bool(dx.max() <= tol)
+
+
+def _diagnosis_findings(report: Report, problem: Problem, x: np.ndarray, P: np.ndarray,
+                        tol: float) -> None:
+    diag = diagnose(P, x, problem, tol)
+    t = problem.model.t_gps
+    names = lambda ms: ", ".join(str(m) for m in ms)  # noqa: E731
+    if diag.covariance is not None and diag.mean is not None:
+        found = diag.covariance + diag.mean
+        report.details["matched"] = [{"code": m.code, "variant": m.variant} for m in found]
+        for m in found:
+            report.add(m.code, m.message)
+        report.tables.append(f"catalogue: on every run your (x̂, P) match, to {tol:g} σ, the "
+                             f"filter that makes\n" + "\n".join(f"  {m}" for m in found))
+        return
+    if diag.covariance is not None:  # P recognised, x̂ not
+        for m in diag.covariance:
+            report.add(m.code, m.message)
+        dx = np.abs(x - cat.build(problem.model, diag.covariance).apply(problem.z)[0]) / problem.sd
+        i = np.unravel_index(int(np.argmax(dx)), dx.shape)
+        lead = ("Your P is the optimal one, so your model (Φ, Q, H, V, M0) is right, but"
+                if not diag.covariance else f"Your P matches {names(diag.covariance)}, and")
+        report.add("gain-or-residual", f"{lead} your x̂ differs from what that filter gives on "
+                   f"the same z by up to {dx.max():.3g} σ ({_where(problem.sd, t, i, 'x')}). "
+                   f"The mistake is in how x̂ is formed: check K = M Hᵀ (H M Hᵀ + V)⁻¹ (or "
+                   f"P Hᵀ V⁻¹), x̄ = Φ x̂ at every accelerometer step, the residual r = z − H x̄ "
+                   f"and x̂ = x̄ + K r, with z at the matching GPS time.")
+        report.details["matched"] = [{"code": m.code, "variant": m.variant}
+                                     for m in diag.covariance]
+        return
+    dP = _dist_P(P, problem.P_ref[None], problem.sd).max(axis=(0, 2, 3))
+    first = int(np.argmax(dP > tol))
+    where = ("P at t = 0 already differs: the first update uses only M0, H and V, so one of "
+             "them is wrong (or the update formula)." if first == 0 else
+             f"P at t = 0 is right (so M0, H, V and the update are), but P differs from "
+             f"t = {t[first]:g} s on: the propagation between GPS fixes is wrong (Φ, "
+             f"Q = Γ W Γᵀ, or the number of steps).")
+    hint = ""
+    if diag.nearest is not None:
+        near = names(diag.nearest) if diag.nearest else "the optimal filter"
+        hint = (f" Nearest known filter: {near}, which still differs by {diag.nearest_distance:.3g}"
+                f" σσ, so that is not it.")
+    report.add("p-mismatch", f"Your P does not match the optimal filter (it differs by up to "
+               f"{dP.max():.3g} σσ), nor any mistake of the catalogue. {where}{hint} Check "
+               f"your matrices with gpsaccel.check.model_matrices(Phi=..., Gamma=..., H=..., "
+               f"V=..., W=..., M0=...).")
+    report.details["matched"] = []
+
+
+def _consistency(report: Report, problem: Problem, x: np.ndarray, P: np.ndarray,
+                 alpha: float) -> None:
+    t = problem.model.t_gps
+    N = x.shape[0]
+    e = problem.x_true - x                              # (N, n_gps, 3)
+    sym = np.abs(P - np.swapaxes(P, -1, -2)).max(axis=(-1, -2)) <= 1e-9 * np.abs(P).max(
+        axis=(-1, -2))
+    eig_min = np.linalg.eigvalsh((P + np.swapaxes(P, -1, -2)) / 2).min(axis=-1)
+    bad = ~sym | (eig_min <= 0)                        # (N, n_gps)
+    if bad.any():
+        times = np.flatnonzero(bad.any(axis=0))
+        report.add("p-not-positive-definite", f"Your P is not a covariance at {times.size} GPS "
+                   f"times (first t = {t[times[0]]:g} s): it is not symmetric positive definite, "
+                   f"so NEES cannot be formed. A Joseph update, or symmetrising "
+                   f"P = (P + Pᵀ)/2, keeps it one.", "warning")
+        return
+    L = np.linalg.cholesky((P + np.swapaxes(P, -1, -2)) / 2)
+    var = np.diagonal(P, axis1=-2, axis2=-1)           # (N, n_gps, 3)
+    z_mean = e.mean(axis=0) / np.sqrt(var.mean(axis=0) / N)  # (n_gps, 3)
+    v_mean = verdict_from_z("mean error ē/σ", z_mean,
+                            lambda idx: f"t = {t[idx[0]]:g} s, {STATE[idx[1]]}", alpha)
+    y = np.linalg.solve(L, e[..., None])[..., 0]       # L⁻¹ e
+    eps = np.einsum("rti,rti->t", y, y) / N             # ensemble-average NEES at each time
+    k = 3 * N
+    cdf = stats.chi2.cdf(N * eps, k)
+    sf = stats.chi2.sf(N * eps, k)
+    p_two = np.clip(2 * np.minimum(cdf, sf), np.finfo(float).tiny, 1.0)  # |z| ≤ 37.5
+    z_nees = np.where(sf < cdf, 1.0, -1.0) * stats.norm.isf(p_two / 2)  # + when ε̄ too large
+    v_nees = verdict_from_z("NEES (average)", z_nees, lambda idx: f"t = {t[idx[0]]:g} s", alpha)
+    lo, hi = chi2_bounds(3, N, 0.05)
+    inside = float(np.mean((eps >= lo) & (eps <= hi)))
+    rms = np.sqrt(np.mean(e**2, axis=0))                # (n_gps, 3)
+    rms_ref = np.sqrt(np.mean((problem.x_true - problem.x_ref) ** 2, axis=0))
+    ratio = rms.mean(axis=0) / rms_ref.mean(axis=0)
+    report.details["consistency"] = {
+        "alpha": alpha, "n_runs": N,
+        "mean_error_max_abs_z": v_mean.max_abs_z, "mean_error_bound": v_mean.threshold,
+        "nees_max_abs_z": v_nees.max_abs_z, "nees_bound": v_nees.threshold,
+        "nees_fraction_inside_95": inside, "nees_average_first_last": [float(eps[0]),
+                                                                       float(eps[-1])],
+        "rms_ratio_to_optimal": [float(r) for r in ratio],
+    }
+    report.tables.append(
+        f"consistency over {N} runs, with your P (family-wise false-alarm rate {alpha:g} each):\n"
+        + format_verdicts([v_mean, v_nees])
+        + f"\nNEES inside its 95% bounds [{lo:.3f}, {hi:.3f}] at {100 * inside:.0f}% of the "
+          f"{t.size} GPS times (expected ≈ 95%)."
+        + "\nRMS error over time relative to the optimal filter: "
+        + ", ".join(f"{s} {r:.3g}" for s, r in zip(STATE, ratio, strict=True)))
+    i_mean = np.unravel_index(int(np.nanargmax(np.abs(z_mean))), z_mean.shape)
+    i_nees = int(np.nanargmax(np.abs(z_nees)))
+    for v, what in (
+            (v_mean, f"Your errors do not average to zero: at {v_mean.where} the mean error over "
+                     f"{N} runs is {e.mean(axis=0)[i_mean]:.3g}, {v_mean.max_abs_z:.3g} times its "
+                     f"standard error √(P/N)"),
+            (v_nees, f"Your P does not describe your actual errors: at {v_nees.where} the "
+                     f"average NEES over {N} runs is {eps[i_nees]:.4g}, outside its 95% bounds "
+                     f"[{lo:.3f}, {hi:.3f}] (|z| = {v_nees.max_abs_z:.3g})")):
+        if not v.passed:
+            report.add("inconsistent", f"{what}; the test fails beyond |z| = {v.threshold:.3g} "
+                       f"(family-wise false-alarm rate {alpha:g} over {v.n_tests} tests). This "
+                       f"is what the mistake does to the estimates.", "warning")
+    if v_mean.passed and v_nees.passed:
+        report.add("consistent", f"Over {N} runs your errors average to zero and match your P "
+                   f"(mean-error and NEES tests at family-wise α = {alpha:g}).", "note")
+
+
+def submission(path: str | os.PathLike, n_runs: int = 200, seed: int = 0, timeout: float = 60,
+               model: CalibrationModel | None = None, alpha: float = 0.01,
+               tol: float = TOLERANCE) -> Report:
+    """Check the student file ``path`` that defines ``kalman_filter(z) -> (x_hat, P)``.
+
+    Parameters
+    ----------
+    path : the student's ``.py`` file.
+    n_runs : realizations to run it on (≥ 2).
+    seed : seed of the realizations (``numpy.random.default_rng(seed)``).
+    timeout : wall-clock limit (s) for the student's process (import and all runs).
+    model : the problem (report 000's defaults when None).
+    alpha : family-wise false-alarm rate of each consistency test.
+    tol : distance (units of the optimal σ) within which P and x̂ count as equal.
+
+    Returns a :class:`~gpsaccel.check.report.Report`; it does not raise for anything the student's
+    file does.  Arguments of the caller are validated (ValueError naming the argument).
+    """
+    t0 = time.perf_counter()
+    n_runs = _v.integer("n_runs", n_runs, minimum=2)
+    seed = _v.integer("seed", seed, minimum=0)
+    timeout = _v.positive_float("timeout", timeout)
+    alpha = _v.positive_float("alpha", alpha)
+    if alpha >= 1:
+        raise ValueError(f"alpha must be a probability strictly between 0 and 1, got {alpha!r}")
+    tol = _v.positive_float("tol", tol)
+    path = Path(path)
+    report = Report(path.name)
+    report.details.update({"path": str(path), "n_runs": n_runs, "seed": seed, "timeout": timeout})
+    if not path.is_file():
+        report.add("not-found", f"{path} is not a file.")
+        report.seconds = time.perf_counter() - t0
+        return report
+    problem = _problem(model, n_runs, seed)
+    run = run_student(path.resolve(), problem.z, timeout)
+    report.details["student_seconds"] = round(run.seconds, 3)
+    n_gps = problem.z.shape[1]
+    if _run_findings(report, run, timeout, n_runs, (n_gps, 3)) and \
+            _value_findings(report, run.x, run.P, problem.model.t_gps):
+        P_ok, x_ok = _comparison(report, problem, run.x, run.P, tol)
+        if P_ok and x_ok:
+            report.add("matches-optimal", f"P and x̂ match the optimal filter to "
+                       f"{tol:g} σ on all {n_runs} runs.", "note")
+        else:
+            _diagnosis_findings(report, problem, run.x, run.P, tol)
+        _consistency(report, problem, run.x, run.P, alpha)
+    report.sort()
+    report.seconds = time.perf_counter() - t0
+    return report
+
+
+def assert_submission(path: str | os.PathLike, **kwargs: object) -> Report:
+    """:func:`submission` for a grader cell: raise AssertionError with the findings if it fails."""
+    report = submission(path, **kwargs)
+    if not report.passed:
+        raise AssertionError("\n" + str(report))
+    return report
