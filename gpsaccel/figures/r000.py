@@ -1,7 +1,9 @@
 """Report 000 (MAE 271A, 10,000-run Monte Carlo): figures 1-7.
 
 Figures 1-6 are one realization (seed ``seed``) filtered by filterpy under the multirate driver,
-with the error-model truth as report 000's code builds it.
+with the error-model truth as report 000's code builds it.  Figure 7 is the Monte Carlo ensemble
+(``runs`` realizations, :func:`gpsaccel.figures._shared.ensemble`), drawn like the report: the
+nine elements of P_ave − P on one axes.
 """
 
 from __future__ import annotations
@@ -54,3 +56,6 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
         fig = plots.estimate_vs_truth(run.t, truth, res.t_gps, est, quantity=q, unit=unit,
                                       title=cap)
         yield ReportFigure("000", num, slug, cap + f" (seed {seed}).", fig)
+    from gpsaccel.figures._ensemble import ensemble_set
+
+    yield from ensemble_set("000", runs, seed, [("07", "pave-minus-p-lines")])

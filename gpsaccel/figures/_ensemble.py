@@ -1,0 +1,67 @@
+"""The Monte Carlo figures of reports 000, 001 and 003, from one cached ensemble per problem.
+
+Report 000's ensemble is :func:`gpsaccel.figures._shared.ensemble` (its default model, error-model
+truth).  Reports 001 and 003 share one problem (a(t) = 10 sin(2π·0.1·t), closed-form truth), so
+one cached ensemble serves both.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from functools import lru_cache
+
+from gpsaccel import plots
+from gpsaccel.errata import REPORT_TRUTH, report_model
+from gpsaccel.figures import ReportFigure
+from gpsaccel.montecarlo import MonteCarloResult, monte_carlo
+
+
+@lru_cache(maxsize=4)
+def _kinematic_ensemble(runs: int, seed: int) -> MonteCarloResult:
+    return monte_carlo(report_model("001"), runs, seed=seed, truth="kinematic", progress=False)
+
+
+def report_ensemble(report: str, runs: int, seed: int) -> MonteCarloResult:
+    """The Monte Carlo ensemble behind ``report``'s figures (cached; treat it as read-only)."""
+    if REPORT_TRUTH.get(report) == "error-model":
+        from gpsaccel.figures._shared import ensemble
+
+        return ensemble(runs, seed, "error-model")
+    report_model(report)  # ValueError naming the reports for anything else
+    return _kinematic_ensemble(runs, seed)
+
+
+def _captions(mc: MonteCarloResult) -> dict[str, str]:
+    n = f" N = {mc.n_runs:,} realizations, seed {mc.seed}, {mc.truth} truth."
+    kin = (" With the closed-form truth e_ave is not zero: the dotted line is the mean error the "
+           "Euler model's integration error predicts.") if mc.truth == "kinematic" else ""
+    return {
+        "ensemble-mean-error": "Ensemble-mean error e_ave of position, velocity and bias, with "
+                               "±2 standard errors (2σ/√N) shaded." + kin + n,
+        "ensemble-mean-error-sigma": "Ensemble-average error with the filter's ±σ (dashed) and "
+                                     "±2σ/√N (shaded)." + kin + n,
+        "pave-minus-p": "P_ave − P, the sample error covariance minus the filter's, element by "
+                        "element, with ±2 standard errors of P_ave shaded." + n,
+        "pave-minus-p-lines": "P_ave − P, all nine elements over time (each in its own unit: "
+                              "m², m²/s, ...)." + n,
+        "orthogonality": "Orthogonality of the error and the estimate, (1/N) Σ (e − e_ave) x̂ᵀ, "
+                         "nine elements, ±2 standard errors shaded." + n,
+    }
+
+
+def ensemble_set(report: str, runs: int, seed: int,
+                 wanted: list[tuple[str, str]]) -> Iterator[ReportFigure]:
+    """``report``'s Monte Carlo figures: ``wanted`` = [(number, kind), ...] with kinds
+    ensemble-mean-error[-sigma], pave-minus-p[-lines], orthogonality."""
+    mc = report_ensemble(report, runs, seed)
+    captions = _captions(mc)
+    draw = {
+        "ensemble-mean-error": lambda: plots.ensemble_mean_error(mc),
+        "ensemble-mean-error-sigma": lambda: plots.ensemble_mean_error(mc, sigma=True),
+        "pave-minus-p": lambda: plots.pave_minus_p(mc),
+        "pave-minus-p-lines": lambda: plots.pave_minus_p(mc, grid=False),
+        "orthogonality": lambda: plots.orthogonality(mc),
+    }
+    for number, kind in wanted:
+        slug = kind.removesuffix("-lines").removesuffix("-sigma")
+        yield ReportFigure(report, number, slug, captions[kind], draw[kind]())
