@@ -31,8 +31,79 @@ def _cmd_run(args: argparse.Namespace) -> int:
     with np.printoptions(precision=4, suppress=False):
         print(f"P at t = {res.t_gps[-1]:g} s:")
         print(res.P[-1])
+    _run_ensemble(args.runs, args.seed)  # prints the verdict table; cached for figure 7
     paths = write_figures(["000"], args.out, runs=args.runs, seed=args.seed)
     print(f"wrote {len(paths)} figures and index.html to {args.out}/")
+    return 0
+
+
+def _run_ensemble(runs: int | None, seed: int):
+    """Report 000's Monte Carlo (10,000 runs unless ``runs``), cached for its figures; prints the
+    verdict table."""
+    import time
+
+    from gpsaccel.figures._shared import ensemble
+
+    runs = 10_000 if runs is None else runs
+    t0 = time.perf_counter()
+    mc = ensemble(runs, seed, "error-model")
+    print(f"\nMonte Carlo (report 000's experiment): {mc.n_runs:,} runs, truth error-model, "
+          f"seed {seed}, {time.perf_counter() - t0:.2f} s")
+    print(mc.consistency())
+    return mc
+
+
+def _cmd_montecarlo(args: argparse.Namespace) -> int:
+    """The reports' Monte Carlo: verdict table, the report-style numbers, figures in --out."""
+    import time
+
+    from gpsaccel import plots
+    from gpsaccel.executors import resolve_executor
+    from gpsaccel.models.calibration import CalibrationModel
+    from gpsaccel.montecarlo import STATE_NAMES, STATE_UNITS, monte_carlo
+
+    spec = None
+    if args.dask is not None:
+        if args.dask != "local" and not args.dask.startswith("tcp://"):
+            raise ValueError(f"--dask must be 'local' or tcp://host:port, got {args.dask!r}")
+        spec = "dask-local" if args.dask == "local" else args.dask
+    resolved = resolve_executor(spec)
+    with resolved as ex:
+        t0 = time.perf_counter()
+        mc = monte_carlo(CalibrationModel(), args.runs, seed=args.seed, truth=args.truth,
+                         chunk_size=args.chunk_size, executor=ex,
+                         progress=not args.no_progress)
+        seconds = time.perf_counter() - t0
+    print(f"gpsaccel montecarlo: {mc.n_runs:,} runs, truth {mc.truth}, seed {mc.seed}, "
+          f"{seconds:.2f} s ({resolved.description})")
+    print(mc.consistency(alpha=args.alpha))
+    z0 = (mc.P_ave[0, 0, 0] - mc.P[0, 0, 0]) / mc.P_ave_se[0, 0, 0]
+    print(f"\nP_ave − P at t = 0 for (δp, δp): {mc.P_ave[0, 0, 0] - mc.P[0, 0, 0]:+.4f} m² "
+          f"(standard error {mc.P_ave_se[0, 0, 0]:.4f} m², z = {z0:+.2f}; report 000 printed "
+          f"−0.013)")
+    rc, rc_se = mc.residual_correlation[-1, -2], mc.residual_correlation_se()[-1, -2]
+    print(f"residual correlation r({mc.t[-1]:g} s) r({mc.t[-2]:g} s)ᵀ (report 000's pair) "
+          f"± its standard error:")
+    for a in range(2):
+        print("  [" + ",  ".join(f"{rc[a, b]:+.2e} ± {rc_se[a, b]:.1e}" for b in range(2)) + "]")
+    if np.any(mc.predicted_mean_error):
+        print("the mean error theory predicts for this truth (the filter's error on the Euler "
+              "integration error alone), at its largest, in standard errors of e_ave:")
+        ratio = np.abs(mc.predicted_mean_error) / mc.e_ave_se
+        for k, (name, unit) in enumerate(zip(STATE_NAMES, STATE_UNITS, strict=True)):
+            i = int(np.argmax(ratio[:, k]))
+            print(f"  {name:>2}: {mc.predicted_mean_error[i, k]:+.3g} {unit} at t = {mc.t[i]:g} s "
+                  f"= {ratio[i, k]:.1f} SE (e_ave there {mc.e_ave[i, k]:+.3g})")
+    args.out.mkdir(parents=True, exist_ok=True)
+    figures = {
+        "pave-minus-p": plots.pave_minus_p(mc, grid=False),
+        "pave-minus-p-grid": plots.pave_minus_p(mc, grid=True),
+        "ensemble-mean-error": plots.ensemble_mean_error(mc, sigma=True),
+        "orthogonality": plots.orthogonality(mc),
+    }
+    for slug, fig in figures.items():
+        fig.savefig(args.out / f"montecarlo-{mc.truth}-{slug}.png", dpi=110)
+    print(f"wrote {len(figures)} figures to {args.out}/ (montecarlo-{mc.truth}-*.png)")
     return 0
 
 
@@ -130,6 +201,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--alpha", type=float, default=0.05, help="test level (default 0.05)")
     p.set_defaults(func=_cmd_coop)
+
+    p = sub.add_parser("montecarlo", help="the reports' Monte Carlo validation, with verdicts")
+    p.add_argument("--runs", type=int, default=10_000, help="ensemble size (default 10000)")
+    p.add_argument("--truth", choices=TRUTHS, default="error-model",
+                   help="error-model (report 000) or kinematic (reports 001/003)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--chunk-size", type=int, default=None,
+                   help="runs per task (default 1000); does not change the result")
+    p.add_argument("--dask", default=None, metavar="local|tcp://host:port",
+                   help="run on a Dask LocalCluster or a running scheduler (optional extra)")
+    p.add_argument("--alpha", type=float, default=0.01,
+                   help="family-wise false-alarm rate of the verdict table (default 0.01)")
+    p.add_argument("--out", type=Path, default=Path("out"), help="folder for figures (out/)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_montecarlo)
 
     # Further sub-commands register here (montecarlo, check, lessons, ...).
     return parser
