@@ -63,7 +63,8 @@ Wind or current (``wind=True``), which the report proposes but does not implemen
 ---------------------------------------------------------------------------------
 Two more states ``[b_x, b_y]``, a force (N) on the hull along the world axes, entering like the
 thrust (1/m on ẍ and ÿ), constant or a slow random walk: ``b_{k+1} = b_k + ω_k``,
-``ω ~ N(0, wind_drift I₂)``, prior ``N(0, wind_prior I₂)``.  The wind is not measured.
+``ω ~ N(0, wind_drift I₂)``, prior ``N(0, wind_prior I₂)``; by default wind_drift = 1e-5 N² per
+step (σ ≈ 0.1 N over the 100 s voyage) and wind_prior = 1 N².  The wind is not measured.
 
 The course-notation / filterpy mapping is that of :mod:`gpsaccel.models.calibration`, plus
 ``B`` (course) = ``B`` (filterpy) and ``u`` passed to ``predict(u=...)``.
@@ -136,7 +137,7 @@ class ShipModel:
     imu_rate_hz: float = 10.0
     multirate: bool = True
     wind: bool = False
-    wind_drift: float = 1e-4
+    wind_drift: float = 1e-5
     wind_prior: float = 1.0
 
     def __post_init__(self) -> None:
