@@ -161,6 +161,52 @@ def _cmd_coop(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_ship(args: argparse.Namespace) -> int:
+    """Report 004: RMSE and NEES of the ship's monorate, multirate and zeroed-gain filters."""
+    from gpsaccel.ship_comparison import compare_ship_filters, compare_wind
+
+    print(compare_ship_filters(n_runs=args.runs, seed=args.seed))
+    print()
+    print(compare_wind(n_runs=args.runs, seed=args.seed))
+    return 0
+
+
+def _cmd_check(args: argparse.Namespace) -> int:
+    """Check students' kalman_filter files in parallel; table on stdout, --json for the details."""
+    import time
+
+    from gpsaccel.check.batch import check_many, find_submissions, table, write_json
+
+    files, notes = find_submissions(args.paths)
+    for note in notes:
+        print(note, file=sys.stderr)
+    if not files:
+        raise ValueError("paths: no .py file was found")
+    if args.dask is not None:
+        if args.dask != "local" and not args.dask.startswith("tcp://"):
+            raise ValueError(f"--dask must be 'local' or tcp://host:port, got {args.dask!r}")
+        spec = "dask-local" if args.dask == "local" else args.dask
+    else:
+        spec = None if args.workers == 1 else "processes"
+    if args.workers is not None and args.workers < 1:
+        raise ValueError(f"--workers must be >= 1, got {args.workers}")
+    t0 = time.perf_counter()
+    results = check_many(files, n_runs=args.runs, seed=args.seed, timeout=args.timeout,
+                         executor=spec, max_workers=args.workers)
+    seconds = time.perf_counter() - t0
+    if args.verbose:
+        for r in results:
+            print(r["text"], end="\n\n")
+    print(table(results))
+    print(f"{len(results)} submissions, {args.runs} runs each (seed {args.seed}), "
+          f"{seconds:.1f} s")
+    if args.json is not None:
+        path = write_json(results, args.json, runs=args.runs, seed=args.seed,
+                          timeout=args.timeout)
+        print(f"wrote {path}")
+    return 0 if all(r["passed"] for r in results) else 1
+
+
 def build_parser() -> argparse.ArgumentParser:
     from gpsaccel.simulation import TRUTHS
 
@@ -216,6 +262,28 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, default=Path("out"), help="folder for figures (out/)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_montecarlo)
+
+    p = sub.add_parser("ship", help="the ship (report 004): RMSE/NEES of monorate, multirate, "
+                                    "zeroed gain; wind states")
+    p.add_argument("--runs", type=int, default=200, help="Monte Carlo runs (default 200)")
+    p.add_argument("--seed", type=int, default=0)
+    p.set_defaults(func=_cmd_ship)
+
+    p = sub.add_parser("check", help="check students' kalman_filter files (homework checker)")
+    p.add_argument("paths", nargs="+", type=Path,
+                   help="submission files, or folders searched for *.py files")
+    p.add_argument("--json", type=Path, default=None, metavar="FILE",
+                   help="write every finding and number to FILE (e.g. results.json)")
+    p.add_argument("--runs", type=int, default=200, help="realizations per check (default 200)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the realizations (default 0)")
+    p.add_argument("--timeout", type=float, default=60.0,
+                   help="time limit per submission, s (default 60)")
+    p.add_argument("--workers", type=int, default=None,
+                   help="parallel local processes (default: one per CPU; 1 = one at a time)")
+    p.add_argument("--dask", default=None, metavar="local|tcp://host:port",
+                   help="check on a Dask LocalCluster or a running scheduler instead")
+    p.add_argument("-v", "--verbose", action="store_true", help="print every report in full")
+    p.set_defaults(func=_cmd_check)
 
     # Further sub-commands register here (montecarlo, check, lessons, ...).
     return parser
