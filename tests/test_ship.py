@@ -331,3 +331,33 @@ def test_bad_run_input(model):
     with pytest.raises(ValueError, match="z is NaN where the gain"):
         apply_gains(model.Phi, model.H, model.x0, sched, res.K, z_bad[None], B=model.B, u=run.u)
 
+
+
+# --------------------------------------------------------------------------- CLI and figures
+def test_cli_ship_prints_the_tables(capsys):
+    from gpsaccel.cli import main
+
+    assert main(["ship", "--runs", "20", "--seed", "1"]) == 0
+    out = capsys.readouterr().out
+    for text in ("monorate (all sensors every step)", "mean NEES", "exact cost",
+                 "track RMSE, 11-state filter"):
+        assert text in out
+    assert main(["ship", "--runs", "1"]) == 2
+
+
+def test_report_004_figures(tmp_path):
+    from gpsaccel.figures import write_figures
+
+    paths = write_figures(["004"], tmp_path, runs=10, seed=2, dpi=40)
+    names = [p.name for p in paths]
+    assert len(names) == 14
+    assert names[10] == "r004-fig11-difference-acceleration.png"
+    assert (tmp_path / "index.html").read_text(encoding="utf-8").count("<figure>") == 14
+
+
+def test_acceleration_difference_panels_show_accelerations():
+    from gpsaccel.figures.r004 import figures
+
+    figs = {f.number: f for f in figures(5, 0)}
+    labels = [ax.get_ylabel() for ax in figs["11"].figure.axes]
+    assert labels == ["Δẍ (m/s²)", "Δÿ (m/s²)", "Δψ̈ (rad/s²)"]
