@@ -198,25 +198,29 @@ def gps_noise(run, *, fig: Figure | None = None) -> Figure:
 def errors_with_sigma(run, result, states: Sequence[int] = (0, 1, 2), k: float = 1.0, *,
                       title: str = "Estimation errors with the filter's ±σ",
                       between_fixes: bool = False, shade: tuple[float, float] | None = None,
+                      window: tuple[float, float] | None = None,
                       fig: Figure | None = None) -> Figure:
     """Errors x − x̂ of one run (Realization ``run``, MultirateResult ``result``) with ±kσ, stacked.
 
     ``between_fixes`` also draws the a priori ±kσ on the accelerometer grid (the saw-tooth between
     GPS fixes) and the error of the propagated estimate there; ``shade`` = (t0, t1) marks an
-    interval (a GPS outage).
+    interval (a GPS outage); ``window`` = (t0, t1) draws only that time span (s).
     """
     fig, axs = panels(len(states), fig, title=title)
     e = run.x_gps - result.x_post
+    lo, hi = (-np.inf, np.inf) if window is None else window
+    slow = (result.t_gps >= lo) & (result.t_gps <= hi)
+    fast = (result.t >= lo) & (result.t <= hi)
     for ax, i in zip(axs, states, strict=True):
         name, unit = _state_label(i)
         if between_fixes:
-            sd_fast = np.sqrt(result.M_fast[:, i, i])
-            ax.plot(result.t, run.x[:, i] - result.x_fast[:, i], color=STYLE["error"], lw=0.6,
-                    alpha=0.5, label="error between fixes")
-            ax.plot(result.t, k * sd_fast, color=STYLE["bound"], lw=0.6, alpha=0.6)
-            ax.plot(result.t, -k * sd_fast, color=STYLE["bound"], lw=0.6, alpha=0.6)
-        error_band(result.t_gps, e[:, i], result.sigma[:, i], k, label=f"{name} − {name}̂",
-                   unit=unit, ax=ax)
+            sd_fast = np.sqrt(result.M_fast[fast, i, i])
+            ax.plot(result.t[fast], run.x[fast, i] - result.x_fast[fast, i], color=STYLE["error"],
+                    lw=0.6, alpha=0.5, label="error between fixes")
+            ax.plot(result.t[fast], k * sd_fast, color=STYLE["bound"], lw=0.6, alpha=0.6)
+            ax.plot(result.t[fast], -k * sd_fast, color=STYLE["bound"], lw=0.6, alpha=0.6)
+        error_band(result.t_gps[slow], e[slow, i], result.sigma[slow, i], k,
+                   label=f"{name} − {name}̂", unit=unit, ax=ax)
         if shade is not None:
             ax.axvspan(*shade, color=STYLE["measurement"], alpha=0.3, lw=0, label="no GPS")
             ax.legend(loc="best", fontsize="small")
