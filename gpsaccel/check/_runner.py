@@ -2,7 +2,11 @@
 
 Usage (by :func:`gpsaccel.check.submission.run_student`, not by hand)::
 
-    python -m gpsaccel.check._runner SUBMISSION.py INPUT.npz OUTPUT.npz PROGRESS.txt
+    python -P path/to/gpsaccel/check/_runner.py SUBMISSION.py INPUT.npz OUTPUT.npz PROGRESS.txt
+
+It is run as a script (``-P``: its own folder is not put on ``sys.path``) and imports only the
+standard library and numpy, so the child starts in a fraction of a second and a student's module
+named like one of ours (``report.py``) is not shadowed.
 
 INPUT.npz holds ``z`` (n_runs, n_gps, 2).  The runner imports SUBMISSION.py as a module (its
 ``if __name__ == "__main__":`` block does not run), calls ``kalman_filter(z[r].copy())`` for each

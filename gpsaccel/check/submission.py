@@ -9,7 +9,7 @@ What :func:`submission` does
 ----------------------------
 1. Simulates ``n_runs`` realizations from ``numpy.random.default_rng(seed)`` with the error-model
    truth (:func:`gpsaccel.simulate`), so it knows the true state of each.
-2. Runs the student's file in a separate Python process (``python -m gpsaccel.check._runner``)
+2. Runs the student's file in a separate Python process (``python -P .../check/_runner.py``)
    with a time limit; a crash, an endless loop, wrong shapes, NaN, lists, a flood of prints each
    become a finding, never an exception here.
 3. Compares P and x̂ with the optimal filter on the same data.  Distances are in units of the
@@ -62,6 +62,9 @@ from gpsaccel.simulation import simulate
 #: Largest distance (units of the optimal σ) at which P and x̂ count as equal; also the distance
 #: within which a catalogue entry counts as matching.
 TOLERANCE = 1e-6
+
+#: The script that runs the student's code in the child process.
+RUNNER = Path(__file__).with_name("_runner.py")
 
 #: Characters of the student's printed output kept in a finding.
 OUTPUT_KEEP = 1500
@@ -154,8 +157,9 @@ def run_student(path: Path, z: np.ndarray, timeout: float) -> StudentRun:
         np.savez(inp, z=z)
         prog.touch()
         env = dict(os.environ, MPLBACKEND="Agg", PYTHONHASHSEED="0", PYTHONIOENCODING="utf-8")
-        cmd = [sys.executable, "-m", "gpsaccel.check._runner", str(path), str(inp), str(out),
-               str(prog)]
+        # the runner as a script with -P (its folder not on sys.path: a student's "import report"
+        # must not find ours), so the child imports numpy and the student's file, not gpsaccel
+        cmd = [sys.executable, "-P", str(RUNNER), str(path), str(inp), str(out), str(prog)]
         work = tmp / "cwd"
         work.mkdir()
         timed_out = False
