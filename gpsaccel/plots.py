@@ -101,6 +101,7 @@ def state_grid(t: np.ndarray, values: np.ndarray, *, title: str, ylabel: str,
             ax.set_title(f"({names[i]}, {names[j]})", fontsize="small")
             ax.grid(True, alpha=0.3)
             ax.tick_params(labelsize="x-small")
+            ax.yaxis.get_offset_text().set_fontsize("x-small")  # "1e-5" clear of the title
             ax.set_xlabel("time (s)", fontsize="x-small")
             ax.set_ylabel(f"{ylabel} ({product_unit(units[i], units[j])})", fontsize="x-small")
     fig.suptitle(title)
