@@ -60,15 +60,15 @@ so the ensemble-mean error is then not zero but the filter's error on d alone,
 
 Random draws, reproducible and mergeable
 ----------------------------------------
-Run number l uses row ``l mod BLOCK_RUNS`` of the block ``b = l // BLOCK_RUNS``, whose standard
-normals come from ``numpy.random.default_rng(SeedSequence(seed, spawn_key=(b,)))`` — the b-th
-child of ``SeedSequence(seed)`` — drawn as an array of shape (rows, 605) in C order, so a row does
-not depend on how many rows are drawn.  Run l is therefore the same realization whatever
-``n_runs``, ``chunk_size``, executor or number of workers.  Each chunk returns its sums (count,
-means, centred co-moments, Σ r rᵀ, Σ NEES, Σ NIS) and chunks merge in order (Chan et al.'s
-pairwise update), so memory does not grow with ``n_runs`` and the statistics depend on the chunking
-only through floating-point rounding (≪ 1e-12 relative).  These draws are *not* those of
-:func:`gpsaccel.simulate` (a different random stream, and no per-step noise): use
+Run number l uses column ``l mod BLOCK_RUNS`` of the block ``b = l // BLOCK_RUNS``, whose
+standard normals come from ``numpy.random.default_rng(SeedSequence(seed, spawn_key=(b,)))`` — the
+b-th child of ``SeedSequence(seed)`` — drawn whole as one (605, BLOCK_RUNS) array (row k: normal k
+of every run; the layout the array filter reads without a transpose).  Run l is therefore the
+same realization whatever ``n_runs``, ``chunk_size``, executor or number of workers.  Each chunk
+returns its sums (count, means, centred co-moments, Σ r rᵀ, Σ NEES, Σ NIS) and chunks merge in
+order (Chan et al.'s pairwise update), so memory does not grow with ``n_runs`` and the statistics
+depend on the chunking only through floating-point rounding (≪ 1e-12 relative).  These draws are
+*not* those of :func:`gpsaccel.simulate` (a different random stream, and no per-step noise): use
 :func:`realizations` to get the engine's measurements and truths.
 """
 
@@ -114,7 +114,9 @@ class EnsemblePlan:
     L0 (3, 3) Cholesky factor of M0; LQ (3, 3) of Q_N (its third row and column are zero);
     LV (2, 2) of V; offset (n, 3) the deterministic part of the truth (zero for the error model);
     X (n, 3, 3) the covariance of the true error state; Xhat (n, 3, 3) the covariance of x̂;
-    P_chol_inv, S_chol_inv (n, 3, 3), (n, 2, 2): inverses of the Cholesky factors of P and S.
+    P_inv, S_inv (n, 3, 3), (n, 2, 2): inverses of P and S (for Σ NEES = tr(P⁻¹ Σ e eᵀ));
+    mean_e, mean_xprior, mean_xhat (n, 3) and mean_r (n, 2): the expected error, prior, estimate
+    and residual (the filter run on the offset alone; zero for the error model).
     """
 
     truth: str
@@ -130,12 +132,16 @@ class EnsemblePlan:
     K: np.ndarray
     P: np.ndarray
     S: np.ndarray
-    P_chol_inv: np.ndarray
-    S_chol_inv: np.ndarray
+    P_inv: np.ndarray
+    S_inv: np.ndarray
     X: np.ndarray
     Xhat: np.ndarray
     offset: np.ndarray
     x0: np.ndarray
+    mean_e: np.ndarray
+    mean_xprior: np.ndarray
+    mean_xhat: np.ndarray
+    mean_r: np.ndarray
 
     @property
     def n_normals(self) -> int:
@@ -211,51 +217,128 @@ def plan(model: CalibrationModel, truth: str = "error-model") -> EnsemblePlan:
         Xhat[i] = Cbar + K[i] @ S[i] @ K[i].T
     LQ = np.zeros((3, 3))
     LQ[:2, :2] = np.linalg.cholesky(Q_N[:2, :2])  # Q_N has no bias part: Γ's third entry is 0
+    # Expected values: E x_i = d_i (the offset; x_0 and the noise have zero mean), and the filter,
+    # being linear, maps it like data: E r_i = H d_i − H E x̄_i, E x̂_i = E x̄_i + K_i E r_i.
+    if not np.array_equal(H, np.eye(2, 3)):
+        raise ValueError("model.H must be [I 0] (GPS measures δp and δv) for the ensemble engine")
+    offset = truth_offset(model, truth)
+    x0 = np.asarray(model.x0, dtype=float)
+    mean_xprior = np.empty((n, 3))
+    mean_xhat = np.empty((n, 3))
+    mean_r = np.empty((n, 2))
+    for i in range(n):
+        mean_xprior[i] = x0 if i == 0 else Phi_N @ mean_xhat[i - 1]
+        mean_r[i] = H @ offset[i] - H @ mean_xprior[i]
+        mean_xhat[i] = mean_xprior[i] + K[i] @ mean_r[i]
     return EnsemblePlan(truth, n, model.t_gps, H, Phi_N, Q_N, np.linalg.cholesky(model.M0), LQ,
-                        np.linalg.cholesky(V), M, K, P, S, np.linalg.inv(np.linalg.cholesky(P)),
-                        np.linalg.inv(np.linalg.cholesky(S)),
-                        X, Xhat, truth_offset(model, truth), np.asarray(model.x0, dtype=float))
+                        np.linalg.cholesky(V), M, K, P, S, np.linalg.inv(P), np.linalg.inv(S), X,
+                        Xhat, offset, x0, offset - mean_xhat, mean_xprior, mean_xhat, mean_r)
 
 
 # ------------------------------------------------------------------------------ draws and filter
 def _standard_normals(seed: int, n_normals: int, start: int, stop: int) -> np.ndarray:
-    """Rows ``start:stop`` (global run indices) of the standard normals, block by block."""
+    """(n_normals, stop − start) standard normals of runs ``start:stop``: column l is run l.
+
+    Block b holds runs b·BLOCK_RUNS .. (b+1)·BLOCK_RUNS − 1; its normals are one
+    (n_normals, BLOCK_RUNS) array drawn in C order from
+    ``default_rng(SeedSequence(seed, spawn_key=(b,)))``, always whole, so a run's normals do not
+    depend on which runs are asked for.
+    """
     parts = []
     for b in range(start // BLOCK_RUNS, (stop - 1) // BLOCK_RUNS + 1):
         lo = max(start, b * BLOCK_RUNS) - b * BLOCK_RUNS
         hi = min(stop, (b + 1) * BLOCK_RUNS) - b * BLOCK_RUNS
         rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(b,)))
-        parts.append(rng.standard_normal((hi, n_normals))[lo:])
-    return parts[0] if len(parts) == 1 else np.concatenate(parts)
+        parts.append(rng.standard_normal((n_normals, BLOCK_RUNS))[:, lo:hi])
+    return parts[0] if len(parts) == 1 else np.concatenate(parts, axis=1)
 
 
-def _filter_block(pl: EnsemblePlan, xi: np.ndarray) -> dict[str, np.ndarray]:
-    """Truth, measurements and the filter's estimates for each row of standard normals ``xi``.
+def _run_block(pl: EnsemblePlan, xi: np.ndarray,
+               keep: bool = False) -> tuple[EnsembleSums, dict[str, np.ndarray] | None]:
+    """Truth, measurements, filter and sums for each column of standard normals xi (n_normals, m).
 
-    Returns arrays laid out (epoch, component, run) so that every step is one small matrix times
-    a (component, run) array: x (n, 3, m) true error state, z (n, 2, m), x_prior and x_hat
-    (n, 3, m), r (n, 2, m) residuals.
+    Everything is linear, so every quantity is its expected value (``pl.mean_*``, the filter run
+    on the deterministic offset; zero for the error model) plus a zero-mean part driven by the
+    noise.  The loop runs the zero-mean part only — x̃_i = Φ_N x̃_{i−1} + u_{i−1},
+    r̃_i = x̃_i[:2] + η_i − x̄̃_i[:2], x̂̃_i = x̄̃_i + K_i r̃_i, ẽ_i = x̃_i − x̂̃_i — with every
+    quantity a (component, run) array, so that each step is one small matrix times m columns.
+    Per epoch it accumulates G_i = Σ w wᵀ of w = [ẽ; x̂̃; 1] (which holds Σ ẽ ẽᵀ, Σ ẽ x̂̃ᵀ and
+    the sums Σ ẽ, Σ x̂̃), and keeps r̃ for Σ r̃ r̃ᵀ.  The expected values go back in afterwards,
+    exactly: with r = r̃ + ρ, Σ r rᵀ = Σ r̃ r̃ᵀ + ρ (Σ r̃)ᵀ + (Σ r̃) ρᵀ + m ρ ρᵀ, and likewise
+    Σ e eᵀ for NEES = tr(P⁻¹ e eᵀ) and NIS = tr(S⁻¹ r rᵀ).  The co-moments are centred on the
+    expected values, so no precision is lost to a large mean.
+
+    With ``keep`` it also returns the full arrays (epoch, component, run): x (true error state),
+    z, x_prior, x_hat, r.
     """
-    m, n = xi.shape[0], pl.n_gps
-    xiT = np.ascontiguousarray(xi.T)  # (n_normals, m)
+    m, n = xi.shape[1], pl.n_gps
+    xiT = xi  # (n_normals, m): row k = normal k of every run
     nu = 3 + 2 * (n - 1)
-    x = np.empty((n, 3, m))
-    x[0] = pl.L0 @ xiT[:3]  # x_0 ~ N(0, M0)
-    u = pl.LQ[:, :2] @ xiT[3:nu].reshape(n - 1, 2, m)  # u_i ~ N(0, Q_N), (n − 1, 3, m)
-    for i in range(1, n):  # error-model truth at the GPS epochs: x_{i+1} = Φ_N x_i + u_i
-        x[i] = pl.Phi_N @ x[i - 1] + u[i - 1]
-    x += pl.offset[:, :, None]  # + d(t_i), the kinematic truth's deterministic part (or 0)
-    z = pl.H @ x + pl.LV @ xiT[nu:].reshape(n, 2, m)  # z_i = H x_i + η_i
-    x_prior = np.empty((n, 3, m))
-    x_hat = np.empty((n, 3, m))
-    r = np.empty((n, 2, m))
-    x_prior[0] = pl.x0[:, None]
+    # u_i = L_Q ξ and η_i = L_V ξ for all epochs at once (both factors are lower triangular 2x2)
+    un = xiT[3:nu].reshape(n - 1, 2, m)
+    en = xiT[nu:].reshape(n, 2, m)
+    U = np.empty((n - 1, 2, m))
+    E = np.empty((n, 2, m))
+    for out, L, xn in ((U, pl.LQ[:2, :2], un), (E, pl.LV, en)):
+        np.multiply(L[0, 0], xn[:, 0], out=out[:, 0])
+        np.multiply(L[1, 0], xn[:, 0], out=out[:, 1])
+        out[:, 1] += L[1, 1] * xn[:, 1]
+    Phi_N, K = pl.Phi_N, pl.K
+    r_all = np.empty((2 * n, m))  # stacked r̃: rows r̃_0[p], r̃_0[v], r̃_1[p], ...
+    w = np.empty((7, m))  # [ẽ; x̂̃; 1]
+    w[6] = 1.0
+    xhat = w[3:6]
+    G = np.empty((n, 7, 7))
+    Kr = np.empty((3, m))
+    x = pl.L0 @ xiT[:3]  # x̃_0 ~ N(0, M0)
+    xbar = np.zeros((3, m))  # x̄_0 = x0 is deterministic
+    if keep:
+        kept = {k: np.empty((n, d, m)) for k, d in
+                (("x", 3), ("z", 2), ("x_prior", 3), ("x_hat", 3), ("r", 2))}
     for i in range(n):
         if i > 0:
-            x_prior[i] = pl.Phi_N @ x_hat[i - 1]  # x̄_i = Φ_N x̂_{i−1}
-        r[i] = z[i] - pl.H @ x_prior[i]  # r_i = z_i − H x̄_i
-        x_hat[i] = x_prior[i] + pl.K[i] @ r[i]  # x̂_i = x̄_i + K_i r_i
-    return {"x": x, "z": z, "x_prior": x_prior, "x_hat": x_hat, "r": r}
+            x = Phi_N @ x
+            x[:2] += U[i - 1]  # x̃_i = Φ_N x̃_{i−1} + u_{i−1}
+            xbar = Phi_N @ xhat  # x̄̃_i = Φ_N x̂̃_{i−1}
+        r = r_all[2 * i:2 * i + 2]
+        np.add(x[:2], E[i], out=r)
+        r -= xbar[:2]  # r̃_i = H x̃_i + η_i − H x̄̃_i
+        np.matmul(K[i], r, out=Kr)
+        np.add(xbar, Kr, out=xhat)  # x̂̃_i = x̄̃_i + K_i r̃_i
+        np.subtract(x, xhat, out=w[:3])  # ẽ_i
+        np.matmul(w, w.T, out=G[i])
+        if keep:
+            kept["x"][i], kept["x_prior"][i], kept["x_hat"][i] = x, xbar, xhat
+            kept["z"][i], kept["r"][i] = x[:2] + E[i], r
+    # -- the sums, expected values put back
+    sw = G[:, 6, :6]  # Σ w (n, 6)
+    de, dx = sw[:, :3] / m, sw[:, 3:] / m  # block means of ẽ and x̂̃
+    C = G[:, :6, :6] - m * (sw[:, :, None] / m) * (sw[:, None, :] / m)
+    mu = pl.mean_e
+    see = G[:, :3, :3] + mu[:, :, None] * sw[:, None, :3] + sw[:, :3, None] * mu[:, None, :] \
+        + m * mu[:, :, None] * mu[:, None, :]  # Σ e eᵀ
+    rr = r_all @ r_all.T
+    s_r = r_all.sum(axis=1)
+    rho = pl.mean_r.reshape(-1)
+    if rho.any():
+        rr += np.outer(rho, s_r)
+        rr += np.outer(s_r, rho)
+        rr += m * np.outer(rho, rho)
+    rr_diag = np.einsum("iaib->iab", rr.reshape(n, 2, n, 2))  # Σ r_i r_iᵀ
+    sums = EnsembleSums(
+        n=m, mean_e=mu + de, mean_xhat=pl.mean_xhat + dx,
+        mean_r=pl.mean_r + s_r.reshape(n, 2) / m,
+        C_ee=C[:, :3, :3], C_ex=C[:, :3, 3:], rr=rr,
+        nees=np.einsum("iab,iba->i", pl.P_inv, see),
+        nis=np.einsum("iab,iba->i", pl.S_inv, rr_diag))
+    if not keep:
+        return sums, None
+    kept["x"] += pl.offset[:, :, None]
+    kept["z"] += pl.offset[:, :2, None]
+    kept["x_prior"] += pl.mean_xprior[:, :, None]
+    kept["x_hat"] += pl.mean_xhat[:, :, None]
+    kept["r"] += pl.mean_r[:, :, None]
+    return sums, kept
 
 
 @dataclass(frozen=True, eq=False)
@@ -286,7 +369,7 @@ def realizations(model: CalibrationModel, start: int, stop: int, seed: int = 0,
     start = _v.integer("start", start, minimum=0)
     stop = _v.integer("stop", stop, minimum=start + 1)
     pl = plan(model, truth)
-    out = _filter_block(pl, _standard_normals(seed, pl.n_normals, start, stop))
+    out = _run_block(pl, _standard_normals(seed, pl.n_normals, start, stop), keep=True)[1]
     runs_first = {k: np.ascontiguousarray(v.transpose(2, 0, 1)) for k, v in out.items()}
     return Realizations(np.arange(start, stop), pl.t, runs_first["x"], runs_first["z"],
                         runs_first["x_prior"], runs_first["x_hat"], runs_first["r"])
@@ -312,24 +395,6 @@ class EnsembleSums:
     rr: np.ndarray
     nees: np.ndarray
     nis: np.ndarray
-
-    @classmethod
-    def of_block(cls, pl: EnsemblePlan, block: dict[str, np.ndarray]) -> EnsembleSums:
-        """The sums of one block from :func:`_filter_block` (arrays laid out (epoch, comp, run))."""
-        xh, r = block["x_hat"], block["r"]
-        e = block["x"] - xh
-        m = e.shape[2]
-        mean_e, mean_x = e.mean(axis=2), xh.mean(axis=2)
-        ec = e - mean_e[:, :, None]
-        xc = xh - mean_x[:, :, None]
-        ecT = ec.transpose(0, 2, 1)
-        C_ee = ec @ ecT
-        C_ex = ec @ xc.transpose(0, 2, 1)
-        y = pl.P_chol_inv @ e  # eᵀ P⁻¹ e = |L⁻¹ e|² with P = L Lᵀ
-        s = pl.S_chol_inv @ r
-        rf = r.reshape(-1, m)  # rows: r_0[p], r_0[v], r_1[p], ...
-        return cls(m, mean_e, mean_x, r.mean(axis=2), C_ee, C_ex, rf @ rf.T,
-                   np.einsum("iam,iam->i", y, y), np.einsum("iam,iam->i", s, s))
 
     def merge(self, other: EnsembleSums) -> EnsembleSums:
         """The sums of both sets (Chan, Golub & LeVeque's pairwise update of the co-moments)."""
@@ -360,8 +425,7 @@ def _chunk_sums(pl: EnsemblePlan, seed: int, start: int, stop: int) -> EnsembleS
     lo = start
     while lo < stop:
         hi = min(stop, (lo // BLOCK_RUNS + 1) * BLOCK_RUNS)
-        part = EnsembleSums.of_block(pl, _filter_block(pl, _standard_normals(seed, pl.n_normals,
-                                                                             lo, hi)))
+        part = _run_block(pl, _standard_normals(seed, pl.n_normals, lo, hi))[0]
         acc = part if acc is None else acc.merge(part)
         lo = hi
     return acc
@@ -616,18 +680,9 @@ def _result(model: CalibrationModel, pl: EnsemblePlan, s: EnsembleSums,
             seed: int) -> MonteCarloResult:
     N, n = s.n, pl.n_gps
     rc = (s.rr / N).reshape(n, 2, n, 2).transpose(0, 2, 1, 3)
-    predicted = _predicted_mean_error(pl)
     return MonteCarloResult(
         n_runs=N, seed=seed, truth=pl.truth, t=pl.t.copy(), e_ave=s.mean_e,
         P_ave=s.C_ee / (N - 1), P=pl.P.copy(), orthogonality=s.C_ex / N,
         residual_correlation=np.ascontiguousarray(rc), residual_mean=s.mean_r, S=pl.S.copy(),
         nees=s.nees / N, nis=s.nis / N, estimate_covariance=pl.Xhat.copy(),
-        predicted_mean_error=predicted, model=model)
-
-
-def _predicted_mean_error(pl: EnsemblePlan) -> np.ndarray:
-    """The filter's error on the deterministic part of the truth alone (all noise set to 0)."""
-    if not np.any(pl.offset):
-        return np.zeros((pl.n_gps, 3))
-    out = _filter_block(pl, np.zeros((1, pl.n_normals)))
-    return (out["x"] - out["x_hat"])[:, :, 0]
+        predicted_mean_error=pl.mean_e.copy(), model=model)

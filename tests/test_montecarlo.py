@@ -19,8 +19,7 @@ from gpsaccel.filters.multirate import run_multirate
 from gpsaccel.models.calibration import CalibrationModel
 from gpsaccel.montecarlo import (
     BLOCK_RUNS,
-    EnsembleSums,
-    _filter_block,
+    _run_block,
     _standard_normals,
     gps_interval_noise,
     plan,
@@ -155,13 +154,19 @@ def test_run_l_is_the_same_realization_whatever_the_range():
 def test_merged_sums_equal_the_sums_of_the_whole():
     pl = plan(MODEL, "kinematic")
     xi = _standard_normals(5, pl.n_normals, 0, 300)
-    whole = EnsembleSums.of_block(pl, _filter_block(pl, xi))
-    parts = [EnsembleSums.of_block(pl, _filter_block(pl, xi[lo:hi]))
-             for lo, hi in ((0, 7), (7, 180), (180, 300))]
+    whole, arrays = _run_block(pl, xi, keep=True)
+    parts = [_run_block(pl, xi[:, lo:hi])[0] for lo, hi in ((0, 7), (7, 180), (180, 300))]
     merged = parts[0].merge(parts[1]).merge(parts[2])
     assert merged.n == whole.n == 300
     for name in ("mean_e", "mean_xhat", "mean_r", "C_ee", "C_ex", "rr", "nees", "nis"):
         assert_close(getattr(merged, name), getattr(whole, name), 1e-12)
+    # and the shifted on-the-fly sums equal the textbook formulas on the kept arrays
+    e = arrays["x"] - arrays["x_hat"]
+    ec = e - e.mean(axis=2, keepdims=True)
+    xc = arrays["x_hat"] - arrays["x_hat"].mean(axis=2, keepdims=True)
+    assert_close(whole.C_ee, np.einsum("iam,ibm->iab", ec, ec), 1e-12)
+    assert_close(whole.C_ex, np.einsum("iam,ibm->iab", ec, xc), 1e-12)
+    assert_close(whole.mean_e, e.mean(axis=2), 1e-12)
 
 
 def test_results_do_not_depend_on_chunk_size_executor_or_workers():
