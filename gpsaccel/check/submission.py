@@ -340,10 +340,11 @@ class Diagnosis:
     nearest_distance: float
 
 
-def diagnose(P_student: np.ndarray, x_student: np.ndarray, problem: Problem,
-             tol: float = TOLERANCE, max_combined: int = 3) -> Diagnosis:
-    """Match (x̂, P) of the student (all runs) against the catalogue; see the module docstring."""
-    model, sd = problem.model, problem.sd
+@lru_cache(maxsize=8)
+def _candidates(model: CalibrationModel, max_combined: int
+                ) -> tuple[list[tuple[cat.Mistake, ...]], np.ndarray]:
+    """Every covariance entry and combination of up to ``max_combined`` (the first is the optimal
+    filter, ``()``) and the covariance each returns, (C, n_gps, 3, 3).  Cached per model object."""
     cov = cat.covariance_mistakes(model)
     combos: list[tuple[cat.Mistake, ...]] = [()]
     for k in range(1, max_combined + 1):
@@ -351,12 +352,19 @@ def diagnose(P_student: np.ndarray, x_student: np.ndarray, problem: Problem,
     filters = [cat.build(model, c) for c in combos]
     _, M, P = cat.batch_gains(filters)
     prior = np.array([f.output == "prior" for f in filters])
-    P_out = np.where(prior[:, None, None, None], M, P)
-    # every run's P against every candidate: max over runs, times and elements
-    d = np.zeros(len(combos))
-    for r in range(P_student.shape[0]):
-        d = np.maximum(d, _dist_P(P_student[r][None], P_out, sd).reshape(len(combos), -1)
-                       .max(axis=1))
+    return combos, np.where(prior[:, None, None, None], M, P)
+
+
+def diagnose(P_student: np.ndarray, x_student: np.ndarray, problem: Problem,
+             tol: float = TOLERANCE, max_combined: int = 3) -> Diagnosis:
+    """Match (x̂, P) of the student (all runs) against the catalogue; see the module docstring."""
+    model, sd = problem.model, problem.sd
+    combos, P_out = _candidates(model, max_combined)
+    # run 0's P against every candidate ranks them; a candidate within the tolerance must then
+    # also match every other run's P (a P that varies with the data matches nothing)
+    d = _dist_P(P_student[0][None], P_out, sd).reshape(len(combos), -1).max(axis=1)
+    for c in np.flatnonzero(d <= tol):
+        d[c] = _dist_P(P_student, P_out[c][None], sd).max()
     order = np.argsort(d, kind="stable")
     means = cat.mean_mistakes(model)
     mean_combos = [()] + [(m,) for m in means] + list(cat.combinations(means, 2))
