@@ -1,0 +1,19 @@
+"""``gpsaccel lessons``: executes the lessons and renders them as HTML with their figures."""
+
+from __future__ import annotations
+
+from gpsaccel.cli import main
+
+
+def test_lessons_html_renders_a_lesson_with_its_figures(tmp_path, capsys):
+    assert main(["lessons", "--html", str(tmp_path), "--only", "02", "--runs", "10"]) == 0
+    html = (tmp_path / "02-error-model.html").read_text(encoding="utf-8")
+    assert "image/png" in html and "Deriving" in html
+    assert "1 lessons executed" in capsys.readouterr().out
+
+
+def test_lessons_refuses_an_unknown_lesson_and_a_tiny_ensemble(capsys):
+    assert main(["lessons", "--only", "99"]) == 2
+    assert "--only" in capsys.readouterr().err
+    assert main(["lessons", "--only", "02", "--runs", "1"]) == 2
+    assert "--runs must be >= 2" in capsys.readouterr().err
