@@ -171,7 +171,7 @@ def run_student(path: Path, z: np.ndarray, timeout: float) -> StudentRun:
                 proc.wait(timeout=timeout)
             except subprocess.TimeoutExpired:
                 timed_out = True
-                _kill(proc)
+            _kill(proc)  # also whatever the student's code started and left running
         runs_done = len(prog.read_text(encoding="utf-8").split())
         text, chars = _tail(log, OUTPUT_KEEP)
         x = P = None
@@ -185,10 +185,14 @@ def run_student(path: Path, z: np.ndarray, timeout: float) -> StudentRun:
 
 
 def _kill(proc: subprocess.Popen) -> None:
-    """Kill the child and whatever it started (its own session, so only its processes)."""
-    try:
-        os.killpg(proc.pid, signal.SIGKILL)
-    except (ProcessLookupError, PermissionError):
+    """Kill the child and whatever it started: the process group it leads (it was started in a
+    session of its own, so the group holds only its processes)."""
+    if hasattr(os, "killpg"):
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):
+            pass  # the group is already empty
+    if proc.poll() is None:
         proc.kill()
     proc.wait()
 
