@@ -82,6 +82,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gpsaccel import _validation as _v
+from gpsaccel._blas import single_threaded_blas
 from gpsaccel.consistency import (
     ConsistencyReport,
     chi2_bounds,
@@ -419,15 +420,17 @@ class EnsembleSums:
 def _chunk_sums(pl: EnsemblePlan, seed: int, start: int, stop: int) -> EnsembleSums:
     """Sums of runs ``start:stop``, one random block (≤ BLOCK_RUNS runs) at a time, merged in order.
 
-    Module-level and picklable: this is what an executor runs.
+    Module-level and picklable: this is what an executor runs.  BLAS runs single-threaded meanwhile
+    (:mod:`gpsaccel._blas`): the products are small, and the executor's workers are the parallelism.
     """
     acc = None
     lo = start
-    while lo < stop:
-        hi = min(stop, (lo // BLOCK_RUNS + 1) * BLOCK_RUNS)
-        part = _run_block(pl, _standard_normals(seed, pl.n_normals, lo, hi))[0]
-        acc = part if acc is None else acc.merge(part)
-        lo = hi
+    with single_threaded_blas():
+        while lo < stop:
+            hi = min(stop, (lo // BLOCK_RUNS + 1) * BLOCK_RUNS)
+            part = _run_block(pl, _standard_normals(seed, pl.n_normals, lo, hi))[0]
+            acc = part if acc is None else acc.merge(part)
+            lo = hi
     return acc
 
 

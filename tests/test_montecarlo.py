@@ -221,3 +221,18 @@ def test_bad_input_raises_value_error_naming_the_argument(kwargs, name):
 def test_bad_model():
     with pytest.raises(ValueError, match="model"):
         monte_carlo("report 000", 10)
+
+
+def test_blas_thread_count_is_restored_after_overlapping_users():
+    from gpsaccel._blas import blas_threads, single_threaded_blas
+
+    before = blas_threads()
+    with single_threaded_blas():
+        assert all(n == 1 for n in blas_threads())
+        with single_threaded_blas():  # a second, overlapping user (another executor thread)
+            pass
+        assert all(n == 1 for n in blas_threads())  # not restored while the first is inside
+    assert blas_threads() == before
+    with cf.ThreadPoolExecutor(max_workers=2) as pool:
+        monte_carlo(MODEL, 2 * BLOCK_RUNS, executor=pool, progress=False)
+    assert blas_threads() == before
