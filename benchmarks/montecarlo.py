@@ -134,7 +134,7 @@ def main() -> None:
               f"(in-process {mc['wall'] * 1e6:.1f} µs; filterpy / pool = "
               f"{fp['wall'] / mc2['wall']:.0f}x)")
 
-    print("\npeak resident memory (ru_maxrss of a fresh process)")
+    print("\npeak resident memory (VmHWM of a fresh process)")
     print(f"{'runs':>11} {'truth':<12} {'peak MiB':>9}")
     for runs, truth in ((0, "-"), (args.runs, "error-model"), (args.big, "error-model"),
                         (args.big, "kinematic")):
