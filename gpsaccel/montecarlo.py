@@ -626,9 +626,9 @@ def monte_carlo(model: CalibrationModel, n_runs: int, seed: int = 0, truth: str 
         executor (see the module docstring; the stream differs from :func:`gpsaccel.simulate`'s).
     truth : ``"error-model"`` (report 000) or ``"kinematic"`` (reports 001/003), as in
         :func:`gpsaccel.simulate`.
-    chunk_size : runs per task submitted to the executor (default :data:`BLOCK_RUNS`).  Memory
-        per task is about 10 kB per run up to BLOCK_RUNS runs; results do not depend on it beyond
-        rounding.
+    chunk_size : runs per task submitted to the executor (default :data:`BLOCK_RUNS`).  A task
+        works one random block at a time, so its memory stays at about 10 MB whatever the size;
+        results do not depend on it beyond rounding.  At most 2 × workers tasks are in flight.
     executor : None (in this process), any :class:`concurrent.futures.Executor` (a process pool,
         ``dask.distributed.Client(...).get_executor()``), or a specification understood by
         :func:`gpsaccel.executors.resolve_executor` (``"processes"``, ``"dask-local"``,

@@ -236,3 +236,20 @@ def test_blas_thread_count_is_restored_after_overlapping_users():
     with cf.ThreadPoolExecutor(max_workers=2) as pool:
         monte_carlo(MODEL, 2 * BLOCK_RUNS, executor=pool, progress=False)
     assert blas_threads() == before
+
+
+def test_cli_montecarlo_prints_the_table_and_writes_the_figures(tmp_path, capsys):
+    from gpsaccel.cli import main
+
+    assert main(["montecarlo", "--runs", "300", "--truth", "kinematic", "--out", str(tmp_path),
+                 "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "e_ave[δv]" in out and "residual whiteness" in out and "NEES" in out
+    assert "r(30 s) r(29.8 s)ᵀ" in out
+    names = sorted(p.name for p in tmp_path.glob("*.png"))
+    assert names == [f"montecarlo-kinematic-{s}.png" for s in
+                     ("ensemble-mean-error", "orthogonality", "pave-minus-p-grid", "pave-minus-p")]
+    assert main(["montecarlo", "--runs", "1", "--out", str(tmp_path)]) == 2
+    assert main(["montecarlo", "--dask", "nowhere", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "n_runs" in err and "--dask" in err
