@@ -1,0 +1,281 @@
+"""Report 002 (ASEN 5044, cooperative air/ground localization): figures 1-19, and the UKF.
+
+Figures 1-5 are the linearization study of part 1c (the report's perturbation
+δx0 = [0, 1, 0, 0, 0, 0.1]); 6-15 one Monte Carlo truth set (``runs`` runs from ``seed``, run 0 the
+"typical" one) filtered by the LKF, the EKF and the UKF with their tuned Q; 16-19 the course's
+100-second log.  Sub-figures with letters go beyond the report: 8b how far the truth wanders from
+the nominal (why the LKF fails), 14b/15b the EKF with Q = Qtrue, 14c/15c the UKF, 18b/19b the UKF
+on the log, 19c the NIS of the three filters on the log.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from gpsaccel import plots
+from gpsaccel.coop_montecarlo import ConsistencyRun, consistency_test, truth_runs
+from gpsaccel.figures import ReportFigure
+from gpsaccel.filters.nonlinear import FilterResult, run_filter
+from gpsaccel.models.coop import (
+    MEASUREMENTS,
+    STATES,
+    CoopModel,
+    h,
+    state_residual,
+    wrap_angle,
+)
+
+TITLE = "Cooperative air/ground localization: LKF, EKF and UKF with NEES/NIS tests (ASEN 5044)"
+#: The report's EKF NEES/NIS used 100 runs (its LKF 50).
+DEFAULT_RUNS = 100
+#: Report 002's initial perturbation for the linearization study (part 1c).
+DX0 = np.array([0.0, 1.0, 0.0, 0.0, 0.0, 0.1])
+S = plots.STYLE
+NAMES = {"lkf": "LKF", "ekf": "EKF", "ukf": "UKF", "ekf-qtrue": "EKF, Q = Qtrue"}
+
+
+def _breaks(v: np.ndarray, unit: str) -> np.ndarray:
+    """A copy for line plots with NaN where a wrapped angle jumps across ±π (no vertical lines)."""
+    v = np.array(v, dtype=float, copy=True)
+    if unit == "rad":
+        jump = np.abs(np.diff(v)) > np.pi
+        v[1:][jump] = np.nan
+    return v
+
+
+def _no_roundoff_zoom(ax) -> None:
+    """Keep a nearly constant curve from being zoomed into its rounding noise."""
+    lo, hi = ax.get_ylim()
+    c = 0.5 * (lo + hi)
+    if hi - lo < 1e-6 * max(1.0, abs(c)):
+        half = max(0.1 * abs(c), 0.1)
+        ax.set_ylim(c - half, c + half)
+    ax.ticklabel_format(axis="y", useOffset=False)
+
+
+def states_figure(t: np.ndarray, series: list[tuple[np.ndarray, str, dict]], title: str,
+                  quantity: str = "") -> Figure:
+    """The six states in a 3 x 2 grid, UGV left, UAV right: series = [(x (K,6), label, style)]."""
+    fig = Figure(figsize=(10.0, 7.5), layout="constrained")
+    axs = fig.subplots(3, 2, sharex=True)
+    for i, (name, unit) in enumerate(STATES):
+        ax = axs[i % 3, i // 3]
+        for values, label, style in series:
+            ax.plot(t, _breaks(values[:, i], unit), label=label, **style)
+        plots.finish(ax, "UGV" if i == 0 else "UAV" if i == 3 else "",
+                     "time (s)" if i % 3 == 2 else "", f"{quantity}{name} ({unit})",
+                     legend=i == 0)
+        _no_roundoff_zoom(ax)
+    fig.suptitle(title)
+    return fig
+
+
+def measurements_figure(t: np.ndarray, series: list[tuple[np.ndarray, str, dict]],
+                        title: str) -> Figure:
+    """The five measurements stacked: series = [(y (K,5), label, style)]."""
+    fig, axs = plots.panels(5, title=title, height=1.6)
+    for i, (name, unit) in enumerate(MEASUREMENTS):
+        for values, label, style in series:
+            axs[i].plot(t, _breaks(values[:, i], unit), label=label, **style)
+        plots.finish(axs[i], "", "time (s)" if i == 4 else "", f"{name.split(' ')[0]} ({unit})",
+                     legend=i == 0)
+    return fig
+
+
+def vehicle_figure(t: np.ndarray, states: tuple[int, int, int], est: np.ndarray,
+                   sigma: np.ndarray, title: str, truth: np.ndarray | None = None,
+                   measured: np.ndarray | None = None) -> Figure:
+    """One vehicle: estimate ±2σ (and the truth) left; error ±2σ right when the truth is known."""
+    ncol = 1 if truth is None else 2
+    fig = Figure(figsize=(5.5 * ncol, 7.0), layout="constrained")
+    axs = fig.subplots(3, ncol, sharex=True, squeeze=False)
+    for row, i in enumerate(states):
+        name, unit = STATES[i]
+        ax = axs[row, 0]
+        lo, hi = est[:, i] - 2 * sigma[:, i], est[:, i] + 2 * sigma[:, i]
+        ax.fill_between(t, _breaks(lo, unit), _breaks(hi, unit), color=S["band"], alpha=0.3,
+                        lw=0, label="estimate ± 2σ")
+        if measured is not None and i in (3, 4):
+            ax.plot(t, measured[:, i], ".", color=S["measurement"], ms=2, label="GPS")
+        if truth is not None:
+            ax.plot(t, _breaks(truth[:, i], unit), color=S["truth"], lw=1.0, label="truth")
+        ax.plot(t, _breaks(est[:, i], unit), color=S["estimate"], lw=0.9, label="estimate")
+        plots.finish(ax, "", "time (s)" if row == 2 else "", f"{name} ({unit})", legend=row == 0)
+        if truth is not None:
+            ax = axs[row, 1]
+            err = truth[:, i] - est[:, i]
+            if unit == "rad":
+                err = wrap_angle(err)
+            ax.plot(t, err, color=S["error"], lw=0.9, label="error")
+            ax.plot(t, 2 * sigma[:, i], color=S["bound"], ls="--", lw=1.0, label="±2σ (filter)")
+            ax.plot(t, -2 * sigma[:, i], color=S["bound"], ls="--", lw=1.0)
+            plots.finish(ax, "", "time (s)" if row == 2 else "", f"{name} error ({unit})",
+                         legend=row == 0)
+    fig.suptitle(title)
+    return fig
+
+
+def linearization_study(model: CoopModel, dx0: np.ndarray = DX0) -> dict[str, np.ndarray]:
+    """Nominal, the linearized DT perturbation run and the full nonlinear run from x0 + δx0."""
+    xn = model.nominal()
+    dx, dy = model.linearized_simulation(dx0, xn)
+    full = model.nominal(model.x0 + dx0)
+    return {"t": model.t, "nominal": xn, "dx": dx, "x_lin": xn + dx, "y_lin": h(xn) + dy,
+            "x_full": full, "y_full": h(full), "dx_full": state_residual(full, xn)}
+
+
+def monte_carlo(model: CoopModel, runs: int, seed: int) -> dict[str, ConsistencyRun]:
+    """The LKF, EKF, UKF (tuned Q) and the EKF with Q = Qtrue on one truth set."""
+    truth = truth_runs(model, runs, seed)
+    out = {m: consistency_test(model, m, truth=truth, keep=True) for m in ("lkf", "ekf", "ukf")}
+    out["ekf-qtrue"] = consistency_test(model, "ekf", model.Qtrue, truth=truth, keep=True)
+    return out
+
+
+def on_the_log(model: CoopModel) -> dict[str, FilterResult]:
+    """The three filters (tuned Q) on the course's 100-second log."""
+    y = model.log()
+    return {m: run_filter(m, model, y) for m in ("lkf", "ekf", "ukf")}
+
+
+def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
+    model = CoopModel()
+    t = model.t
+    lin = linearization_study(model)
+    dash = {"ls": "--", "lw": 1.0, "color": S["estimate"]}
+    solid = {"lw": 1.0, "color": S["truth"]}
+    nom = {"lw": 0.8, "color": S["measurement"]}
+    nominal = (lin["nominal"], "nominal x*", nom)
+    linear = (lin["x_lin"], "linearized x* + δx", dash)
+    full = (lin["x_full"], "nonlinear (solve_ivp)", solid)
+    yield ReportFigure("002", "01", "linearized-states", (
+        "States of the linearized DT simulation x* + δx (δx_{k+1} = (I + ΔT·A) δx_k from "
+        "δx0 = [0, 1 m, 0, 0, 0, 0.1 rad]) against the nominal x*."),
+        states_figure(t, [nominal, linear], "Linearized DT simulation: total states"))
+    yield ReportFigure("002", "02", "perturbations", (
+        "State perturbations δx of the linearized DT model against the nonlinear perturbation "
+        "x(t) − x*(t) from the same initial offset: the Euler-linearized model tracks it."),
+        states_figure(t, [(lin["dx_full"], "nonlinear x − x*", solid),
+                          (lin["dx"], "linearized δx", dash)],
+                      "Perturbations: linearized against nonlinear", "δ"))
+    y_lin = (lin["y_lin"][1:], "linearized h(x*) + Hδx", dash)
+    yield ReportFigure("002", "03", "linearized-measurements", (
+        "Measurements of the linearized model h(x*) + H δx (noiseless)."),
+        measurements_figure(t[1:], [y_lin], "Linearized DT simulation: measurements"))
+    yield ReportFigure("002", "04", "nonlinear-states", (
+        "States of the full nonlinear model (solve_ivp, DOP853) from x0 + δx0, with the linearized "
+        "run dashed and the nominal in grey."),
+        states_figure(t, [nominal, full, linear], "Nonlinear simulation: states"))
+    yield ReportFigure("002", "05", "nonlinear-measurements", (
+        "Measurements h(x) of the nonlinear run against those of the linearized run."),
+        measurements_figure(t[1:], [(lin["y_full"][1:], "nonlinear h(x)", solid), y_lin],
+                            "Nonlinear simulation: measurements"))
+
+    mc = monte_carlo(model, runs, seed)
+    truth = mc["ekf"].truth
+    drift = np.hypot(*(truth.x[:, :, 3:5] - lin["nominal"][:, 3:5]).transpose(2, 0, 1))
+    drift_g = np.hypot(*(truth.x[:, :, 0:2] - lin["nominal"][:, 0:2]).transpose(2, 0, 1))
+    fig, ax = plots.axes()
+    for d, who, c in [(drift, "UAV", S["estimate"]), (drift_g, "UGV", S["error"])]:
+        ax.fill_between(t, np.percentile(d, 5, axis=0), np.percentile(d, 95, axis=0), color=c,
+                        alpha=0.2, lw=0, label=f"{who}: 5-95 % of runs")
+        ax.plot(t, np.median(d, axis=0), color=c, lw=1.2, label=f"{who}: median")
+    plots.finish(ax, f"How far the truth wanders from the nominal ({truth.n_runs} runs)",
+                 "time (s)", "‖truth − nominal‖ position (m)")
+    drift_fig = ReportFigure("002", "08b", "truth-drift", (
+        "Distance of the Monte Carlo truth from the nominal trajectory: heading noise of "
+        "0.01 rad² per step makes the UAV's heading a random walk, and by 100 s the truth is "
+        "hundreds of metres from x*, far outside the LKF's linear range."), fig)
+
+    i0 = 0
+    x0 = truth.x[i0]
+    for num, m in [("06", "lkf"), ("07", "lkf")]:
+        r = mc[m].result
+        ugv = num == "06"
+        yield ReportFigure("002", num, f"lkf-{'ugv' if ugv else 'uav'}", (
+            f"LKF (tuned Q), typical run (run {i0} of seed {seed}): "
+            f"{'UGV' if ugv else 'UAV'} truth, estimate ±2σ, and the errors with ±2σ."),
+            vehicle_figure(t, (0, 1, 2) if ugv else (3, 4, 5), r.x_post[i0], r.sigma[i0],
+                           f"LKF, {'UGV' if ugv else 'UAV'}: typical run", truth=x0))
+    for num, m, stat in [("08", "lkf", "NEES"), ("09", "lkf", "NIS"),
+                         ("14", "ekf", "NEES"), ("15", "ekf", "NIS"),
+                         ("14b", "ekf-qtrue", "NEES"), ("15b", "ekf-qtrue", "NIS"),
+                         ("14c", "ukf", "NEES"), ("15c", "ukf", "NIS")]:
+        c = mc[m]
+        vals, bounds = ((c.nees_mean, c.nees_bounds) if stat == "NEES"
+                        else (c.nis_mean, c.nis_bounds))
+        fig = plots.chi2_band(c.t, vals, bounds, statistic=stat, dof=6 if stat == "NEES" else 5,
+                              n_runs=c.n_runs, log=m == "lkf",
+                              title=f"{NAMES[m]}: {stat} over {c.n_runs} runs, α = {c.alpha:g}")
+        qdiag = ", ".join(f"{q:.3g}" for q in np.diag(c.Q))
+        yield ReportFigure("002", num, f"{m}-{stat.lower()}", (
+            f"{NAMES[m]} {stat} averaged over {c.n_runs} truth runs with the two-sided χ² bounds; "
+            f"{c.nees_fraction if stat == 'NEES' else c.nis_fraction:.1%} of steps inside, "
+            f"time-average {vals.mean():.2f} (expected {6 if stat == 'NEES' else 5}); "
+            f"Q = diag({qdiag})."), fig)
+        if num == "08":
+            yield drift_fig
+        if num == "09":
+            yield from _ekf_single(mc, t, x0, i0, seed)
+
+    logs = on_the_log(model)
+    y = model.log()
+    for num, m, ugv in [("16", "lkf", True), ("17", "lkf", False), ("18", "ekf", True),
+                        ("19", "ekf", False), ("18b", "ukf", True), ("19b", "ukf", False)]:
+        r = logs[m]
+        who = "UGV" if ugv else "UAV"
+        yield ReportFigure("002", num, f"log-{m}-{who.lower()}", (
+            f"{NAMES[m]} on the course's 100-second log: {who} estimates with ±2σ"
+            f"{'' if ugv else ' and the GPS fixes'}; NIS time-average "
+            f"{r.nis()[1:].mean():.2f} (5 expected)."),
+            vehicle_figure(t, (0, 1, 2) if ugv else (3, 4, 5), r.x_post, r.sigma,
+                           f"{NAMES[m]} on the logged data: {who}", measured=y))
+    fig, ax = plots.axes()
+    for m, c in [("lkf", S["error"]), ("ekf", S["estimate"]), ("ukf", S["truth"])]:
+        nis = logs[m].nis()[1:]
+        k = 50  # a 5-second moving average: one run's NIS is too noisy to read
+        ma = np.convolve(nis, np.ones(k) / k, mode="valid")
+        ax.semilogy(t[k:], ma, color=c, lw=1.0, label=f"{NAMES[m]} (mean {nis.mean():.1f})")
+    ax.axhline(5, color=S["bound"], ls="--", lw=1.0, label="expected 5")
+    plots.finish(ax, "NIS on the course log, 5-s moving average", "time (s)", "NIS (1)")
+    means = ", ".join(f"{NAMES[m]} {logs[m].nis()[1:].mean():.2f}" for m in logs)
+    yield ReportFigure("002", "19c", "log-nis", (
+        f"NIS of the three filters on the course log (5-second moving average); time-averages "
+        f"{means} (5 expected, ±0.1 for 1000 independent steps)."), fig)
+
+
+def _ekf_single(mc: dict[str, ConsistencyRun], t: np.ndarray, x0: np.ndarray, i0: int,
+                seed: int) -> Iterator[ReportFigure]:
+    r = mc["ekf"].result
+    truth = mc["ekf"].truth
+    for num, ugv in [("10", True), ("11", False)]:
+        who = "UGV" if ugv else "UAV"
+        yield ReportFigure("002", num, f"ekf-{who.lower()}", (
+            f"EKF (tuned Q), typical run (run {i0} of seed {seed}): {who} truth against the "
+            "estimate ±2σ, and the errors."),
+            vehicle_figure(t, (0, 1, 2) if ugv else (3, 4, 5), r.x_post[i0], r.sigma[i0],
+                           f"EKF, {who}: typical run", truth=x0))
+    yhat = h(r.x_prior[i0])
+    yield ReportFigure("002", "12", "ekf-measurements", (
+        "The simulated measurements of the typical run against the EKF's predicted h(x̄)."),
+        measurements_figure(
+            t[1:], [(truth.y[i0, 1:], "measured y",
+                     {"ls": "", "marker": ".", "ms": 2, "color": S["measurement"]}),
+                    (yhat[1:], "predicted h(x̄)", {"lw": 0.9, "color": S["estimate"]})],
+            "EKF: measurements of the typical run"))
+    fig = Figure(figsize=(10.0, 7.5), layout="constrained")
+    axs = fig.subplots(3, 2, sharex=True)
+    err = r.errors(truth.x)[i0]
+    for i, (name, unit) in enumerate(STATES):
+        ax = axs[i % 3, i // 3]
+        plots.error_band(t, err[:, i], r.sigma[i0][:, i], k=2, label=f"{name} error", unit=unit,
+                         ax=ax)
+        ax.set_xlabel("time (s)" if i % 3 == 2 else "")
+        ax.legend().set_visible(i == 0)
+    fig.suptitle("EKF: state errors with ±2σ, typical run")
+    yield ReportFigure("002", "13", "ekf-errors", (
+        "EKF state estimation errors of the typical run with the filter's ±2σ (headings wrapped: "
+        "no 2π jumps)."), fig)
