@@ -233,21 +233,50 @@ def sample_covariance_se(C: np.ndarray, n_runs: int) -> np.ndarray:
 
 
 def z_sample_covariance(C_hat: np.ndarray, C: np.ndarray, n_runs: int) -> np.ndarray:
-    """z of every element of an unbiased sample covariance Ĉ (..., n, n) against the truth C.
+    """z of every element of an unbiased sample covariance Ĉ (..., n, n) of N Gaussian vectors
+    against the true covariance C.  Exact N(0, 1) for any N ≥ 2 when C is the truth.
 
-    Diagonal: exact, through χ²(N − 1) (:func:`z_sample_variance`).  Off the diagonal:
-    (Ĉ_ab − C_ab) / :func:`sample_covariance_se` (central limit theorem).  NaN where the
-    standard error is 0.
+    Diagonal: (N − 1) Ĉ_aa / C_aa ~ χ²(N − 1) (:func:`z_sample_variance`).  Element (a, b) off the
+    diagonal, conditionally on the draws of component b: e_a = μ_a + β (e_b − μ_b) + ε with
+    β = C_ab / C_bb and ε ~ N(0, C_aa − C_ab²/C_bb) independent of e_b, so
+    (N − 1)(Ĉ_ab − β Ĉ_bb) ~ N(0, (C_aa − C_ab²/C_bb)(N − 1) Ĉ_bb) exactly, and
+
+        z_ab = √(N − 1) (Ĉ_ab − β Ĉ_bb) / √((C_aa − C_ab²/C_bb) Ĉ_bb).
+
+    This tests the regression of a on b, whose sampling distribution is exact; the plain
+    (Ĉ_ab − C_ab) / :func:`sample_covariance_se` is only normal for large N.  z_ab and z_ba
+    condition on different components: count one of each pair.  NaN where there is no spread
+    (C_bb = 0, Ĉ_bb = 0 or C_aa − C_ab²/C_bb = 0).
     """
+    n_runs = _v.integer("n_runs", n_runs, minimum=2)
     C_hat = np.asarray(C_hat, dtype=float)
     C = np.asarray(C, dtype=float)
-    se = sample_covariance_se(C, n_runs)
+    d = np.diagonal(C, axis1=-2, axis2=-1)
+    d_hat = np.diagonal(C_hat, axis1=-2, axis2=-1)
+    C_bb = d[..., None, :]
+    C_hat_bb = d_hat[..., None, :]
     with np.errstate(divide="ignore", invalid="ignore"):
-        z = np.where(se > 0, (C_hat - C) / se, np.nan)
+        beta = C / C_bb
+        resid_var = d[..., :, None] - C * beta
+        z = np.sqrt(n_runs - 1) * (C_hat - beta * C_hat_bb) / np.sqrt(resid_var * C_hat_bb)
+    z = np.where((C_bb > 0) & (C_hat_bb > 0) & (resid_var > 0), z, np.nan)
     n = C.shape[-1]
     idx = np.arange(n)
     z[..., idx, idx] = z_sample_variance(C_hat[..., idx, idx], C[..., idx, idx], n_runs)
     return z
+
+
+def z_cross_products(sum_ab: np.ndarray, var_a: np.ndarray, sum_bb: np.ndarray) -> np.ndarray:
+    """Exact z of Σ_l a_l b_l when the a_l are independent N(0, var_a), independent of the b_l.
+
+    Conditionally on the b_l, Σ a_l b_l ~ N(0, var_a Σ b_l²), so z = Σ a_l b_l / √(var_a Σ b_l²)
+    is N(0, 1) for any N and any distribution of the b_l (centred or not).  Used for the
+    independence of residuals (b: the earlier residual) and for orthogonality (a: the error,
+    b: the centred estimate).  NaN where var_a Σ b_l² = 0.
+    """
+    den = np.asarray(var_a, dtype=float) * np.asarray(sum_bb, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(den > 0, np.asarray(sum_ab, dtype=float) / np.sqrt(den), np.nan)
 
 
 def cross_moment_se(var_a: np.ndarray, var_b: np.ndarray, n_runs: int,

@@ -90,6 +90,7 @@ from gpsaccel.consistency import (
     fraction_inside,
     sample_covariance_se,
     verdict_from_z,
+    z_cross_products,
     z_ensemble_normalized_squared,
     z_sample_covariance,
     z_sample_mean,
@@ -329,7 +330,7 @@ def _run_block(pl: EnsemblePlan, xi: np.ndarray,
     sums = EnsembleSums(
         n=m, mean_e=mu + de, mean_xhat=pl.mean_xhat + dx,
         mean_r=pl.mean_r + s_r.reshape(n, 2) / m,
-        C_ee=C[:, :3, :3], C_ex=C[:, :3, 3:], rr=rr,
+        C_ee=C[:, :3, :3], C_ex=C[:, :3, 3:], C_xx=C[:, 3:, 3:], rr=rr,
         nees=np.einsum("iab,iba->i", pl.P_inv, see),
         nis=np.einsum("iab,iba->i", pl.S_inv, rr_diag))
     if not keep:
@@ -382,7 +383,8 @@ class EnsembleSums:
     """Sufficient statistics of a set of runs; two sets merge with :meth:`merge`.
 
     n : runs.  mean_e, mean_xhat (n_gps, 3) and mean_r (n_gps, 2): means.
-    C_ee, C_ex (n_gps, 3, 3): centred co-moments Σ (e − ē)(e − ē)ᵀ, Σ (e − ē)(x̂ − x̂̄)ᵀ.
+    C_ee, C_ex, C_xx (n_gps, 3, 3): centred co-moments Σ (e − ē)(e − ē)ᵀ, Σ (e − ē)(x̂ − x̂̄)ᵀ,
+    Σ (x̂ − x̂̄)(x̂ − x̂̄)ᵀ.
     rr (2 n_gps, 2 n_gps): Σ r rᵀ over the stacked residuals [r_0; r_1; ...].
     nees, nis (n_gps,): Σ eᵀ P⁻¹ e and Σ rᵀ S⁻¹ r.
     """
@@ -393,6 +395,7 @@ class EnsembleSums:
     mean_r: np.ndarray
     C_ee: np.ndarray
     C_ex: np.ndarray
+    C_xx: np.ndarray
     rr: np.ndarray
     nees: np.ndarray
     nis: np.ndarray
@@ -411,6 +414,7 @@ class EnsembleSums:
             fa * self.mean_r + fb * other.mean_r,
             self.C_ee + other.C_ee + w * de[:, :, None] * de[:, None, :],
             self.C_ex + other.C_ex + w * de[:, :, None] * dx[:, None, :],
+            self.C_xx + other.C_xx + w * dx[:, :, None] * dx[:, None, :],
             self.rr + other.rr,
             self.nees + other.nees,
             self.nis + other.nis,
@@ -453,6 +457,7 @@ class MonteCarloResult:
     S : (n, 2, 2) the residual covariance H M Hᵀ + V.
     nees, nis : (n,) ensemble averages of eᵀ P⁻¹ e and rᵀ S⁻¹ r.
     estimate_covariance : (n, 3, 3) the theoretical covariance of x̂ (for orthogonality's error).
+    estimate_sample_covariance : (n, 3, 3) the sample covariance of x̂ (N − 1 divisor).
     predicted_mean_error : (n, 3) the mean error theory predicts for this truth: zero for the
         error model, the filter's error on the deterministic path d for the kinematic truth.
     """
@@ -471,6 +476,7 @@ class MonteCarloResult:
     nees: np.ndarray
     nis: np.ndarray
     estimate_covariance: np.ndarray
+    estimate_sample_covariance: np.ndarray
     predicted_mean_error: np.ndarray
     model: CalibrationModel = field(repr=False)
 
@@ -508,19 +514,33 @@ class MonteCarloResult:
     def z_scores(self) -> dict[str, np.ndarray]:
         """z-scores of every statistic against theory for a consistent filter (NaN: no spread).
 
-        Keys: ``e_ave`` (n, 3), ``P_ave`` (n, 3, 3), ``orthogonality`` (n, 3, 3),
-        ``residual_correlation`` (n, n, 2, 2), NaN on and above the diagonal i ≤ m so that every
-        pair counts once, ``nees`` and ``nis`` (n,).  See :mod:`gpsaccel.consistency`.
+        Each is exactly N(0, 1) under theory, for any N (:mod:`gpsaccel.consistency`):
+
+        ``e_ave`` (n, 3): e_ave / √(P_aa / N).
+        ``P_ave`` (n, 3, 3): diagonal through χ²(N − 1); off the diagonal the regression form of
+            :func:`~gpsaccel.consistency.z_sample_covariance` (element (a, b) conditions on b).
+        ``orthogonality`` (n, 3, 3): N O_ab / √(P_aa Σ (x̂_b − x̂̄_b)²), exact because e is
+            independent of x̂ (:func:`~gpsaccel.consistency.z_cross_products`).
+        ``residual_correlation`` (n, n, 2, 2): for t_m < t_i, N R_im,ab / √(S_i,aa Σ r_m,b²),
+            exact because r_i is independent of r_m; NaN for i ≤ m (each pair counts once).
+        ``nees``, ``nis`` (n,): N·NEES ~ χ²(3N), N·NIS ~ χ²(2N).
+
+        The standard errors (:attr:`e_ave_se`, :attr:`P_ave_se`, :attr:`orthogonality_se`,
+        :meth:`residual_correlation_se`) are the unconditional ones, for plotting; the z-scores
+        use the sample's own Σ b² where that makes them exact, so z is close to, not equal to,
+        value / SE.
         """
-        N = self.n_runs
-        with np.errstate(divide="ignore", invalid="ignore"):
-            ortho = np.where(self.orthogonality_se > 0,
-                             self.orthogonality / self.orthogonality_se, np.nan)
-            rz = self.residual_correlation / self.residual_correlation_se()
-        n = self.t.size
+        N, n = self.n_runs, self.t.size
+        d_P = np.diagonal(self.P, axis1=1, axis2=2)
+        d_X = np.diagonal(self.estimate_sample_covariance, axis1=1, axis2=2) * (N - 1)
+        ortho = z_cross_products(N * self.orthogonality, d_P[:, :, None], d_X[:, None, :])
+        d_S = np.diagonal(self.S, axis1=1, axis2=2)
+        power = N * np.einsum("mmbb->mb", self.residual_correlation)  # Σ_l r_m,b²
+        rz = z_cross_products(N * self.residual_correlation, d_S[:, None, :, None],
+                              power[None, :, None, :])
         rz[np.triu_indices(n)] = np.nan  # keep pairs t_m < t_i only
         return {
-            "e_ave": z_sample_mean(self.e_ave, np.diagonal(self.P, axis1=1, axis2=2), N),
+            "e_ave": z_sample_mean(self.e_ave, d_P, N),
             "P_ave": z_sample_covariance(self.P_ave, self.P, N),
             "orthogonality": ortho,
             "residual_correlation": rz,
@@ -688,4 +708,5 @@ def _result(model: CalibrationModel, pl: EnsemblePlan, s: EnsembleSums,
         P_ave=s.C_ee / (N - 1), P=pl.P.copy(), orthogonality=s.C_ex / N,
         residual_correlation=np.ascontiguousarray(rc), residual_mean=s.mean_r, S=pl.S.copy(),
         nees=s.nees / N, nis=s.nis / N, estimate_covariance=pl.Xhat.copy(),
+        estimate_sample_covariance=s.C_xx / (N - 1),
         predicted_mean_error=pl.mean_e.copy(), model=model)
