@@ -112,6 +112,34 @@ def test_broken_submission_becomes_a_finding(name, code, words):
         assert w in msg, (w, msg)
 
 
+@pytest.mark.parametrize("source, code, words", [
+    ("def kalman_filter(z)\n    return z\n", "import-error", ["SyntaxError", "line 1"]),
+    ("def kalman_filter(z):\n    return (r for r in z), [[1.0]]\n", "not-numeric", ["generator"]),
+    ("def kalman_filter(z):\n    return [[1, 2], [3]], [[1.0]]\n", "not-numeric", ["x_hat"]),
+])
+def test_files_written_on_the_fly(tmp_path, source, code, words):
+    """Cases that cannot live in tests/submissions (a syntax error would break ruff there)."""
+    path = tmp_path / "student.py"
+    path.write_text(source)
+    report = check.submission(path, n_runs=3)
+    assert report.codes == [code], report
+    msg = report.findings[0].message
+    for w in words:
+        assert w in msg, (w, msg)
+    assert "_runner.py" not in msg and "<frozen" not in msg
+
+
+def test_a_p_that_is_no_covariance_is_flagged(tmp_path):
+    path = tmp_path / "student.py"
+    path.write_text("import numpy as np\n\ndef kalman_filter(z):\n"
+                    "    P = np.tile(np.eye(3), (len(z), 1, 1))\n    P[:, 0, 1] = 5\n"
+                    "    return np.zeros((len(z), 3)), P\n")
+    report = check.submission(path, n_runs=3)
+    assert report.codes == ["p-mismatch"], report
+    assert "P at t = 0 already differs" in report.findings[0].message
+    assert "p-not-positive-definite" in [f.code for f in report.findings]
+
+
 def test_endless_loop_is_stopped_at_the_time_limit():
     report = _check("broken_infinite_loop.py", timeout=3)
     assert report.codes == ["timeout"]

@@ -43,6 +43,10 @@ def _student_traceback(exc: BaseException, path: Path) -> str:
         if Path(frame.filename).resolve() == path:
             tb = tb[i:]
             break
+    else:  # not in the student's code (a SyntaxError, say): leave out the runner and importlib
+        here = Path(__file__).resolve()
+        tb = [f for f in tb if not f.filename.startswith("<frozen")
+              and Path(f.filename).resolve() != here]
     lines = traceback.format_list(tb) + traceback.format_exception_only(type(exc), exc)
     text = "".join(lines).rstrip("\n").splitlines()
     return "\n".join(text[-TRACEBACK_LINES:])

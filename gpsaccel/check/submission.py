@@ -264,7 +264,7 @@ def _run_findings(report: Report, run: StudentRun, timeout: float, n_runs: int,
     elif kind == "not-numeric":
         report.add("not-numeric", f"{problem['name']} returned by kalman_filter is not an array "
                    f"of numbers ({problem['returned']['type']}): np.array({problem['name']}, "
-                   f"dtype=float) fails with: {problem['error']}.")
+                   f"dtype=float) fails with: {problem['error'].rstrip('.')}.")
     elif kind == "wrong-shape":
         report.add("wrong-shape", _shape_message(tuple(problem["x_hat"]), tuple(problem["P"]),
                                                  n_gps))
@@ -449,12 +449,12 @@ def _diagnosis_findings(report: Report, problem: Problem, x: np.ndarray, P: np.n
              f"t = {t[first]:g} s on: the propagation between GPS fixes is wrong (Φ, "
              f"Q = Γ W Γᵀ, or the number of steps).")
     hint = ""
-    if diag.nearest is not None:
-        near = names(diag.nearest) if diag.nearest else "the optimal filter"
-        hint = (f" Nearest known filter: {near}, which still differs by {diag.nearest_distance:.3g}"
-                f" σσ, so that is not it.")
+    d_optimal = float(dP.max())
+    if diag.nearest and diag.nearest_distance < 0.5 * d_optimal:  # only a hint that is close
+        hint = (f" The nearest known mistake is {names(diag.nearest)}, but it still differs by "
+                f"{diag.nearest_distance:.3g} σσ, so that is not it.")
     report.add("p-mismatch", f"Your P does not match the optimal filter (it differs by up to "
-               f"{dP.max():.3g} σσ), nor any mistake of the catalogue. {where}{hint} Check "
+               f"{d_optimal:.3g} σσ), nor any mistake of the catalogue. {where}{hint} Check "
                f"your matrices with gpsaccel.check.model_matrices(Phi=..., Gamma=..., H=..., "
                f"V=..., W=..., M0=...).")
     report.details["matched"] = []
