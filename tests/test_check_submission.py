@@ -57,12 +57,18 @@ MUTANTS = [
     ("mutant_mean_not_propagated.py", ["mean-not-propagated"]),
     ("mutant_x0_total_state.py", ["x0-total-state"]),
     ("mutant_returns_a_priori.py", ["returns-a-priori"]),
+    ("mutant_first_update_skipped.py", ["first-update-skipped"]),
     ("mutant_w_value.py", ["w-value"]),
     ("mutant_two_mistakes.py", ["phi-sign", "x0-total-state"]),
     ("report003.py", ["process-noise-interval", "std-as-variance"]),
     ("mutant_residual_index.py", ["gain-or-residual"]),
     ("mutant_diagonal_q.py", ["p-mismatch"]),
 ]
+
+
+def test_every_catalogue_code_has_a_mutant_here():
+    covered = {c for _, codes in MUTANTS for c in codes}
+    assert set(check.codes()) <= covered, set(check.codes()) - covered
 
 
 @pytest.mark.parametrize("name, codes", MUTANTS, ids=[n[:-3] for n, _ in MUTANTS])
