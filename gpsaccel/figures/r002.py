@@ -87,9 +87,14 @@ def measurements_figure(t: np.ndarray, series: list[tuple[np.ndarray, str, dict]
 
 def vehicle_figure(t: np.ndarray, states: tuple[int, int, int], est: np.ndarray,
                    sigma: np.ndarray, title: str, truth: np.ndarray | None = None,
-                   measured: np.ndarray | None = None) -> Figure:
-    """One vehicle: estimate ±2σ (and the truth) left; error ±2σ right when the truth is known."""
-    ncol = 1 if truth is None else 2
+                   measured: np.ndarray | None = None,
+                   reference: np.ndarray | None = None) -> Figure:
+    """One vehicle: estimate ±2σ (and the truth) left; error ±2σ right when the truth is known.
+
+    Without a truth, ``reference`` (e.g. the nominal x*) draws x̂ − reference ±2σ on the right,
+    where the band is visible at all (σ ~ 1 m against a 200 m track).
+    """
+    ncol = 1 if truth is None and reference is None else 2
     fig = Figure(figsize=(5.5 * ncol, 7.0), layout="constrained")
     axs = fig.subplots(3, ncol, sharex=True, squeeze=False)
     for row, i in enumerate(states):
@@ -113,6 +118,16 @@ def vehicle_figure(t: np.ndarray, states: tuple[int, int, int], est: np.ndarray,
             ax.plot(t, 2 * sigma[:, i], color=S["bound"], ls="--", lw=1.0, label="±2σ (filter)")
             ax.plot(t, -2 * sigma[:, i], color=S["bound"], ls="--", lw=1.0)
             plots.finish(ax, "", "time (s)" if row == 2 else "", f"{name} error ({unit})",
+                         legend=row == 0)
+        elif reference is not None:
+            ax = axs[row, 1]
+            d = est[:, i] - reference[:, i]
+            if unit == "rad":
+                d = wrap_angle(d)
+            ax.fill_between(t, _breaks(d - 2 * sigma[:, i], unit), _breaks(d + 2 * sigma[:, i], unit),
+                            color=S["band"], alpha=0.4, lw=0, label="±2σ")
+            ax.plot(t, _breaks(d, unit), color=S["estimate"], lw=0.9, label="x̂ − x* (nominal)")
+            plots.finish(ax, "", "time (s)" if row == 2 else "", f"{name} − nominal ({unit})",
                          legend=row == 0)
     fig.suptitle(title)
     return fig
@@ -229,10 +244,12 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
         who = "UGV" if ugv else "UAV"
         yield ReportFigure("002", num, f"log-{m}-{who.lower()}", (
             f"{NAMES[m]} on the course's 100-second log: {who} estimates with ±2σ"
-            f"{'' if ugv else ' and the GPS fixes'}; NIS time-average "
+            f"{'' if ugv else ' and the GPS fixes'}, and (right) their departure from the nominal "
+            f"x* with ±2σ; NIS time-average "
             f"{r.nis()[1:].mean():.2f} (5 expected)."),
             vehicle_figure(t, (0, 1, 2) if ugv else (3, 4, 5), r.x_post, r.sigma,
-                           f"{NAMES[m]} on the logged data: {who}", measured=y))
+                           f"{NAMES[m]} on the logged data: {who}", measured=y,
+                           reference=lin["nominal"]))
     fig, ax = plots.axes()
     for m, c in [("lkf", S["error"]), ("ekf", S["estimate"]), ("ukf", S["truth"])]:
         nis = logs[m].nis()[1:]
