@@ -52,3 +52,12 @@ def test_bad_specs_raise_value_error_naming_executor(spec):
 def test_bad_max_workers():
     with pytest.raises(ValueError, match="max_workers"):
         resolve_executor("threads", max_workers=0)
+
+
+def test_dask_local_spec_starts_and_closes_a_cluster():
+    pytest.importorskip("distributed")
+    resolved = resolve_executor("dask-local", max_workers=1)
+    with resolved as ex:
+        assert isinstance(ex, cf.Executor)
+        assert ex.submit(operator.mul, 6, 7).result() == 42
+    assert "LocalCluster" in resolved.description

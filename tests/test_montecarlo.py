@@ -13,7 +13,6 @@ import pytest
 
 from gpsaccel import monte_carlo
 from gpsaccel.consistency import nees, nis, z_sample_mean, z_threshold
-from gpsaccel.executors import resolve_executor
 from gpsaccel.figures._shared import ensemble
 from gpsaccel.filters.multirate import run_multirate
 from gpsaccel.models.calibration import CalibrationModel
@@ -187,13 +186,23 @@ def test_results_do_not_depend_on_chunk_size_executor_or_workers():
                        1e-12)
 
 
-def test_dask_local_cluster_gives_the_same_result():
-    pytest.importorskip("distributed")
+def test_dask_cluster_gives_the_same_result_by_address_client_and_executor():
+    distributed = pytest.importorskip("distributed")
     n = BLOCK_RUNS + 250
     ref = monte_carlo(MODEL, n, seed=2, progress=False)
-    with resolve_executor("dask-local", max_workers=2) as ex:
-        got = monte_carlo(MODEL, n, seed=2, executor=ex, chunk_size=500, progress=False)
-    assert_same_result(got, ref, 1e-12)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        # "tcp://host:port", as `gpsaccel montecarlo --dask tcp://...` passes it
+        got = monte_carlo(MODEL, n, seed=2, executor=cluster.scheduler_address, chunk_size=500,
+                          progress=False)
+        assert_same_result(got, ref, 1e-12)
+        with distributed.Client(cluster) as client:
+            assert_same_result(monte_carlo(MODEL, n, seed=2, executor=client, progress=False),
+                               ref, 1e-12)
+            with client.get_executor() as ex:  # a concurrent.futures.Executor, unchanged
+                assert_same_result(monte_carlo(MODEL, n, seed=2, executor=ex, chunk_size=300,
+                                               progress=False), ref, 1e-12)
+            assert client.status == "running"  # a client we passed in is left open
 
 
 def test_no_progress_bar_when_not_a_terminal(capsys):
