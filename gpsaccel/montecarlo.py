@@ -650,7 +650,8 @@ def monte_carlo(model: CalibrationModel, n_runs: int, seed: int = 0, truth: str 
         works one random block at a time, so its memory stays at about 10 MB whatever the size;
         results do not depend on it beyond rounding.  At most 2 × workers tasks are in flight.
     executor : None (in this process), any :class:`concurrent.futures.Executor` (a process pool,
-        ``dask.distributed.Client(...).get_executor()``), or a specification understood by
+        ``dask.distributed.Client(...).get_executor()``), a ``dask.distributed.Client`` (left
+        open), or a specification understood by
         :func:`gpsaccel.executors.resolve_executor` (``"processes"``, ``"dask-local"``,
         ``"tcp://host:port"``), which is then opened and closed here.
     progress : show a tqdm bar (only when stderr is a terminal).
