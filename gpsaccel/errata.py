@@ -36,10 +36,10 @@ from gpsaccel.check.catalogue import (
     EpochFilter,
     build,
     catalogue,
-    epoch_transition,
     mutant,
     reference,
 )
+from gpsaccel.filters.multirate import epoch_transition
 from gpsaccel.models.calibration import CalibrationModel
 from gpsaccel.simulation import TRUTHS, euler_integrate, simulate_many
 

@@ -96,6 +96,7 @@ from gpsaccel.consistency import (
     z_sample_mean,
 )
 from gpsaccel.executors import resolve_executor
+from gpsaccel.filters.multirate import epoch_transition
 from gpsaccel.models.calibration import CalibrationModel
 from gpsaccel.simulation import TRUTHS, euler_integrate
 
@@ -158,12 +159,7 @@ def gps_interval_noise(model: CalibrationModel) -> tuple[np.ndarray, np.ndarray]
     noise u_i (see the module docstring for its closed form), by the same recursion as N filter
     predictions: Q ← Φ Q Φᵀ + ΓWΓᵀ.
     """
-    Phi, Q1 = model.Phi, model.Q
-    Phi_N, Q_N = np.eye(3), np.zeros((3, 3))
-    for _ in range(model.gps_every):
-        Phi_N = Phi @ Phi_N
-        Q_N = Phi @ Q_N @ Phi.T + Q1
-    return Phi_N, Q_N
+    return epoch_transition(model.Phi, model.Q, model.gps_every)
 
 
 def truth_offset(model: CalibrationModel, truth: str) -> np.ndarray:

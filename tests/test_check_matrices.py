@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from gpsaccel import check
-from gpsaccel.check.catalogue import epoch_transition, gamma, phi
+from gpsaccel.check.catalogue import gamma, phi
+from gpsaccel.filters.multirate import epoch_transition
 
 DT, T = 0.005, 0.2
 RIGHT = dict(Phi=phi(DT), Gamma=gamma(DT), H=np.eye(2, 3), V=np.diag([1.0, 0.0016]), W=0.0004,

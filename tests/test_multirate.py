@@ -121,3 +121,16 @@ def test_bad_input(model):
     bad[3, 1] = np.inf
     with pytest.raises(ValueError, match="z contains an infinite value"):
         run_multirate(model, bad)
+
+
+def test_epoch_transition_composes_the_fast_steps(model):
+    from gpsaccel.filters.multirate import epoch_transition
+
+    F, Qe = epoch_transition(model.Phi, model.Q, 40)
+    powers = [np.linalg.matrix_power(model.Phi, k) for k in range(41)]
+    np.testing.assert_allclose(F, powers[40], rtol=1e-15)
+    np.testing.assert_allclose(Qe, sum(Pk @ model.Q @ Pk.T for Pk in powers[:40]), rtol=1e-12)
+    dt = 0.2  # Φ(Δt)⁴⁰ = Φ(40Δt): the bias integrates exactly over the GPS interval
+    np.testing.assert_allclose(F, [[1, dt, -dt**2 / 2], [0, 1, -dt], [0, 0, 1]], rtol=1e-13)
+    with pytest.raises(ValueError, match="steps"):
+        epoch_transition(model.Phi, model.Q, -1)

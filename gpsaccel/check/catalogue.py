@@ -37,6 +37,7 @@ from functools import cached_property
 
 import numpy as np
 
+from gpsaccel.filters.multirate import epoch_transition
 from gpsaccel.models.calibration import CalibrationModel
 
 
@@ -48,16 +49,6 @@ def phi(dt: float, sign13: float = -1.0) -> np.ndarray:
 def gamma(dt: float) -> np.ndarray:
     """Noise input Γ(Δt) = −[Δt²/2, Δt, 0]ᵀ (3x1)."""
     return -np.array([[dt**2 / 2], [dt], [0.0]])
-
-
-def epoch_transition(Phi: np.ndarray, Q: np.ndarray, steps: int) -> tuple[np.ndarray, np.ndarray]:
-    """(Φⁿ, Σ_{j<n} Φʲ Q Φʲᵀ): the mean transition and process noise of n one-step predictions."""
-    F = np.eye(Phi.shape[0])
-    Qe = np.zeros_like(Q)
-    for _ in range(steps):
-        F = Phi @ F
-        Qe = Phi @ Qe @ Phi.T + Q
-    return F, Qe
 
 
 @dataclass(frozen=True, eq=False)

@@ -22,8 +22,9 @@ import time
 
 import numpy as np
 
-from gpsaccel.check.catalogue import epoch_transition, gamma, phi
+from gpsaccel.check.catalogue import gamma, phi
 from gpsaccel.check.report import Report
+from gpsaccel.filters.multirate import epoch_transition
 from gpsaccel.models.calibration import CalibrationModel
 
 #: Relative tolerance of an element against its expected value (students type numbers such as

@@ -110,19 +110,58 @@ def make_filter(model: LinearGaussianModel, method: str):
                              B=getattr(model, "B", None))
 
 
-def _known_input(model: LinearGaussianModel, u: np.ndarray | None, n_steps: int,
-                 n: int) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """(B, u) checked against each other and the grid; (None, None) without an input."""
-    if u is None:
-        return None, None
-    B = getattr(model, "B", None)
-    if B is None:
-        raise ValueError("u was given but the model has no control-input matrix B")
-    B = np.asarray(B, dtype=float)
-    if B.ndim != 2 or B.shape[0] != n:
-        raise ValueError(f"model.B must have shape ({n}, m), got {B.shape}")
-    u = _v.finite_array("u", u, (n_steps, B.shape[1]))
-    return B, u
+@dataclass(frozen=True, eq=False)
+class DriverInputs:
+    """A driver's inputs after checking: the schedule, H and V as float arrays, z, and (B, u)."""
+
+    schedule: Schedule
+    H: np.ndarray
+    V: np.ndarray
+    z: np.ndarray
+    B: np.ndarray | None
+    u: np.ndarray | None
+
+
+def check_inputs(model: LinearGaussianModel, z: np.ndarray, schedule: Schedule | None,
+                 u: np.ndarray | None) -> DriverInputs:
+    """Check what a multirate driver is given (shared by every driver of this package).
+
+    ``schedule`` defaults to ``model.schedule()``; ``z`` must be (n_epochs, p) with NaN allowed
+    (not measured) and no inf; a known input ``u`` must be (n_steps, m) and the model must have a
+    matching ``B`` (n, m).
+    """
+    schedule = model.schedule() if schedule is None else schedule
+    H, V = np.asarray(model.H, dtype=float), np.asarray(model.V, dtype=float)
+    p, n = H.shape
+    if schedule.dim_z != p:
+        raise ValueError(f"schedule delivers {schedule.dim_z} components but H has {p} rows")
+    z = _v.finite_array("z", z, (schedule.n_epochs, p), allow_nan=True)
+    B = None
+    if u is not None:
+        B = getattr(model, "B", None)
+        if B is None:
+            raise ValueError("u was given but the model has no control-input matrix B")
+        B = np.asarray(B, dtype=float)
+        if B.ndim != 2 or B.shape[0] != n:
+            raise ValueError(f"model.B must have shape ({n}, m), got {B.shape}")
+        u = _v.finite_array("u", u, (schedule.n_steps, B.shape[1]))
+    return DriverInputs(schedule, H, V, z, B, u)
+
+
+def epoch_transition(Phi: np.ndarray, Q: np.ndarray, steps: int) -> tuple[np.ndarray, np.ndarray]:
+    """(Φⁿ, Σ_{j<n} Φʲ Q Φʲᵀ): mean transition and process noise of n = ``steps`` fast steps.
+
+    What ``steps`` one-step predictions do between two updates, composed into one: the
+    calibration problem's 40 accelerometer steps between GPS fixes are one step with Φ⁴⁰ and
+    Q₄₀.  Computed by the same recursion as the predictions, Q ← Φ Q Φᵀ + Q₁.
+    """
+    steps = _v.integer("steps", steps, minimum=0)
+    F = np.eye(Phi.shape[0])
+    Qe = np.zeros_like(Q, dtype=float)
+    for _ in range(steps):
+        F = Phi @ F
+        Qe = Phi @ Qe @ Phi.T + Q
+    return F, Qe
 
 
 def run_multirate(model: LinearGaussianModel, z: np.ndarray, method: str = "filterpy",
@@ -135,13 +174,9 @@ def run_multirate(model: LinearGaussianModel, z: np.ndarray, method: str = "filt
     components that the schedule delivers and that are finite in ``z``.
     """
     method = _v.choice("method", method, METHODS)
-    schedule = model.schedule() if schedule is None else schedule
-    H, V = np.asarray(model.H, dtype=float), np.asarray(model.V, dtype=float)
+    inputs = check_inputs(model, z, schedule, u)
+    schedule, H, V, z, B, u = (inputs.schedule, inputs.H, inputs.V, inputs.z, inputs.B, inputs.u)
     p, n = H.shape
-    if schedule.dim_z != p:
-        raise ValueError(f"schedule delivers {schedule.dim_z} components but H has {p} rows")
-    z = _v.finite_array("z", z, (schedule.n_epochs, p), allow_nan=True)
-    B, u = _known_input(model, u, schedule.n_steps, n)
 
     kf = make_filter(model, method)
 

@@ -43,7 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gpsaccel import _validation as _v
-from gpsaccel.filters.multirate import LinearGaussianModel, MultirateResult, _known_input
+from gpsaccel.filters.multirate import LinearGaussianModel, MultirateResult, check_inputs
 from gpsaccel.filters.schedule import Schedule
 
 COVARIANCES = ("joseph", "report")
@@ -84,14 +84,10 @@ def run_zeroed_gain(model: LinearGaussianModel, z: np.ndarray, schedule: Schedul
     all p components arrive (the report's reuse of its monorate gain).
     """
     covariance = _v.choice("covariance", covariance, COVARIANCES)
-    schedule = model.schedule() if schedule is None else schedule
+    inputs = check_inputs(model, z, schedule, u)
+    schedule, H, V, z, B, u = (inputs.schedule, inputs.H, inputs.V, inputs.z, inputs.B, inputs.u)
     Phi, Q = np.asarray(model.Phi, dtype=float), np.asarray(model.Q, dtype=float)
-    H, V = np.asarray(model.H, dtype=float), np.asarray(model.V, dtype=float)
     p, n = H.shape
-    if schedule.dim_z != p:
-        raise ValueError(f"schedule delivers {schedule.dim_z} components but H has {p} rows")
-    z = _v.finite_array("z", z, (schedule.n_epochs, p), allow_nan=True)
-    B, u = _known_input(model, u, schedule.n_steps, n)
     if full_epoch_gains is not None:
         full_epoch_gains = _v.finite_array("full_epoch_gains", full_epoch_gains,
                                            (schedule.n_epochs, n, p))
