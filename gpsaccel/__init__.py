@@ -13,15 +13,19 @@ The calibration core (reports 000, 001, 003)::
 from gpsaccel.filters.multirate import MultirateResult, run_multirate
 from gpsaccel.filters.schedule import Schedule
 from gpsaccel.models.calibration import CalibrationModel
+from gpsaccel.models.coop import CoopModel
+from gpsaccel.models.ship import ShipModel
 from gpsaccel.montecarlo import MonteCarloResult, monte_carlo
 from gpsaccel.simulation import Realization, simulate
 
 __all__ = [
     "CalibrationModel",
+    "CoopModel",
     "MonteCarloResult",
     "MultirateResult",
     "Realization",
     "Schedule",
+    "ShipModel",
     "monte_carlo",
     "run_multirate",
     "simulate",
