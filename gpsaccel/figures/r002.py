@@ -255,7 +255,7 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
         nis = logs[m].nis()[1:]
         k = 50  # a 5-second moving average: one run's NIS is too noisy to read
         ma = np.convolve(nis, np.ones(k) / k, mode="valid")
-        ax.semilogy(t[k:], ma, color=c, lw=1.0, label=f"{NAMES[m]} (mean {nis.mean():.1f})")
+        ax.plot(t[k:], ma, color=c, lw=1.0, label=f"{NAMES[m]} (mean {nis.mean():.2f})")
     ax.axhline(5, color=S["bound"], ls="--", lw=1.0, label="expected 5")
     plots.finish(ax, "NIS on the course log, 5-s moving average", "time (s)", "NIS (1)")
     means = ", ".join(f"{NAMES[m]} {logs[m].nis()[1:].mean():.2f}" for m in logs)
