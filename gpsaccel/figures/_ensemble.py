@@ -1,34 +1,17 @@
 """The Monte Carlo figures of reports 000, 001 and 003, from one cached ensemble per problem.
 
-Report 000's ensemble is :func:`gpsaccel.figures._shared.ensemble` (its default model, error-model
-truth).  Reports 001 and 003 share one problem (a(t) = 10 sin(2π·0.1·t), closed-form truth), so
-one cached ensemble serves both.
+The ensembles come from :func:`gpsaccel.figures._shared.report_ensemble` (cached there; reports
+001 and 003 state one problem, so one ensemble serves both).
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterator
-from functools import lru_cache
 
 from gpsaccel import plots
-from gpsaccel.errata import REPORT_TRUTH, report_model
 from gpsaccel.figures import ReportFigure
-from gpsaccel.montecarlo import MonteCarloResult, monte_carlo
-
-
-@lru_cache(maxsize=4)
-def _kinematic_ensemble(runs: int, seed: int) -> MonteCarloResult:
-    return monte_carlo(report_model("001"), runs, seed=seed, truth="kinematic", progress=False)
-
-
-def report_ensemble(report: str, runs: int, seed: int) -> MonteCarloResult:
-    """The Monte Carlo ensemble behind ``report``'s figures (cached; treat it as read-only)."""
-    if REPORT_TRUTH.get(report) == "error-model":
-        from gpsaccel.figures._shared import ensemble
-
-        return ensemble(runs, seed, "error-model")
-    report_model(report)  # ValueError naming the reports for anything else
-    return _kinematic_ensemble(runs, seed)
+from gpsaccel.figures._shared import report_ensemble
+from gpsaccel.montecarlo import MonteCarloResult
 
 
 def _captions(mc: MonteCarloResult) -> dict[str, str]:

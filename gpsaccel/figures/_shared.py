@@ -1,4 +1,4 @@
-"""What several report figure modules (and ``gpsaccel run``) share: one ensemble, computed once.
+"""What several report figure modules (and ``gpsaccel run``) share: each ensemble, computed once.
 
 ``ensemble(10_000, 0, "error-model")`` is report 000's Monte Carlo on the default
 :class:`~gpsaccel.models.calibration.CalibrationModel`; the first call runs it (about a second),
@@ -10,15 +10,24 @@ from __future__ import annotations
 
 from functools import lru_cache
 
-from gpsaccel.models.calibration import CalibrationModel
+from gpsaccel.errata import REPORT_TRUTH, report_model
 from gpsaccel.montecarlo import MonteCarloResult, monte_carlo
 
 
 @lru_cache(maxsize=8)
-def ensemble(runs: int, seed: int, truth: str) -> MonteCarloResult:
-    """``monte_carlo(CalibrationModel(), runs, seed=seed, truth=truth, progress=False)``, cached.
+def ensemble(runs: int, seed: int, truth: str, problem: str = "000") -> MonteCarloResult:
+    """``monte_carlo(report_model(problem), runs, seed=seed, truth=truth, progress=False)``, cached.
 
     runs : ensemble size (≥ 2); seed : non-negative integer; truth : ``"error-model"`` or
-    ``"kinematic"``.  Bad arguments raise ValueError naming them (and are not cached).
+    ``"kinematic"``; problem : the report whose (corrected) model to use, ``"000"`` (the default
+    model, a = 10 sin(0.1 t)) or ``"001"`` (a = 10 sin(2π·0.1·t), also report 003's).  Bad
+    arguments raise ValueError naming them (and are not cached).
     """
-    return monte_carlo(CalibrationModel(), runs, seed=seed, truth=truth, progress=False)
+    return monte_carlo(report_model(problem), runs, seed=seed, truth=truth, progress=False)
+
+
+def report_ensemble(report: str, runs: int, seed: int) -> MonteCarloResult:
+    """The ensemble behind ``report``'s figures: its model and its truth (001 and 003 share one)."""
+    problem = "000" if report == "000" else "001"  # 001 and 003 state the same problem
+    report_model(report)  # ValueError naming the reports for anything else
+    return ensemble(runs, seed, REPORT_TRUTH[report], problem)
