@@ -403,10 +403,7 @@ class ShipEnsemble:
 
     def measurements(self, schedule: Schedule) -> np.ndarray:
         """(n_runs, n_epochs, 9) the rows of z at the schedule's epochs, NaN where not delivered."""
-        _check_schedule(self.model, schedule)
-        z = self.z[:, schedule.steps].copy()
-        z[:, ~schedule.mask] = np.nan
-        return z
+        return _measured(self.model, self.z, schedule)
 
     def realization(self, i: int) -> ShipRealization:
         """Run ``i`` on its own."""
@@ -429,10 +426,15 @@ class ShipRealization:
 
     def measurements(self, schedule: Schedule) -> np.ndarray:
         """(n_epochs, 9) the rows of z at the schedule's epochs, NaN where not delivered."""
-        _check_schedule(self.model, schedule)
-        z = self.z[schedule.steps].copy()
-        z[~schedule.mask] = np.nan
-        return z
+        return _measured(self.model, self.z, schedule)
+
+
+def _measured(model: ShipModel, z: np.ndarray, schedule: Schedule) -> np.ndarray:
+    """The rows of z (..., N, 9) at the schedule's epochs, NaN where a component is not delivered."""
+    _check_schedule(model, schedule)
+    out = z[..., schedule.steps, :].copy()
+    out[..., ~schedule.mask] = np.nan
+    return out
 
 
 def _check_schedule(model: ShipModel, schedule: Schedule) -> None:
