@@ -16,9 +16,9 @@ import numpy as np
 def _cmd_run(args: argparse.Namespace) -> int:
     """Simulate one realization on report 000's defaults, filter it, summarise, draw."""
     from gpsaccel.figures import write_figures
-    from gpsaccel.figures.r000 import single_run
+    from gpsaccel.figures._shared import single_run
 
-    model, run, res = single_run(args.seed)
+    model, run, res = single_run("000", args.seed)
     names = [("δp", "m"), ("δv", "m/s"), ("b", "m/s²")]
     print(f"gpsaccel run: one realization (seed {args.seed}, truth error-model), "
           f"{model.n_steps} accelerometer steps, {model.n_gps} GPS fixes")

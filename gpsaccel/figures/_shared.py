@@ -1,4 +1,5 @@
-"""What several report figure modules (and ``gpsaccel run``) share: each ensemble, computed once.
+"""What several report figure modules (and ``gpsaccel run``) share: the single run of a report and
+each Monte Carlo ensemble, computed once.
 
 ``ensemble(10_000, 0, "error-model")`` is report 000's Monte Carlo on the default
 :class:`~gpsaccel.models.calibration.CalibrationModel`; the first call runs it (about a second),
@@ -10,8 +11,13 @@ from __future__ import annotations
 
 from functools import lru_cache
 
+import numpy as np
+
 from gpsaccel.errata import REPORT_TRUTH, report_model
+from gpsaccel.filters.multirate import MultirateResult, run_multirate
+from gpsaccel.models.calibration import CalibrationModel
 from gpsaccel.montecarlo import MonteCarloResult, monte_carlo
+from gpsaccel.simulation import Realization, simulate
 
 
 @lru_cache(maxsize=8)
@@ -31,3 +37,11 @@ def report_ensemble(report: str, runs: int, seed: int) -> MonteCarloResult:
     problem = "000" if report == "000" else "001"  # 001 and 003 state the same problem
     report_model(report)  # ValueError naming the reports for anything else
     return ensemble(runs, seed, REPORT_TRUTH[report], problem)
+
+
+def single_run(report: str, seed: int) -> tuple[CalibrationModel, Realization, MultirateResult]:
+    """(model, realization, filterpy result) of ``report``'s single run: its corrected model and
+    its truth (error-model for 000, closed-form for 001 and 003), ``default_rng(seed)``."""
+    model = report_model(report)
+    run = simulate(model, np.random.default_rng(seed), truth=REPORT_TRUTH[report])
+    return model, run, run_multirate(model, run.z)

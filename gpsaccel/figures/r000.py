@@ -14,23 +14,14 @@ import numpy as np
 
 from gpsaccel import plots
 from gpsaccel.figures import ReportFigure
-from gpsaccel.filters.multirate import run_multirate
-from gpsaccel.models.calibration import CalibrationModel
-from gpsaccel.simulation import simulate
+from gpsaccel.figures._shared import single_run
 
 TITLE = "GPS-aided accelerometer calibration (MAE 271A, 10,000-run Monte Carlo)"
 DEFAULT_RUNS = 10_000
 
 
-def single_run(seed: int, model: CalibrationModel | None = None):
-    """(model, realization, filterpy result) of report 000's single run."""
-    model = CalibrationModel() if model is None else model
-    run = simulate(model, np.random.default_rng(seed), truth="error-model")
-    return model, run, run_multirate(model, run.z)
-
-
 def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
-    model, run, res = single_run(seed)
+    model, run, res = single_run("000", seed)
     e = run.x_gps - res.x_post
     sd = res.sigma
     names = [("01", "position-error", "Position error p − p̂ with ±1σ", "m"),

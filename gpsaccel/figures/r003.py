@@ -10,28 +10,17 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-import numpy as np
-
 from gpsaccel import plots
-from gpsaccel.errata import REPORT_TRUTH, report_model
 from gpsaccel.figures import ReportFigure
-from gpsaccel.filters.multirate import run_multirate
-from gpsaccel.simulation import simulate
+from gpsaccel.figures._shared import single_run
 
 REPORT = "003"
 TITLE = "Calibration of an accelerometer using GPS measurements (MAE 271A, 10,000-run Monte Carlo)"
 DEFAULT_RUNS = 10_000
 
 
-def single_run(seed: int):
-    """(model, realization, filterpy result) of report 003's single run (closed-form truth)."""
-    model = report_model(REPORT)
-    run = simulate(model, np.random.default_rng(seed), truth=REPORT_TRUTH[REPORT])
-    return model, run, run_multirate(model, run.z)
-
-
 def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
-    model, run, res = single_run(seed)
+    model, run, res = single_run("003", seed)
     one = f" One realization, seed {seed}, a(t) = 10 sin(2π·0.1·t) m/s²."
     yield ReportFigure(REPORT, "01", "system-diagram",
                        "System diagram: the accelerometer is integrated, GPS minus the "
