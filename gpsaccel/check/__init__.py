@@ -14,7 +14,7 @@ codes are in :mod:`gpsaccel.check.catalogue`; ``gpsaccel check PATH ...`` checks
 from gpsaccel.check.catalogue import codes
 from gpsaccel.check.matrices import assert_model_matrices, model_matrices
 from gpsaccel.check.report import Finding, Report
-from gpsaccel.check.submission import TOLERANCE, assert_submission, submission
+from gpsaccel.check.whole_filter import TOLERANCE, assert_submission, submission
 
 __all__ = [
     "TOLERANCE",

@@ -1,6 +1,6 @@
 """Run a student's ``kalman_filter(z)`` on given measurements, in a process of its own.
 
-Usage (by :func:`gpsaccel.check.submission.run_student`, not by hand)::
+Usage (by :func:`gpsaccel.check.whole_filter.run_student`, not by hand)::
 
     python -P path/to/gpsaccel/check/_runner.py SUBMISSION.py INPUT.npz OUTPUT.npz PROGRESS.txt
 

@@ -14,7 +14,7 @@ import os
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
-from gpsaccel.check.submission import submission
+from gpsaccel.check.whole_filter import submission
 from gpsaccel.executors import resolve_executor
 
 
