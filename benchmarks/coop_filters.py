@@ -17,8 +17,8 @@ import time
 
 import numpy as np
 
-from gpsaccel.filters.nonlinear import METHODS, run_batch, run_filter
-from gpsaccel.models.coop import CoopModel, state_residual
+from gpsaccel.coop.filters import METHODS, run_batch, run_filter
+from gpsaccel.coop.model import CoopModel, state_residual
 
 
 def main() -> None:

@@ -21,10 +21,11 @@ import time
 
 import numpy as np
 
-from gpsaccel.filters.gain_sequence import apply_gains
-from gpsaccel.filters.multirate import run_multirate
-from gpsaccel.filters.zeroed_gain import run_zeroed_gain
-from gpsaccel.models.ship import ShipModel, simulate_ensemble
+from gpsaccel.kalman.gain_sequence import apply_gains
+from gpsaccel.kalman.multirate import run_multirate
+from gpsaccel.ship.model import ShipModel
+from gpsaccel.ship.simulation import simulate_ensemble
+from gpsaccel.ship.zeroed_gain import run_zeroed_gain
 
 
 def main() -> None:

@@ -10,13 +10,13 @@ The calibration core (reports 000, 001, 003)::
     print(mc.consistency())                         # each statistic against its sampling error
 """
 
-from gpsaccel.filters.multirate import MultirateResult, run_multirate
-from gpsaccel.filters.schedule import Schedule
-from gpsaccel.models.calibration import CalibrationModel
-from gpsaccel.models.coop import CoopModel
-from gpsaccel.models.ship import ShipModel
-from gpsaccel.montecarlo import MonteCarloResult, monte_carlo
-from gpsaccel.simulation import Realization, simulate
+from gpsaccel.calibration.model import CalibrationModel
+from gpsaccel.calibration.montecarlo import MonteCarloResult, monte_carlo
+from gpsaccel.calibration.simulation import Realization, simulate
+from gpsaccel.coop.model import CoopModel
+from gpsaccel.kalman.multirate import MultirateResult, run_multirate
+from gpsaccel.kalman.schedule import Schedule
+from gpsaccel.ship.model import ShipModel
 
 __all__ = [
     "CalibrationModel",

@@ -15,11 +15,12 @@ import numpy as np
 
 def _cmd_run(args: argparse.Namespace) -> int:
     """Simulate one realization on report 000's defaults, filter it, summarise, draw."""
+    from gpsaccel.calibration.model import STATE_NAMES, STATE_UNITS
     from gpsaccel.figures import write_figures
     from gpsaccel.figures._shared import single_run
 
     model, run, res = single_run("000", args.seed)
-    names = [("δp", "m"), ("δv", "m/s"), ("b", "m/s²")]
+    names = zip(STATE_NAMES, STATE_UNITS, strict=True)
     print(f"gpsaccel run: one realization (seed {args.seed}, truth error-model), "
           f"{model.n_steps} accelerometer steps, {model.n_gps} GPS fixes")
     print(f"final estimates at t = {res.t_gps[-1]:g} s (truth, estimate ± 1σ):")
@@ -58,9 +59,9 @@ def _cmd_montecarlo(args: argparse.Namespace) -> int:
     import time
 
     from gpsaccel import plots
+    from gpsaccel.calibration.model import STATE_NAMES, STATE_UNITS, CalibrationModel
+    from gpsaccel.calibration.montecarlo import monte_carlo
     from gpsaccel.executors import resolve_executor
-    from gpsaccel.models.calibration import CalibrationModel
-    from gpsaccel.montecarlo import STATE_NAMES, STATE_UNITS, monte_carlo
 
     spec = None
     if args.dask is not None:
@@ -108,7 +109,7 @@ def _cmd_montecarlo(args: argparse.Namespace) -> int:
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
-    from gpsaccel.compare import compare
+    from gpsaccel.calibration.compare import compare
 
     print(f"filterpy (covariance/Joseph form) against the hand-written information form, "
           f"seed {args.seed}, truth {args.truth}:")
@@ -155,7 +156,7 @@ def _cmd_lessons(args: argparse.Namespace) -> int:
 
 def _cmd_coop(args: argparse.Namespace) -> int:
     """Report 002: NEES/NIS of the LKF, EKF and UKF over Monte Carlo sets, and the course log."""
-    from gpsaccel.coop_montecarlo import summary
+    from gpsaccel.coop.montecarlo import summary
 
     print(summary(n_runs=args.runs, n_sets=args.sets, seed=args.seed, alpha=args.alpha))
     return 0
@@ -163,7 +164,7 @@ def _cmd_coop(args: argparse.Namespace) -> int:
 
 def _cmd_ship(args: argparse.Namespace) -> int:
     """Report 004: RMSE and NEES of the ship's monorate, multirate and zeroed-gain filters."""
-    from gpsaccel.ship_comparison import compare_ship_filters, compare_wind
+    from gpsaccel.ship.comparison import compare_ship_filters, compare_wind
 
     print(compare_ship_filters(n_runs=args.runs, seed=args.seed))
     print()
@@ -208,7 +209,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from gpsaccel.simulation import TRUTHS
+    from gpsaccel.calibration.simulation import TRUTHS
 
     parser = argparse.ArgumentParser(prog="gpsaccel", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)

@@ -13,6 +13,8 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from gpsaccel.calibration.model import STATE_NAMES, STATE_UNITS
+
 #: The house style: colours by role, so truth, estimate, measurement and bounds read the same in
 #: every figure.
 STYLE = {
@@ -27,7 +29,7 @@ STYLE = {
 }
 
 #: Names and units of the calibration error state, used in labels.
-CALIBRATION_STATES = (("δp", "m"), ("δv", "m/s"), ("b", "m/s²"))
+CALIBRATION_STATES = tuple(zip(STATE_NAMES, STATE_UNITS, strict=True))
 
 
 def axes(ax: Axes | None = None, figsize: tuple[float, float] | None = None) -> tuple[Figure, Axes]:
@@ -366,7 +368,7 @@ def actual_vs_claimed(stats, baseline=None, states: Sequence[int] = (0, 1, 2), *
                       fig: Figure | None = None) -> Figure:
     """Exact RMS actual error and claimed σ over time (log scale), one panel per state.
 
-    ``stats`` and ``baseline`` are :class:`gpsaccel.errata.ErrorStatistics`; |mean error| is drawn
+    ``stats`` and ``baseline`` are :class:`gpsaccel.calibration.errata.ErrorStatistics`; |mean error| is drawn
     dotted where it is not negligible (a bias the filter does not know of).
     """
     fig, axs = panels(len(states), fig, title=title)
@@ -459,7 +461,7 @@ def track(tracks: Sequence[tuple[np.ndarray, np.ndarray, str, str]], *, title: s
 
 def ensemble_mean_error(mc, *, sigma: bool = False, k: float = 1.0,
                         title: str | None = None, fig: Figure | None = None) -> Figure:
-    """Ensemble-mean error e_ave over time (a :class:`gpsaccel.montecarlo.MonteCarloResult`).
+    """Ensemble-mean error e_ave over time (a :class:`gpsaccel.calibration.montecarlo.MonteCarloResult`).
 
     Shaded: ±2 standard errors 2σ/√N, where e_ave of a consistent filter stays 95 % of the time.
     Dotted: the mean error theory predicts (zero for the error-model truth; the filter's error on

@@ -8,8 +8,8 @@ import pytest
 from matplotlib.figure import Figure
 
 from gpsaccel import plots, run_multirate, simulate
-from gpsaccel.errata import report_model
-from gpsaccel.montecarlo import monte_carlo
+from gpsaccel.calibration.montecarlo import monte_carlo
+from gpsaccel.calibration.reports import report_model
 
 matplotlib.use("Agg")
 
@@ -127,7 +127,7 @@ def test_draws_into_a_given_figure_or_axes(one_run):
 
 
 def test_actual_vs_claimed_draws_exact_statistics():
-    from gpsaccel import errata
+    from gpsaccel.calibration import errata
 
     wrong, base = errata.process_noise_on_gps_interval().statistics()
     fig = plots.actual_vs_claimed(wrong, base, states=(1,))

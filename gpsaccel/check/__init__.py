@@ -8,10 +8,10 @@ Two checks, one kind of answer (a :class:`Report` of :class:`Finding` s with sta
 
 :func:`assert_model_matrices` and :func:`assert_submission` raise ``AssertionError`` with the
 findings instead, for a grader's test cell (nbgrader, otter-grader).  The known mistakes and their
-codes are in :mod:`gpsaccel.check.catalogue`; ``gpsaccel check PATH ...`` checks many files.
+codes are in :mod:`gpsaccel.calibration.mistakes`; ``gpsaccel check PATH ...`` checks many files.
 """
 
-from gpsaccel.check.catalogue import codes
+from gpsaccel.calibration.mistakes import codes
 from gpsaccel.check.matrices import assert_model_matrices, model_matrices
 from gpsaccel.check.report import Finding, Report
 from gpsaccel.check.whole_filter import TOLERANCE, assert_submission, submission

@@ -12,7 +12,7 @@ it as ``Q``), not Γ(0.2 s) W Γ(0.2 s)ᵀ.
 
 Each wrong element becomes a :class:`~gpsaccel.check.report.Finding` that names the element in the
 course's 1-based notation (Φ₁₃), says what it should be and, for the mistakes of the catalogue
-(:mod:`gpsaccel.check.catalogue`), the likely cause, under the catalogue's code.
+(:mod:`gpsaccel.calibration.mistakes`), the likely cause, under the catalogue's code.
 """
 
 from __future__ import annotations
@@ -22,10 +22,9 @@ import time
 
 import numpy as np
 
-from gpsaccel.check.catalogue import gamma, phi
+from gpsaccel.calibration.model import STATE_UNITS, CalibrationModel, gamma, phi
 from gpsaccel.check.report import Report
-from gpsaccel.filters.multirate import epoch_transition
-from gpsaccel.models.calibration import CalibrationModel
+from gpsaccel.kalman.multirate import epoch_transition
 
 #: Relative tolerance of an element against its expected value (students type numbers such as
 #: 1.25e-5 by hand; 1e-6 accepts every correct rounding of 7 significant digits).
@@ -216,8 +215,9 @@ def _check_M0(report: Report, M0: np.ndarray, model: CalibrationModel) -> None:
                    f"swapped).")
         return
     before = len(report.findings)
-    units = ("m", "m/s", "m/s²")
-    var_units = ("m²", "(m/s)²", "(m/s²)²")
+    units = STATE_UNITS
+    var_units = tuple(u if "/" not in u else f"({u})" for u in STATE_UNITS)
+    var_units = tuple(u + "²" for u in var_units)
     for k in range(3):
         a, right = float(M0[k, k]), float(want[k, k])
         if _close(a, right, right):

@@ -22,7 +22,7 @@ What :func:`submission` does
    correct form passes (covariance, information or Joseph update; filterpy or by hand; a filter
    that steps only at GPS times with Φ⁴⁰ and the 40-step process noise): they agree to ~1e-11 σ,
    while the smallest effect of a catalogued mistake (phi-sign on P) is 3e-4 σ.
-4. Diagnoses a failing filter against the catalogue (:mod:`gpsaccel.check.catalogue`): P does not
+4. Diagnoses a failing filter against the catalogue (:mod:`gpsaccel.calibration.mistakes`): P does not
    depend on the data, so P is matched first against every covariance mistake and every
    combination of up to three that touch different ingredients; then x̂ against the matched
    entry with each combination of the mean mistakes.  A match (both within the tolerance) is
@@ -57,11 +57,11 @@ import numpy as np
 from scipy import stats
 
 from gpsaccel import _validation as _v
-from gpsaccel.check import catalogue as cat
+from gpsaccel.calibration import mistakes as cat
+from gpsaccel.calibration.model import STATE_NAMES, CalibrationModel
+from gpsaccel.calibration.simulation import simulate
 from gpsaccel.check.report import Report
-from gpsaccel.consistency import chi2_bounds, format_verdicts, verdict_from_z
-from gpsaccel.models.calibration import CalibrationModel
-from gpsaccel.simulation import simulate
+from gpsaccel.kalman.consistency import chi2_bounds, format_verdicts, verdict_from_z
 
 #: Largest distance (units of the optimal σ) at which P and x̂ count as equal; also the distance
 #: within which a catalogue entry counts as matching.
@@ -76,7 +76,6 @@ OUTPUT_KEEP = 1500
 #: Printed output (characters) beyond which the check warns about prints.
 OUTPUT_WARN = 20_000
 
-STATE = ("δp", "δv", "b")
 
 
 # ---------------------------------------------------------------------------------- the data
@@ -205,7 +204,7 @@ def _kill(proc: subprocess.Popen) -> None:
 def _where(sd: np.ndarray, t: np.ndarray, idx: tuple[int, ...], kind: str) -> str:
     if kind == "x":
         r, i, s = idx
-        return f"run {r}, t = {t[i]:g} s, {STATE[s]}"
+        return f"run {r}, t = {t[i]:g} s, {STATE_NAMES[s]}"
     i, a, b = idx[-3:]
     return f"t = {t[i]:g} s, element P{a + 1}{b + 1}"
 
@@ -480,7 +479,7 @@ def _consistency(report: Report, problem: Problem, x: np.ndarray, P: np.ndarray,
     var = np.diagonal(P, axis1=-2, axis2=-1)           # (N, n_gps, 3)
     z_mean = e.mean(axis=0) / np.sqrt(var.mean(axis=0) / N)  # (n_gps, 3)
     v_mean = verdict_from_z("mean error ē/σ", z_mean,
-                            lambda idx: f"t = {t[idx[0]]:g} s, {STATE[idx[1]]}", alpha)
+                            lambda idx: f"t = {t[idx[0]]:g} s, {STATE_NAMES[idx[1]]}", alpha)
     y = np.linalg.solve(L, e[..., None])[..., 0]       # L⁻¹ e
     eps = np.einsum("rti,rti->t", y, y) / N             # ensemble-average NEES at each time
     k = 3 * N
@@ -508,7 +507,7 @@ def _consistency(report: Report, problem: Problem, x: np.ndarray, P: np.ndarray,
         + f"\nNEES inside its 95% bounds [{lo:.3f}, {hi:.3f}] at {100 * inside:.0f}% of the "
           f"{t.size} GPS times (expected ≈ 95%)."
         + "\nRMS error over time relative to the optimal filter: "
-        + ", ".join(f"{s} {r:.3g}" for s, r in zip(STATE, ratio, strict=True)))
+        + ", ".join(f"{s} {r:.3g}" for s, r in zip(STATE_NAMES, ratio, strict=True)))
     i_mean = np.unravel_index(int(np.nanargmax(np.abs(z_mean))), z_mean.shape)
     i_nees = int(np.nanargmax(np.abs(z_nees)))
     for v, what in (

@@ -9,9 +9,9 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 from gpsaccel import plots
+from gpsaccel.calibration.montecarlo import MonteCarloResult
 from gpsaccel.figures import ReportFigure
 from gpsaccel.figures._shared import report_ensemble
-from gpsaccel.montecarlo import MonteCarloResult
 
 
 def _captions(mc: MonteCarloResult) -> dict[str, str]:

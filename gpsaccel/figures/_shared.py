@@ -2,8 +2,8 @@
 each Monte Carlo ensemble, computed once.
 
 ``ensemble(10_000, 0, "error-model")`` is report 000's Monte Carlo on the default
-:class:`~gpsaccel.models.calibration.CalibrationModel`; the first call runs it (about a second),
-later calls with the same arguments return the same :class:`~gpsaccel.montecarlo.MonteCarloResult`
+:class:`~gpsaccel.calibration.model.CalibrationModel`; the first call runs it (about a second),
+later calls with the same arguments return the same :class:`~gpsaccel.calibration.montecarlo.MonteCarloResult`
 object.  Treat it as read-only: its arrays are shared by every caller.
 """
 
@@ -13,11 +13,11 @@ from functools import lru_cache
 
 import numpy as np
 
-from gpsaccel.errata import REPORT_TRUTH, report_model
-from gpsaccel.filters.multirate import MultirateResult, run_multirate
-from gpsaccel.models.calibration import CalibrationModel
-from gpsaccel.montecarlo import MonteCarloResult, monte_carlo
-from gpsaccel.simulation import Realization, simulate
+from gpsaccel.calibration.model import CalibrationModel
+from gpsaccel.calibration.montecarlo import MonteCarloResult, monte_carlo
+from gpsaccel.calibration.reports import REPORT_TRUTH, report_model
+from gpsaccel.calibration.simulation import Realization, simulate
+from gpsaccel.kalman.multirate import MultirateResult, run_multirate
 
 
 @lru_cache(maxsize=8)

@@ -1,8 +1,8 @@
 """Report 001 (MAE 271A, 5,000-run Monte Carlo): figures 1-12.
 
 The report's truth is the closed form of a(t) = 10 sin(2π·0.1·t) (``truth="kinematic"``); its
-printed Φ₁₃, M0 and W are wrong (see :mod:`gpsaccel.errata`), so the figures use the corrected
-model :func:`gpsaccel.errata.report_model` ("001").  Figures 1-10a are one realization (seed
+printed Φ₁₃, M0 and W are wrong (see :mod:`gpsaccel.calibration.errata`), so the figures use the corrected
+model :func:`gpsaccel.calibration.errata.report_model` ("001").  Figures 1-10a are one realization (seed
 ``seed``) filtered by filterpy under the multirate driver; 10b-12 the Monte Carlo ensemble.  The
 report numbers two different figures 10; they are 10a (gains) and 10b (ensemble-mean error) here.
 """

@@ -16,10 +16,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from gpsaccel import plots
-from gpsaccel.coop_montecarlo import ConsistencyRun, consistency_test, truth_runs
-from gpsaccel.figures import ReportFigure
-from gpsaccel.filters.nonlinear import FilterResult, run_filter
-from gpsaccel.models.coop import (
+from gpsaccel.coop.filters import FilterResult, run_filter
+from gpsaccel.coop.model import (
     MEASUREMENTS,
     STATES,
     CoopModel,
@@ -27,6 +25,8 @@ from gpsaccel.models.coop import (
     state_residual,
     wrap_angle,
 )
+from gpsaccel.coop.montecarlo import ConsistencyRun, consistency_test, truth_runs
+from gpsaccel.figures import ReportFigure
 
 TITLE = "Cooperative air/ground localization: LKF, EKF and UKF with NEES/NIS tests (ASEN 5044)"
 #: The report's EKF NEES/NIS used 100 runs (its LKF 50).

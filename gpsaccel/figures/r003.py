@@ -2,7 +2,7 @@
 
 The report's truth is the closed form of a(t) = 10 sin(2π·0.1·t) (``truth="kinematic"``).  Its
 code builds Φ and Γ on the GPS interval and mixes up variances and standard deviations (see
-:mod:`gpsaccel.errata`); the figures use the corrected model, filtered at 200 Hz by filterpy under
+:mod:`gpsaccel.calibration.errata`); the figures use the corrected model, filtered at 200 Hz by filterpy under
 the multirate driver.  Figures 2-3 are one realization (seed ``seed``), 4-6 the ensemble.
 """
 

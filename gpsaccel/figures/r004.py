@@ -1,6 +1,6 @@
 """Report 004 (AAUSHIP, monorate vs multirate): figures 1-11, and 12-14 on what it left open.
 
-Figures 1-11 are one voyage (seed ``seed``) of :class:`~gpsaccel.models.ship.ShipModel`, filtered
+Figures 1-11 are one voyage (seed ``seed``) of :class:`~gpsaccel.ship.model.ShipModel`, filtered
 monorate (every sensor every step) and multirate (GPS 1 Hz, IMU 10 Hz) with the optimal update of
 the multirate driver; the same realization feeds both, so their difference is the filters' alone
 (the report drew a new realization for its multirate run).  Figures 9-11 add the report's
@@ -17,10 +17,11 @@ import numpy as np
 
 from gpsaccel import plots
 from gpsaccel.figures import ReportFigure
-from gpsaccel.filters.multirate import MultirateResult, run_multirate
-from gpsaccel.filters.zeroed_gain import run_zeroed_gain
-from gpsaccel.models.ship import STATES, ShipModel, ShipRealization, simulate_ship
-from gpsaccel.ship_comparison import DESCRIPTIONS, FILTERS, compare_ship_filters, compare_wind
+from gpsaccel.kalman.multirate import MultirateResult, run_multirate
+from gpsaccel.ship.comparison import DESCRIPTIONS, FILTERS, compare_ship_filters, compare_wind
+from gpsaccel.ship.model import STATES, ShipModel
+from gpsaccel.ship.simulation import ShipRealization, simulate_ship
+from gpsaccel.ship.zeroed_gain import run_zeroed_gain
 
 TITLE = "AAUSHIP ship: monorate vs multirate Kalman filter (GPS 1 Hz, IMU 10 Hz)"
 #: The report has no Monte Carlo; this is the size of figures 12-14's.

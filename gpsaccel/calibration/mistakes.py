@@ -1,0 +1,375 @@
+r"""Known mistakes as parameterised filters, run vectorised across realizations and candidates.
+
+Every filter a student writes for the report-000 problem — right or wrong — is, at the GPS times,
+a linear recursion of the same shape::
+
+    x̄_0 = x0,                      M_0 = M0
+    x̄_i = A x̂_{i−1},               M_i = F P_{i−1} Fᵀ + Q_e          (i ≥ 1)
+    K_i = M_i Hᵀ (H M_i Hᵀ + V)⁻¹
+    P_i = (I − K_i H) M_i (I − K_i H)ᵀ + K_i V K_iᵀ                   (Joseph form)
+    x̂_i = x̄_i + K_i (z_i − H x̄_i)
+
+For the optimal filter ``A = F = Φⁿ`` with n = gps_every = 40 and ``Q_e = Σ_{j<n} Φʲ ΓWΓᵀ Φʲᵀ``
+(exactly what 40 one-step predictions do).  A mistake changes one ingredient of this recursion
+(:class:`Ingredients`): ``phi-sign`` flips the sign of Φ₁₃, ``process-noise-interval`` builds Φ and
+Γ with the GPS interval and steps once, ``m0-order`` swaps M0's first two diagonal elements,
+``mean-not-propagated`` sets ``A = I``, and so on (:func:`covariance_mistakes`,
+:func:`mean_mistakes`).
+
+The gains K_i and covariances M_i, P_i do not depend on the data, so :func:`batch_gains` computes
+them once — for many candidate filters at once, as stacked arrays — and :meth:`EpochFilter.apply`
+runs the mean recursion for all realizations at once: z of shape (n_runs, n_gps, 2) gives x̂ of
+shape (n_runs, n_gps, 3).
+
+Two stages, because P does not depend on the data: the covariance mistakes decide P (and the
+gains); the mean mistakes change only x̂ and combine with any covariance entry, so a student who
+makes one of each is still recognised.  Covariance mistakes that touch different ingredients
+combine too (report 003's filter makes three at once: process-noise-interval and two
+std-as-variance), see :func:`combinations`.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Iterator
+from dataclasses import dataclass, replace
+from functools import cached_property
+
+import numpy as np
+
+from gpsaccel.calibration.model import CalibrationModel, gamma, phi
+from gpsaccel.kalman.multirate import epoch_transition
+
+
+@dataclass(frozen=True, eq=False)
+class EpochFilter:
+    """A linear filter written at the GPS epochs (see the module docstring for the recursion).
+
+    A : (3, 3) mean transition from one epoch to the next (x̄_i = A x̂_{i−1}).
+    F, Qe : (3, 3) covariance transition and process noise between epochs (M_i = F P Fᵀ + Qe).
+    H (2, 3), V (2, 2), x0 (3,), M0 (3, 3): measurement model and prior at t = 0.
+    n_gps : number of epochs.
+    output : ``"posterior"`` returns (x̂, P); ``"prior"`` returns (x̄, M) (returns-a-priori).
+    skip_first : True skips the update at t = 0 (first-update-skipped).
+    """
+
+    A: np.ndarray
+    F: np.ndarray
+    Qe: np.ndarray
+    H: np.ndarray
+    V: np.ndarray
+    x0: np.ndarray
+    M0: np.ndarray
+    n_gps: int
+    output: str = "posterior"
+    skip_first: bool = False
+
+    @cached_property
+    def gains(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(K, M, P): gains (n_gps, 3, 2), a priori and a posteriori covariances (n_gps, 3, 3)."""
+        K, M, P = batch_gains([self])
+        return K[0], M[0], P[0]
+
+    @property
+    def P_out(self) -> np.ndarray:
+        """The covariance this filter returns: P, or M with ``output="prior"``."""
+        _, M, P = self.gains
+        return M if self.output == "prior" else P
+
+    def apply(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Run on z (n_runs, n_gps, 2) → (x (n_runs, n_gps, 3), P (n_gps, 3, 3)), as returned.
+
+        With ``output="posterior"`` these are x̂ and P; with ``"prior"`` x̄ and M.
+        """
+        z = np.asarray(z, dtype=float)
+        K, M, P = self.gains
+        n_runs, n = z.shape[0], self.A.shape[0]
+        x_bar = np.empty((n_runs, self.n_gps, n))
+        x_hat = np.empty_like(x_bar)
+        xb = np.broadcast_to(np.asarray(self.x0, dtype=float), (n_runs, n))
+        for i in range(self.n_gps):
+            if i:
+                xb = x_hat[:, i - 1] @ self.A.T
+            x_bar[:, i] = xb
+            r = z[:, i] - xb @ self.H.T
+            x_hat[:, i] = xb + r @ K[i].T
+        if self.output == "prior":
+            return x_bar, M
+        return x_hat, P
+
+
+def batch_gains(filters: list[EpochFilter]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Gains and covariances of many filters at once: K (C, n_gps, 3, 2), M and P (C, n_gps, 3, 3).
+
+    All filters must share n_gps and the state/measurement sizes.  The Joseph update keeps P
+    symmetric and positive definite even for badly scaled mistakes.
+    """
+    C, n_gps = len(filters), filters[0].n_gps
+    F = np.stack([f.F for f in filters])
+    Qe = np.stack([f.Qe for f in filters])
+    H = np.stack([f.H for f in filters])
+    V = np.stack([f.V for f in filters])
+    M0 = np.stack([f.M0 for f in filters])
+    skip = np.array([f.skip_first for f in filters])
+    n, p = F.shape[-1], H.shape[-2]
+    I = np.eye(n)
+    K = np.zeros((C, n_gps, n, p))
+    M = np.empty((C, n_gps, n, n))
+    P = np.empty((C, n_gps, n, n))
+    Ht = np.swapaxes(H, -1, -2)
+    Ft = np.swapaxes(F, -1, -2)
+    for i in range(n_gps):
+        Mi = M0 if i == 0 else F @ P[:, i - 1] @ Ft + Qe
+        M[:, i] = Mi
+        S = H @ Mi @ Ht + V
+        Ki = np.swapaxes(np.linalg.solve(S, H @ Mi), -1, -2)  # M Hᵀ S⁻¹ (S, M symmetric)
+        if i == 0:
+            Ki = np.where(skip[:, None, None], 0.0, Ki)
+        IKH = I - Ki @ H
+        Pi = IKH @ Mi @ np.swapaxes(IKH, -1, -2) + Ki @ V @ np.swapaxes(Ki, -1, -2)
+        K[:, i] = Ki
+        P[:, i] = (Pi + np.swapaxes(Pi, -1, -2)) / 2
+    return K, M, P
+
+
+@dataclass(frozen=True, eq=False)
+class Ingredients:
+    """What a student chooses when writing the filter; :meth:`epoch_filter` assembles it.
+
+    phi_dt, sign13 : Φ = Φ(phi_dt) with Φ₁₃ = sign13·phi_dt²/2.
+    gamma_dt, W : one-step process noise Q = Γ(gamma_dt) W Γ(gamma_dt)ᵀ.
+    steps : one-step predictions between GPS updates (40; 1 when stepping over the GPS interval).
+    H, V, M0, x0 : measurement matrix, GPS noise, prior covariance and mean.
+    mean_propagated : False is the mean-not-propagated mistake (x̄_k = x̂_{k−1}).
+    output, skip_first : see :class:`EpochFilter`.
+    """
+
+    phi_dt: float
+    sign13: float
+    gamma_dt: float
+    W: float
+    steps: int
+    H: np.ndarray
+    V: np.ndarray
+    M0: np.ndarray
+    x0: np.ndarray
+    n_gps: int
+    mean_propagated: bool = True
+    output: str = "posterior"
+    skip_first: bool = False
+
+    @classmethod
+    def correct(cls, model: CalibrationModel) -> Ingredients:
+        return cls(model.dt, -1.0, model.dt, float(model.W[0, 0]), model.gps_every, model.H,
+                   model.V, model.M0, model.x0, model.n_gps)
+
+    def epoch_filter(self) -> EpochFilter:
+        G = gamma(self.gamma_dt)
+        F, Qe = epoch_transition(phi(self.phi_dt, self.sign13), G @ G.T * self.W, self.steps)
+        A = F if self.mean_propagated else np.eye(F.shape[0])
+        return EpochFilter(A, F, Qe, self.H, self.V, self.x0, self.M0, self.n_gps,
+                           self.output, self.skip_first)
+
+    def with_changes(self, changes: tuple[tuple, ...]) -> Ingredients:
+        """Apply ``(field, value)`` or ``(field, (row, col), value)`` changes (see :class:`Mistake`)."""
+        kw: dict[str, object] = {}
+        for change in changes:
+            if len(change) == 2:
+                kw[change[0]] = change[1]
+            else:
+                name, idx, value = change
+                arr = np.array(kw.get(name, getattr(self, name)), dtype=float)
+                arr[idx] = value
+                kw[name] = arr
+        return replace(self, **kw)
+
+
+@dataclass(frozen=True)
+class Mistake:
+    """One entry of the catalogue.
+
+    code : the stable code students and instructors see (``"phi-sign"``).
+    variant : which form of the mistake (``"V[2,2] = 0.04"``); a code can have several.
+    message : what is wrong, what it should be and the likely cause, for the student.
+    changes : the ingredients it changes, ``(field, value)`` or ``(field, (row, col), value)``.
+    """
+
+    code: str
+    variant: str
+    message: str
+    changes: tuple[tuple, ...]
+
+    @property
+    def touches(self) -> frozenset:
+        """The ingredients (and elements) it changes; mistakes that share one do not combine."""
+        return frozenset(c[0] if len(c) == 2 else (c[0], c[1]) for c in self.changes)
+
+    def __str__(self) -> str:
+        return f"{self.code} ({self.variant})"
+
+
+_SUB = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
+
+
+def _plural(n: int, word: str) -> str:
+    return f"{n} {word}" + ("" if n == 1 else "s")
+
+
+def covariance_mistakes(model: CalibrationModel | None = None) -> tuple[Mistake, ...]:
+    """Mistakes that change P (and, through the gains and Φ, x̂) on ``model``'s numbers."""
+    model = CalibrationModel() if model is None else model
+    dt, n = model.dt, model.gps_every
+    T = model.gps_interval
+    W = float(model.W[0, 0])
+    V11, V22 = float(model.V[0, 0]), float(model.V[1, 1])
+    m_p, m_v, m_b = (float(m) for m in np.diag(model.M0))
+    out: list[Mistake] = [
+        Mistake(
+            "phi-sign", "Φ₁₃ = +Δt²/2",
+            f"Φ₁₃ has the wrong sign: the bias enters position as −Δt²/2 = {-dt**2 / 2:.4g}, and "
+            f"your filter uses +Δt²/2. Likely cause: the accelerometer reads a + b, so the "
+            f"integrated accelerometer runs ahead by the bias and δp = p − p_c loses b·Δt²/2 per "
+            f"step (report 001 prints the + sign).",
+            (("sign13", 1.0),),
+        ),
+        Mistake(
+            "process-noise-interval", f"Φ, Γ built with T = {T:g} s, one step per GPS interval",
+            f"The process noise between GPS fixes is Γ W Γᵀ built with the GPS interval "
+            f"T = {T:g} s. Stepping once over T with Φ(T) is exact for the mean, but the noise of "
+            f"{n} accelerometer samples adds up as Σ_(j<{n}) Φʲ Γ W Γᵀ Φʲᵀ (velocity variance "
+            f"{n}·Δt²·W = {n * dt**2 * W:.3g} (m/s)², not T²·W = {T**2 * W:.3g}). Likely cause: "
+            f"Φ and Γ written for the GPS step, as report 003 does; sum Q over the {n} steps.",
+            (("phi_dt", T), ("gamma_dt", T), ("steps", 1)),
+        ),
+        Mistake(
+            "m0-order", "M0 = diag(M_v, M_p, M_b)",
+            f"M0 has position and velocity swapped: the state is [δp, δv, b], so M0 = "
+            f"diag({m_p:g} m², {m_v:g} (m/s)², {m_b:g} (m/s²)²); your filter starts with "
+            f"diag({m_v:g}, {m_p:g}, {m_b:g}) (as report 001 writes it).",
+            (("M0", (0, 0), m_v), ("M0", (1, 1), m_p)),
+        ),
+        Mistake(
+            "first-update-skipped", "no update at t = 0",
+            "Your filter does not use the GPS fix at t = 0: its first estimate is the prior "
+            "(x̂₀ = x̄₀, P₀ = M0) and its first update is at the second GPS time. The GPS reports "
+            "at t = 0 too; update with z₀ before the first propagation.",
+            (("skip_first", True),),
+        ),
+        Mistake(
+            "returns-a-priori", "returns (x̄, M)",
+            "Your filter returns the a priori estimate and covariance (x̄, M: before the update) "
+            "at each GPS time; the checker expects the a posteriori ones (x̂, P: after the "
+            "update with z at that time). Likely cause: the values are stored before update().",
+            (("output", "prior"),),
+        ),
+        Mistake(
+            "w-value", "W = V₂₂",
+            f"W = {V22:g} is the GPS velocity-noise variance (0.04 m/s)²; the accelerometer "
+            f"noise variance is W = {W:g} (m/s²)² (report 001 writes 0.0016).",
+            (("W", V22),),
+        ),
+    ]
+    for steps, cause in ((n - 1, "a loop such as range(1, 40), or the first prediction placed "
+                                 "before the loop"),
+                         (n + 1, "an extra predict() at the update step"),
+                         (1, "one prediction with the 200 Hz Φ per GPS interval"),
+                         (n // 10, "the GPS interval taken as 0.02 s, as report 001 writes it")):
+        if steps < 1 or steps == n:
+            continue
+        out.append(Mistake(
+            "missing-propagation", f"{_plural(steps, 'step')} between updates",
+            f"Your filter propagates {_plural(steps, 'accelerometer step')} between GPS updates; "
+            f"there are {n} (GPS {1 / T:g} Hz, accelerometer {1 / dt:g} Hz). Likely cause: "
+            f"{cause}.",
+            (("steps", steps),),
+        ))
+    sva = "a standard deviation used where a variance belongs"
+    avs = "a variance squared again, as if it were a standard deviation"
+    entries: list[tuple[str, tuple[int, int] | None, float, float, str]] = []
+    for idx, right in (((0, 0), V11), ((1, 1), V22)):
+        entries += [("V", idx, np.sqrt(right), right, sva), ("V", idx, right**2, right, avs)]
+    entries += [("W", None, np.sqrt(W), W, sva), ("W", None, W**2, W, avs)]
+    for k, right in enumerate((m_p, m_v, m_b)):
+        entries += [("M0", (k, k), np.sqrt(right), right, sva),
+                    ("M0", (k, k), right**2, right, avs)]
+    for name, idx, value, right, label in entries:
+        if np.isclose(value, right, rtol=1e-6):
+            continue  # σ = σ² (a variance of 1): this slip cannot be seen
+        value = float(value)
+        elem = name if idx is None else name + f"{idx[0] + 1}{idx[1] + 1}".translate(_SUB)
+        change = (name, value) if idx is None else (name, idx, value)
+        out.append(Mistake(
+            "std-as-variance", f"{elem} = {value:.4g}",
+            f"{elem} = {value:.4g} in your filter; it should be {right:.4g}: {label}. "
+            f"A covariance holds variances σ² (here σ = {np.sqrt(right):.4g}, "
+            f"σ² = {right:.4g}); report 003 mixes them up the same way.",
+            (change,),
+        ))
+    return tuple(out)
+
+
+def mean_mistakes(model: CalibrationModel | None = None) -> tuple[Mistake, ...]:
+    """Mistakes that change only how the estimate is carried (P is untouched)."""
+    model = CalibrationModel() if model is None else model
+    n = model.gps_every
+    x0_total = np.array([model.p0_mean, model.v0_mean, 0.0])
+    return (
+        Mistake(
+            "mean-not-propagated", "x̄ₖ = x̂ₖ₋₁",
+            f"Your covariance is propagated between GPS fixes but your estimate is not: the "
+            f"residual uses x̂ₖ₋₁ where it should use x̄ₖ = Φ^{n} x̂ₖ₋₁ (Φ applied at each of the "
+            f"{n} accelerometer steps). Likely cause: x_bar = Phi @ x_hat is missing from the "
+            f"propagation loop, or its result is not kept.",
+            (("mean_propagated", False),),
+        ),
+        Mistake(
+            "x0-total-state", f"x̄₀ = [{x0_total[0]:g}, {x0_total[1]:g}, 0]",
+            f"Your error-state estimate starts at the total-state means [p̄0, v̄0, 0] = "
+            f"[{x0_total[0]:g}, {x0_total[1]:g}, 0], as report 000's code does. The state is the "
+            f"error [δp, δv, b] of the accelerometer-integrated solution, which itself starts at "
+            f"(p̄0, v̄0), so the prior mean of the error is x̄₀ = [0, 0, 0].",
+            (("x0", x0_total),),
+        ),
+    )
+
+
+def combinations(mistakes: tuple[Mistake, ...], size: int) -> Iterator[tuple[Mistake, ...]]:
+    """All ``size``-tuples of ``mistakes`` that touch disjoint ingredients (so they can co-occur)."""
+    for combo in itertools.combinations(mistakes, size):
+        touched = [m.touches for m in combo]
+        if all(a.isdisjoint(b) for a, b in itertools.combinations(touched, 2)):
+            yield combo
+
+
+def build(model: CalibrationModel, mistakes: tuple[Mistake, ...] = ()) -> EpochFilter:
+    """The epoch filter that makes ``mistakes`` (none: the optimal filter)."""
+    g = Ingredients.correct(model)
+    for m in mistakes:
+        g = g.with_changes(m.changes)
+    return g.epoch_filter()
+
+
+def reference(model: CalibrationModel | None = None) -> EpochFilter:
+    """The optimal filter at GPS epochs (A = F = Φ⁴⁰, Q_e the 40-step sum)."""
+    return build(CalibrationModel() if model is None else model)
+
+
+def catalogue(model: CalibrationModel | None = None) -> tuple[Mistake, ...]:
+    """Every mistake, covariance mistakes first."""
+    return covariance_mistakes(model) + mean_mistakes(model)
+
+
+def codes(model: CalibrationModel | None = None) -> tuple[str, ...]:
+    """Every code of the catalogue, in catalogue order."""
+    return tuple(dict.fromkeys(m.code for m in catalogue(model)))
+
+
+def mutant(code: str, model: CalibrationModel | None = None, variant: str | None = None
+           ) -> EpochFilter:
+    """The filter that makes mistake ``code`` (its first variant unless ``variant`` is named)."""
+    model = CalibrationModel() if model is None else model
+    for m in catalogue(model):
+        if m.code == code and (variant is None or m.variant == variant):
+            return build(model, (m,))
+    raise ValueError(f"code must be one of {', '.join(codes(model))} (with a known variant); "
+                     f"got {code!r}" + ("" if variant is None else f", variant {variant!r}"))

@@ -1,0 +1,239 @@
+r"""NEES/NIS truth-model testing and Q tuning for cooperative localization (report 002).
+
+Truth-model test (the course's "TMT"): simulate N truth runs with process noise
+(:meth:`gpsaccel.coop.model.CoopModel.simulate`), filter each, and at every step k = 1..K average
+the N normalised errors::
+
+    ε̄_x,k = (1/N) Σ_i e_ikᵀ P_ik⁻¹ e_ik          (NEES, n = 6 dof per run)
+    ε̄_y,k = (1/N) Σ_i r_ikᵀ S_ik⁻¹ r_ik          (NIS,  p = 5 dof per run)
+
+For a consistent filter N·ε̄ ~ χ²(N·n), so ε̄ should lie in [r1, r2] =
+[χ²⁻¹(α/2; N·n)/N, χ²⁻¹(1 − α/2; N·n)/N] on a fraction 1 − α of the steps
+(:func:`gpsaccel.kalman.consistency.chi2_bounds`).  NEES at neighbouring steps is strongly correlated, so
+the fraction inside varies by several points from one N-run set to the next: judge a filter over
+several independent sets (:func:`repeated_sets`).
+
+Tuning (:func:`tune_q`): the report tuned Q by hand, multiplying Qtrue by powers of ten and then
+adjusting the diagonal.  Here a grid of multipliers of Qtrue's UGV-position, UAV-position and
+heading terms is scored on common random numbers (the same truth runs for every candidate) by
+``min(NEES fraction, NIS fraction)``; among the candidates within a tolerance of the top score
+(the scatter of the fractions between sets) the one closest to Qtrue is chosen.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from gpsaccel import _validation as _v
+from gpsaccel.coop.filters import METHODS, FilterResult, run_batch, scaled_q, tuned_q
+from gpsaccel.coop.model import CoopModel, Truth
+from gpsaccel.kalman import consistency
+
+#: The grids of Qtrue multipliers :func:`tune_q` searches by default (UGV pos, UAV pos, heading):
+#: fine steps around Qtrue for the EKF and UKF, powers of ten for the LKF (as the report did).
+_FINE = ((1.0, 1.5, 2.0, 3.0, 4.0), (1.0, 1.5, 2.0, 3.0, 4.0), (0.5, 1.0, 2.0))
+DEFAULT_GRIDS = {"lkf": ((1.0, 10.0, 100.0, 1e3, 1e4), (1.0, 10.0, 100.0, 1e3, 1e4),
+                         (1.0, 10.0, 100.0)),
+                 "ekf": _FINE, "ukf": _FINE}
+
+
+@dataclass
+class ConsistencyRun:
+    """One N-run NEES/NIS test of one filter.
+
+    t : (K,) s, steps 1..K.  nees_mean, nis_mean : (K,) the N-run averages ε̄_x, ε̄_y.
+    nees_bounds, nis_bounds : (r1, r2).  nees_fraction, nis_fraction : fraction of steps inside.
+    runtime_s : wall time of the filter over all N runs (s), truth simulation excluded.
+    """
+
+    method: str
+    Q: np.ndarray
+    n_runs: int
+    alpha: float
+    t: np.ndarray
+    nees_mean: np.ndarray
+    nis_mean: np.ndarray
+    nees_bounds: tuple[float, float]
+    nis_bounds: tuple[float, float]
+    runtime_s: float
+    result: FilterResult | None = None
+    truth: Truth | None = None
+
+    @property
+    def nees_fraction(self) -> float:
+        return consistency.fraction_inside(self.nees_mean, self.nees_bounds)
+
+    @property
+    def nis_fraction(self) -> float:
+        return consistency.fraction_inside(self.nis_mean, self.nis_bounds)
+
+
+def truth_runs(model: CoopModel, n_runs: int, seed: int | np.random.SeedSequence) -> Truth:
+    """N truth runs from a seed (an int or a ``SeedSequence``)."""
+    return model.simulate(np.random.default_rng(seed), n_runs)
+
+
+def consistency_test(model: CoopModel, method: str, Q: np.ndarray | None = None,
+                     n_runs: int = 50, seed: int = 0, alpha: float = 0.05,
+                     truth: Truth | None = None, keep: bool = False) -> ConsistencyRun:
+    """NEES and NIS of ``method`` ('lkf', 'ekf', 'ukf') over N truth runs (or the given ``truth``).
+
+    ``Q`` defaults to the tuned Q of the method.  ``keep`` keeps the filter result and the truth
+    on the returned object (for plots of a typical run).
+    """
+    method = _v.choice("method", method, METHODS)
+    alpha = _v.positive_float("alpha", alpha)
+    if truth is None:
+        n_runs = _v.integer("n_runs", n_runs, minimum=1)
+        truth = truth_runs(model, n_runs, seed)
+    Q = tuned_q(method, model) if Q is None else _v.spd_matrix("Q", Q, 6)
+    t0 = time.perf_counter()
+    res = run_batch(method, model, truth.y, Q)
+    runtime = time.perf_counter() - t0
+    nees = res.nees(truth.x)[:, 1:]
+    nis = res.nis()[:, 1:]
+    N = truth.n_runs
+    return ConsistencyRun(method, Q, N, alpha, model.t[1:], nees.mean(axis=0), nis.mean(axis=0),
+                          consistency.chi2_bounds(6, N, alpha), consistency.chi2_bounds(5, N, alpha),
+                          runtime, res if keep else None, truth if keep else None)
+
+
+def set_seeds(seed: int, n_sets: int) -> list[np.random.SeedSequence]:
+    """Independent seeds of ``n_sets`` Monte Carlo sets, spawned from ``seed``."""
+    return np.random.SeedSequence(seed).spawn(_v.integer("n_sets", n_sets, minimum=1))
+
+
+def repeated_sets(model: CoopModel, method: str, Q: np.ndarray | None = None,
+                  n_sets: int = 5, n_runs: int = 50, seed: int = 0,
+                  alpha: float = 0.05) -> list[ConsistencyRun]:
+    """``n_sets`` independent N-run consistency tests (seeds spawned from ``seed``)."""
+    return [consistency_test(model, method, Q, n_runs, alpha=alpha,
+                             truth=truth_runs(model, n_runs, s))
+            for s in set_seeds(seed, n_sets)]
+
+
+@dataclass
+class TuningResult:
+    """Every candidate tried by :func:`tune_q`: scales (UGV pos, UAV pos, heading) and fractions.
+
+    ``tol``: candidates whose score is within ``tol`` of the highest count as equally good (one
+    50-run set's NEES fraction scatters by several points); among them :attr:`best` is the one
+    closest to Qtrue (smallest Σ log² of its multipliers), so Q is inflated only as far as the
+    tests can tell it helps.
+    """
+
+    method: str
+    scales: list[tuple[float, float, float]]
+    nees_fraction: np.ndarray
+    nis_fraction: np.ndarray
+    tol: float = 0.02
+
+    @property
+    def score(self) -> np.ndarray:
+        """min(NEES fraction, NIS fraction) of each candidate."""
+        return np.minimum(self.nees_fraction, self.nis_fraction)
+
+    @property
+    def inflation(self) -> np.ndarray:
+        """Distance of each candidate from Qtrue: Σ log²(multiplier)."""
+        return np.array([sum(np.log(s) ** 2 for s in sc) for sc in self.scales])
+
+    @property
+    def best(self) -> tuple[float, float, float]:
+        """The candidate closest to Qtrue among those scoring within ``tol`` of the top score."""
+        good = self.score >= self.score.max() - self.tol
+        i = int(np.argmin(np.where(good, self.inflation, np.inf)))
+        return self.scales[i]
+
+    def table(self, top: int = 10) -> str:
+        """The ``top`` candidates by score as a fixed-width table; the chosen one marked."""
+        order = np.lexsort((self.inflation, -self.score))[:top]
+        best = self.best
+        lines = [f"{self.method.upper()} Q = Qtrue scaled by (UGV pos, UAV pos, heading); "
+                 f"* = chosen (closest to Qtrue within {self.tol:g} of the top score)",
+                 f"{'scales':<22} {'NEES in':>8} {'NIS in':>8}"]
+        for i in order:
+            sc = "(" + ", ".join(f"{s:g}" for s in self.scales[i]) + ")"
+            mark = " *" if self.scales[i] == best else ""
+            lines.append(f"{sc:<22} {self.nees_fraction[i]:8.3f} {self.nis_fraction[i]:8.3f}{mark}")
+        if best not in [self.scales[i] for i in order]:
+            i = self.scales.index(best)
+            lines.append(f"{str(best):<22} {self.nees_fraction[i]:8.3f} "
+                         f"{self.nis_fraction[i]:8.3f} *")
+        return "\n".join(lines)
+
+
+def tune_q(model: CoopModel, method: str, grid: Sequence[Sequence[float]] | None = None,
+           n_runs: int = 50, n_sets: int = 1, seed: int = 2024, alpha: float = 0.05,
+           tol: float = 0.02) -> TuningResult:
+    """Search Q = Qtrue scaled by every (UGV pos, UAV pos, heading) multiplier in ``grid``.
+
+    Every candidate sees the same truth runs (common random numbers, ``n_sets`` sets of ``n_runs``
+    spawned from ``seed``); fractions are averaged over the sets.  ``grid`` defaults to
+    :data:`DEFAULT_GRIDS` of the method.
+    """
+    method = _v.choice("method", method, METHODS)
+    grid = DEFAULT_GRIDS[method] if grid is None else grid
+    if len(grid) != 3:
+        raise ValueError(f"grid must hold 3 lists of multipliers (UGV pos, UAV pos, heading), "
+                         f"got {len(grid)}")
+    truths = [truth_runs(model, n_runs, s) for s in set_seeds(seed, n_sets)]
+    scales = [tuple(float(v) for v in c) for c in itertools.product(*grid)]
+    nees_f, nis_f = [], []
+    for sc in scales:
+        Q = scaled_q(model.Qtrue, *sc)
+        runs = [consistency_test(model, method, Q, alpha=alpha, truth=tr) for tr in truths]
+        nees_f.append(np.mean([r.nees_fraction for r in runs]))
+        nis_f.append(np.mean([r.nis_fraction for r in runs]))
+    return TuningResult(method, scales, np.array(nees_f), np.array(nis_f), tol)
+
+
+def format_sets(runs_by_label: dict[str, list[ConsistencyRun]]) -> str:
+    """A table: per filter, the NEES/NIS fractions inside the bounds (mean, min-max over sets)."""
+    lines = [f"{'filter':<22} {'sets':>4} {'N':>4} {'NEES in: mean [min, max]':>26} "
+             f"{'NIS in: mean [min, max]':>25} {'NEES avg':>9} {'NIS avg':>8}"]
+    for label, runs in runs_by_label.items():
+        ne = np.array([r.nees_fraction for r in runs])
+        ni = np.array([r.nis_fraction for r in runs])
+        na = np.mean([r.nees_mean.mean() for r in runs])
+        sa = np.mean([r.nis_mean.mean() for r in runs])
+        lines.append(f"{label:<22} {len(runs):4d} {runs[0].n_runs:4d} "
+                     f"{ne.mean():10.3f} [{ne.min():.3f}, {ne.max():.3f}] "
+                     f"{ni.mean():9.3f} [{ni.min():.3f}, {ni.max():.3f}] {na:9.2f} {sa:8.2f}")
+    return "\n".join(lines)
+
+
+def summary(model: CoopModel | None = None, n_runs: int = 50, n_sets: int = 5, seed: int = 0,
+            alpha: float = 0.05) -> str:
+    """The issue's table: per filter the Q, NEES/NIS fractions over sets, NIS on the log, runtime.
+
+    LKF, EKF and UKF with their tuned Q, and the EKF and UKF with Q = Qtrue, all on the same
+    ``n_sets`` truth sets of ``n_runs`` runs; the runtime is one 100-second run of the filterpy
+    implementation (wall clock, this machine).
+    """
+    from gpsaccel.coop.filters import run_filter
+
+    model = CoopModel() if model is None else model
+    truths = [truth_runs(model, n_runs, s) for s in set_seeds(seed, n_sets)]
+    cases = [("LKF (tuned Q)", "lkf", None), ("EKF (tuned Q)", "ekf", None),
+             ("UKF (tuned Q)", "ukf", None), ("EKF (Q = Qtrue)", "ekf", model.Qtrue),
+             ("UKF (Q = Qtrue)", "ukf", model.Qtrue)]
+    sets = {label: [consistency_test(model, m, Q, alpha=alpha, truth=tr) for tr in truths]
+            for label, m, Q in cases}
+    y = model.log()
+    lines = [f"NEES/NIS over {n_sets} sets of {n_runs} truth runs (seed {seed}), alpha = {alpha:g}",
+             format_sets(sets), "",
+             f"{'filter':<22} {'Q diagonal':<44} {'log NIS avg':>11} {'one run (s)':>11}"]
+    for label, m, Q in cases:
+        Q = tuned_q(m, model) if Q is None else Q
+        t0 = time.perf_counter()
+        res = run_filter(m, model, y, Q)
+        dt = time.perf_counter() - t0
+        qd = ", ".join(f"{q:.3g}" for q in np.diag(Q))
+        lines.append(f"{label:<22} {qd:<44} {res.nis()[1:].mean():11.2f} {dt:11.3f}")
+    return "\n".join(lines)

@@ -1,0 +1,224 @@
+"""The multirate driver: predict at the fast rate, update whenever the schedule says a sensor reports.
+
+Any linear-Gaussian model with the course's matrices runs through it: it needs ``Phi``, ``Q``
+(= Γ W Γᵀ), ``H``, ``V``, ``M0``, ``x0``, ``dt`` and a ``schedule()`` (see
+:class:`gpsaccel.kalman.schedule.Schedule`).  Two filters run under the same driver:
+
+* ``method="filterpy"``: filterpy's ``KalmanFilter`` (covariance form with the Joseph update),
+  set up by ``model.kalman_filter()``;
+* ``method="information"``: the hand-written :class:`~gpsaccel.kalman.information.InformationFilter`.
+
+Known input.  A model with a control-input matrix ``B`` (n, m) can be driven by a known input
+sequence ``u`` (n_steps, m): the prediction from fast step k to k + 1 is then
+``x̄_{k+1} = Φ x̂_k + B u_k`` (the covariance propagation M = Φ P Φᵀ + Q does not change, a known
+input adds no uncertainty).  Without ``u`` the prediction is x̄ = Φ x̂, as before.
+
+Missing data.  ``z`` has one row per update epoch of the schedule.  A NaN element means that
+component was not measured: the update uses only the finite components (the matching rows of H and
+the rows and columns of V).  A row that is entirely NaN is an outage: the filter only propagates,
+K = 0 and P = M there.  Infinite values are an error.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from gpsaccel import _validation as _v
+from gpsaccel.kalman.information import InformationFilter
+from gpsaccel.kalman.schedule import Schedule
+
+METHODS = ("filterpy", "information")
+
+
+class LinearGaussianModel(Protocol):
+    """What the driver needs of a model (``CalibrationModel`` and ``ShipModel`` have it)."""
+
+    Phi: np.ndarray
+    Q: np.ndarray
+    H: np.ndarray
+    V: np.ndarray
+    M0: np.ndarray
+    x0: np.ndarray
+    dt: float
+
+    def schedule(self) -> Schedule: ...
+
+    def kalman_filter(self): ...
+
+
+@dataclass(frozen=True, eq=False)
+class MultirateResult:
+    """Everything one multirate run produces, at the update epochs and on the fast grid.
+
+    Epoch arrays (one row per update epoch, ``n_epochs`` rows; for the calibration model the
+    GPS times, 151 rows on the defaults):
+
+    t_meas : (n_epochs,) epoch times (s); ``t_gps`` is the same array.
+    x_prior, M : a priori mean x̄ (n_epochs, n) and covariance M (n_epochs, n, n).
+    x_post, P : a posteriori mean x̂ and covariance P.
+    K : (n_epochs, n, p) gain; zero columns for components not measured.
+    residuals : (n_epochs, p) r = z − H x̄; NaN for components not measured.
+    S : (n_epochs, p, p) residual covariance H M Hᵀ + V (all components, measured or not).
+    used : (n_epochs, p) bool, the components that entered each update.
+
+    Fast-grid arrays (``n_steps + 1`` rows):
+
+    t : (n_steps + 1,) fast-grid times (s).
+    x_fast, M_fast : the filter's latest mean and covariance at every fast step — a priori between
+        updates and at an epoch before its update (for plotting between GPS fixes).
+    """
+
+    method: str
+    t: np.ndarray
+    t_meas: np.ndarray
+    steps: np.ndarray
+    x_prior: np.ndarray
+    M: np.ndarray
+    x_post: np.ndarray
+    P: np.ndarray
+    K: np.ndarray
+    residuals: np.ndarray
+    S: np.ndarray
+    used: np.ndarray
+    x_fast: np.ndarray
+    M_fast: np.ndarray
+
+    @property
+    def t_gps(self) -> np.ndarray:
+        """The update epochs' times (s), under the calibration problem's name."""
+        return self.t_meas
+
+    @property
+    def sigma(self) -> np.ndarray:
+        """(n_epochs, n) a posteriori standard deviations √diag P."""
+        return np.sqrt(np.diagonal(self.P, axis1=1, axis2=2))
+
+
+def make_filter(model: LinearGaussianModel, method: str):
+    """The filter object for ``method``, initialised at (x0, M0) from the model.
+
+    A model with a control-input matrix ``B`` hands it to the information form too (filterpy's
+    ``KalmanFilter`` gets it from ``model.kalman_filter()``).
+    """
+    _v.choice("method", method, METHODS)
+    if method == "filterpy":
+        return model.kalman_filter()
+    return InformationFilter(model.Phi, model.Q, model.H, model.V, model.x0, model.M0,
+                             B=getattr(model, "B", None))
+
+
+@dataclass(frozen=True, eq=False)
+class DriverInputs:
+    """A driver's inputs after checking: the schedule, H and V as float arrays, z, and (B, u)."""
+
+    schedule: Schedule
+    H: np.ndarray
+    V: np.ndarray
+    z: np.ndarray
+    B: np.ndarray | None
+    u: np.ndarray | None
+
+
+def check_inputs(model: LinearGaussianModel, z: np.ndarray, schedule: Schedule | None,
+                 u: np.ndarray | None) -> DriverInputs:
+    """Check what a multirate driver is given (shared by every driver of this package).
+
+    ``schedule`` defaults to ``model.schedule()``; ``z`` must be (n_epochs, p) with NaN allowed
+    (not measured) and no inf; a known input ``u`` must be (n_steps, m) and the model must have a
+    matching ``B`` (n, m).
+    """
+    schedule = model.schedule() if schedule is None else schedule
+    H, V = np.asarray(model.H, dtype=float), np.asarray(model.V, dtype=float)
+    p, n = H.shape
+    if schedule.dim_z != p:
+        raise ValueError(f"schedule delivers {schedule.dim_z} components but H has {p} rows")
+    z = _v.finite_array("z", z, (schedule.n_epochs, p), allow_nan=True)
+    B = None
+    if u is not None:
+        B = getattr(model, "B", None)
+        if B is None:
+            raise ValueError("u was given but the model has no control-input matrix B")
+        B = np.asarray(B, dtype=float)
+        if B.ndim != 2 or B.shape[0] != n:
+            raise ValueError(f"model.B must have shape ({n}, m), got {B.shape}")
+        u = _v.finite_array("u", u, (schedule.n_steps, B.shape[1]))
+    return DriverInputs(schedule, H, V, z, B, u)
+
+
+def epoch_transition(Phi: np.ndarray, Q: np.ndarray, steps: int) -> tuple[np.ndarray, np.ndarray]:
+    """(Φⁿ, Σ_{j<n} Φʲ Q Φʲᵀ): mean transition and process noise of n = ``steps`` fast steps.
+
+    What ``steps`` one-step predictions do between two updates, composed into one: the
+    calibration problem's 40 accelerometer steps between GPS fixes are one step with Φ⁴⁰ and
+    Q₄₀.  Computed by the same recursion as the predictions, Q ← Φ Q Φᵀ + Q₁.
+    """
+    steps = _v.integer("steps", steps, minimum=0)
+    F = np.eye(Phi.shape[0])
+    Qe = np.zeros_like(Q, dtype=float)
+    for _ in range(steps):
+        F = Phi @ F
+        Qe = Phi @ Qe @ Phi.T + Q
+    return F, Qe
+
+
+def run_multirate(model: LinearGaussianModel, z: np.ndarray, method: str = "filterpy",
+                  schedule: Schedule | None = None,
+                  u: np.ndarray | None = None) -> MultirateResult:
+    """Filter measurements ``z`` (n_epochs, p) taken on ``schedule`` (default ``model.schedule()``).
+
+    At every fast step the filter predicts with Φ and Q (and ``B u_k`` when a known input ``u``,
+    (n_steps, m), is given; the model must then have ``B``); at each epoch it updates with the
+    components that the schedule delivers and that are finite in ``z``.
+    """
+    method = _v.choice("method", method, METHODS)
+    inputs = check_inputs(model, z, schedule, u)
+    schedule, H, V, z, B, u = (inputs.schedule, inputs.H, inputs.V, inputs.z, inputs.B, inputs.u)
+    p, n = H.shape
+
+    kf = make_filter(model, method)
+
+    def predict(k: int) -> None:
+        """From fast step k to k + 1."""
+        if u is None:
+            kf.predict()
+        else:
+            kf.predict(u=u[k].reshape(-1, 1), B=B)
+
+    n_epochs, n_fast = schedule.n_epochs, schedule.n_steps + 1
+    x_prior = np.empty((n_epochs, n))
+    M = np.empty((n_epochs, n, n))
+    x_post = np.empty((n_epochs, n))
+    P = np.empty((n_epochs, n, n))
+    K = np.zeros((n_epochs, n, p))
+    residuals = np.full((n_epochs, p), np.nan)
+    S = np.empty((n_epochs, p, p))
+    used = schedule.mask & np.isfinite(z)
+    x_fast = np.empty((n_fast, n))
+    M_fast = np.empty((n_fast, n, n))
+
+    step = 0
+    x_fast[0], M_fast[0] = kf.x[:, 0], kf.P
+    for i, epoch_step in enumerate(schedule.steps):
+        while step < epoch_step:
+            predict(step)
+            step += 1
+            x_fast[step], M_fast[step] = kf.x[:, 0], kf.P
+        x_prior[i], M[i] = kf.x[:, 0], kf.P
+        S[i] = H @ kf.P @ H.T + V
+        rows = np.flatnonzero(used[i])
+        if rows.size:
+            residuals[i, rows] = z[i, rows] - H[rows] @ x_prior[i]
+            kf.update(z[i, rows].reshape(-1, 1), R=V[np.ix_(rows, rows)], H=H[rows])
+            K[i][:, rows] = kf.K
+        x_post[i], P[i] = kf.x[:, 0], kf.P
+    while step < schedule.n_steps:  # propagate past the last epoch, if the grid goes on
+        predict(step)
+        step += 1
+        x_fast[step], M_fast[step] = kf.x[:, 0], kf.P
+
+    t = np.arange(n_fast) * model.dt
+    return MultirateResult(method, t, t[schedule.steps], schedule.steps, x_prior, M, x_post, P,
+                           K, residuals, S, used, x_fast, M_fast)

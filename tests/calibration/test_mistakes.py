@@ -1,0 +1,121 @@
+"""The catalogue's vectorised filters against the package's multirate driver, and its resolution."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from gpsaccel import CalibrationModel, run_multirate
+from gpsaccel.calibration import mistakes as cat
+from gpsaccel.calibration.compare import reference_filter
+from gpsaccel.calibration.simulation import simulate_many
+from gpsaccel.check import TOLERANCE
+
+MODEL = CalibrationModel()
+
+
+@pytest.fixture(scope="module")
+def z():
+    return np.stack([r.z for r in simulate_many(MODEL, 4, seed=11)])
+
+
+def _sigma(P):
+    return np.sqrt(np.diagonal(P, axis1=-2, axis2=-1))
+
+
+@pytest.mark.parametrize("method", ["filterpy", "information"])
+def test_vectorised_reference_equals_run_multirate(z, method):
+    x, P = cat.reference(MODEL).apply(z)
+    f = reference_filter(MODEL, method)
+    for r in range(z.shape[0]):
+        x_r, P_r = f(z[r])
+        sd = _sigma(P_r)
+        assert np.max(np.abs(x[r] - x_r) / sd) < 1e-9
+        assert np.max(np.abs(P - P_r) / (sd[:, :, None] * sd[:, None, :])) < 1e-11
+
+
+class _PlusPhi(CalibrationModel):
+    """The report-000 model with Φ₁₃ = +Δt²/2, run through the package's driver."""
+
+    @property
+    def Phi(self):
+        return cat.phi(self.dt, +1.0)
+
+
+class _TotalX0(CalibrationModel):
+    @property
+    def x0(self):
+        return np.array([self.p0_mean, self.v0_mean, 0.0])
+
+
+def _model_for(mistake: cat.Mistake) -> CalibrationModel | None:
+    """The same mistake expressed as a CalibrationModel, where the model can express it."""
+    c = mistake.changes
+    if mistake.code == "phi-sign":
+        return _PlusPhi()
+    if mistake.code == "x0-total-state":
+        return _TotalX0()
+    if mistake.code in ("m0-order", "std-as-variance", "w-value"):
+        kw = {"M0": MODEL.M0.copy(), "V": MODEL.V.copy(), "W": MODEL.W.copy()}
+        for change in c:
+            if len(change) == 2:
+                kw[change[0]] = np.array([[change[1]]])
+            else:
+                kw[change[0]][change[1]] = change[2]
+        return CalibrationModel(**kw)
+    return None
+
+
+EXPRESSIBLE = [m for m in cat.catalogue(MODEL) if _model_for(m) is not None]
+
+
+@pytest.mark.parametrize("mistake", EXPRESSIBLE, ids=[f"{m.code}:{m.variant}" for m in EXPRESSIBLE])
+def test_mutant_equals_driver_on_mistaken_model(z, mistake):
+    x, P = cat.build(MODEL, (mistake,)).apply(z[:2])
+    model = _model_for(mistake)
+    for r in range(2):
+        res = run_multirate(model, z[r])
+        sd = _sigma(res.P)
+        assert np.max(np.abs(x[r] - res.x_post) / sd) < 1e-9
+        assert np.max(np.abs(P - res.P) / (sd[:, :, None] * sd[:, None, :])) < 1e-11
+
+
+def test_gps_rate_mistake_keeps_the_exact_mean_transition():
+    """Φ(T) = Φ(Δt)⁴⁰ exactly, so process-noise-interval changes only the noise."""
+    pni = cat.mutant("process-noise-interval", MODEL)
+    ref = cat.reference(MODEL)
+    np.testing.assert_allclose(pni.A, ref.A, rtol=0, atol=1e-15)
+    assert not np.allclose(pni.Qe, ref.Qe)
+    np.testing.assert_allclose(pni.Qe[1, 1], 0.2**2 * 0.0004, rtol=1e-12)
+    np.testing.assert_allclose(ref.Qe[1, 1], 40 * 0.005**2 * 0.0004, rtol=1e-12)
+
+
+def test_every_entry_is_far_from_every_other_and_from_the_optimum(z):
+    """Distinct entries differ by far more than the match tolerance, so a match is unambiguous."""
+    outs = [("optimal", *cat.reference(MODEL).apply(z))]
+    outs += [(str(m), *cat.build(MODEL, (m,)).apply(z)) for m in cat.catalogue(MODEL)]
+    sd = _sigma(outs[0][2])
+    for (a, xa, Pa), (b, xb, Pb) in itertools.combinations(outs, 2):
+        d = max(np.max(np.abs(xa - xb) / sd),
+                np.max(np.abs(Pa - Pb) / (sd[:, :, None] * sd[:, None, :])))
+        assert d > 100 * TOLERANCE, (a, b, d)
+
+
+def test_combinations_skip_mistakes_that_touch_the_same_ingredient():
+    cov = cat.covariance_mistakes(MODEL)
+    pairs = list(cat.combinations(cov, 2))
+    for a, b in pairs:
+        assert a.touches.isdisjoint(b.touches)
+    steps = [m for m in cov if m.code == "missing-propagation"]
+    assert len(steps) >= 2 and (steps[0], steps[1]) not in pairs
+    assert len(pairs) < len(cov) * (len(cov) - 1) // 2
+
+
+def test_codes_cover_the_issue():
+    need = {"phi-sign", "process-noise-interval", "m0-order", "std-as-variance",
+            "missing-propagation", "mean-not-propagated", "x0-total-state"}
+    assert need <= set(cat.codes(MODEL))
+    with pytest.raises(ValueError, match="code must be one of"):
+        cat.mutant("no-such-code", MODEL)

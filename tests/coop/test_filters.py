@@ -1,0 +1,144 @@
+"""LKF, EKF, UKF for cooperative localization (report 002): agreement, consistency, the log."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gpsaccel.coop import filters as nl
+from gpsaccel.coop import model as coop
+from gpsaccel.coop.model import CoopModel
+from gpsaccel.coop.montecarlo import (
+    consistency_test,
+    repeated_sets,
+    set_seeds,
+    truth_runs,
+    tune_q,
+)
+from gpsaccel.kalman import consistency
+
+MODEL = CoopModel()
+
+
+@pytest.fixture(scope="module")
+def truth3():
+    return MODEL.simulate(np.random.default_rng(42), n_runs=3)
+
+
+@pytest.mark.parametrize("method", nl.METHODS)
+def test_vectorised_filter_equals_filterpy(method, truth3):
+    batch = nl.run_batch(method, MODEL, truth3.y)
+    for i in range(truth3.n_runs):
+        one = nl.run_filter(method, MODEL, truth3.y[i])
+        np.testing.assert_allclose(coop.state_residual(batch.x_post[i], one.x_post), 0,
+                                   atol=1e-10)
+        np.testing.assert_allclose(batch.P_post[i], one.P_post, atol=1e-10)
+        np.testing.assert_allclose(batch.innovation[i], one.innovation, atol=1e-10)
+        np.testing.assert_allclose(batch.S[i], one.S, atol=1e-10)
+
+
+@pytest.fixture(scope="module")
+def truths():
+    # 5 independent 50-run sets; seed 44 is not the tuning seed (2024)
+    return [truth_runs(MODEL, 50, s) for s in set_seeds(44, 5)]
+
+
+@pytest.fixture(scope="module")
+def ekf_sets(truths):
+    return [consistency_test(MODEL, "ekf", truth=tr) for tr in truths]
+
+
+def test_tuned_ekf_passes_nees_and_nis_over_five_sets(ekf_sets):
+    # For a consistent filter each fraction is ~0.95 (alpha = 0.05); NEES is correlated in time,
+    # so one 50-run set scatters by several points.  The issue's acceptance: mean over 5 sets
+    # >= 0.88 (NEES) and >= 0.90 (NIS).  The seeds are fixed: the test is deterministic.
+    nees = np.mean([r.nees_fraction for r in ekf_sets])
+    nis = np.mean([r.nis_fraction for r in ekf_sets])
+    assert nees >= 0.88, nees
+    assert nis >= 0.90, nis
+    assert ekf_sets[0].nees_bounds == consistency.chi2_bounds(6, 50, 0.05)
+
+
+def test_ekf_with_qtrue_is_overconfident_along_track(truths):
+    # same truth runs, Q = Qtrue: the predicted mean ignores E[cos(θ+δ)] = cos θ·e^(−σ²/2), so the
+    # average NEES sits above n = 6 (the tuned Q, which inflates the position terms, fixes it)
+    plain = [consistency_test(MODEL, "ekf", MODEL.Qtrue, truth=tr) for tr in truths]
+    mean_nees = np.mean([r.nees_mean.mean() for r in plain])
+    assert mean_nees > 6.4, mean_nees
+    assert np.mean([r.nees_fraction for r in plain]) < 0.85
+
+
+def test_ukf_with_its_tuned_q_passes_nees_and_nis():
+    runs = repeated_sets(MODEL, "ukf", n_sets=2, n_runs=50, seed=45)
+    assert np.mean([r.nees_fraction for r in runs]) >= 0.88
+    assert np.mean([r.nis_fraction for r in runs]) >= 0.90
+
+
+def test_lkf_cannot_be_consistent_over_100_s():
+    run = consistency_test(MODEL, "lkf", n_runs=30, seed=46, keep=True)
+    xn = MODEL.nominal()
+    drift = np.hypot(*(run.truth.x[:, -1, 3:5] - xn[-1, 3:5]).T)
+    assert np.median(drift) > 100.0  # the truth wanders hundreds of metres from the nominal
+    assert run.nees_fraction < 0.5
+    assert run.nees_mean[-100:].mean() > 10 * run.nees_bounds[1]
+
+
+def test_tuning_prefers_an_inflated_position_q_for_the_ekf():
+    grid = ((1.0, 2.0), (1.0, 2.0), (1.0,))
+    res = tune_q(MODEL, "ekf", grid=grid, n_runs=50, seed=2024)
+    assert len(res.scales) == 4
+    assert res.best != (1.0, 1.0, 1.0)
+    i = res.scales.index((1.0, 1.0, 1.0))
+    assert res.nees_fraction[i] < res.nees_fraction[res.scales.index(res.best)]
+
+
+def test_filters_on_the_course_log_keep_every_innovation_finite():
+    y = MODEL.log()
+    for method in nl.METHODS:
+        res = nl.run_filter(method, MODEL, y)
+        assert np.isnan(res.innovation[0]).all()  # t = 0 is not measured: no update
+        assert np.isfinite(res.innovation[1:]).all(), method
+        assert np.isfinite(res.x_post).all() and np.isfinite(res.P_post).all()
+        np.testing.assert_array_equal(res.x_post[0], MODEL.x0)
+    ekf = nl.run_ekf(MODEL, y)
+    assert 3.0 < ekf.nis()[1:].mean() < 7.0
+
+
+def test_missing_components_are_left_out_of_the_update(truth3):
+    y = truth3.y[0].copy()
+    y[10] = np.nan  # a whole row: no update at all
+    y[20, [1, 3]] = np.nan  # range and GPS easting missing
+    for method in nl.METHODS:
+        res = nl.run_filter(method, MODEL, y)
+        assert np.isfinite(res.x_post).all()
+        np.testing.assert_array_equal(res.x_post[10], res.x_prior[10])
+        np.testing.assert_array_equal(res.P_post[10], res.P_prior[10])
+        assert np.isnan(res.innovation[20, [1, 3]]).all()
+        assert np.isfinite(res.innovation[20, [0, 2, 4]]).all()
+        assert consistency.dof_of(res.innovation[20]) == 3
+    # the EKF's partial update is the update with the reduced H and R, by hand
+    res = nl.run_ekf(MODEL, y)
+    m = np.isfinite(y[20])
+    xb, M = res.x_prior[20], res.P_prior[20]
+    H = MODEL.C(xb)[m]
+    R = MODEL.Rtrue[np.ix_(m, m)]
+    K = M @ H.T @ np.linalg.inv(H @ M @ H.T + R)
+    r = coop.measurement_residual(y[20], coop.h(xb))[m]
+    np.testing.assert_allclose(res.x_post[20], coop.wrap_state(xb + K @ r), atol=1e-12)
+
+
+@pytest.mark.parametrize("call, name", [
+    (lambda y: nl.run_ekf(MODEL, y[:-1]), "y"),
+    (lambda y: nl.run_ekf(MODEL, y.T), "y"),
+    (lambda y: nl.run_ukf(MODEL, y, Q=np.diag([1, 1, 1, 1, 1, -1.0])), "Q"),
+    (lambda y: nl.run_lkf(MODEL, y, R=np.eye(4)), "R"),
+    (lambda y: nl.run_ekf(MODEL, y, P0=np.zeros((6, 6))), "P0"),
+    (lambda y: nl.run_filter("pf", MODEL, y), "method"),
+    (lambda y: nl.run_batch("ekf", MODEL, y), "y"),
+    (lambda y: nl.run_batch("ekf", MODEL, np.stack([y, np.where(np.arange(5) == 1, np.nan, y)])),
+     "y"),
+    (lambda y: nl.scaled_q(MODEL.Qtrue, 0.0), "scale"),
+])
+def test_bad_input_names_the_argument(call, name, truth3):
+    with pytest.raises(ValueError, match=name):
+        call(truth3.y[0])
