@@ -37,7 +37,7 @@ def main() -> None:
         t0 = time.perf_counter()
         batch = run_batch(method, model, truth.y)
         t_batch = (time.perf_counter() - t0) / args.runs
-        diff = max(np.abs(state_residual(s.x_post, batch.x_post[i])).max()
+        diff = max(np.abs(state_residual(s.x_hat, batch.x_hat[i])).max()
                    for i, s in enumerate(singles))
         print(f"{method.upper():<6} {t_one:15.4f} {t_batch:17.5f} {t_one / t_batch:7.1f} "
               f"{diff:10.1e}")

@@ -48,15 +48,15 @@ with open("/proc/self/status") as f:
 def filterpy_loop(model: CalibrationModel, z: np.ndarray) -> np.ndarray:
     """The plain filterpy loop of one realization: predict at 200 Hz, update at every GPS fix."""
     kf = model.kalman_filter()
-    x_post = np.empty((model.n_gps, 3))
+    x_hat = np.empty((model.n_gps, 3))
     kf.update(z[0].reshape(2, 1))
-    x_post[0] = kf.x[:, 0]
+    x_hat[0] = kf.x[:, 0]
     for i in range(1, model.n_gps):
         for _ in range(model.gps_every):
             kf.predict()
         kf.update(z[i].reshape(2, 1))
-        x_post[i] = kf.x[:, 0]
-    return x_post
+        x_hat[i] = kf.x[:, 0]
+    return x_hat
 
 
 def time_filterpy(model: CalibrationModel, truth: str, sample: int) -> dict[str, float]:

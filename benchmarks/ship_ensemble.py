@@ -51,13 +51,13 @@ def main() -> None:
     for name, (sched, run) in filters.items():
         z = ens.measurements(sched)
         t0 = time.perf_counter()
-        singles = [run(z[r], sched).x_post for r in range(args.sample)]
+        singles = [run(z[r], sched).x_hat for r in range(args.sample)]
         loop = (time.perf_counter() - t0) / args.sample * args.runs
         t0 = time.perf_counter()
         first = run(z[0], sched)
         est = apply_gains(model.Phi, model.H, model.x0, sched, first.K, z, B=model.B, u=ens.u)
         gains = time.perf_counter() - t0
-        dx = max(np.abs(est.x_post[r] - singles[r]).max() for r in range(args.sample))
+        dx = max(np.abs(est.x_hat[r] - singles[r]).max() for r in range(args.sample))
         print(f"{name:<22} {loop:12.2f} {gains:13.3f} {loop / gains:10.1f} {dx:9.1e}")
 
 

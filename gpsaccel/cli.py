@@ -25,10 +25,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
           f"{model.n_steps} accelerometer steps, {model.n_gps} GPS fixes")
     print(f"final estimates at t = {res.t_gps[-1]:g} s (truth, estimate ± 1σ):")
     for i, (name, unit) in enumerate(names):
-        print(f"  {name:>2} = {run.x_gps[-1, i]: .6g} {unit:<5} x̂ = {res.x_post[-1, i]: .6g} "
+        print(f"  {name:>2} = {run.x_gps[-1, i]: .6g} {unit:<5} x̂ = {res.x_hat[-1, i]: .6g} "
               f"± {res.sigma[-1, i]:.3g}")
-    print(f"  p̂ = {run.p_c[-1] + res.x_post[-1, 0]:.3f} m (true {run.p[-1]:.3f} m), "
-          f"v̂ = {run.v_c[-1] + res.x_post[-1, 1]:.4f} m/s (true {run.v[-1]:.4f} m/s)")
+    print(f"  p̂ = {run.p_c[-1] + res.x_hat[-1, 0]:.3f} m (true {run.p[-1]:.3f} m), "
+          f"v̂ = {run.v_c[-1] + res.x_hat[-1, 1]:.4f} m/s (true {run.v[-1]:.4f} m/s)")
     with np.printoptions(precision=4, suppress=False):
         print(f"P at t = {res.t_gps[-1]:g} s:")
         print(res.P[-1])

@@ -210,7 +210,7 @@ def errors_with_sigma(run, result, states: Sequence[int] = (0, 1, 2), k: float =
     interval (a GPS outage); ``window`` = (t0, t1) draws only that time span (s).
     """
     fig, axs = panels(len(states), fig, title=title)
-    e = run.x_gps - result.x_post
+    e = run.x_gps - result.x_hat
     lo, hi = (-np.inf, np.inf) if window is None else window
     slow = (result.t_gps >= lo) & (result.t_gps <= hi)
     fast = (result.t >= lo) & (result.t <= hi)
@@ -238,9 +238,9 @@ def estimates_with_truth(run, result, states: Sequence[int] = (0, 1, 2), *,
     """Total estimates p̂ = p_c + δp̂, v̂ = v_c + δv̂, b̂ at the GPS times against the truth, stacked."""
     fig, axs = panels(len(states), fig, title=title)
     gps = run.gps_steps
-    totals = [(run.p, run.p_c[gps] + result.x_post[:, 0], "position p", "m"),
-              (run.v, run.v_c[gps] + result.x_post[:, 1], "velocity v", "m/s"),
-              (np.full_like(run.t, run.b), result.x_post[:, 2], "bias b", "m/s²")]
+    totals = [(run.p, run.p_c[gps] + result.x_hat[:, 0], "position p", "m"),
+              (run.v, run.v_c[gps] + result.x_hat[:, 1], "velocity v", "m/s"),
+              (np.full_like(run.t, run.b), result.x_hat[:, 2], "bias b", "m/s²")]
     for ax, i in zip(axs, states, strict=True):
         truth, est, quantity, unit = totals[i]
         estimate_vs_truth(run.t, truth, result.t_gps, est, quantity=quantity, unit=unit, ax=ax)
@@ -255,7 +255,7 @@ def error_comparison(run, result, *, fig: Figure | None = None) -> Figure:
     Position and velocity: accelerometer-only |p − p_c|, GPS-only |η|, filter |p − p̂|.
     """
     fig, axs = panels(2, fig, title="Errors of the estimates against the sensors' own errors")
-    e = run.x_gps - result.x_post
+    e = run.x_gps - result.x_hat
     for i, ax in enumerate(axs):
         name, unit = _state_label(i)
         ax.semilogy(run.t, np.abs(run.x[:, i]), color=STYLE["truth"], lw=1.0,

@@ -48,7 +48,7 @@ def test_errors_with_sigma_draws_the_error_and_its_bounds(one_run):
     _, run, res = one_run
     fig = plots.errors_with_sigma(run, res, k=2.0)
     assert isinstance(fig, Figure) and len(fig.axes) == 3
-    e = run.x_gps - res.x_post
+    e = run.x_gps - res.x_hat
     for i, ax in enumerate(fig.axes):
         name = ["δp", "δv", "b"][i]
         np.testing.assert_array_equal(_line(ax, f"{name} − {name}̂").get_ydata(), e[:, i])
@@ -73,7 +73,7 @@ def test_estimates_with_truth_adds_the_integrated_accelerometer(one_run):
     _, run, res = one_run
     ax = plots.estimates_with_truth(run, res, states=(0,)).axes[0]
     np.testing.assert_allclose(_line(ax, "estimate").get_ydata(),
-                               run.p_c[run.gps_steps] + res.x_post[:, 0])
+                               run.p_c[run.gps_steps] + res.x_hat[:, 0])
     np.testing.assert_array_equal(_line(ax, "truth").get_ydata(), run.p)
 
 
@@ -122,7 +122,7 @@ def test_draws_into_a_given_figure_or_axes(one_run):
     fig = Figure()
     assert plots.errors_with_sigma(run, res, fig=fig) is fig
     ax = Figure().add_subplot()
-    assert plots.error_band(res.t_gps, res.x_post[:, 0], res.sigma[:, 0], ax=ax) is ax.figure
+    assert plots.error_band(res.t_gps, res.x_hat[:, 0], res.sigma[:, 0], ax=ax) is ax.figure
     assert plots.system_diagram(ax=Figure().add_subplot()).axes[0].axison is False
 
 

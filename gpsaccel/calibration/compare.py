@@ -31,7 +31,7 @@ def reference_filter(model: CalibrationModel, method: str = "filterpy") -> Filte
 
     def kalman_filter(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         result = run_multirate(model, z, method=method)
-        return result.x_post, result.P
+        return result.x_hat, result.P
 
     kalman_filter.__name__ = f"gpsaccel[{method}]"
     return kalman_filter

@@ -247,7 +247,7 @@ def _run_block(pl: EnsemblePlan, xi: np.ndarray,
     expected values, so no precision is lost to a large mean.
 
     With ``keep`` it also returns the full arrays (epoch, component, run): x (true error state),
-    z, x_prior, x_hat, r.
+    z, x_bar, x_hat, r.
     """
     m, n = xi.shape[1], pl.n_gps
     xiT = xi  # (n_normals, m): row k = normal k of every run
@@ -272,7 +272,7 @@ def _run_block(pl: EnsemblePlan, xi: np.ndarray,
     xbar = np.zeros((3, m))  # x̄_0 = x0 is deterministic
     if keep:
         kept = {k: np.empty((n, d, m)) for k, d in
-                (("x", 3), ("z", 2), ("x_prior", 3), ("x_hat", 3), ("r", 2))}
+                (("x", 3), ("z", 2), ("x_bar", 3), ("x_hat", 3), ("r", 2))}
     for i in range(n):
         if i > 0:
             x = Phi_N @ x
@@ -286,7 +286,7 @@ def _run_block(pl: EnsemblePlan, xi: np.ndarray,
         np.subtract(x, xhat, out=w[:3])  # ẽ_i
         np.matmul(w, w.T, out=G[i])
         if keep:
-            kept["x"][i], kept["x_prior"][i], kept["x_hat"][i] = x, xbar, xhat
+            kept["x"][i], kept["x_bar"][i], kept["x_hat"][i] = x, xbar, xhat
             kept["z"][i], kept["r"][i] = x[:2] + E[i], r
     # -- the sums, expected values put back
     sw = G[:, 6, :6]  # Σ w (n, 6)
@@ -313,7 +313,7 @@ def _run_block(pl: EnsemblePlan, xi: np.ndarray,
         return sums, None
     kept["x"] += pl.offset[:, :, None]
     kept["z"] += pl.offset[:, :2, None]
-    kept["x_prior"] += pl.mean_xprior[:, :, None]
+    kept["x_bar"] += pl.mean_xprior[:, :, None]
     kept["x_hat"] += pl.mean_xhat[:, :, None]
     kept["r"] += pl.mean_r[:, :, None]
     return sums, kept
@@ -324,16 +324,16 @@ class Realizations:
     """The engine's realizations ``runs`` (global run indices), for checking it against filterpy.
 
     x_gps (m, n_gps, 3): the true error state at the GPS times; z (m, n_gps, 2) the measurement
-    (m, m/s); x_prior, x_hat (m, n_gps, 3) and residuals (m, n_gps, 2) the engine's filter.
+    (m, m/s); x_bar, x_hat (m, n_gps, 3) and residuals (m, n_gps, 2) the engine's filter.
     """
 
     runs: np.ndarray
     t: np.ndarray
     x_gps: np.ndarray
     z: np.ndarray
-    x_prior: np.ndarray
+    x_bar: np.ndarray
     x_hat: np.ndarray
-    residuals: np.ndarray
+    r: np.ndarray
 
 
 def realizations(model: CalibrationModel, start: int, stop: int, seed: int = 0,
@@ -341,7 +341,7 @@ def realizations(model: CalibrationModel, start: int, stop: int, seed: int = 0,
     """Runs ``start`` .. ``stop − 1`` of the ensemble ``monte_carlo(model, ..., seed, truth)`` uses.
 
     Feed ``z[l]`` to :func:`gpsaccel.run_multirate` to run filterpy on realization l; its
-    ``x_gps[l] − x_post`` is the error the engine accumulated for that run.
+    ``x_gps[l] − x_hat`` is the error the engine accumulated for that run.
     """
     seed = _v.integer("seed", seed, minimum=0)
     start = _v.integer("start", start, minimum=0)
@@ -350,7 +350,7 @@ def realizations(model: CalibrationModel, start: int, stop: int, seed: int = 0,
     out = _run_block(pl, _standard_normals(seed, pl.n_normals, start, stop), keep=True)[1]
     runs_first = {k: np.ascontiguousarray(v.transpose(2, 0, 1)) for k, v in out.items()}
     return Realizations(np.arange(start, stop), pl.t, runs_first["x"], runs_first["z"],
-                        runs_first["x_prior"], runs_first["x_hat"], runs_first["r"])
+                        runs_first["x_bar"], runs_first["x_hat"], runs_first["r"])
 
 
 # ------------------------------------------------------------------------------ mergeable sums

@@ -110,36 +110,36 @@ def tuned_q(method: str, model: CoopModel | None = None) -> np.ndarray:
 class FilterResult:
     """What a filter run produced; arrays may carry a leading run axis (N, ...) from run_batch.
 
-    t : (K+1,) s.  x_prior, x_post : (..., K+1, 6) x̄ and x̂ (angles wrapped); P_prior, P_post :
-    (..., K+1, 6, 6) M and P.  innovation : (..., K+1, 5) r = y − ŷ (NaN where not measured, row 0
+    t : (K+1,) s.  x_bar, x_hat : (..., K+1, 6) x̄ and x̂ (angles wrapped); M, P :
+    (..., K+1, 6, 6) M and P.  r : (..., K+1, 5) residual r = y − ŷ (NaN where not measured, row 0
     NaN); S : (..., K+1, 5, 5) its covariance.  Row 0 holds the initial x̂_0, P_0.
     """
 
     method: str
     t: np.ndarray
-    x_prior: np.ndarray
-    P_prior: np.ndarray
-    x_post: np.ndarray
-    P_post: np.ndarray
-    innovation: np.ndarray
+    x_bar: np.ndarray
+    M: np.ndarray
+    x_hat: np.ndarray
+    P: np.ndarray
+    r: np.ndarray
     S: np.ndarray
 
     @property
     def sigma(self) -> np.ndarray:
         """Posterior standard deviations √diag(P) (..., K+1, 6)."""
-        return np.sqrt(np.diagonal(self.P_post, axis1=-2, axis2=-1))
+        return np.sqrt(np.diagonal(self.P, axis1=-2, axis2=-1))
 
     def errors(self, x_true: np.ndarray) -> np.ndarray:
-        """Estimation errors x − x̂ (headings wrapped), same leading shape as x_post."""
-        return state_residual(x_true, self.x_post)
+        """Estimation errors x − x̂ (headings wrapped), same leading shape as x_hat."""
+        return state_residual(x_true, self.x_hat)
 
     def nees(self, x_true: np.ndarray) -> np.ndarray:
         """NEES eᵀ P⁻¹ e at every step (..., K+1)."""
-        return consistency.nees(self.errors(x_true), self.P_post)
+        return consistency.nees(self.errors(x_true), self.P)
 
     def nis(self) -> np.ndarray:
         """NIS rᵀ S⁻¹ r at every step (..., K+1); 0 with 0 dof where nothing was measured."""
-        return consistency.nis(self.innovation, self.S)
+        return consistency.nis(self.r, self.S)
 
 
 # --------------------------------------------------------------------------- helpers
@@ -191,9 +191,9 @@ def _check(model: CoopModel, y: object, Q: object, R: object, x0: object, P0: ob
 
 def _empty(model: CoopModel, lead: tuple[int, ...] = ()) -> dict[str, np.ndarray]:
     K1 = model.n_steps + 1
-    return {"x_prior": np.empty(lead + (K1, 6)), "P_prior": np.empty(lead + (K1, 6, 6)),
-            "x_post": np.empty(lead + (K1, 6)), "P_post": np.empty(lead + (K1, 6, 6)),
-            "innovation": np.full(lead + (K1, 5), np.nan), "S": np.full(lead + (K1, 5, 5), np.nan)}
+    return {"x_bar": np.empty(lead + (K1, 6)), "M": np.empty(lead + (K1, 6, 6)),
+            "x_hat": np.empty(lead + (K1, 6)), "P": np.empty(lead + (K1, 6, 6)),
+            "r": np.full(lead + (K1, 5), np.nan), "S": np.full(lead + (K1, 5, 5), np.nan)}
 
 
 # --------------------------------------------------------------------------- single-run filters
@@ -212,24 +212,24 @@ def run_lkf(model: CoopModel, y: np.ndarray, Q: np.ndarray | None = None,
     kf.P = P0.copy()
     kf.Q = Q
     out = _empty(model)
-    out["x_prior"][0] = out["x_post"][0] = wrap_state(xn[0] + kf.x)
-    out["P_prior"][0] = out["P_post"][0] = kf.P
+    out["x_bar"][0] = out["x_hat"][0] = wrap_state(xn[0] + kf.x)
+    out["M"][0] = out["P"][0] = kf.P
     for k in range(model.n_steps):
         kf.F = Fs[k]
         kf.predict()
         j = k + 1
-        out["x_prior"][j] = wrap_state(xn[j] + kf.x)
-        out["P_prior"][j] = kf.P
+        out["x_bar"][j] = wrap_state(xn[j] + kf.x)
+        out["M"][j] = kf.P
         m = np.isfinite(y[j])
         if m.any():
             H = Hs[j][m]
             r = measurement_residual(y[j], yn[j] + Hs[j] @ kf.x)[m]
             # filterpy forms z − H δx̄; hand it z = H δx̄ + r so its residual is the wrapped r
             kf.update(H @ kf.x + r, R=R[np.ix_(m, m)], H=H)
-            out["innovation"][j, m] = kf.y
+            out["r"][j, m] = kf.y
             out["S"][j] = Hs[j] @ kf.P_prior @ Hs[j].T + R
-        out["x_post"][j] = wrap_state(xn[j] + kf.x)
-        out["P_post"][j] = kf.P
+        out["x_hat"][j] = wrap_state(xn[j] + kf.x)
+        out["P"][j] = kf.P
     return FilterResult("lkf", model.t, **out)
 
 
@@ -254,22 +254,22 @@ def run_ekf(model: CoopModel, y: np.ndarray, Q: np.ndarray | None = None,
     ekf.P = P0.copy()
     ekf.Q = Q
     out = _empty(model)
-    out["x_prior"][0] = out["x_post"][0] = x0
-    out["P_prior"][0] = out["P_post"][0] = P0
+    out["x_bar"][0] = out["x_hat"][0] = x0
+    out["M"][0] = out["P"][0] = P0
     for k in range(model.n_steps):
         ekf.F = model.F(ekf.x)
         ekf.predict()
         j = k + 1
-        out["x_prior"][j], out["P_prior"][j] = ekf.x, ekf.P
+        out["x_bar"][j], out["M"][j] = ekf.x, ekf.P
         m = np.isfinite(y[j])
         if m.any():
             ekf.update(y[j][m], lambda x, m=m: model.C(x)[m], lambda x, m=m: h(x)[m],
                        R=R[np.ix_(m, m)], residual=_subset_residual(m))
             ekf.x = wrap_state(ekf.x)
-            Hf = model.C(out["x_prior"][j])
-            out["innovation"][j, m] = ekf.y
-            out["S"][j] = Hf @ out["P_prior"][j] @ Hf.T + R
-        out["x_post"][j], out["P_post"][j] = ekf.x, ekf.P
+            Hf = model.C(out["x_bar"][j])
+            out["r"][j, m] = ekf.y
+            out["S"][j] = Hf @ out["M"][j] @ Hf.T + R
+        out["x_hat"][j], out["P"][j] = ekf.x, ekf.P
     return FilterResult("ekf", model.t, **out)
 
 
@@ -298,12 +298,12 @@ def run_ukf(model: CoopModel, y: np.ndarray, Q: np.ndarray | None = None,
     ukf.Q = Q
     ukf.R = R
     out = _empty(model)
-    out["x_prior"][0] = out["x_post"][0] = x0
-    out["P_prior"][0] = out["P_post"][0] = P0
+    out["x_bar"][0] = out["x_hat"][0] = x0
+    out["M"][0] = out["P"][0] = P0
     for k in range(model.n_steps):
         ukf.predict()
         j = k + 1
-        out["x_prior"][j], out["P_prior"][j] = ukf.x, ukf.P
+        out["x_bar"][j], out["M"][j] = ukf.x, ukf.P
         m = np.isfinite(y[j])
         if m.all():
             ukf.update(y[j])
@@ -318,12 +318,12 @@ def run_ukf(model: CoopModel, y: np.ndarray, Q: np.ndarray | None = None,
                 ukf.residual_z, ukf.z_mean = full
         if m.any():
             ukf.x = wrap_state(ukf.x)
-            out["innovation"][j, m] = ukf.y
+            out["r"][j, m] = ukf.y
             if m.all():
                 out["S"][j] = ukf.S
             else:
                 out["S"][j][np.ix_(m, m)] = ukf.S
-        out["x_post"][j], out["P_post"][j] = ukf.x, ukf.P
+        out["x_hat"][j], out["P"][j] = ukf.x, ukf.P
     return FilterResult("ukf", model.t, **out)
 
 
@@ -357,8 +357,8 @@ def run_batch(method: str, model: CoopModel, y: np.ndarray, Q: np.ndarray | None
     out = _empty(model, (N,))
     x = np.broadcast_to(x0, (N, 6)).copy()
     P = np.broadcast_to(P0, (N, 6, 6)).copy()
-    out["x_prior"][:, 0] = out["x_post"][:, 0] = x
-    out["P_prior"][:, 0] = out["P_post"][:, 0] = P
+    out["x_bar"][:, 0] = out["x_hat"][:, 0] = x
+    out["M"][:, 0] = out["P"][:, 0] = P
     step = {"lkf": _batch_lkf, "ekf": _batch_ekf, "ukf": _batch_ukf}[method]
     step(model, y, rows, Q, R, x, P, out, nominal)
     return FilterResult(method, model.t, **out)
@@ -382,8 +382,8 @@ def _batch_lkf(model, y, skip, Q, R, x, P, out, nominal):
         j = k + 1
         dx = dx @ Fs[k].T
         M = Fs[k] @ P @ Fs[k].T + Q
-        out["x_prior"][:, j] = wrap_state(xn[j] + dx)
-        out["P_prior"][:, j] = M
+        out["x_bar"][:, j] = wrap_state(xn[j] + dx)
+        out["M"][:, j] = M
         if skip[j]:
             P = M
         else:
@@ -393,10 +393,10 @@ def _batch_lkf(model, y, skip, Q, R, x, P, out, nominal):
             K = M @ H.T @ np.linalg.inv(S)
             dx = dx + r @ K.T
             P = _joseph(M, K, H, R)
-            out["innovation"][:, j] = r
+            out["r"][:, j] = r
             out["S"][:, j] = S
-        out["x_post"][:, j] = wrap_state(xn[j] + dx)
-        out["P_post"][:, j] = P
+        out["x_hat"][:, j] = wrap_state(xn[j] + dx)
+        out["P"][:, j] = P
 
 
 def _batch_ekf(model, y, skip, Q, R, x, P, out, nominal):
@@ -405,7 +405,7 @@ def _batch_ekf(model, y, skip, Q, R, x, P, out, nominal):
         F = model.F(x)
         x = model.step(x)
         P = F @ P @ _tr(F) + Q
-        out["x_prior"][:, j], out["P_prior"][:, j] = x, P
+        out["x_bar"][:, j], out["M"][:, j] = x, P
         if not skip[j]:
             H = model.C(x)
             r = measurement_residual(y[:, j], h(x))
@@ -413,8 +413,8 @@ def _batch_ekf(model, y, skip, Q, R, x, P, out, nominal):
             K = P @ _tr(H) @ np.linalg.inv(S)
             x = wrap_state(x + np.einsum("nij,nj->ni", K, r))
             P = _joseph(P, K, H, R)
-            out["innovation"][:, j], out["S"][:, j] = r, S
-        out["x_post"][:, j], out["P_post"][:, j] = x, P
+            out["r"][:, j], out["S"][:, j] = r, S
+        out["x_hat"][:, j], out["P"][:, j] = x, P
 
 
 def _sigma_points(x, P, lam):
@@ -435,7 +435,7 @@ def _batch_ukf(model, y, skip, Q, R, x, P, out, nominal):
         x = angle_mean(sig, Wm, ANGLE_STATES)
         d = state_residual(sig, x[:, None, :])
         P = np.einsum("m,nmi,nmj->nij", Wc, d, d) + Q
-        out["x_prior"][:, j], out["P_prior"][:, j] = x, P
+        out["x_bar"][:, j], out["M"][:, j] = x, P
         if not skip[j]:
             sig = _sigma_points(x, P, lam)
             zs = h(sig)
@@ -448,5 +448,5 @@ def _batch_ukf(model, y, skip, Q, R, x, P, out, nominal):
             r = measurement_residual(y[:, j], zp)
             x = wrap_state(x + np.einsum("nij,nj->ni", K, r))
             P = P - K @ S @ _tr(K)
-            out["innovation"][:, j], out["S"][:, j] = r, S
-        out["x_post"][:, j], out["P_post"][:, j] = x, P
+            out["r"][:, j], out["S"][:, j] = r, S
+        out["x_hat"][:, j], out["P"][:, j] = x, P

@@ -22,7 +22,7 @@ DEFAULT_RUNS = 10_000
 
 def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
     model, run, res = single_run("000", seed)
-    e = run.x_gps - res.x_post
+    e = run.x_gps - res.x_hat
     sd = res.sigma
     names = [("01", "position-error", "Position error p − p̂ with ±1σ", "m"),
              ("02", "velocity-error", "Velocity error v − v̂ with ±1σ", "m/s"),
@@ -38,11 +38,11 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
                        "Bias error b − b̂ with ±1σ, the last 10 s zoomed.", fig)
     gps = run.gps_steps
     series = [("04", "position-estimate", "Position estimate p̂ = p_c + δp̂ against the truth",
-               run.p, run.p_c[gps] + res.x_post[:, 0], "position p", "m"),
+               run.p, run.p_c[gps] + res.x_hat[:, 0], "position p", "m"),
               ("05", "velocity-estimate", "Velocity estimate v̂ = v_c + δv̂ against the truth",
-               run.v, run.v_c[gps] + res.x_post[:, 1], "velocity v", "m/s"),
+               run.v, run.v_c[gps] + res.x_hat[:, 1], "velocity v", "m/s"),
               ("06", "bias-estimate", "Bias estimate b̂ against the true bias",
-               np.full_like(run.t, run.b), res.x_post[:, 2], "bias b", "m/s²")]
+               np.full_like(run.t, run.b), res.x_hat[:, 2], "bias b", "m/s²")]
     for num, slug, cap, truth, est, q, unit in series:
         fig = plots.estimate_vs_truth(run.t, truth, res.t_gps, est, quantity=q, unit=unit,
                                       title=cap)

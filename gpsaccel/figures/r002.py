@@ -213,7 +213,7 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
         yield ReportFigure("002", num, f"lkf-{'ugv' if ugv else 'uav'}", (
             f"LKF (tuned Q), typical run (run {i0} of seed {seed}): "
             f"{'UGV' if ugv else 'UAV'} truth, estimate ±2σ, and the errors with ±2σ."),
-            vehicle_figure(t, (0, 1, 2) if ugv else (3, 4, 5), r.x_post[i0], r.sigma[i0],
+            vehicle_figure(t, (0, 1, 2) if ugv else (3, 4, 5), r.x_hat[i0], r.sigma[i0],
                            f"LKF, {'UGV' if ugv else 'UAV'}: typical run", truth=x0))
     for num, m, stat in [("08", "lkf", "NEES"), ("09", "lkf", "NIS"),
                          ("14", "ekf", "NEES"), ("15", "ekf", "NIS"),
@@ -247,7 +247,7 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
             f"{'' if ugv else ' and the GPS fixes'}, and (right) their departure from the nominal "
             f"x* with ±2σ; NIS time-average "
             f"{r.nis()[1:].mean():.2f} (5 expected)."),
-            vehicle_figure(t, (0, 1, 2) if ugv else (3, 4, 5), r.x_post, r.sigma,
+            vehicle_figure(t, (0, 1, 2) if ugv else (3, 4, 5), r.x_hat, r.sigma,
                            f"{NAMES[m]} on the logged data: {who}", measured=y,
                            reference=lin["nominal"]))
     fig, ax = plots.axes()
@@ -273,9 +273,9 @@ def _ekf_single(mc: dict[str, ConsistencyRun], t: np.ndarray, x0: np.ndarray, i0
         yield ReportFigure("002", num, f"ekf-{who.lower()}", (
             f"EKF (tuned Q), typical run (run {i0} of seed {seed}): {who} truth against the "
             "estimate ±2σ, and the errors."),
-            vehicle_figure(t, (0, 1, 2) if ugv else (3, 4, 5), r.x_post[i0], r.sigma[i0],
+            vehicle_figure(t, (0, 1, 2) if ugv else (3, 4, 5), r.x_hat[i0], r.sigma[i0],
                            f"EKF, {who}: typical run", truth=x0))
-    yhat = h(r.x_prior[i0])
+    yhat = h(r.x_bar[i0])
     yield ReportFigure("002", "12", "ekf-measurements", (
         "The simulated measurements of the typical run against the EKF's predicted h(x̄)."),
         measurements_figure(

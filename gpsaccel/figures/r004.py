@@ -55,7 +55,7 @@ def _estimate_figure(run: ShipRealization, res: MultirateResult, group: str,
         panels.append((name, unit, [
             (res.t_meas[measured], run.z[res.steps[measured], j], "measured", "measurement"),
             (run.t, run.x[:, j], "true", "truth"),
-            (res.t_meas, res.x_post[:, j], "filtered", "estimate"),
+            (res.t_meas, res.x_hat[:, j], "filtered", "estimate"),
         ]))
     return plots.overlay_panels(panels, title=f"{group.capitalize()} estimation – {label}")
 
@@ -66,7 +66,7 @@ def _track_figure(run: ShipRealization, res: MultirateResult, label: str):
     return plots.track([
         (run.z[steps, 0], run.z[steps, 3], "measured (GPS)", "measurement"),
         (run.x[:, 0], run.x[:, 3], "true", "truth"),
-        (res.x_post[:, 0], res.x_post[:, 3], "filtered", "estimate"),
+        (res.x_hat[:, 0], res.x_hat[:, 3], "filtered", "estimate"),
     ], title=f"x–y track – {label}")
 
 
@@ -94,9 +94,9 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
         for j in states:
             name, unit = STATES[j]
             panels.append((f"Δ{name}", unit, [
-                (multi.t_meas, mono.x_post[:, j] - multi.x_post[:, j],
+                (multi.t_meas, mono.x_hat[:, j] - multi.x_hat[:, j],
                  "monorate − multirate (optimal)", "estimate"),
-                (zeroed.t_meas, mono.x_post[:, j] - zeroed.x_post[:, j],
+                (zeroed.t_meas, mono.x_hat[:, j] - zeroed.x_hat[:, j],
                  "monorate − multirate (report's zeroed gain)", "alternative"),
             ]))
         fig = plots.overlay_panels(panels, title=f"Difference monorate − multirate: {group}")

@@ -24,10 +24,10 @@ from gpsaccel.kalman.schedule import Schedule
 
 @dataclass(frozen=True, eq=False)
 class EnsembleEstimates:
-    """x_prior, x_post : (R, n_epochs, n) a priori and a posteriori means of every run."""
+    """x_bar, x_hat : (R, n_epochs, n) a priori and a posteriori means of every run."""
 
-    x_prior: np.ndarray
-    x_post: np.ndarray
+    x_bar: np.ndarray
+    x_hat: np.ndarray
 
 
 def apply_gains(Phi: np.ndarray, H: np.ndarray, x0: np.ndarray, schedule: Schedule,
@@ -62,8 +62,8 @@ def apply_gains(Phi: np.ndarray, H: np.ndarray, x0: np.ndarray, schedule: Schedu
 
     R = z.shape[0]
     x = np.broadcast_to(x0, (R, n)).copy()
-    x_prior = np.empty((R, schedule.n_epochs, n))
-    x_post = np.empty((R, schedule.n_epochs, n))
+    x_bar = np.empty((R, schedule.n_epochs, n))
+    x_hat = np.empty((R, schedule.n_epochs, n))
     step = 0
     for i, epoch_step in enumerate(schedule.steps):
         while step < epoch_step:
@@ -71,9 +71,9 @@ def apply_gains(Phi: np.ndarray, H: np.ndarray, x0: np.ndarray, schedule: Schedu
             if u is not None:
                 x += B @ u[step]
             step += 1
-        x_prior[:, i] = x
+        x_bar[:, i] = x
         r = z[:, i] - x @ H.T
         r[missing[:, i]] = 0.0
         x = x + r @ K[i].T
-        x_post[:, i] = x
-    return EnsembleEstimates(x_prior, x_post)
+        x_hat[:, i] = x
+    return EnsembleEstimates(x_bar, x_hat)

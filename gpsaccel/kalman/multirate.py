@@ -57,10 +57,10 @@ class MultirateResult:
     GPS times, 151 rows on the defaults):
 
     t_meas : (n_epochs,) epoch times (s); ``t_gps`` is the same array.
-    x_prior, M : a priori mean x̄ (n_epochs, n) and covariance M (n_epochs, n, n).
-    x_post, P : a posteriori mean x̂ and covariance P.
+    x_bar, M : a priori mean x̄ (n_epochs, n) and covariance M (n_epochs, n, n).
+    x_hat, P : a posteriori mean x̂ and covariance P.
     K : (n_epochs, n, p) gain; zero columns for components not measured.
-    residuals : (n_epochs, p) r = z − H x̄; NaN for components not measured.
+    r : (n_epochs, p) residual r = z − H x̄; NaN for components not measured.
     S : (n_epochs, p, p) residual covariance H M Hᵀ + V (all components, measured or not).
     used : (n_epochs, p) bool, the components that entered each update.
 
@@ -75,12 +75,12 @@ class MultirateResult:
     t: np.ndarray
     t_meas: np.ndarray
     steps: np.ndarray
-    x_prior: np.ndarray
+    x_bar: np.ndarray
     M: np.ndarray
-    x_post: np.ndarray
+    x_hat: np.ndarray
     P: np.ndarray
     K: np.ndarray
-    residuals: np.ndarray
+    r: np.ndarray
     S: np.ndarray
     used: np.ndarray
     x_fast: np.ndarray
@@ -188,9 +188,9 @@ def run_multirate(model: LinearGaussianModel, z: np.ndarray, method: str = "filt
             kf.predict(u=u[k].reshape(-1, 1), B=B)
 
     n_epochs, n_fast = schedule.n_epochs, schedule.n_steps + 1
-    x_prior = np.empty((n_epochs, n))
+    x_bar = np.empty((n_epochs, n))
     M = np.empty((n_epochs, n, n))
-    x_post = np.empty((n_epochs, n))
+    x_hat = np.empty((n_epochs, n))
     P = np.empty((n_epochs, n, n))
     K = np.zeros((n_epochs, n, p))
     residuals = np.full((n_epochs, p), np.nan)
@@ -206,19 +206,19 @@ def run_multirate(model: LinearGaussianModel, z: np.ndarray, method: str = "filt
             predict(step)
             step += 1
             x_fast[step], M_fast[step] = kf.x[:, 0], kf.P
-        x_prior[i], M[i] = kf.x[:, 0], kf.P
+        x_bar[i], M[i] = kf.x[:, 0], kf.P
         S[i] = H @ kf.P @ H.T + V
         rows = np.flatnonzero(used[i])
         if rows.size:
-            residuals[i, rows] = z[i, rows] - H[rows] @ x_prior[i]
+            residuals[i, rows] = z[i, rows] - H[rows] @ x_bar[i]
             kf.update(z[i, rows].reshape(-1, 1), R=V[np.ix_(rows, rows)], H=H[rows])
             K[i][:, rows] = kf.K
-        x_post[i], P[i] = kf.x[:, 0], kf.P
+        x_hat[i], P[i] = kf.x[:, 0], kf.P
     while step < schedule.n_steps:  # propagate past the last epoch, if the grid goes on
         predict(step)
         step += 1
         x_fast[step], M_fast[step] = kf.x[:, 0], kf.P
 
     t = np.arange(n_fast) * model.dt
-    return MultirateResult(method, t, t[schedule.steps], schedule.steps, x_prior, M, x_post, P,
+    return MultirateResult(method, t, t[schedule.steps], schedule.steps, x_bar, M, x_hat, P,
                            K, residuals, S, used, x_fast, M_fast)

@@ -77,7 +77,7 @@ class FilterStatistics:
     nees_actual : the same with its true (Joseph) covariance; None for the optimal filters.
     result : the single filter run on run 0 (gains, covariances; a MultirateResult or a
         ZeroedGainResult).
-    x_post : (R, n_epochs, dim_x) every run's a posteriori estimate.
+    x_hat : (R, n_epochs, dim_x) every run's a posteriori estimate.
     """
 
     name: str
@@ -85,7 +85,7 @@ class FilterStatistics:
     nees: np.ndarray
     nees_actual: np.ndarray | None
     result: MultirateResult
-    x_post: np.ndarray
+    x_hat: np.ndarray
 
     @property
     def description(self) -> str:
@@ -224,12 +224,12 @@ def compare_ship_filters(model: ShipModel | None = None, n_runs: int = 200, seed
         sched = schedules[multirate]
         est = apply_gains(model.Phi, model.H, model.x0, sched, res.K, z[multirate],
                           B=model.B, u=ens.u)
-        e = ens.x[:, sched.steps] - est.x_post
+        e = ens.x[:, sched.steps] - est.x_hat
         rmse = np.sqrt(np.mean(e**2, axis=(0, 1)))
         nees = quadratic_form(e, res.P).mean(axis=0)
         actual = getattr(res, "P_actual", None)
         nees_actual = None if actual is None else quadratic_form(e, actual).mean(axis=0)
-        stats[name] = FilterStatistics(name, rmse, nees, nees_actual, res, est.x_post)
+        stats[name] = FilterStatistics(name, rmse, nees, nees_actual, res, est.x_hat)
     return ShipComparison(model, ens, seed, chi2_bounds(9, n_runs, 0.05), stats)
 
 
@@ -306,7 +306,7 @@ def compare_wind(model: ShipModel | None = None, n_runs: int = 200, seed: int = 
     for m in (plain, model):
         res = run_multirate(m, z[0], schedule=sched, u=ens.u)
         est = apply_gains(m.Phi, m.H, m.x0, sched, res.K, z, B=m.B, u=ens.u)
-        out[m.wind] = (res, est.x_post)
+        out[m.wind] = (res, est.x_hat)
     truth_xy = ens.x[:, steps][:, :, [0, 3]]
     err = {w: truth_xy - x[:, :, [0, 3]] for w, (_, x) in out.items()}
     late = ens.t[steps] >= ens.t[steps][-1] - 50.0

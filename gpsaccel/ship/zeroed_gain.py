@@ -93,7 +93,7 @@ def run_zeroed_gain(model: LinearGaussianModel, z: np.ndarray, schedule: Schedul
                                            (schedule.n_epochs, n, p))
 
     n_epochs, n_fast = schedule.n_epochs, schedule.n_steps + 1
-    x_prior, x_post = np.empty((n_epochs, n)), np.empty((n_epochs, n))
+    x_bar, x_hat = np.empty((n_epochs, n)), np.empty((n_epochs, n))
     M, P = np.empty((n_epochs, n, n)), np.empty((n_epochs, n, n))
     M_act, P_act = np.empty((n_epochs, n, n)), np.empty((n_epochs, n, n))
     K, K_full = np.zeros((n_epochs, n, p)), np.zeros((n_epochs, n, p))
@@ -119,7 +119,7 @@ def run_zeroed_gain(model: LinearGaussianModel, z: np.ndarray, schedule: Schedul
             predict(step)
             step += 1
             x_fast[step], M_fast[step] = x, C
-        x_prior[i], M[i], M_act[i] = x, C, C_act
+        x_bar[i], M[i], M_act[i] = x, C, C_act
         S[i] = H @ C @ H.T + V
         K_full[i] = np.linalg.solve(S[i], H @ C.T).T  # M Hᵀ S⁻¹, S symmetric
         rows = np.flatnonzero(used[i])
@@ -136,7 +136,7 @@ def run_zeroed_gain(model: LinearGaussianModel, z: np.ndarray, schedule: Schedul
         else:
             C = (np.eye(n) - K[i] @ H) @ C  # the report's short form, not symmetrised
         C_act = joseph(C_act, K[i], H, V)
-        x_post[i], P[i], P_act[i] = x, C, C_act
+        x_hat[i], P[i], P_act[i] = x, C, C_act
     while step < schedule.n_steps:
         predict(step)
         step += 1
@@ -144,5 +144,5 @@ def run_zeroed_gain(model: LinearGaussianModel, z: np.ndarray, schedule: Schedul
 
     t = np.arange(n_fast) * model.dt
     return ZeroedGainResult(f"zeroed-gain ({covariance})", t, t[schedule.steps], schedule.steps,
-                            x_prior, M, x_post, P, K, residuals, S, used, x_fast, M_fast,
+                            x_bar, M, x_hat, P, K, residuals, S, used, x_fast, M_fast,
                             P_act, M_act, K_full, covariance)

@@ -24,7 +24,7 @@ def test_a_mistaken_filter_shows_up():
 
     def student(z):
         res = run_multirate(wrong, z)
-        return res.x_post, res.P
+        return res.x_hat, res.P
 
     table = compare(filters={"student": student, "same": reference_filter(CalibrationModel())},
                     repeat=1)

@@ -78,7 +78,7 @@ def test_mutant_equals_driver_on_mistaken_model(z, mistake):
     for r in range(2):
         res = run_multirate(model, z[r])
         sd = _sigma(res.P)
-        assert np.max(np.abs(x[r] - res.x_post) / sd) < 1e-9
+        assert np.max(np.abs(x[r] - res.x_hat) / sd) < 1e-9
         assert np.max(np.abs(P - res.P) / (sd[:, :, None] * sd[:, None, :])) < 1e-11
 
 

@@ -52,13 +52,13 @@ def test_statistics_equal_filterpy_run_once_per_realization(truth):
     e, xh, r, nees_l, nis_l = [], [], [], [], []
     for l in range(n):
         res = run_multirate(MODEL, draws.z[l], method="filterpy")
-        err = draws.x_gps[l] - res.x_post
+        err = draws.x_gps[l] - res.x_hat
         e.append(err)
-        xh.append(res.x_post)
-        r.append(res.residuals)
+        xh.append(res.x_hat)
+        r.append(res.r)
         nees_l.append(nees(err, res.P))
-        nis_l.append(nis(res.residuals, res.S))
-        assert_close(draws.x_hat[l], res.x_post, 1e-10)  # and run by run
+        nis_l.append(nis(res.r, res.S))
+        assert_close(draws.x_hat[l], res.x_hat, 1e-10)  # and run by run
     e, xh, r = np.array(e), np.array(xh), np.array(r)
     e_ave = e.mean(axis=0)
     ec = e - e_ave
@@ -97,7 +97,7 @@ def test_predicted_mean_error_is_filterpy_on_the_noise_free_kinematic_measuremen
     d = truth_mean(MODEL, "kinematic")
     res = run_multirate(MODEL, d[:, :2])  # z = H d: no noise at all
     mc = monte_carlo(MODEL, 2, truth="kinematic", progress=False)
-    assert_close(mc.predicted_mean_error, d - res.x_post, 1e-10)
+    assert_close(mc.predicted_mean_error, d - res.x_hat, 1e-10)
 
 
 # ------------------------------------------------------------------ what it must show

@@ -30,10 +30,10 @@ def test_vectorised_filter_equals_filterpy(method, truth3):
     batch = nl.run_batch(method, MODEL, truth3.y)
     for i in range(truth3.n_runs):
         one = nl.run_filter(method, MODEL, truth3.y[i])
-        np.testing.assert_allclose(coop.state_residual(batch.x_post[i], one.x_post), 0,
+        np.testing.assert_allclose(coop.state_residual(batch.x_hat[i], one.x_hat), 0,
                                    atol=1e-10)
-        np.testing.assert_allclose(batch.P_post[i], one.P_post, atol=1e-10)
-        np.testing.assert_allclose(batch.innovation[i], one.innovation, atol=1e-10)
+        np.testing.assert_allclose(batch.P[i], one.P, atol=1e-10)
+        np.testing.assert_allclose(batch.r[i], one.r, atol=1e-10)
         np.testing.assert_allclose(batch.S[i], one.S, atol=1e-10)
 
 
@@ -96,10 +96,10 @@ def test_filters_on_the_course_log_keep_every_innovation_finite():
     y = MODEL.log()
     for method in nl.METHODS:
         res = nl.run_filter(method, MODEL, y)
-        assert np.isnan(res.innovation[0]).all()  # t = 0 is not measured: no update
-        assert np.isfinite(res.innovation[1:]).all(), method
-        assert np.isfinite(res.x_post).all() and np.isfinite(res.P_post).all()
-        np.testing.assert_array_equal(res.x_post[0], MODEL.x0)
+        assert np.isnan(res.r[0]).all()  # t = 0 is not measured: no update
+        assert np.isfinite(res.r[1:]).all(), method
+        assert np.isfinite(res.x_hat).all() and np.isfinite(res.P).all()
+        np.testing.assert_array_equal(res.x_hat[0], MODEL.x0)
     ekf = nl.run_ekf(MODEL, y)
     assert 3.0 < ekf.nis()[1:].mean() < 7.0
 
@@ -110,21 +110,21 @@ def test_missing_components_are_left_out_of_the_update(truth3):
     y[20, [1, 3]] = np.nan  # range and GPS easting missing
     for method in nl.METHODS:
         res = nl.run_filter(method, MODEL, y)
-        assert np.isfinite(res.x_post).all()
-        np.testing.assert_array_equal(res.x_post[10], res.x_prior[10])
-        np.testing.assert_array_equal(res.P_post[10], res.P_prior[10])
-        assert np.isnan(res.innovation[20, [1, 3]]).all()
-        assert np.isfinite(res.innovation[20, [0, 2, 4]]).all()
-        assert consistency.dof_of(res.innovation[20]) == 3
+        assert np.isfinite(res.x_hat).all()
+        np.testing.assert_array_equal(res.x_hat[10], res.x_bar[10])
+        np.testing.assert_array_equal(res.P[10], res.M[10])
+        assert np.isnan(res.r[20, [1, 3]]).all()
+        assert np.isfinite(res.r[20, [0, 2, 4]]).all()
+        assert consistency.dof_of(res.r[20]) == 3
     # the EKF's partial update is the update with the reduced H and R, by hand
     res = nl.run_ekf(MODEL, y)
     m = np.isfinite(y[20])
-    xb, M = res.x_prior[20], res.P_prior[20]
+    xb, M = res.x_bar[20], res.M[20]
     H = MODEL.C(xb)[m]
     R = MODEL.Rtrue[np.ix_(m, m)]
     K = M @ H.T @ np.linalg.inv(H @ M @ H.T + R)
     r = coop.measurement_residual(y[20], coop.h(xb))[m]
-    np.testing.assert_allclose(res.x_post[20], coop.wrap_state(xb + K @ r), atol=1e-12)
+    np.testing.assert_allclose(res.x_hat[20], coop.wrap_state(xb + K @ r), atol=1e-12)
 
 
 @pytest.mark.parametrize("call, name", [

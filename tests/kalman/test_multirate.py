@@ -22,9 +22,9 @@ def both(model, request):
 
 def test_forms_agree_to_1e10(both):
     _, fp, info = both
-    dx, dP = differences(fp.x_post, fp.P, info.x_post, info.P)
+    dx, dP = differences(fp.x_hat, fp.P, info.x_hat, info.P)
     assert dx < 1e-10 and dP < 1e-10
-    dx, dM = differences(fp.x_prior, fp.M, info.x_prior, info.M)
+    dx, dM = differences(fp.x_bar, fp.M, info.x_bar, info.M)
     assert dx < 1e-10 and dM < 1e-10
     np.testing.assert_allclose(info.K, fp.K, rtol=1e-9, atol=1e-14)
 
@@ -55,8 +55,8 @@ def test_P_at_30s_matches_the_reports_and_an_independent_gps_rate_recursion(mode
 
 def test_residuals_and_gains_are_consistent(both):
     run, fp, _ = both
-    np.testing.assert_allclose(fp.residuals, run.z - fp.x_prior[:, :2], rtol=1e-14, atol=1e-14)
-    np.testing.assert_allclose(fp.x_post, fp.x_prior + np.einsum("kij,kj->ki", fp.K, fp.residuals),
+    np.testing.assert_allclose(fp.r, run.z - fp.x_bar[:, :2], rtol=1e-14, atol=1e-14)
+    np.testing.assert_allclose(fp.x_hat, fp.x_bar + np.einsum("kij,kj->ki", fp.K, fp.r),
                                rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(fp.S, fp.M[:, :2, :2] + np.diag([1.0, 0.0016]), rtol=1e-14)
 
@@ -64,9 +64,9 @@ def test_residuals_and_gains_are_consistent(both):
 def test_fast_grid_propagates_between_fixes(model, both):
     _, fp, _ = both
     assert fp.x_fast.shape == (6001, 3)
-    np.testing.assert_array_equal(fp.x_fast[::40], fp.x_prior)
+    np.testing.assert_array_equal(fp.x_fast[::40], fp.x_bar)
     np.testing.assert_array_equal(fp.M_fast[::40], fp.M)
-    x = fp.x_post[3]
+    x = fp.x_hat[3]
     for _ in range(17):
         x = model.Phi @ x
     np.testing.assert_allclose(fp.x_fast[3 * 40 + 17], x, rtol=1e-13)
@@ -80,8 +80,8 @@ def test_outage_propagates_only(model, method):
     res = run_multirate(model, z, method=method)
     np.testing.assert_array_equal(res.K[50:75], 0.0)
     np.testing.assert_array_equal(res.P[50:75], res.M[50:75])
-    np.testing.assert_array_equal(res.x_post[50:75], res.x_prior[50:75])
-    assert np.isnan(res.residuals[50:75]).all() and not res.used[50:75].any()
+    np.testing.assert_array_equal(res.x_hat[50:75], res.x_bar[50:75])
+    assert np.isnan(res.r[50:75]).all() and not res.used[50:75].any()
     sd = res.sigma
     assert np.all(np.diff(sd[50:75, 0]) > 0)  # position uncertainty grows during the outage
     assert sd[75, 0] < sd[74, 0]              # and shrinks at the first fix after it
@@ -97,15 +97,15 @@ def test_partial_measurement_uses_the_remaining_rows(model):
     z[20, 0] = np.nan
     res = run_multirate(model, z)
     info = run_multirate(model, z, method="information")
-    M, xb = res.M[20], res.x_prior[20]
+    M, xb = res.M[20], res.x_bar[20]
     h = np.array([[0.0, 1.0, 0.0]])
     s = (h @ M @ h.T)[0, 0] + 0.0016
     k = M @ h.T / s
     np.testing.assert_allclose(res.K[20][:, 1], k[:, 0], rtol=1e-12)
     np.testing.assert_array_equal(res.K[20][:, 0], 0.0)
-    np.testing.assert_allclose(res.x_post[20], xb + k[:, 0] * (z[20, 1] - xb[1]), rtol=1e-12)
+    np.testing.assert_allclose(res.x_hat[20], xb + k[:, 0] * (z[20, 1] - xb[1]), rtol=1e-12)
     np.testing.assert_allclose(res.P[20], M - k @ h @ M, rtol=1e-10, atol=1e-15)
-    dx, dP = differences(res.x_post, res.P, info.x_post, info.P)
+    dx, dP = differences(res.x_hat, res.P, info.x_hat, info.P)
     assert dx < 1e-10 and dP < 1e-10
 
 

@@ -100,16 +100,16 @@ def test_driver_against_a_hand_computed_update_on_the_reduced_H(model, method):
     res = run_multirate(model, z, method=method, schedule=sched, u=run.u)
     Phi, Q, H, V, B = model.Phi, model.Q, model.H, model.V, model.B
     # first prediction, by hand: x̄1 = Φ x0 + B u0, M1 = Φ M0 Φᵀ + Q
-    np.testing.assert_allclose(res.x_prior[0], Phi @ model.x0 + B @ run.u[0], rtol=1e-12)
+    np.testing.assert_allclose(res.x_bar[0], Phi @ model.x0 + B @ run.u[0], rtol=1e-12)
     np.testing.assert_allclose(res.M[0], Phi @ model.M0 @ Phi.T + Q, rtol=1e-12)
     for i, rows in ((4, IMU_ROWS), (9, list(range(9)))):  # k = 5 (no GPS), k = 10 (GPS)
         assert list(np.flatnonzero(sched.mask[i])) == rows
-        xb, M = res.x_prior[i], res.M[i]
+        xb, M = res.x_bar[i], res.M[i]
         Hr, Vr = H[rows], V[np.ix_(rows, rows)]
         Kr = M @ Hr.T @ np.linalg.inv(Hr @ M @ Hr.T + Vr)
         x_hat = xb + Kr @ (z[i, rows] - Hr @ xb)
         P = (np.eye(9) - Kr @ Hr) @ M
-        np.testing.assert_allclose(res.x_post[i], x_hat, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(res.x_hat[i], x_hat, rtol=1e-9, atol=1e-12)
         np.testing.assert_allclose(res.P[i], P, rtol=1e-8, atol=1e-14)
         np.testing.assert_allclose(res.K[i][:, rows], Kr, rtol=1e-8, atol=1e-14)
         missing = [c for c in range(9) if c not in rows]
@@ -130,7 +130,7 @@ def test_known_input_equals_filtering_the_deviation_from_the_plan(model, method)
     plan = nominal_plan(model)[: model.n_samples]
     # x0 of the model is the plan's start, so the deviation filter starts from 0
     dev = run_multirate(_ZeroMean(model), z - plan[sched.steps], method=method, schedule=sched)
-    np.testing.assert_allclose(with_u.x_post, plan[sched.steps] + dev.x_post, atol=1e-9)
+    np.testing.assert_allclose(with_u.x_hat, plan[sched.steps] + dev.x_hat, atol=1e-9)
     np.testing.assert_allclose(with_u.P, dev.P, rtol=1e-12, atol=1e-16)
 
 
@@ -163,7 +163,7 @@ def test_gain_sequence_reproduces_the_filters_run_by_run(model):
         first = run_filter(z[0])
         est = apply_gains(model.Phi, model.H, model.x0, sched, first.K, z, B=model.B, u=ens.u)
         for r in range(3):
-            np.testing.assert_allclose(est.x_post[r], run_filter(z[r]).x_post, atol=1e-9)
+            np.testing.assert_allclose(est.x_hat[r], run_filter(z[r]).x_hat, atol=1e-9)
 
 
 # --------------------------------------------------------------------------- zeroed gain
@@ -220,7 +220,7 @@ def test_optimal_multirate_filter_is_consistent(comparison):
 
 def test_nees_helper_is_the_consistency_modules(comparison):
     s = comparison.filters["multirate"]
-    e = comparison.ensemble.x[:3, s.result.steps] - s.x_post[:3]
+    e = comparison.ensemble.x[:3, s.result.steps] - s.x_hat[:3]
     np.testing.assert_allclose(quadratic_form(e, s.result.P),
                                np.stack([nees(e[r], s.result.P) for r in range(3)]), rtol=1e-9)
 
@@ -283,7 +283,7 @@ def test_wind_model_runs_under_both_forms():
     a = run_multirate(m, run.measurements(sched), schedule=sched, u=run.u)
     b = run_multirate(m, run.measurements(sched), "information", schedule=sched, u=run.u)
     sd = np.sqrt(np.diagonal(a.P, axis1=1, axis2=2))
-    assert np.max(np.abs(a.x_post - b.x_post) / sd) < 1e-6
+    assert np.max(np.abs(a.x_hat - b.x_hat) / sd) < 1e-6
 
 
 # --------------------------------------------------------------------------- bad input
