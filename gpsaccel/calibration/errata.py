@@ -35,7 +35,7 @@ from gpsaccel.calibration.mistakes import EpochFilter, mutant, reference
 from gpsaccel.calibration.model import CalibrationModel
 from gpsaccel.calibration.reports import report_model
 from gpsaccel.calibration.simulation import simulate_many, truth_mean
-from gpsaccel.kalman.multirate import epoch_transition
+from gpsaccel.kalman.update import epoch_transition
 
 
 @dataclass(frozen=True, eq=False)

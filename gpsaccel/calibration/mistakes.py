@@ -38,7 +38,7 @@ from functools import cached_property
 import numpy as np
 
 from gpsaccel.calibration.model import CalibrationModel, gamma, phi
-from gpsaccel.kalman.multirate import epoch_transition
+from gpsaccel.kalman.update import epoch_transition, gain, joseph_update
 
 
 @dataclass(frozen=True, eq=False)
@@ -112,21 +112,17 @@ def batch_gains(filters: list[EpochFilter]) -> tuple[np.ndarray, np.ndarray, np.
     M0 = np.stack([f.M0 for f in filters])
     skip = np.array([f.skip_first for f in filters])
     n, p = F.shape[-1], H.shape[-2]
-    I = np.eye(n)
     K = np.zeros((C, n_gps, n, p))
     M = np.empty((C, n_gps, n, n))
     P = np.empty((C, n_gps, n, n))
-    Ht = np.swapaxes(H, -1, -2)
     Ft = np.swapaxes(F, -1, -2)
     for i in range(n_gps):
         Mi = M0 if i == 0 else F @ P[:, i - 1] @ Ft + Qe
         M[:, i] = Mi
-        S = H @ Mi @ Ht + V
-        Ki = np.swapaxes(np.linalg.solve(S, H @ Mi), -1, -2)  # M Hᵀ S⁻¹ (S, M symmetric)
+        Ki, _ = gain(Mi, H, V)
         if i == 0:
             Ki = np.where(skip[:, None, None], 0.0, Ki)
-        IKH = I - Ki @ H
-        Pi = IKH @ Mi @ np.swapaxes(IKH, -1, -2) + Ki @ V @ np.swapaxes(Ki, -1, -2)
+        Pi = joseph_update(Mi, Ki, H, V)
         K[:, i] = Ki
         P[:, i] = (Pi + np.swapaxes(Pi, -1, -2)) / 2
     return K, M, P

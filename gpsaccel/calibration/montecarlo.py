@@ -99,7 +99,7 @@ from gpsaccel.kalman.consistency import (
     z_sample_covariance,
     z_sample_mean,
 )
-from gpsaccel.kalman.multirate import epoch_transition
+from gpsaccel.kalman.update import epoch_transition, joseph_update
 
 #: Runs per random block: one ``SeedSequence`` child each, and the largest array pass.
 BLOCK_RUNS = 1000
@@ -173,7 +173,7 @@ def plan(model: CalibrationModel, truth: str = "error-model") -> EnsemblePlan:
         raise ValueError(f"model must be a CalibrationModel, got {type(model).__name__}")
     truth = _v.choice("truth", truth, TRUTHS)
     n = model.n_gps
-    H, V, I3 = model.H, model.V, np.eye(3)
+    H, V = model.H, model.V
     Phi_N, Q_N = gps_interval_noise(model)
     M = np.empty((n, 3, 3))
     K = np.empty((n, 3, 2))
@@ -189,9 +189,8 @@ def plan(model: CalibrationModel, truth: str = "error-model") -> EnsemblePlan:
             Cbar = Phi_N @ Xhat[i - 1] @ Phi_N.T
         M[i], X[i] = Mi, Xi
         S[i] = H @ Mi @ H.T + V
-        K[i] = Mi @ H.T @ np.linalg.inv(S[i])
-        IKH = I3 - K[i] @ H
-        P[i] = IKH @ Mi @ IKH.T + K[i] @ V @ K[i].T
+        K[i] = Mi @ H.T @ np.linalg.inv(S[i])  # as filterpy computes it
+        P[i] = joseph_update(Mi, K[i], H, V)
         Xhat[i] = Cbar + K[i] @ S[i] @ K[i].T
     LQ = np.zeros((3, 3))
     LQ[:2, :2] = np.linalg.cholesky(Q_N[:2, :2])  # Q_N has no bias part: Γ's third entry is 0

@@ -24,7 +24,7 @@ import numpy as np
 
 from gpsaccel.calibration.model import STATE_UNITS, CalibrationModel, gamma, phi
 from gpsaccel.check.report import Report
-from gpsaccel.kalman.multirate import epoch_transition
+from gpsaccel.kalman.update import epoch_transition
 
 #: Relative tolerance of an element against its expected value (students type numbers such as
 #: 1.25e-5 by hand; 1e-6 accepts every correct rounding of 7 significant digits).

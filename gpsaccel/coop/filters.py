@@ -62,6 +62,7 @@ from gpsaccel.coop.model import (
     wrap_state,
 )
 from gpsaccel.kalman import consistency
+from gpsaccel.kalman.update import joseph_update
 
 METHODS = ("lkf", "ekf", "ukf")
 
@@ -368,11 +369,6 @@ def _tr(a: np.ndarray) -> np.ndarray:
     return np.swapaxes(a, -1, -2)
 
 
-def _joseph(M, K, H, R):
-    I_KH = np.eye(N_STATES) - K @ H
-    return I_KH @ M @ _tr(I_KH) + K @ R @ _tr(K)
-
-
 def _batch_lkf(model, y, skip, Q, R, x, P, out, nominal):
     xn = model.nominal() if nominal is None else model._trajectory("nominal", nominal)
     Fs, Hs, yn = model.F(xn), model.C(xn), h(xn)
@@ -392,7 +388,7 @@ def _batch_lkf(model, y, skip, Q, R, x, P, out, nominal):
             S = H @ M @ H.T + R
             K = M @ H.T @ np.linalg.inv(S)
             dx = dx + r @ K.T
-            P = _joseph(M, K, H, R)
+            P = joseph_update(M, K, H, R)
             out["r"][:, j] = r
             out["S"][:, j] = S
         out["x_hat"][:, j] = wrap_state(xn[j] + dx)
@@ -412,7 +408,7 @@ def _batch_ekf(model, y, skip, Q, R, x, P, out, nominal):
             S = H @ P @ _tr(H) + R
             K = P @ _tr(H) @ np.linalg.inv(S)
             x = wrap_state(x + np.einsum("nij,nj->ni", K, r))
-            P = _joseph(P, K, H, R)
+            P = joseph_update(P, K, H, R)
             out["r"][:, j], out["S"][:, j] = r, S
         out["x_hat"][:, j], out["P"][:, j] = x, P
 

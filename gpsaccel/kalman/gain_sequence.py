@@ -20,6 +20,7 @@ import numpy as np
 
 from gpsaccel import _validation as _v
 from gpsaccel.kalman.schedule import Schedule
+from gpsaccel.kalman.update import step_schedule
 
 
 @dataclass(frozen=True, eq=False)
@@ -64,16 +65,20 @@ def apply_gains(Phi: np.ndarray, H: np.ndarray, x0: np.ndarray, schedule: Schedu
     x = np.broadcast_to(x0, (R, n)).copy()
     x_bar = np.empty((R, schedule.n_epochs, n))
     x_hat = np.empty((R, schedule.n_epochs, n))
-    step = 0
-    for i, epoch_step in enumerate(schedule.steps):
-        while step < epoch_step:
-            x = x @ Phi.T
-            if u is not None:
-                x += B @ u[step]
-            step += 1
+
+    def predict(k: int) -> None:
+        nonlocal x
+        x = x @ Phi.T
+        if u is not None:
+            x += B @ u[k]
+
+    def update(i: int) -> None:
+        nonlocal x
         x_bar[:, i] = x
         r = z[:, i] - x @ H.T
         r[missing[:, i]] = 0.0
         x = x + r @ K[i].T
         x_hat[:, i] = x
+
+    step_schedule(schedule, predict, update)
     return EnsembleEstimates(x_bar, x_hat)

@@ -29,6 +29,7 @@ import numpy as np
 from gpsaccel import _validation as _v
 from gpsaccel.kalman.information import InformationFilter
 from gpsaccel.kalman.schedule import Schedule
+from gpsaccel.kalman.update import step_schedule
 
 METHODS = ("filterpy", "information")
 
@@ -148,30 +149,44 @@ def check_inputs(model: LinearGaussianModel, z: np.ndarray, schedule: Schedule |
     return DriverInputs(schedule, H, V, z, B, u)
 
 
-def epoch_transition(Phi: np.ndarray, Q: np.ndarray, steps: int) -> tuple[np.ndarray, np.ndarray]:
-    """(Φⁿ, Σ_{j<n} Φʲ Q Φʲᵀ): mean transition and process noise of n = ``steps`` fast steps.
+class UpdateHook(Protocol):
+    """How a filter updates at an epoch (the driver's hook; :func:`optimal_update` by default).
 
-    What ``steps`` one-step predictions do between two updates, composed into one: the
-    calibration problem's 40 accelerometer steps between GPS fixes are one step with Φ⁴⁰ and
-    Q₄₀.  Computed by the same recursion as the predictions, Q ← Φ Q Φᵀ + Q₁.
+    Called as ``hook(kf, i, z, rows, H, V)`` with the filter ``kf`` at its a priori (x̄, M) of
+    epoch i, that epoch's measurement ``z`` (p,), the indices ``rows`` of the components that
+    arrived, and the full H (p, n) and V (p, p).  It leaves x̂ and P in ``kf.x`` (n, 1) and
+    ``kf.P`` and returns the gain it applied, (n, p) with zero columns for components not used.
     """
-    steps = _v.integer("steps", steps, minimum=0)
-    F = np.eye(Phi.shape[0])
-    Qe = np.zeros_like(Q, dtype=float)
-    for _ in range(steps):
-        F = Phi @ F
-        Qe = Phi @ Qe @ Phi.T + Q
-    return F, Qe
+
+    def __call__(self, kf, i: int, z: np.ndarray, rows: np.ndarray, H: np.ndarray,
+                 V: np.ndarray) -> np.ndarray: ...
+
+
+def optimal_update(kf, i: int, z: np.ndarray, rows: np.ndarray, H: np.ndarray,
+                   V: np.ndarray) -> np.ndarray:
+    """The optimal update with exactly the rows that arrived (the filter's own ``update``).
+
+    With H_r, V_r the rows (and columns) of the components r that arrived:
+    K_r = M H_rᵀ (H_r M H_rᵀ + V_r)⁻¹, x̂ = x̄ + K_r (z_r − H_r x̄), P in the filter's own form
+    (Joseph for filterpy, information form for :class:`InformationFilter`).  Nothing arrived:
+    x̂ = x̄, P = M, K = 0.
+    """
+    K = np.zeros((H.shape[1], H.shape[0]))
+    if rows.size:
+        kf.update(z[rows].reshape(-1, 1), R=V[np.ix_(rows, rows)], H=H[rows])
+        K[:, rows] = kf.K
+    return K
 
 
 def run_multirate(model: LinearGaussianModel, z: np.ndarray, method: str = "filterpy",
-                  schedule: Schedule | None = None,
-                  u: np.ndarray | None = None) -> MultirateResult:
+                  schedule: Schedule | None = None, u: np.ndarray | None = None,
+                  update: UpdateHook = optimal_update) -> MultirateResult:
     """Filter measurements ``z`` (n_epochs, p) taken on ``schedule`` (default ``model.schedule()``).
 
     At every fast step the filter predicts with Φ and Q (and ``B u_k`` when a known input ``u``,
     (n_steps, m), is given; the model must then have ``B``); at each epoch it updates with the
-    components that the schedule delivers and that are finite in ``z``.
+    components that the schedule delivers and that are finite in ``z``, by ``update``
+    (:func:`optimal_update`, or a system's own variant: :class:`UpdateHook`).
     """
     method = _v.choice("method", method, METHODS)
     inputs = check_inputs(model, z, schedule, u)
@@ -193,32 +208,25 @@ def run_multirate(model: LinearGaussianModel, z: np.ndarray, method: str = "filt
     x_hat = np.empty((n_epochs, n))
     P = np.empty((n_epochs, n, n))
     K = np.zeros((n_epochs, n, p))
-    residuals = np.full((n_epochs, p), np.nan)
+    r = np.full((n_epochs, p), np.nan)
     S = np.empty((n_epochs, p, p))
     used = schedule.mask & np.isfinite(z)
     x_fast = np.empty((n_fast, n))
     M_fast = np.empty((n_fast, n, n))
 
-    step = 0
-    x_fast[0], M_fast[0] = kf.x[:, 0], kf.P
-    for i, epoch_step in enumerate(schedule.steps):
-        while step < epoch_step:
-            predict(step)
-            step += 1
-            x_fast[step], M_fast[step] = kf.x[:, 0], kf.P
+    def record(k: int) -> None:
+        x_fast[k], M_fast[k] = kf.x[:, 0], kf.P
+
+    def update_at(i: int) -> None:
         x_bar[i], M[i] = kf.x[:, 0], kf.P
         S[i] = H @ kf.P @ H.T + V
         rows = np.flatnonzero(used[i])
-        if rows.size:
-            residuals[i, rows] = z[i, rows] - H[rows] @ x_bar[i]
-            kf.update(z[i, rows].reshape(-1, 1), R=V[np.ix_(rows, rows)], H=H[rows])
-            K[i][:, rows] = kf.K
+        r[i, rows] = z[i, rows] - H[rows] @ x_bar[i]
+        K[i] = update(kf, i, z[i], rows, H, V)
         x_hat[i], P[i] = kf.x[:, 0], kf.P
-    while step < schedule.n_steps:  # propagate past the last epoch, if the grid goes on
-        predict(step)
-        step += 1
-        x_fast[step], M_fast[step] = kf.x[:, 0], kf.P
+
+    step_schedule(schedule, predict, update_at, record)
 
     t = np.arange(n_fast) * model.dt
     return MultirateResult(method, t, t[schedule.steps], schedule.steps, x_bar, M, x_hat, P,
-                           K, residuals, S, used, x_fast, M_fast)
+                           K, r, S, used, x_fast, M_fast)

@@ -38,13 +38,14 @@ x̄_{k+1} = Φ x̂_k + B u_k, M_{k+1} = Φ P_k Φᵀ + Q.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
 from gpsaccel import _validation as _v
-from gpsaccel.kalman.multirate import LinearGaussianModel, MultirateResult, check_inputs
+from gpsaccel.kalman.multirate import LinearGaussianModel, MultirateResult, check_inputs, run_multirate
 from gpsaccel.kalman.schedule import Schedule
+from gpsaccel.kalman.update import epoch_transition, gain, joseph_update
 
 COVARIANCES = ("joseph", "report")
 
@@ -67,10 +68,63 @@ class ZeroedGainResult(MultirateResult):
     covariance: str
 
 
-def joseph(M: np.ndarray, K: np.ndarray, H: np.ndarray, V: np.ndarray) -> np.ndarray:
-    """(I − K H) M (I − K H)ᵀ + K V Kᵀ: the a posteriori covariance of any gain K."""
-    A = np.eye(M.shape[0]) - K @ H
-    return A @ M @ A.T + K @ V @ K.T
+class ZeroedGainUpdate:
+    """The report's update as a hook of the multirate driver (:class:`UpdateHook`).
+
+    At epoch i, with the filter at (x̄, C) (C = M for the Joseph variant, the report's carried
+    covariance otherwise)::
+
+        K_full = C Hᵀ (H C Hᵀ + V)⁻¹    (all p components, as if all had arrived)
+        K      = K_full, columns of missing components zeroed  (or the given full-epoch gain)
+        x̂      = x̄ + K r                 r = z − H x̄ on the components that arrived, 0 elsewhere
+        C      ← Joseph(C, K)  or  (I − K H) C                  (``covariance``)
+
+    and the true covariance of this filter's error is carried alongside,
+    M_actual = Φ_n P_actual Φ_nᵀ + Q_n between epochs, P_actual = Joseph(M_actual, K).
+    """
+
+    def __init__(self, Phi: np.ndarray, Q: np.ndarray, M0: np.ndarray, steps: np.ndarray,
+                 covariance: str, full_epoch_gains: np.ndarray | None) -> None:
+        self.Phi, self.Q, self.steps = Phi, Q, steps
+        self.covariance, self.full_epoch_gains = covariance, full_epoch_gains
+        n_epochs, n = len(steps), M0.shape[0]
+        self.C_actual = M0.copy()
+        self._transitions: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self.M_actual = np.empty((n_epochs, n, n))
+        self.P_actual = np.empty((n_epochs, n, n))
+        self.K_full: list[np.ndarray] = []
+
+    def _propagate_actual(self, i: int) -> None:
+        """C_actual from the previous epoch (or step 0) to epoch i."""
+        n_steps = int(self.steps[i] - (self.steps[i - 1] if i else 0))
+        if n_steps not in self._transitions:
+            self._transitions[n_steps] = epoch_transition(self.Phi, self.Q, n_steps)
+        F, Qn = self._transitions[n_steps]
+        self.C_actual = F @ self.C_actual @ F.T + Qn
+
+    def __call__(self, kf, i: int, z: np.ndarray, rows: np.ndarray, H: np.ndarray,
+                 V: np.ndarray) -> np.ndarray:
+        self._propagate_actual(i)
+        self.M_actual[i] = self.C_actual
+        p = H.shape[0]
+        x, C = kf.x[:, 0], kf.P
+        K_full, _ = gain(C, H, V)
+        self.K_full.append(K_full)
+        K = np.zeros_like(K_full)
+        if self.full_epoch_gains is not None and rows.size == p:
+            K = self.full_epoch_gains[i].copy()
+        else:
+            K[:, rows] = K_full[:, rows]
+        r = np.zeros(p)
+        r[rows] = z[rows] - H[rows] @ x
+        kf.x = (x + K @ r).reshape(-1, 1)
+        if self.covariance == "joseph":
+            kf.P = joseph_update(C, K, H, V)
+        else:
+            kf.P = (np.eye(C.shape[0]) - K @ H) @ C  # the report's short form, not symmetrised
+        self.C_actual = joseph_update(self.C_actual, K, H, V)
+        self.P_actual[i] = self.C_actual
+        return K
 
 
 def run_zeroed_gain(model: LinearGaussianModel, z: np.ndarray, schedule: Schedule | None = None,
@@ -79,70 +133,23 @@ def run_zeroed_gain(model: LinearGaussianModel, z: np.ndarray, schedule: Schedul
     """Filter ``z`` (n_epochs, p) on ``schedule`` with the report's zeroed-column gain.
 
     Same inputs as :func:`~gpsaccel.kalman.multirate.run_multirate` (a NaN or a component the
-    schedule does not deliver is missing; its gain column is zeroed).  ``full_epoch_gains``
-    (n_epochs, n, p), if given, is applied instead of the filter's own gain at every epoch where
-    all p components arrive (the report's reuse of its monorate gain).
+    schedule does not deliver is missing; its gain column is zeroed), run by that driver with
+    :class:`ZeroedGainUpdate` as its update.  ``full_epoch_gains`` (n_epochs, n, p), if given, is
+    applied instead of the filter's own gain at every epoch where all p components arrive (the
+    report's reuse of its monorate gain).
     """
     covariance = _v.choice("covariance", covariance, COVARIANCES)
     inputs = check_inputs(model, z, schedule, u)
-    schedule, H, V, z, B, u = (inputs.schedule, inputs.H, inputs.V, inputs.z, inputs.B, inputs.u)
-    Phi, Q = np.asarray(model.Phi, dtype=float), np.asarray(model.Q, dtype=float)
-    p, n = H.shape
+    schedule = inputs.schedule
+    p, n = inputs.H.shape
     if full_epoch_gains is not None:
         full_epoch_gains = _v.finite_array("full_epoch_gains", full_epoch_gains,
                                            (schedule.n_epochs, n, p))
-
-    n_epochs, n_fast = schedule.n_epochs, schedule.n_steps + 1
-    x_bar, x_hat = np.empty((n_epochs, n)), np.empty((n_epochs, n))
-    M, P = np.empty((n_epochs, n, n)), np.empty((n_epochs, n, n))
-    M_act, P_act = np.empty((n_epochs, n, n)), np.empty((n_epochs, n, n))
-    K, K_full = np.zeros((n_epochs, n, p)), np.zeros((n_epochs, n, p))
-    residuals = np.full((n_epochs, p), np.nan)
-    S = np.empty((n_epochs, p, p))
-    used = schedule.mask & np.isfinite(z)
-    x_fast, M_fast = np.empty((n_fast, n)), np.empty((n_fast, n, n))
-
-    x = np.asarray(model.x0, dtype=float).copy()
-    C = np.asarray(model.M0, dtype=float).copy()
-    C_act = C.copy()  # the true covariance of this filter's error
-
-    def predict(k: int) -> None:
-        nonlocal x, C, C_act
-        x = Phi @ x + (B @ u[k] if u is not None else 0.0)
-        C = Phi @ C @ Phi.T + Q
-        C_act = Phi @ C_act @ Phi.T + Q
-
-    step = 0
-    x_fast[0], M_fast[0] = x, C
-    for i, epoch_step in enumerate(schedule.steps):
-        while step < epoch_step:
-            predict(step)
-            step += 1
-            x_fast[step], M_fast[step] = x, C
-        x_bar[i], M[i], M_act[i] = x, C, C_act
-        S[i] = H @ C @ H.T + V
-        K_full[i] = np.linalg.solve(S[i], H @ C.T).T  # M Hᵀ S⁻¹, S symmetric
-        rows = np.flatnonzero(used[i])
-        if full_epoch_gains is not None and rows.size == p:
-            K[i] = full_epoch_gains[i]
-        else:
-            K[i][:, rows] = K_full[i][:, rows]
-        r = np.zeros(p)
-        r[rows] = z[i, rows] - H[rows] @ x
-        residuals[i, rows] = r[rows]
-        x = x + K[i] @ r
-        if covariance == "joseph":
-            C = joseph(C, K[i], H, V)
-        else:
-            C = (np.eye(n) - K[i] @ H) @ C  # the report's short form, not symmetrised
-        C_act = joseph(C_act, K[i], H, V)
-        x_hat[i], P[i], P_act[i] = x, C, C_act
-    while step < schedule.n_steps:
-        predict(step)
-        step += 1
-        x_fast[step], M_fast[step] = x, C
-
-    t = np.arange(n_fast) * model.dt
-    return ZeroedGainResult(f"zeroed-gain ({covariance})", t, t[schedule.steps], schedule.steps,
-                            x_bar, M, x_hat, P, K, residuals, S, used, x_fast, M_fast,
-                            P_act, M_act, K_full, covariance)
+    hook = ZeroedGainUpdate(np.asarray(model.Phi, dtype=float), np.asarray(model.Q, dtype=float),
+                            np.asarray(model.M0, dtype=float), schedule.steps, covariance,
+                            full_epoch_gains)
+    res = run_multirate(model, inputs.z, "filterpy", schedule, inputs.u, update=hook)
+    base = {f.name: getattr(res, f.name) for f in fields(MultirateResult)}
+    base["method"] = f"zeroed-gain ({covariance})"
+    return ZeroedGainResult(**base, P_actual=hook.P_actual, M_actual=hook.M_actual,
+                            K_full=np.stack(hook.K_full), covariance=covariance)

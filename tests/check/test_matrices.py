@@ -7,7 +7,7 @@ import pytest
 
 from gpsaccel import check
 from gpsaccel.calibration.mistakes import gamma, phi
-from gpsaccel.kalman.multirate import epoch_transition
+from gpsaccel.kalman.update import epoch_transition
 
 DT, T = 0.005, 0.2
 RIGHT = dict(Phi=phi(DT), Gamma=gamma(DT), H=np.eye(2, 3), V=np.diag([1.0, 0.0016]), W=0.0004,

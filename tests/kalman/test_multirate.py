@@ -124,7 +124,7 @@ def test_bad_input(model):
 
 
 def test_epoch_transition_composes_the_fast_steps(model):
-    from gpsaccel.kalman.multirate import epoch_transition
+    from gpsaccel.kalman.update import epoch_transition
 
     F, Qe = epoch_transition(model.Phi, model.Q, 40)
     powers = [np.linalg.matrix_power(model.Phi, k) for k in range(41)]

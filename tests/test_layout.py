@@ -1,0 +1,71 @@
+"""The package's layers: imports point down only, and the systems never import each other.
+
+Floors, bottom up: infrastructure (``_validation``, ``_blas``, ``executors``) -> ``kalman`` ->
+the systems (``calibration``, ``ship``, ``coop``, side by side) -> ``check`` -> ``plots`` ->
+``figures`` -> ``lessons``, ``cli``.  Read from the source with ``ast`` (every ``import`` and
+``from ... import``, at module level or inside a function), so a lazy import counts too.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1] / "gpsaccel"
+INFRA = {"_validation", "_blas", "executors"}
+SYSTEMS = {"calibration", "ship", "coop"}
+# what each unit may import (besides itself); "top" is gpsaccel/__init__.py, the façade
+ALLOWED = {
+    "_validation": set(), "_blas": set(), "executors": {"_validation"},
+    "kalman": INFRA,
+    **{s: INFRA | {"kalman"} for s in SYSTEMS},
+    "check": INFRA | {"kalman"} | SYSTEMS,
+    "plots": INFRA | {"kalman"} | SYSTEMS,
+    "figures": INFRA | {"kalman", "plots"} | SYSTEMS,
+    "lessons": INFRA,
+    "cli": INFRA | {"kalman", "plots", "figures", "lessons", "check"} | SYSTEMS,
+    "top": INFRA | {"kalman"} | SYSTEMS,
+}
+
+
+def _unit(path: Path) -> str:
+    rel = path.relative_to(ROOT)
+    if rel.parts == ("__init__.py",):
+        return "top"
+    return rel.parts[0].removesuffix(".py")
+
+
+def _imported_units(path: Path) -> set[str]:
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    names: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            if node.module == "gpsaccel":
+                names.update(f"gpsaccel.{a.name}" for a in node.names)
+            else:
+                names.add(node.module)
+    return {n.split(".")[1] for n in names if n.startswith("gpsaccel.")}
+
+
+def _modules() -> list[Path]:
+    return sorted(p for p in ROOT.rglob("*.py"))
+
+
+@pytest.mark.parametrize("path", _modules(), ids=lambda p: str(p.relative_to(ROOT)))
+def test_imports_point_down(path):
+    unit = _unit(path)
+    assert unit in ALLOWED, f"{unit}: a new top-level unit needs its floor in ALLOWED"
+    bad = _imported_units(path) - ALLOWED[unit] - {unit}
+    assert not bad, f"gpsaccel/{path.relative_to(ROOT)} ({unit}) imports {sorted(bad)}"
+
+
+def test_the_rule_catches_a_system_importing_another(tmp_path):
+    fake = ROOT / "ship" / "model.py"
+    assert "coop" not in _imported_units(fake)
+    bad = tmp_path / "x.py"
+    bad.write_text("from gpsaccel.coop.model import CoopModel\nfrom gpsaccel import check\n")
+    assert _imported_units(bad) == {"coop", "check"}
