@@ -17,6 +17,14 @@ import numpy as np
 MULTIPLE_RTOL = 1e-9
 
 
+def probability(name: str, value: object) -> float:
+    """A probability strictly between 0 and 1 (a test level α, a false-alarm rate)."""
+    p = finite_float(name, value)
+    if not 0.0 < p < 1.0:
+        raise ValueError(f"{name} must be a probability strictly between 0 and 1, got {value!r}")
+    return p
+
+
 def positive_float(name: str, value: object) -> float:
     """``value`` as a finite float > 0."""
     if isinstance(value, bool) or not isinstance(value, Real):

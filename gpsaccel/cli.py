@@ -13,6 +13,15 @@ from pathlib import Path
 import numpy as np
 
 
+def _dask_spec(value: str | None) -> str | None:
+    """``--dask local|tcp://host:port`` as an executor spec of :mod:`gpsaccel.executors`."""
+    if value is None:
+        return None
+    if value != "local" and not value.startswith("tcp://"):
+        raise ValueError(f"--dask must be 'local' or tcp://host:port, got {value!r}")
+    return "dask-local" if value == "local" else value
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     """Simulate one realization on report 000's defaults, filter it, summarise, draw."""
     from gpsaccel.calibration.model import STATE_NAMES, STATE_UNITS
@@ -63,12 +72,7 @@ def _cmd_montecarlo(args: argparse.Namespace) -> int:
     from gpsaccel.calibration.montecarlo import monte_carlo
     from gpsaccel.executors import resolve_executor
 
-    spec = None
-    if args.dask is not None:
-        if args.dask != "local" and not args.dask.startswith("tcp://"):
-            raise ValueError(f"--dask must be 'local' or tcp://host:port, got {args.dask!r}")
-        spec = "dask-local" if args.dask == "local" else args.dask
-    resolved = resolve_executor(spec)
+    resolved = resolve_executor(_dask_spec(args.dask))
     with resolved as ex:
         t0 = time.perf_counter()
         mc = monte_carlo(CalibrationModel(), args.runs, seed=args.seed, truth=args.truth,
@@ -183,11 +187,8 @@ def _cmd_check(args: argparse.Namespace) -> int:
         print(note, file=sys.stderr)
     if not files:
         raise ValueError("paths: no .py file was found")
-    if args.dask is not None:
-        if args.dask != "local" and not args.dask.startswith("tcp://"):
-            raise ValueError(f"--dask must be 'local' or tcp://host:port, got {args.dask!r}")
-        spec = "dask-local" if args.dask == "local" else args.dask
-    else:
+    spec = _dask_spec(args.dask)
+    if spec is None:
         spec = None if args.workers == 1 else "processes"
     if args.workers is not None and args.workers < 1:
         raise ValueError(f"--workers must be >= 1, got {args.workers}")

@@ -21,6 +21,7 @@ import numpy as np
 from gpsaccel import _validation as _v
 from gpsaccel.calibration.model import CalibrationModel
 from gpsaccel.calibration.simulation import TRUTHS, simulate
+from gpsaccel.kalman.consistency import sigma_distance
 from gpsaccel.kalman.multirate import run_multirate
 
 FilterCallable = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
@@ -67,9 +68,7 @@ class Comparison:
 def differences(x_ref: np.ndarray, P_ref: np.ndarray, x_hat: np.ndarray,
                 P: np.ndarray) -> tuple[float, float]:
     """(max |Δx̂|/σ, max |ΔP_ij|/√(P_ii P_jj)) of (x_hat, P) against the reference."""
-    sd = np.sqrt(np.diagonal(P_ref, axis1=1, axis2=2))
-    dx = np.abs(x_hat - x_ref) / sd
-    dP = np.abs(P - P_ref) / (sd[:, :, None] * sd[:, None, :])
+    dx, dP = sigma_distance(x_hat, P, x_ref, P_ref)
     return float(dx.max()), float(dP.max())
 
 

@@ -265,11 +265,13 @@ def covariance_mistakes(model: CalibrationModel | None = None) -> tuple[Mistake,
             (("W", V22),),
         ),
     ]
-    for steps, cause in ((n - 1, "a loop such as range(1, 40), or the first prediction placed "
-                                 "before the loop"),
+    rate = 1.0 / dt
+    for steps, cause in ((n - 1, f"a loop such as range(1, {n}), or the first prediction placed "
+                                 f"before the loop"),
                          (n + 1, "an extra predict() at the update step"),
-                         (1, "one prediction with the 200 Hz Φ per GPS interval"),
-                         (n // 10, "the GPS interval taken as 0.02 s, as report 001 writes it")):
+                         (1, f"one prediction with the {rate:g} Hz Φ per GPS interval"),
+                         (n // 10, f"the GPS interval taken as {n // 10 * dt:g} s (report 001 "
+                                   f"writes 0.02 s for its 0.2 s)")):
         if steps < 1 or steps == n:
             continue
         out.append(Mistake(

@@ -535,7 +535,7 @@ class MonteCarloResult:
         z = self.z_scores()
         t, N = self.t, self.n_runs
         rows = 11
-        a = _probability_alpha(alpha) / rows
+        a = _v.probability("alpha", alpha) / rows
         se_e, se_P, se_o = self.e_ave_se, self.P_ave_se, self.orthogonality_se
         verdicts = []
         for k, (s, u) in enumerate(zip(STATE_NAMES, STATE_UNITS, strict=True)):
@@ -586,13 +586,6 @@ class MonteCarloResult:
         title = (f"Monte Carlo consistency: {N} runs, truth {self.truth}, seed {self.seed}, "
                  f"{t.size} GPS epochs")
         return ConsistencyReport(title, tuple(verdicts), float(alpha))
-
-
-def _probability_alpha(alpha: object) -> float:
-    a = _v.finite_float("alpha", alpha)
-    if not 0.0 < a < 1.0:
-        raise ValueError(f"alpha must be a probability strictly between 0 and 1, got {alpha!r}")
-    return a
 
 
 # ------------------------------------------------------------------------------ the engine

@@ -270,7 +270,7 @@ def _check_Q(report: Report, Q: np.ndarray, dt: float, model: CalibrationModel) 
                    f"only at GPS times.")
         return
     _element_finding(report, "q-element", "Q", Q, want, {},
-                     f"Q = {'Σ_(j<40) Φʲ Γ W Γᵀ Φʲᵀ' if step_is_gps else 'Γ W Γᵀ'} with "
+                     f"Q = {f'Σ_(j<{n}) Φʲ Γ W Γᵀ Φʲᵀ' if step_is_gps else 'Γ W Γᵀ'} with "
                      f"Δt = {model.dt:g} s and W = {W:g}.")
 
 

@@ -54,14 +54,22 @@ from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
-from scipy import stats
 
 from gpsaccel import _validation as _v
 from gpsaccel.calibration import mistakes as cat
 from gpsaccel.calibration.model import STATE_NAMES, CalibrationModel
 from gpsaccel.calibration.simulation import simulate
 from gpsaccel.check.report import Report
-from gpsaccel.kalman.consistency import chi2_bounds, format_verdicts, verdict_from_z
+from gpsaccel.kalman.consistency import (
+    chi2_bounds,
+    covariance_distance,
+    format_verdicts,
+    nees,
+    sigma_distance,
+    verdict_from_z,
+    z_ensemble_normalized_squared,
+    z_sample_mean,
+)
 
 #: Largest distance (units of the optimal σ) at which P and x̂ count as equal; also the distance
 #: within which a catalogue entry counts as matching.
@@ -210,9 +218,8 @@ def _where(sd: np.ndarray, t: np.ndarray, idx: tuple[int, ...], kind: str) -> st
 
 
 def _run_findings(report: Report, run: StudentRun, timeout: float, n_runs: int,
-                  shape: tuple[int, int]) -> bool:
+                  model: CalibrationModel) -> bool:
     """Findings about the process itself; True when there are results to examine."""
-    n_gps = shape[0]
     st = run.status
     problem = st.get("problem")
     if run.output_chars > OUTPUT_WARN:
@@ -227,8 +234,8 @@ def _run_findings(report: Report, run: StudentRun, timeout: float, n_runs: int,
                    f"{timeout:g} s: it completed {done} of {n_runs} runs{rate}. "
                    + ("It never returned once: look for a loop whose condition never changes "
                       "(e.g. while k < n without k += 1) or input() waiting for a keyboard."
-                      if done == 0 else "It is too slow: 6000 accelerometer steps per run "
-                      "should take well under a second."))
+                      if done == 0 else f"It is too slow: {model.n_steps} accelerometer steps "
+                      f"per run should take well under a second."))
         return False
     if not st:
         report.add("crashed", f"The Python process running your file ended without a result "
@@ -266,7 +273,7 @@ def _run_findings(report: Report, run: StudentRun, timeout: float, n_runs: int,
                    f"dtype=float) fails with: {problem['error'].rstrip('.')}.")
     elif kind == "wrong-shape":
         report.add("wrong-shape", _shape_message(tuple(problem["x_hat"]), tuple(problem["P"]),
-                                                 n_gps))
+                                                 model))
     else:  # a kind this version does not know: say what the runner said
         report.add("runner", f"The check could not run your filter: {problem}")
     return False
@@ -285,20 +292,22 @@ def _returned_notes(report: Report, st: dict) -> None:
                        f"array. numpy.matrix is deprecated: use numpy arrays and @.", "note")
 
 
-def _shape_message(xs: tuple, Ps: tuple, n_gps: int) -> str:
+def _shape_message(xs: tuple, Ps: tuple, model: CalibrationModel) -> str:
+    n_gps, every, t = model.n_gps, model.gps_every, model.t_gps
     want_x, want_P = (n_gps, 3), (n_gps, 3, 3)
     parts = [f"kalman_filter must return x_hat of shape {want_x} and P of shape {want_P} (one "
-             f"row per GPS time t = 0, 0.2, ..., 30 s); it returned x_hat {xs} and P {Ps}."]
+             f"row per GPS time t = {t[0]:g}, {t[1]:g}, ..., {t[-1]:g} s); it returned x_hat "
+             f"{xs} and P {Ps}."]
     if xs == (3, n_gps):
         parts.append("x_hat looks transposed: one row per GPS time, one column per state.")
     elif xs == (n_gps, 3, 1):
         parts.append("x_hat has a trailing axis of length 1 (filterpy's kf.x is a 3x1 column): "
                      "store kf.x[:, 0] or x.ravel().")
-    elif len(xs) == 2 and xs[1] == 3 and xs[0] == (n_gps - 1) * 40 + 1:
-        parts.append("x_hat has one row per accelerometer step; return the GPS times only "
-                     "(every 40th row: x[::40]).")
+    elif len(xs) == 2 and xs[1] == 3 and xs[0] == (n_gps - 1) * every + 1:
+        parts.append(f"x_hat has one row per accelerometer step; return the GPS times only "
+                     f"(every {every}th row: x[::{every}]).")
     elif len(xs) == 2 and xs[1] == 3 and xs[0] in (n_gps - 1, n_gps + 1):
-        parts.append(f"x_hat has {xs[0]} rows: the GPS times include t = 0 and t = 30 s "
+        parts.append(f"x_hat has {xs[0]} rows: the GPS times include t = 0 and t = {t[-1]:g} s "
                      f"({n_gps} rows).")
     if Ps == (n_gps, 3):
         parts.append("P looks like the diagonal only (or the standard deviations): return the "
@@ -330,11 +339,6 @@ def _value_findings(report: Report, x: np.ndarray, P: np.ndarray, t: np.ndarray)
                        f"row, a division by zero, or the inverse of a singular matrix.")
             return False
     return True
-
-
-def _dist_P(P: np.ndarray, P_ref: np.ndarray, sd: np.ndarray) -> np.ndarray:
-    """|P − P_ref| / (σ_i σ_j), elementwise (P may have leading axes)."""
-    return np.abs(P - P_ref) / (sd[:, :, None] * sd[:, None, :])
 
 
 @dataclass(frozen=True)
@@ -369,9 +373,9 @@ def diagnose(P_student: np.ndarray, x_student: np.ndarray, problem: Problem,
     combos, P_out = _candidates(model, max_combined)
     # run 0's P against every candidate ranks them; a candidate within the tolerance must then
     # also match every other run's P (a P that varies with the data matches nothing)
-    d = _dist_P(P_student[0][None], P_out, sd).reshape(len(combos), -1).max(axis=1)
+    d = covariance_distance(P_student[0][None], P_out, sd).reshape(len(combos), -1).max(axis=1)
     for c in np.flatnonzero(d <= tol):
-        d[c] = _dist_P(P_student, P_out[c][None], sd).max()
+        d[c] = covariance_distance(P_student, P_out[c][None], sd).max()
     order = np.argsort(d, kind="stable")
     means = cat.mean_mistakes(model)
     mean_combos = [()] + [(m,) for m in means] + list(cat.combinations(means, 2))
@@ -390,11 +394,10 @@ def diagnose(P_student: np.ndarray, x_student: np.ndarray, problem: Problem,
 def _comparison(report: Report, problem: Problem, x: np.ndarray, P: np.ndarray,
                 tol: float) -> tuple[bool, bool]:
     t = problem.model.t_gps
-    dP = _dist_P(P, problem.P_ref[None], problem.sd)
-    dx = np.abs(x - problem.x_ref) / problem.sd
+    dx, dP = sigma_distance(x, P, problem.x_ref, problem.P_ref, problem.sd)
     iP = np.unravel_index(int(np.argmax(dP)), dP.shape)
     ix = np.unravel_index(int(np.argmax(dx)), dx.shape)
-    spread = _dist_P(P, P[:1], problem.sd).max()
+    spread = covariance_distance(P, P[:1], problem.sd).max()
     report.details.update({
         "max_dP_sigma": float(dP.max()), "max_dP_where": _where(problem.sd, t, iP, "P"),
         "max_dx_sigma": float(dx.max()), "max_dx_where": _where(problem.sd, t, ix, "x"),
@@ -440,7 +443,7 @@ def _diagnosis_findings(report: Report, problem: Problem, x: np.ndarray, P: np.n
         report.details["matched"] = [{"code": m.code, "variant": m.variant}
                                      for m in diag.covariance]
         return
-    dP = _dist_P(P, problem.P_ref[None], problem.sd).max(axis=(0, 2, 3))
+    dP = covariance_distance(P, problem.P_ref[None], problem.sd).max(axis=(0, 2, 3))
     first = int(np.argmax(dP > tol))
     where = ("P at t = 0 already differs: the first update uses only M0, H and V, so one of "
              "them is wrong (or the update formula)." if first == 0 else
@@ -475,18 +478,12 @@ def _consistency(report: Report, problem: Problem, x: np.ndarray, P: np.ndarray,
                    f"so NEES cannot be formed. A Joseph update, or symmetrising "
                    f"P = (P + Pᵀ)/2, keeps it one.", "warning")
         return
-    L = np.linalg.cholesky((P + np.swapaxes(P, -1, -2)) / 2)
     var = np.diagonal(P, axis1=-2, axis2=-1)           # (N, n_gps, 3)
-    z_mean = e.mean(axis=0) / np.sqrt(var.mean(axis=0) / N)  # (n_gps, 3)
+    z_mean = z_sample_mean(e.mean(axis=0), var.mean(axis=0), N)  # (n_gps, 3)
     v_mean = verdict_from_z("mean error ē/σ", z_mean,
                             lambda idx: f"t = {t[idx[0]]:g} s, {STATE_NAMES[idx[1]]}", alpha)
-    y = np.linalg.solve(L, e[..., None])[..., 0]       # L⁻¹ e
-    eps = np.einsum("rti,rti->t", y, y) / N             # ensemble-average NEES at each time
-    k = 3 * N
-    cdf = stats.chi2.cdf(N * eps, k)
-    sf = stats.chi2.sf(N * eps, k)
-    p_two = np.clip(2 * np.minimum(cdf, sf), np.finfo(float).tiny, 1.0)  # |z| ≤ 37.5
-    z_nees = np.where(sf < cdf, 1.0, -1.0) * stats.norm.isf(p_two / 2)  # + when ε̄ too large
+    eps = nees(e, (P + np.swapaxes(P, -1, -2)) / 2).mean(axis=0)  # ensemble NEES at each time
+    z_nees = z_ensemble_normalized_squared(eps, 3, N)  # + when ε̄ is too large
     v_nees = verdict_from_z("NEES (average)", z_nees, lambda idx: f"t = {t[idx[0]]:g} s", alpha)
     lo, hi = chi2_bounds(3, N, 0.05)
     inside = float(np.mean((eps >= lo) & (eps <= hi)))
@@ -548,9 +545,7 @@ def submission(path: str | os.PathLike, n_runs: int = 200, seed: int = 0, timeou
     n_runs = _v.integer("n_runs", n_runs, minimum=2)
     seed = _v.integer("seed", seed, minimum=0)
     timeout = _v.positive_float("timeout", timeout)
-    alpha = _v.positive_float("alpha", alpha)
-    if alpha >= 1:
-        raise ValueError(f"alpha must be a probability strictly between 0 and 1, got {alpha!r}")
+    alpha = _v.probability("alpha", alpha)
     tol = _v.positive_float("tol", tol)
     path = Path(path)
     report = Report(path.name)
@@ -562,8 +557,7 @@ def submission(path: str | os.PathLike, n_runs: int = 200, seed: int = 0, timeou
     problem = _problem(model, n_runs, seed)
     run = run_student(path.resolve(), problem.z, timeout)
     report.details["student_seconds"] = round(run.seconds, 3)
-    n_gps = problem.z.shape[1]
-    if _run_findings(report, run, timeout, n_runs, (n_gps, 3)) and \
+    if _run_findings(report, run, timeout, n_runs, problem.model) and \
             _value_findings(report, run.x, run.P, problem.model.t_gps):
         P_ok, x_ok = _comparison(report, problem, run.x, run.P, tol)
         if P_ok and x_ok:

@@ -87,7 +87,7 @@ def consistency_test(model: CoopModel, method: str, Q: np.ndarray | None = None,
     on the returned object (for plots of a typical run).
     """
     method = _v.choice("method", method, METHODS)
-    alpha = _v.positive_float("alpha", alpha)
+    alpha = _v.probability("alpha", alpha)
     if truth is None:
         n_runs = _v.integer("n_runs", n_runs, minimum=1)
         truth = truth_runs(model, n_runs, seed)

@@ -16,7 +16,6 @@ two-sided (1 − α) acceptance interval of the course:
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,7 +31,7 @@ def chi2_bounds(dof: int, n_runs: int = 1, alpha: float = 0.05) -> tuple[float, 
     """
     dof = _v.integer("dof", dof, minimum=1)
     n_runs = _v.integer("n_runs", n_runs, minimum=1)
-    alpha = _probability("alpha", alpha)
+    alpha = _v.probability("alpha", alpha)
     k = n_runs * dof
     return (float(stats.chi2.ppf(alpha / 2, k) / n_runs),
             float(stats.chi2.ppf(1 - alpha / 2, k) / n_runs))
@@ -82,6 +81,25 @@ def nis(residuals: np.ndarray, S: np.ndarray) -> np.ndarray:
     return normalized_squared(residuals, S)
 
 
+def sigma_distance(x: np.ndarray, P: np.ndarray, x_ref: np.ndarray, P_ref: np.ndarray,
+                   sd: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(dx, dP): how far (x, P) are from (x_ref, P_ref) in units of σ, elementwise.
+
+    ``dx = |x − x_ref| / σ_i`` and ``dP = |P − P_ref|_ij / (σ_i σ_j)`` with σ = √diag P_ref (or
+    ``sd``), the one meaning of "two filters agree" whatever the units of the states.  x (..., n),
+    P (..., n, n), broadcasting over leading axes.
+    """
+    if sd is None:
+        sd = np.sqrt(np.diagonal(P_ref, axis1=-2, axis2=-1))
+    return np.abs(np.asarray(x) - x_ref) / sd, covariance_distance(P, P_ref, sd)
+
+
+def covariance_distance(P: np.ndarray, P_ref: np.ndarray, sd: np.ndarray) -> np.ndarray:
+    """|P − P_ref|_ij / (σ_i σ_j) elementwise, σ = ``sd`` (..., n): the P part of
+    :func:`sigma_distance`."""
+    return np.abs(np.asarray(P) - P_ref) / (sd[..., :, None] * sd[..., None, :])
+
+
 def fraction_inside(values: np.ndarray, bounds: tuple[float, float]) -> float:
     """Fraction of ``values`` inside the closed interval ``bounds`` (NaN counts as outside)."""
     values = np.asarray(values, dtype=float)
@@ -94,7 +112,7 @@ def z_threshold(alpha: float, n_tests: int) -> float:
 
     The family-wise false-alarm rate of the ``n_tests`` tests together is then at most ``alpha``.
     """
-    alpha = _probability("alpha", alpha)
+    alpha = _v.probability("alpha", alpha)
     n_tests = _v.integer("n_tests", n_tests, minimum=1)
     return float(stats.norm.isf(alpha / (2 * n_tests)))
 
@@ -153,15 +171,6 @@ def format_verdicts(verdicts: list[Verdict]) -> str:
             f"{'pass' if v.passed else 'FAIL':<7}  {v.where}"
         )
     return "\n".join(lines)
-
-
-def _probability(name: str, value: object) -> float:
-    p = _v.finite_float(name, value)
-    if not 0.0 < p < 1.0:
-        raise ValueError(f"{name} must be a probability strictly between 0 and 1, got {value!r}")
-    if math.isclose(p, 1.0):
-        raise ValueError(f"{name} must be < 1, got {value!r}")
-    return p
 
 
 # --------------------------------------------------------------------------------------------
