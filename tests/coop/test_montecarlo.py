@@ -1,0 +1,64 @@
+"""NEES/NIS truth-model tests and the Q tuning of report 002 (coop.montecarlo)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gpsaccel.coop.model import CoopModel
+from gpsaccel.coop.montecarlo import consistency_test, repeated_sets, set_seeds, tune_q
+from gpsaccel.kalman.consistency import chi2_bounds
+
+MODEL = CoopModel()
+
+
+@pytest.fixture(scope="module")
+def ekf_run():
+    return consistency_test(MODEL, "ekf", n_runs=20, seed=1, keep=True)
+
+
+def test_averages_are_the_runs_nees_and_nis(ekf_run):
+    res, truth = ekf_run.result, ekf_run.truth
+    np.testing.assert_allclose(ekf_run.nees_mean, res.nees(truth.x)[:, 1:].mean(axis=0),
+                               rtol=1e-12)
+    np.testing.assert_allclose(ekf_run.nis_mean, res.nis()[:, 1:].mean(axis=0), rtol=1e-12)
+    assert ekf_run.nees_bounds == chi2_bounds(6, 20, 0.05)
+    assert ekf_run.nis_bounds == chi2_bounds(5, 20, 0.05)
+    inside = np.mean((ekf_run.nees_mean >= ekf_run.nees_bounds[0])
+                     & (ekf_run.nees_mean <= ekf_run.nees_bounds[1]))
+    assert ekf_run.nees_fraction == pytest.approx(inside)
+
+
+def test_the_tuned_ekf_passes_and_the_lkf_fails(ekf_run):
+    # fixed seed; the tuned EKF's NIS fraction over 5 sets of 50 was 0.93-0.96 (README)
+    assert ekf_run.nis_fraction > 0.85
+    lkf = consistency_test(MODEL, "lkf", n_runs=20, seed=1)
+    assert lkf.nees_fraction < 0.2  # the nominal is hundreds of metres from the truth
+
+
+def test_sets_are_independent_and_reproducible():
+    a, b = set_seeds(7, 2)
+    assert a.entropy == b.entropy and a.spawn_key != b.spawn_key
+    runs1 = repeated_sets(MODEL, "ekf", n_sets=2, n_runs=5, seed=7)
+    runs2 = repeated_sets(MODEL, "ekf", n_sets=2, n_runs=5, seed=7)
+    np.testing.assert_array_equal(runs1[1].nees_mean, runs2[1].nees_mean)
+    assert not np.array_equal(runs1[0].nees_mean, runs1[1].nees_mean)
+
+
+def test_tune_q_scores_every_candidate_and_prefers_the_least_inflation():
+    res = tune_q(MODEL, "ekf", grid=((1.0, 4.0), (1.0, 2.0), (1.0,)), n_runs=10, seed=3)
+    assert res.scales == [(1.0, 1.0, 1.0), (1.0, 2.0, 1.0), (4.0, 1.0, 1.0), (4.0, 2.0, 1.0)]
+    good = res.score >= res.score.max() - res.tol
+    chosen = res.scales.index(res.best)
+    assert good[chosen]
+    assert res.inflation[chosen] == res.inflation[good].min()
+    assert "* = chosen" in res.table()
+
+
+def test_bad_arguments_name_themselves():
+    with pytest.raises(ValueError, match="method must be one of"):
+        consistency_test(MODEL, "pf", n_runs=2)
+    with pytest.raises(ValueError, match="alpha must be a probability"):
+        consistency_test(MODEL, "ekf", n_runs=2, alpha=1.5)
+    with pytest.raises(ValueError, match="grid must hold 3 lists"):
+        tune_q(MODEL, "ekf", grid=((1.0,), (1.0,)))
