@@ -68,7 +68,7 @@ def _cmd_montecarlo(args: argparse.Namespace) -> int:
     import time
 
     from gpsaccel import plots
-    from gpsaccel.calibration.model import STATE_NAMES, STATE_UNITS, CalibrationModel
+    from gpsaccel.calibration.model import CalibrationModel
     from gpsaccel.calibration.montecarlo import monte_carlo
     from gpsaccel.executors import resolve_executor
 
@@ -82,23 +82,8 @@ def _cmd_montecarlo(args: argparse.Namespace) -> int:
     print(f"gpsaccel montecarlo: {mc.n_runs:,} runs, truth {mc.truth}, seed {mc.seed}, "
           f"{seconds:.2f} s ({resolved.description})")
     print(mc.consistency(alpha=args.alpha))
-    z0 = (mc.P_ave[0, 0, 0] - mc.P[0, 0, 0]) / mc.P_ave_se[0, 0, 0]
-    print(f"\nP_ave − P at t = 0 for (δp, δp): {mc.P_ave[0, 0, 0] - mc.P[0, 0, 0]:+.4f} m² "
-          f"(standard error {mc.P_ave_se[0, 0, 0]:.4f} m², z = {z0:+.2f}; report 000 printed "
-          f"−0.013)")
-    rc, rc_se = mc.residual_correlation[-1, -2], mc.residual_correlation_se()[-1, -2]
-    print(f"residual correlation r({mc.t[-1]:g} s) r({mc.t[-2]:g} s)ᵀ (report 000's pair) "
-          f"± its standard error:")
-    for a in range(2):
-        print("  [" + ",  ".join(f"{rc[a, b]:+.2e} ± {rc_se[a, b]:.1e}" for b in range(2)) + "]")
-    if np.any(mc.predicted_mean_error):
-        print("the mean error theory predicts for this truth (the filter's error on the Euler "
-              "integration error alone), at its largest, in standard errors of e_ave:")
-        ratio = np.abs(mc.predicted_mean_error) / mc.e_ave_se
-        for k, (name, unit) in enumerate(zip(STATE_NAMES, STATE_UNITS, strict=True)):
-            i = int(np.argmax(ratio[:, k]))
-            print(f"  {name:>2}: {mc.predicted_mean_error[i, k]:+.3g} {unit} at t = {mc.t[i]:g} s "
-                  f"= {ratio[i, k]:.1f} SE (e_ave there {mc.e_ave[i, k]:+.3g})")
+    print()
+    print(mc.summary())
     args.out.mkdir(parents=True, exist_ok=True)
     figures = {
         "pave-minus-p": plots.pave_minus_p(mc, grid=False),

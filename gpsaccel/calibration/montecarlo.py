@@ -523,6 +523,35 @@ class MonteCarloResult:
             "nis": z_ensemble_normalized_squared(self.nis, 2, N),
         }
 
+    def summary(self) -> str:
+        """The numbers the reports printed, each with its standard error (what the CLI prints).
+
+        P_ave − P for (δp, δp) at t = 0 (report 000 printed −0.013), the residual correlation
+        r(t_end) r(t_end − T)ᵀ (report 000's pair), and, for a truth the error model does not
+        describe exactly, the mean error theory predicts (:attr:`predicted_mean_error`) at its
+        largest in standard errors of e_ave.
+        """
+        d0, se0 = self.P_ave[0, 0, 0] - self.P[0, 0, 0], self.P_ave_se[0, 0, 0]
+        lines = [f"P_ave − P at t = 0 for (δp, δp): {d0:+.4f} m² (standard error {se0:.4f} m², "
+                 f"z = {d0 / se0:+.2f}; report 000 printed −0.013)"]
+        rc, rc_se = self.residual_correlation[-1, -2], self.residual_correlation_se()[-1, -2]
+        lines.append(f"residual correlation r({self.t[-1]:g} s) r({self.t[-2]:g} s)ᵀ (report "
+                     f"000's pair) ± its standard error:")
+        for a in range(2):
+            lines.append("  [" + ",  ".join(f"{rc[a, b]:+.2e} ± {rc_se[a, b]:.1e}"
+                                            for b in range(2)) + "]")
+        if np.any(self.predicted_mean_error):
+            lines.append("the mean error theory predicts for this truth (the filter's error on "
+                         "the Euler integration error alone), at its largest, in standard "
+                         "errors of e_ave:")
+            ratio = np.abs(self.predicted_mean_error) / self.e_ave_se
+            for k, (name, unit) in enumerate(zip(STATE_NAMES, STATE_UNITS, strict=True)):
+                i = int(np.argmax(ratio[:, k]))
+                lines.append(f"  {name:>2}: {self.predicted_mean_error[i, k]:+.3g} {unit} at "
+                             f"t = {self.t[i]:g} s = {ratio[i, k]:.1f} SE (e_ave there "
+                             f"{self.e_ave[i, k]:+.3g})")
+        return "\n".join(lines)
+
     def consistency(self, alpha: float = 0.01) -> ConsistencyReport:
         """Verdicts on every statistic, family-wise false-alarm rate ``alpha`` for the table.
 

@@ -261,3 +261,13 @@ def test_cli_montecarlo_prints_the_table_and_writes_the_figures(tmp_path, capsys
     assert main(["montecarlo", "--dask", "nowhere", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert "n_runs" in err and "--dask" in err
+
+
+def test_summary_prints_the_reports_numbers_with_their_standard_errors():
+    mc = monte_carlo(MODEL, 200, seed=3, truth="kinematic", progress=False)
+    text = mc.summary()
+    d0 = mc.P_ave[0, 0, 0] - mc.P[0, 0, 0]
+    assert f"{d0:+.4f} m² (standard error {mc.P_ave_se[0, 0, 0]:.4f} m²" in text
+    assert "r(30 s) r(29.8 s)ᵀ" in text
+    assert "δv: -0.014 m/s at t = 30 s" in text  # the Euler offset the filter carries
+    assert "theory predicts" not in monte_carlo(MODEL, 20, seed=3, progress=False).summary()
