@@ -11,14 +11,6 @@ from gpsaccel.calibration.montecarlo import monte_carlo
 from gpsaccel.kalman.consistency import z_sample_mean, z_sample_variance, z_threshold
 
 
-def test_report_models_use_each_reports_frequency_convention():
-    assert errata.report_model("000").angular_frequency == pytest.approx(0.1)
-    assert errata.report_model("001").angular_frequency == pytest.approx(2 * np.pi * 0.1)
-    assert errata.report_model("003").angular_frequency == pytest.approx(2 * np.pi * 0.1)
-    with pytest.raises(ValueError, match="report"):
-        errata.report_model("005")
-
-
 def test_optimal_filter_on_its_own_model_has_actual_covariance_P():
     m = errata.report_model("000")
     s = errata.error_statistics(m, reference(m), truth="error-model")
