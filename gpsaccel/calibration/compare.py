@@ -300,20 +300,18 @@ class Sweep:
         forms = list(self.errors)
         w = {f: max(9, len(f) + 1) for f in forms}
         out = [f"conditioning sweep '{self.kind}': {self.label}, seed {self.seed}"]
-        for title, get in (("max |dP_ij| / sqrt(P*_ii P*_jj)", self.dP),
-                           ("max |dx| / sigma*", self.dx)):
+        for title, get, floor in (
+                ("max |dP_ij| / sqrt(P*_ii P*_jj)", self.dP, [e.dP_rel for e in self.floor]),
+                ("max |dx| / sigma*", self.dx, [e.dx_sigma for e in self.floor])):
             head = f"{'factor':>8} {'kappa':>8} {'cond(P)':>8} {'floor':>8} " + " ".join(
                 f"{f:>{w[f]}}" for f in forms)
             out += ["", title, head, "-" * len(head)]
-            floor = [e.dP_rel for e in self.floor] if get == self.dP else \
-                [e.dx_sigma for e in self.floor]
             cols = {f: get(f) for f in forms}
             for i, fac in enumerate(self.factors):
                 cells = []
                 for f in forms:
-                    v = cols[f][i]
                     mark = "!" if self.errors[f][i].min_eig < 0 else " "
-                    cells.append(f"{v:>{w[f] - 1}.1e}{mark}")
+                    cells.append(f"{cols[f][i]:>{w[f] - 1}.1e}{mark}")
                 out.append(f"{fac:8.0e} {self.kappa[i]:8.1e} {self.cond_P[i]:8.1e} "
                            f"{floor[i]:8.1e} " + " ".join(cells))
         out.append("\n! = P not positive definite (its smallest eigenvalue < 0); floor = the exact "

@@ -70,8 +70,9 @@ class StudentFilter:
         x, P = np.asarray(run.x[0], dtype=float), np.asarray(run.P[0], dtype=float)
         if x.shape != (z.shape[0], 3) or P.shape != (z.shape[0], 3, 3):
             raise StudentFilterError(f"the runner gave back shapes {x.shape} and {P.shape}")
-        # the child's own clock, not trusted beyond the wall clock of the whole process
-        done = max(int(run.runs_done), 1)
+        # the child's own clock, not trusted beyond the wall clock of the whole process (start-up
+        # and import included); a hostile file can still under-report it, so it is indicative
+        done = self.repeat  # no problem reported: every run came back
         wall = run.seconds / done
         reported = run.status.get("run_seconds")
         per_run = float(reported) / done if isinstance(reported, (int, float)) else np.nan
