@@ -29,7 +29,7 @@ def problem():
 def test_every_form_is_the_exact_filter_at_the_reports_numbers(problem, name):
     model, z, ex = problem
     res = run_form(name, model, z)
-    e = errors(ex, res.x_post, res.P)
+    e = errors(ex, res.x_hat, res.P)
     assert e.dx_sigma < TOLERANCE and e.dP_rel < TOLERANCE
     assert e.asymmetry < TOLERANCE and e.min_eig > 0
     assert res.method == name
