@@ -98,11 +98,36 @@ def _cmd_montecarlo(args: argparse.Namespace) -> int:
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
-    from gpsaccel.calibration.compare import compare
+    """Forms and files against the exact answer; with --sweep, the conditioning sweep(s) and figure."""
+    from gpsaccel import plots
+    from gpsaccel.calibration.compare import compare, sweep
+    from gpsaccel.calibration.forms import FORMS
 
-    print(f"filterpy (covariance/Joseph form) against the hand-written information form, "
-          f"seed {args.seed}, truth {args.truth}:")
-    print(compare(seed=args.seed, truth=args.truth))
+    forms = [c for c in args.filters if c in FORMS]
+    files = [c for c in args.filters if c not in FORMS]
+    for c in files:
+        if not c.endswith(".py") or not Path(c).is_file():
+            raise ValueError(f"{c!r} is neither a filter form ({', '.join(FORMS)}) nor a .py file")
+    if args.sweep:
+        if files:
+            raise ValueError("--sweep runs the built-in forms only (a student's file is written "
+                             "for report 000's numbers, the sweep changes them)")
+        sweeps = []
+        for kind in args.sweep:
+            sw = sweep(kind, forms=forms or None, seed=args.seed, truth=args.truth)
+            print(sw, end="\n\n")
+            sweeps.append(sw)
+        args.out.mkdir(parents=True, exist_ok=True)
+        path = args.out / f"compare-sweep-{'-'.join(args.sweep)}.png"
+        plots.form_sweep(sweeps).savefig(path, dpi=110)
+        print(f"wrote {path}")
+        return 0
+    from gpsaccel.check import student_filter
+
+    filters = {Path(c).name: student_filter(c, timeout=args.timeout, repeat=args.repeat)
+               for c in files}
+    print(compare(*forms, seed=args.seed, truth=args.truth, filters=filters or None,
+                  repeat=args.repeat))
     return 0
 
 
@@ -207,9 +232,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, default=Path("out"), help="folder for figures (out/)")
     p.set_defaults(func=_cmd_run)
 
-    p = sub.add_parser("compare", help="filterpy against the hand-written information form")
+    p = sub.add_parser("compare", help="filter forms and students' files against the exact "
+                                       "answer; --sweep: the conditioning sweeps and their figure")
+    p.add_argument("filters", nargs="*", metavar="FORM|FILE",
+                   help="standard, joseph, information, filterpy-information, square-root, or a "
+                        "student's .py file defining kalman_filter(z) (default: every form)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--truth", choices=TRUTHS, default="error-model")
+    p.add_argument("--repeat", type=int, default=3, help="runs timed per filter (best kept)")
+    p.add_argument("--timeout", type=float, default=60.0, help="limit (s) per student file")
+    p.add_argument("--sweep", action="append", choices=("prior", "gps"), default=None,
+                   help="prior: M0 x 1 .. 1e12; gps: V x 1 .. 1e-12; give both for one figure "
+                        "with both (written to --out)")
+    p.add_argument("--out", type=Path, default=Path("out"), help="folder for the sweep figure")
     p.set_defaults(func=_cmd_compare)
 
     p = sub.add_parser("figures", help="write every figure of a report as PNG + index.html")

@@ -507,3 +507,74 @@ def orthogonality(mc, *, title: str | None = None, fig: Figure | None = None) ->
                       f"truth); shaded ±2 s.e.")
     return state_grid(mc.t, mc.orthogonality, title=title, ylabel="E[e x̂ᵀ]",
                       bands=2 * mc.orthogonality_se, fig=fig)
+
+
+# --------------------------------------------------------------------------------------------------
+# Filter forms in finite precision (gpsaccel compare --sweep)
+
+#: One colour and marker per filter form, the same in every sweep figure.
+FORM_STYLE = {
+    "standard": ("#d62728", "o"),
+    "joseph": ("#1f77b4", "s"),
+    "information": ("#2ca02c", "^"),
+    "filterpy-information": ("#9467bd", "v"),
+    "square-root": ("#ff7f0e", "D"),
+}
+
+
+def form_sweep(sweeps: Sequence, *, fig: Figure | None = None) -> Figure:
+    """Each form's error against the exact answer, over the update's condition number κ.
+
+    ``sweeps``: :class:`gpsaccel.calibration.compare.Sweep` s, one column each; top row the
+    covariance error max|ΔP_ij|/√(P*_ii P*_jj), bottom row the estimate error max|Δx̂|/σ*.  Grey
+    dashes: the exact answer rounded to float64 (the floor); dotted guides ε κ and ε √κ
+    (ε = 2⁻⁵³); a ring marks a P that is no longer positive definite, a triangle at the top a form
+    that broke down (inf/NaN or an exception).
+    """
+    if fig is None:
+        fig = Figure(figsize=(5.2 * len(sweeps) + 0.6, 7.6), layout="constrained")
+    axs = fig.subplots(2, len(sweeps), squeeze=False, sharex="col")
+    eps = np.finfo(float).eps / 2
+    for col, sw in enumerate(sweeps):
+        k = np.asarray(sw.kappa)
+        for row, (get, floor, ylabel) in enumerate((
+                (sw.dP, [e.dP_rel for e in sw.floor], "max |P − P*|ᵢⱼ / √(P*ᵢᵢ P*ⱼⱼ)"),
+                (sw.dx, [e.dx_sigma for e in sw.floor], "max |x̂ − x̂*| / σ*"))):
+            ax = axs[row, col]
+            ax.loglog(k, eps * k, ":", color="#555555", lw=1.0, label="ε κ")
+            ax.loglog(k, eps * np.sqrt(k), ":", color="#999999", lw=1.0, label="ε √κ")
+            ax.loglog(k, floor, "--", color="#777777", lw=1.2, label="exact, rounded to float64")
+            top = 1e3
+            broke_down = any(not np.all(np.isfinite(get(n))) for n in sw.errors)
+            for name in sw.errors:
+                colour, marker = FORM_STYLE.get(name, ("#222222", "x"))
+                y = np.asarray(get(name), dtype=float)
+                bad = ~np.isfinite(y)
+                ax.loglog(k, np.where(bad, np.nan, y), marker=marker, color=colour, lw=1.3,
+                          ms=4.5, alpha=0.85, label=name)
+                if bad.any():
+                    ax.plot(k[bad], np.full(bad.sum(), top), marker="^", color=colour, ls="none",
+                            ms=8)
+                lost = np.asarray(sw.min_eig(name)) < 0
+                if lost.any():
+                    ax.plot(k[lost & ~bad], y[lost & ~bad], "o", ms=12, mfc="none", mec="black",
+                            mew=1.3, label="P not positive definite" if not bad.all() else None)
+            finite = np.concatenate([np.asarray(get(n), dtype=float) for n in sw.errors] + [floor])
+            finite = finite[np.isfinite(finite) & (finite > 0)]
+            high = top * 3 if broke_down else 10.0 ** np.ceil(np.log10(finite.max()) + 0.5)
+            ax.set_ylim(10.0 ** np.floor(np.log10(finite.min()) - 0.5), high)
+            finish(ax, "", "κ = max λ(M P⁻¹)  (update's condition number)" if row == 1 else "",
+                   ylabel, legend=False)
+            if row == 0:  # the sweep's own factor along the top, at the points it produced
+                top_axis = ax.secondary_xaxis("top")
+                every = max(1, len(k) // 5)
+                top_axis.set_xticks(k[::every], labels=[f"{f:.0e}".replace("e+0", "e").replace(
+                    "e-0", "e-").replace("e+", "e") for f in sw.factors[::every]])
+                top_axis.minorticks_off()
+                top_axis.set_xlabel(f"sweep '{sw.kind}': {sw.label}")
+    handles, labels = axs[0, 0].get_legend_handles_labels()
+    seen = dict(zip(labels, handles, strict=True))
+    fig.legend(list(seen.values()), list(seen.keys()), loc="outside lower center",
+               ncol=min(5, len(seen)), fontsize="small")
+    fig.suptitle("Filter forms in float64 against the exact answer (mpmath, 50 digits)")
+    return fig

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import re
+from pathlib import Path
+
+import numpy as np
 
 from gpsaccel.cli import main
 
@@ -18,11 +21,41 @@ def test_run_writes_summary_and_figures(tmp_path, capsys):
 
 
 def test_compare_prints_the_table(capsys):
-    assert main(["compare", "--seed", "1"]) == 0
+    assert main(["compare", "--seed", "1", "--repeat", "1"]) == 0
     out = capsys.readouterr().out
-    row = next(line for line in out.splitlines() if line.startswith("information form"))
-    dx, dP = (float(v) for v in row.split()[2:4])
-    assert dx < 1e-10 and dP < 1e-10
+    for form in ("standard", "joseph", "information", "filterpy-information", "square-root"):
+        row = next(line for line in out.splitlines() if line.startswith(form + " "))
+        dx, dP = (float(v) for v in row.split()[1:3])
+        assert dx < 1e-10 and dP < 1e-10
+
+
+def test_compare_a_form_with_a_student_file(capsys):
+    path = Path(__file__).parent / "submissions" / "correct_joseph.py"
+    assert main(["compare", "joseph", str(path), "--repeat", "1"]) == 0
+    out = capsys.readouterr().out
+    row = next(line for line in out.splitlines() if line.startswith("correct_joseph.py"))
+    assert float(row.split()[1]) < 1e-10
+    assert "square-root" not in out
+
+
+def test_compare_sweep_writes_one_figure(tmp_path, capsys, monkeypatch):
+    from gpsaccel.calibration import compare as compare_module
+
+    monkeypatch.setitem(compare_module.DEFAULT_FACTORS, "prior", np.array([1.0, 1e12]))
+    monkeypatch.setitem(compare_module.DEFAULT_FACTORS, "gps", np.array([1.0, 1e-12]))
+    assert main(["compare", "standard", "square-root", "--sweep", "prior", "--sweep", "gps",
+                 "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "conditioning sweep 'prior'" in out and "conditioning sweep 'gps'" in out
+    assert (tmp_path / "compare-sweep-prior-gps.png").stat().st_size > 10_000
+
+
+def test_compare_bad_arguments_exit_2(capsys):
+    assert main(["compare", "ud"]) == 2
+    assert "neither a filter form" in capsys.readouterr().err
+    path = Path(__file__).parent / "submissions" / "correct_joseph.py"
+    assert main(["compare", str(path), "--sweep", "gps"]) == 2
+    assert "built-in forms only" in capsys.readouterr().err
 
 
 def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys):

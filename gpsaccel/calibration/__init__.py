@@ -5,15 +5,30 @@
 * :mod:`~gpsaccel.calibration.reports`: each report's model, truth and presets;
 * :mod:`~gpsaccel.calibration.simulation`: one realization (error-model or kinematic truth);
 * :mod:`~gpsaccel.calibration.montecarlo`: the reports' Monte Carlo as arrays, and its table;
-* :mod:`~gpsaccel.calibration.compare`: two filter implementations side by side;
+* :mod:`~gpsaccel.calibration.forms`: the update's forms (standard, Joseph, information, filterpy's
+  information and square-root filters) as filter objects for the multirate driver;
+* :mod:`~gpsaccel.calibration.exact`: the exact answer, the filter in 50-digit arithmetic;
+* :mod:`~gpsaccel.calibration.compare`: any filters side by side against the exact answer, and
+  the conditioning sweeps;
 * :mod:`~gpsaccel.calibration.mistakes`: known mistakes as filters (used by errata and the checker);
 * :mod:`~gpsaccel.calibration.errata`: the reports' mistakes and their exact cost.
 """
 
-from gpsaccel.calibration import compare, errata, mistakes, model, montecarlo, reports, simulation
+from gpsaccel.calibration import (
+    compare,
+    errata,
+    exact,
+    forms,
+    mistakes,
+    model,
+    montecarlo,
+    reports,
+    simulation,
+)
 from gpsaccel.calibration.model import CalibrationModel
 from gpsaccel.calibration.montecarlo import MonteCarloResult, monte_carlo
 from gpsaccel.calibration.simulation import Realization, simulate
 
-__all__ = ["CalibrationModel", "MonteCarloResult", "Realization", "compare", "errata", "mistakes",
-           "model", "monte_carlo", "montecarlo", "reports", "simulate", "simulation"]
+__all__ = ["CalibrationModel", "MonteCarloResult", "Realization", "compare", "errata", "exact",
+           "forms", "mistakes", "model", "monte_carlo", "montecarlo", "reports", "simulate",
+           "simulation"]

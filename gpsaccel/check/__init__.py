@@ -9,20 +9,25 @@ Two checks, one kind of answer (a :class:`Report` of :class:`Finding` s with sta
 :func:`assert_model_matrices` and :func:`assert_submission` raise ``AssertionError`` with the
 findings instead, for a grader's test cell (nbgrader, otter-grader).  The known mistakes and their
 codes are in :mod:`gpsaccel.calibration.mistakes`; ``gpsaccel check PATH ...`` checks many files.
+:func:`student_filter` makes a file a ``kalman_filter(z)`` callable (run in its own process) for
+:func:`gpsaccel.calibration.compare.compare`.
 """
 
 from gpsaccel.calibration.mistakes import codes
 from gpsaccel.check.matrices import assert_model_matrices, model_matrices
 from gpsaccel.check.report import Finding, Report
+from gpsaccel.check.student_filter import StudentFilterError, student_filter
 from gpsaccel.check.whole_filter import TOLERANCE, assert_submission, submission
 
 __all__ = [
     "TOLERANCE",
     "Finding",
     "Report",
+    "StudentFilterError",
     "assert_model_matrices",
     "assert_submission",
     "codes",
     "model_matrices",
+    "student_filter",
     "submission",
 ]

@@ -180,20 +180,25 @@ def optimal_update(kf, i: int, z: np.ndarray, rows: np.ndarray, H: np.ndarray,
 
 def run_multirate(model: LinearGaussianModel, z: np.ndarray, method: str = "filterpy",
                   schedule: Schedule | None = None, u: np.ndarray | None = None,
-                  update: UpdateHook = optimal_update) -> MultirateResult:
+                  update: UpdateHook = optimal_update,
+                  kf: object | None = None) -> MultirateResult:
     """Filter measurements ``z`` (n_epochs, p) taken on ``schedule`` (default ``model.schedule()``).
 
     At every fast step the filter predicts with Φ and Q (and ``B u_k`` when a known input ``u``,
     (n_steps, m), is given; the model must then have ``B``); at each epoch it updates with the
     components that the schedule delivers and that are finite in ``z``, by ``update``
     (:func:`optimal_update`, or a system's own variant: :class:`UpdateHook`).
+
+    ``kf`` runs a filter object of one's own in place of ``method``'s (any with filterpy's
+    ``KalmanFilter`` interface as used here: ``x``, ``P``, ``K``, ``predict()`` and
+    ``update(z, R=..., H=...)``, initialised at (x0, M0)); ``method`` then only names the result.
     """
-    method = _v.choice("method", method, METHODS)
+    if kf is None:
+        method = _v.choice("method", method, METHODS)
+        kf = make_filter(model, method)
     inputs = check_inputs(model, z, schedule, u)
     schedule, H, V, z, B, u = (inputs.schedule, inputs.H, inputs.V, inputs.z, inputs.B, inputs.u)
     p, n = H.shape
-
-    kf = make_filter(model, method)
 
     def predict(k: int) -> None:
         """From fast step k to k + 1."""

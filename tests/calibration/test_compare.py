@@ -1,4 +1,4 @@
-"""compare(): filter forms side by side, and a student's callable beside the reference."""
+"""compare() and sweep(): every form against the exact answer, and which forms lose precision first."""
 
 from __future__ import annotations
 
@@ -6,37 +6,153 @@ import numpy as np
 import pytest
 
 from gpsaccel import CalibrationModel, run_multirate
-from gpsaccel.calibration.compare import compare, reference_filter
+from gpsaccel.calibration.compare import (
+    compare,
+    form_filter,
+    reference_filter,
+    sweep,
+    sweep_model,
+)
+from gpsaccel.calibration.forms import FORMS
+
+#: Every built-in form at the report's numbers is within this of the exact answer, in σ (x̂) and in
+#: √(P_ii P_jj) (P).  Measured (seed 0 and 3): ≤ 4e-12 in x̂, ≤ 2.2e-13 in P.
+TOLERANCE = 1e-10
 
 
-@pytest.mark.parametrize("truth", ["error-model", "kinematic"])
-def test_information_form_agrees_with_filterpy(truth):
-    table = compare(seed=3, truth=truth, repeat=1)
-    (row,) = table.rows
-    assert row.max_dx_sigma < 1e-10 and row.max_dP_rel < 1e-10
-    assert row.seconds > 0 and table.reference_seconds > 0
+@pytest.fixture(scope="module")
+def table():
+    return compare(seed=3, repeat=1)
+
+
+def test_every_form_matches_the_exact_answer_at_the_reports_numbers(table):
+    assert [r.name for r in table.rows] == list(FORMS)
+    for r in table.rows:
+        assert r.problem is None
+        e = r.errors
+        assert e.dx_sigma < TOLERANCE and e.dP_rel < TOLERANCE and e.asymmetry < TOLERANCE, r.name
+        assert e.min_eig == pytest.approx(table.exact_min_eig, rel=1e-9)
+        assert r.seconds > 0
+    # the floor: the exact answer stored in float64 (half an ulp of x̂ in σ, of P in √(PiiPjj))
+    assert table.floor.dx_sigma < 1e-13 and table.floor.dP_rel < 2e-16
+    assert table.kappa == pytest.approx(626.0, rel=1e-12)  # 1 + M0_vv / V_vv at t = 0
     text = str(table)
-    assert "information form" in text and "filterpy" in text
+    assert "exact (mpmath)" in text and "square-root" in text and "min eig" in text
 
 
-def test_a_mistaken_filter_shows_up():
+def test_kinematic_truth_too():
+    t = compare("joseph", "information", seed=1, truth="kinematic", repeat=1)
+    assert all(r.errors.dx_sigma < TOLERANCE and r.errors.dP_rel < TOLERANCE for r in t.rows)
+
+
+def test_a_mistaken_filter_shows_up_and_a_correct_one_does_not():
     wrong = CalibrationModel(W=0.0004**0.5)  # a standard deviation where a variance belongs
 
     def student(z):
         res = run_multirate(wrong, z)
         return res.x_hat, res.P
 
-    table = compare(filters={"student": student, "same": reference_filter(CalibrationModel())},
-                    repeat=1)
-    student_row, same_row = table.rows
-    assert student_row.max_dP_rel > 0.1 and student_row.max_dx_sigma > 0.1
-    assert same_row.max_dx_sigma == 0.0 and same_row.max_dP_rel == 0.0
+    t = compare("joseph", filters={"student": student,
+                                   "same": reference_filter(CalibrationModel()),
+                                   "joseph again": form_filter("joseph", CalibrationModel())},
+                repeat=1)
+    assert t.row("student").errors.dP_rel > 0.1 and t.row("student").errors.dx_sigma > 0.1
+    assert t.row("same").errors == t.row("joseph").errors == t.row("joseph again").errors
 
 
-def test_bad_filters_are_named():
+def test_a_filter_that_breaks_down_is_a_row_not_an_exception():
+    def raises(z):
+        raise np.linalg.LinAlgError("Singular matrix")
+
+    def nan(z):
+        return np.full((z.shape[0], 3), np.nan), np.full((z.shape[0], 3, 3), np.nan)
+
+    t = compare(filters={"raises": raises, "nan": nan}, repeat=1)
+    assert t.row("raises").errors is None and "LinAlgError: Singular matrix" in t.row("raises").problem
+    assert t.row("nan").errors.dx_sigma == np.inf and t.row("nan").errors.min_eig == -np.inf
+    assert "failed: LinAlgError" in str(t)
+
+
+def test_bad_input_is_named():
     with pytest.raises(ValueError, match=r"filters\['x'\] must be callable"):
         compare(filters={"x": 3}, repeat=1)
-    with pytest.raises(ValueError, match="short: x_hat must have shape"):
+    with pytest.raises(ValueError, match=r"short: x_hat must have shape \(151, 3\)"):
         compare(filters={"short": lambda z: (np.zeros((3, 3)), np.zeros((151, 3, 3)))}, repeat=1)
+    with pytest.raises(ValueError, match="return"):
+        compare(filters={"one": lambda z: np.zeros((151, 3))}, repeat=1)
+    with pytest.raises(ValueError, match="forms must be one of"):
+        compare("ud")
+    with pytest.raises(ValueError, match="own name"):
+        compare("joseph", filters={"joseph": form_filter("joseph", CalibrationModel())})
     with pytest.raises(ValueError, match="truth"):
         compare(truth="euler")
+    with pytest.raises(ValueError, match="kind"):
+        sweep("noise")
+    with pytest.raises(ValueError, match="factor"):
+        sweep_model("gps", -1.0)
+
+
+# ------------------------------------------------------------------------------------ the sweeps
+@pytest.fixture(scope="module")
+def prior():
+    return sweep("prior", factors=[1.0, 1e6, 1e12])
+
+
+@pytest.fixture(scope="module")
+def gps():
+    return sweep("gps", factors=[1.0, 1e-6, 1e-12])
+
+
+def test_sweep_condition_number_is_the_closed_form(prior, gps):
+    """κ = 1 + M0_vv f / V_vv (prior) or 1 + M0_vv / (V_vv f) (gps), from the first update."""
+    assert np.allclose(prior.kappa, 1 + 625 * prior.factors, rtol=1e-12)
+    assert np.allclose(gps.kappa, 1 + 625 / gps.factors, rtol=1e-12)
+
+
+def test_prior_sweep_standard_form_fails_first_square_root_holds(prior):
+    """Measured (seed 0), max|ΔP|/√(PiiPjj) at M0 × 10⁶ and × 10¹²:
+    standard 1.5e-8, 46 (P not positive definite); joseph 3.9e-11, 4.2e-5; information 5.8e-11,
+    5.6e-5; filterpy-information 5.8e-11, 5.6e-5; square-root 2.8e-11, 1.1e-8."""
+    dP = {f: prior.dP(f) for f in FORMS}
+    # at the report's numbers every form is exact to 1e-12
+    assert all(dP[f][0] < 1e-12 for f in FORMS)
+    # at 1e6 the standard form has lost 100x more than any other form
+    assert 1e-10 < dP["standard"][1] < 1e-6
+    assert all(dP["standard"][1] > 100 * dP[f][1] for f in FORMS if f != "standard")
+    # at 1e12 it has no digit left and P is not a covariance any more
+    assert dP["standard"][2] > 1 and prior.min_eig("standard")[2] < 0
+    assert prior.dx("standard")[2] > 0.1
+    for f in ("joseph", "information", "filterpy-information"):
+        assert 1e-6 < dP[f][2] < 1e-3, f
+        assert prior.min_eig(f)[2] > 0
+    assert 1e-10 < dP["square-root"][2] < 1e-7
+    assert all(dP["square-root"][2] < dP[f][2] / 100 for f in FORMS if f != "square-root")
+
+
+def test_gps_sweep_joseph_and_information_hold_square_root_drifts(gps):
+    """Measured (seed 0), max|ΔP|/√(PiiPjj) at V × 10⁻⁶ and × 10⁻¹²:
+    standard 5.4e-8, 6.0e-2; joseph 5.8e-13, 5.5e-13; information 5.7e-13, 5.6e-13;
+    filterpy-information 7.5e-14, 1.9e-11; square-root 1.3e-11, 1.2e-8."""
+    dP = {f: gps.dP(f) for f in FORMS}
+    assert 1e-9 < dP["standard"][1] < 1e-6 and 1e-4 < dP["standard"][2] < 1
+    assert all(dP["standard"][i] > 100 * dP[f][i] for i in (1, 2) for f in FORMS
+               if f != "standard")
+    for f in ("joseph", "information"):
+        assert dP[f][2] < 1e-11, f
+    assert dP["filterpy-information"][2] < 1e-9
+    assert 1e-10 < dP["square-root"][2] < 1e-6
+    assert dP["square-root"][2] > 1000 * dP["joseph"][2]
+    assert all(gps.min_eig(f)[2] > 0 for f in FORMS)
+    text = str(gps)
+    assert "max |dP_ij|" in text and "1e-12" in text
+
+
+def test_sweep_figure_has_a_column_per_sweep(prior, gps):
+    from gpsaccel import plots
+
+    fig = plots.form_sweep([prior, gps])
+    axes = [ax for ax in fig.axes if ax.get_ylabel()]
+    assert len(axes) == 4
+    assert all(ax.get_yscale() == "log" for ax in axes)
+    lo, hi = axes[0].get_ylim()
+    assert hi > prior.dP("standard").max() and lo < min(e.dP_rel for e in prior.floor)

@@ -1,0 +1,50 @@
+"""The filter forms side by side: time of one 30-s calibration run (6000 predictions at 200 Hz,
+151 GPS updates) for each built-in form, and for the exact reference (mpmath, GPS rate).
+
+    python benchmarks/filter_forms.py [--repeat 5] [--digits 50]
+
+All timed in one process, in turn, on the same realization; the best of ``--repeat`` runs is
+kept.  Wall-clock timings on whatever machine runs this; the ratio to filterpy's Joseph form is the
+meaningful number.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from gpsaccel import CalibrationModel, simulate
+from gpsaccel.calibration.exact import exact_filter
+from gpsaccel.calibration.forms import FORMS, run_form
+
+
+def best_of(repeat: int, f) -> float:
+    best = np.inf
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        f()
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=5, help="runs per filter (best kept)")
+    parser.add_argument("--digits", type=int, default=50, help="digits of the exact reference")
+    args = parser.parse_args()
+    model = CalibrationModel()
+    z = simulate(model, np.random.default_rng(0)).z
+    times = {name: best_of(args.repeat, lambda name=name: run_form(name, model, z))
+             for name in FORMS}
+    times[f"exact (mpmath, {args.digits} digits)"] = best_of(
+        max(1, args.repeat // 2), lambda: exact_filter(model, z, args.digits))
+    base = times["joseph"]
+    print(f"{'filter':<28} {'ms/run':>8} {'x joseph':>9}")
+    for name, t in times.items():
+        print(f"{name:<28} {1e3 * t:8.1f} {t / base:9.2f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,86 @@
+"""A student's file as a filter callable, run in a process of its own, for side-by-side comparison.
+
+:func:`gpsaccel.calibration.compare.compare` takes filters as callables ``kalman_filter(z) ->
+(x_hat, P)``; this module makes one of a student's ``.py`` file without importing it here::
+
+    from gpsaccel import check
+    from gpsaccel.calibration.compare import compare
+    print(compare("joseph", "square-root", filters={"alice": check.student_filter("alice.py")}))
+
+Each call runs the file in a child process (the checker's runner, see
+:func:`gpsaccel.check.whole_filter.run_student`: its own session, a time limit, nothing of the
+student's imported into this process) on ``repeat`` copies of ``z`` and hands back the first run's
+(x_hat, P).  The time per run is measured in the child around the student's calls only, and set as
+the callable's ``seconds`` (``compare`` reports it instead of the process's start-up).
+
+Whatever goes wrong in the student's code (it raises, loops, returns the wrong shapes, kills its
+process) raises :class:`StudentFilterError` here with the checker's message for it, which
+``compare`` prints in the filter's row.  The results that come back are untrusted: loaded with
+``allow_pickle=False`` and checked for shape; NaN and inf are passed on (``compare`` counts them as
+infinitely wrong).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from gpsaccel import _validation as _v
+from gpsaccel.check.report import Report
+from gpsaccel.check.whole_filter import _run_findings, run_student
+
+
+class StudentFilterError(RuntimeError):
+    """The student's file did not give back (x_hat, P); the message says why."""
+
+
+class StudentFilter:
+    """``kalman_filter(z) -> (x_hat, P)`` of the file ``path``, run in a child process.
+
+    Parameters
+    ----------
+    path : the student's ``.py`` file, defining ``kalman_filter(z)`` for report 000's problem.
+    timeout : wall-clock limit (s) of one call (import and ``repeat`` runs).
+    repeat : runs per call, for the time per run (the mean of the runs, measured in the child).
+
+    After a call, ``seconds`` is the time of one run (s).
+    """
+
+    def __init__(self, path: str | os.PathLike, timeout: float = 60.0, repeat: int = 3) -> None:
+        self.path = Path(path)
+        if not self.path.is_file():
+            raise ValueError(f"path: {self.path} is not a file")
+        self.timeout = _v.positive_float("timeout", timeout)
+        self.repeat = _v.integer("repeat", repeat, minimum=1)
+        self.seconds: float | None = None
+        self.description = f"student file {self.path.name} (own process)"
+        self.__name__ = self.path.stem
+
+    def __call__(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        z = _v.finite_array("z", z, (None, 2), allow_nan=True)
+        self.seconds = None
+        run = run_student(self.path.resolve(), np.repeat(z[None], self.repeat, axis=0),
+                          self.timeout)
+        report = Report(self.path.name)
+        if not _run_findings(report, run, self.timeout, self.repeat, (z.shape[0], 3)):
+            raise StudentFilterError("\n".join(f.message for f in report.findings
+                                                if f.severity == "error") or "no result")
+        x, P = np.asarray(run.x[0], dtype=float), np.asarray(run.P[0], dtype=float)
+        if x.shape != (z.shape[0], 3) or P.shape != (z.shape[0], 3, 3):
+            raise StudentFilterError(f"the runner gave back shapes {x.shape} and {P.shape}")
+        # the child's own clock, not trusted beyond the wall clock of the whole process (start-up
+        # and import included); a hostile file can still under-report it, so it is indicative
+        done = self.repeat  # no problem reported: every run came back
+        wall = run.seconds / done
+        reported = run.status.get("run_seconds")
+        per_run = float(reported) / done if isinstance(reported, (int, float)) else np.nan
+        self.seconds = per_run if np.isfinite(per_run) and 0 < per_run <= wall else wall
+        return x, P
+
+
+def student_filter(path: str | os.PathLike, timeout: float = 60.0, repeat: int = 3
+                   ) -> StudentFilter:
+    """The student's file ``path`` as a ``kalman_filter(z)`` callable (see :class:`StudentFilter`)."""
+    return StudentFilter(path, timeout=timeout, repeat=repeat)
