@@ -125,3 +125,132 @@ def spd_matrix(name: str, value: object, n: int | None = None, rtol: float = 1e-
             f"{name} must be positive definite (smallest eigenvalue {eig:.3g})"
         ) from None
     return arr
+
+
+# ------------------------------------------------------------------------------ command-line flags
+# The same checks as above, as argparse ``type=`` converters, so that every numeric flag of every
+# sub-command is refused at parse time (exit 2, one line naming the flag) before any work starts:
+#
+#     p.add_argument("--runs", type=_v.flag_int(minimum=2), default=200)
+#     p.add_argument("--out", type=_v.output_dir, default="out")   # a *string* default is checked too
+#
+# argparse prefixes the message with the flag ("argument --runs: must be an integer >= 2, got 0").
+
+
+def _flag_error(exc: ValueError):
+    import argparse
+
+    return argparse.ArgumentTypeError(str(exc).strip())
+
+
+def flag_int(minimum: int | None = None, maximum: int | None = None):
+    """argparse ``type=`` for an integer flag in [minimum, maximum] (checked by :func:`integer`)."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise _flag_error(ValueError(f"must be an integer, got {text!r}")) from None
+        try:
+            value = integer("", value, minimum)
+        except ValueError as exc:
+            raise _flag_error(exc) from None
+        if maximum is not None and value > maximum:
+            raise _flag_error(ValueError(f"must be an integer <= {maximum}, got {value}"))
+        return value
+
+    parse.__name__ = "integer"
+    return parse
+
+
+def flag_float(minimum: float | None = None, maximum: float | None = None, *,
+               open_min: bool = False, open_max: bool = False):
+    """argparse ``type=`` for a finite float flag in the interval [minimum, maximum] (``open_min``,
+    ``open_max`` exclude the end points); NaN and inf are refused (:func:`finite_float`)."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise _flag_error(ValueError(f"must be a number, got {text!r}")) from None
+        try:
+            value = finite_float("", value)
+        except ValueError as exc:
+            raise _flag_error(exc) from None
+        low_bad = minimum is not None and (value <= minimum if open_min else value < minimum)
+        high_bad = maximum is not None and (value >= maximum if open_max else value > maximum)
+        if low_bad or high_bad:
+            lo = "" if minimum is None else f"{'(' if open_min else '['}{minimum:g}"
+            hi = "" if maximum is None else f"{maximum:g}{')' if open_max else ']'}"
+            if minimum is not None and maximum is not None:
+                want = f"in {lo}, {hi}"
+            elif minimum is not None:
+                want = f"{'>' if open_min else '>='} {minimum:g}"
+            else:
+                want = f"{'<' if open_max else '<='} {maximum:g}"
+            raise _flag_error(ValueError(f"must be a number {want}, got {text}"))
+        return value
+
+    parse.__name__ = "number"
+    return parse
+
+
+#: ``--seed``: a non-negative integer (numpy's SeedSequence refuses negative entropy).
+flag_seed = flag_int(minimum=0)
+#: ``--alpha`` and other probabilities: strictly between 0 and 1.
+flag_probability = flag_float(0.0, 1.0, open_min=True, open_max=True)
+
+
+def _probe_directory(directory, what: str) -> None:
+    """Create and delete a temporary file in the existing ``directory``; ValueError if impossible."""
+    import os
+    import tempfile
+
+    try:
+        fd, name = tempfile.mkstemp(dir=directory, prefix=".gpsaccel-probe-")
+    except OSError as exc:
+        raise _flag_error(ValueError(f"{what} is not writable (cannot create a file in "
+                                     f"{directory}: {exc.strerror or exc})")) from None
+    os.close(fd)
+    os.unlink(name)
+
+
+def _existing_ancestor(path):
+    """The nearest existing ancestor of ``path`` (itself included); error if it is not a folder."""
+    from pathlib import Path
+
+    path = Path(path)
+    for candidate in (path, *path.absolute().parents):
+        if candidate.exists():
+            if not candidate.is_dir():
+                raise _flag_error(ValueError(f"{candidate} exists and is not a folder"))
+            return candidate
+    raise _flag_error(ValueError(f"no existing parent folder for {path}"))  # pragma: no cover
+
+
+def output_dir(text: str):
+    """argparse ``type=`` for an output folder: it may not exist yet, but it must be creatable and
+    writable, which is tested now by writing (and removing) a temporary file in its nearest
+    existing ancestor.  Nothing is created."""
+    from pathlib import Path
+
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise _flag_error(ValueError(f"{text} exists and is not a folder"))
+    _probe_directory(_existing_ancestor(path), f"folder {text}")
+    return path
+
+
+def output_file(text: str):
+    """argparse ``type=`` for an output file: not a folder, its folder creatable and writable
+    (probed as in :func:`output_dir`), and the file itself writable if it exists."""
+    import os
+    from pathlib import Path
+
+    path = Path(text)
+    if path.is_dir():
+        raise _flag_error(ValueError(f"{text} is a folder; a file name is required"))
+    if path.exists() and not os.access(path, os.W_OK):
+        raise _flag_error(ValueError(f"{text} is not writable"))
+    _probe_directory(_existing_ancestor(path.parent), f"the folder of {text}")
+    return path

@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+from gpsaccel import _validation as _v
+
 
 def _dask_spec(value: str | None) -> str | None:
     """``--dask local|tcp://host:port`` as an executor spec of :mod:`gpsaccel.executors`."""
@@ -84,6 +86,8 @@ def _cmd_montecarlo(args: argparse.Namespace) -> int:
     print(mc.consistency(alpha=args.alpha))
     print()
     print(mc.summary())
+    from gpsaccel._atomic import savefig
+
     args.out.mkdir(parents=True, exist_ok=True)
     figures = {
         "pave-minus-p": plots.pave_minus_p(mc, grid=False),
@@ -92,7 +96,7 @@ def _cmd_montecarlo(args: argparse.Namespace) -> int:
         "orthogonality": plots.orthogonality(mc),
     }
     for slug, fig in figures.items():
-        fig.savefig(args.out / f"montecarlo-{mc.truth}-{slug}.png", dpi=110)
+        savefig(fig, args.out / f"montecarlo-{mc.truth}-{slug}.png", dpi=110)
     print(f"wrote {len(figures)} figures to {args.out}/ (montecarlo-{mc.truth}-*.png)")
     return 0
 
@@ -100,6 +104,7 @@ def _cmd_montecarlo(args: argparse.Namespace) -> int:
 def _cmd_compare(args: argparse.Namespace) -> int:
     """Forms and files against the exact answer; with --sweep, the conditioning sweep(s) and figure."""
     from gpsaccel import plots
+    from gpsaccel._atomic import savefig
     from gpsaccel.calibration.compare import compare, sweep
     from gpsaccel.calibration.forms import FORMS
 
@@ -119,7 +124,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
             sweeps.append(sw)
         args.out.mkdir(parents=True, exist_ok=True)
         path = args.out / f"compare-sweep-{'-'.join(args.sweep)}.png"
-        plots.form_sweep(sweeps).savefig(path, dpi=110)
+        savefig(plots.form_sweep(sweeps), path, dpi=110)
         print(f"wrote {path}")
         return 0
     from gpsaccel.check import student_filter
@@ -151,8 +156,6 @@ def _cmd_lessons(args: argparse.Namespace) -> int:
         paths = [p for p in paths if any(p.name.startswith(o) for o in args.only)]
     if not paths:
         raise ValueError(f"--only: no lesson in {lessons_dir()} starts with {args.only}")
-    if args.runs is not None and args.runs < 2:
-        raise ValueError(f"--runs must be >= 2, got {args.runs}")
     total = 0.0
     for path in paths:
         t0 = time.perf_counter()
@@ -200,8 +203,6 @@ def _cmd_check(args: argparse.Namespace) -> int:
     spec = _dask_spec(args.dask)
     if spec is None:
         spec = None if args.workers == 1 else "processes"
-    if args.workers is not None and args.workers < 1:
-        raise ValueError(f"--workers must be >= 1, got {args.workers}")
     t0 = time.perf_counter()
     results = check_many(files, n_runs=args.runs, seed=args.seed, timeout=args.timeout,
                          executor=spec, max_workers=args.workers)
@@ -222,14 +223,15 @@ def _cmd_check(args: argparse.Namespace) -> int:
 def build_parser() -> argparse.ArgumentParser:
     from gpsaccel.calibration.simulation import TRUTHS
 
-    parser = argparse.ArgumentParser(prog="gpsaccel", description=__doc__.splitlines()[0])
+    parser = _Parser(prog="gpsaccel", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser("run", help="the main job: one realization, its filter and figures")
-    p.add_argument("--seed", type=int, default=0, help="seed of the realization (default 0)")
-    p.add_argument("--runs", type=int, default=None,
+    p.add_argument("--seed", type=_v.flag_seed, default=0,
+                   help="seed of the realization (default 0)")
+    p.add_argument("--runs", type=_v.flag_int(minimum=2), default=None,
                    help="Monte Carlo runs for the ensemble figures (default: the report's)")
-    p.add_argument("--out", type=Path, default=Path("out"), help="folder for figures (out/)")
+    p.add_argument("--out", type=_v.output_dir, default="out", help="folder for figures (out/)")
     p.set_defaults(func=_cmd_run)
 
     p = sub.add_parser("compare", help="filter forms and students' files against the exact "
@@ -237,26 +239,29 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("filters", nargs="*", metavar="FORM|FILE",
                    help="standard, joseph, information, filterpy-information, square-root, or a "
                         "student's .py file defining kalman_filter(z) (default: every form)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=_v.flag_seed, default=0)
     p.add_argument("--truth", choices=TRUTHS, default="error-model")
-    p.add_argument("--repeat", type=int, default=3, help="runs timed per filter (best kept)")
-    p.add_argument("--timeout", type=float, default=60.0, help="limit (s) per student file")
+    p.add_argument("--repeat", type=_v.flag_int(minimum=1), default=3,
+                   help="runs timed per filter (best kept)")
+    p.add_argument("--timeout", type=_v.flag_float(0.0, open_min=True), default=60.0,
+                   help="limit (s) per student file")
     p.add_argument("--sweep", action="append", choices=("prior", "gps"), default=None,
                    help="prior: M0 x 1 .. 1e12; gps: V x 1 .. 1e-12; give both for one figure "
                         "with both (written to --out)")
-    p.add_argument("--out", type=Path, default=Path("out"), help="folder for the sweep figure")
+    p.add_argument("--out", type=_v.output_dir, default="out", help="folder for the sweep figure")
     p.set_defaults(func=_cmd_compare)
 
     p = sub.add_parser("figures", help="write every figure of a report as PNG + index.html")
     p.add_argument("--report", default="all", help="000, 001, 003, ... or all (default)")
-    p.add_argument("--out", type=Path, default=Path("out"))
-    p.add_argument("--runs", type=int, default=None, help="Monte Carlo runs (report's default)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", type=_v.output_dir, default="out")
+    p.add_argument("--runs", type=_v.flag_int(minimum=2), default=None,
+                   help="Monte Carlo runs (report's default)")
+    p.add_argument("--seed", type=_v.flag_seed, default=0)
     p.set_defaults(func=_cmd_figures)
 
     p = sub.add_parser("lessons", help="execute the Jupyter lessons; --html DIR renders them")
-    p.add_argument("--html", type=Path, default=None, help="folder for the rendered HTML")
-    p.add_argument("--runs", type=int, default=None,
+    p.add_argument("--html", type=_v.output_dir, default=None, help="folder for the rendered HTML")
+    p.add_argument("--runs", type=_v.flag_int(minimum=2), default=None,
                    help="ensemble size for every lesson (GPSACCEL_LESSON_RUNS; default: each "
                         "lesson's full size)")
     p.add_argument("--only", nargs="*", default=None, metavar="NN",
@@ -264,43 +269,50 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_lessons)
 
     p = sub.add_parser("coop", help="cooperative localization (report 002): NEES/NIS table")
-    p.add_argument("--runs", type=int, default=50, help="truth runs per set (default 50)")
-    p.add_argument("--sets", type=int, default=5, help="independent sets (default 5)")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--alpha", type=float, default=0.05, help="test level (default 0.05)")
+    p.add_argument("--runs", type=_v.flag_int(minimum=1), default=50,
+                   help="truth runs per set (default 50)")
+    p.add_argument("--sets", type=_v.flag_int(minimum=1), default=5,
+                   help="independent sets (default 5)")
+    p.add_argument("--seed", type=_v.flag_seed, default=0)
+    p.add_argument("--alpha", type=_v.flag_probability, default=0.05,
+                   help="test level (default 0.05)")
     p.set_defaults(func=_cmd_coop)
 
     p = sub.add_parser("montecarlo", help="the reports' Monte Carlo validation, with verdicts")
-    p.add_argument("--runs", type=int, default=10_000, help="ensemble size (default 10000)")
+    p.add_argument("--runs", type=_v.flag_int(minimum=2), default=10_000,
+                   help="ensemble size (default 10000)")
     p.add_argument("--truth", choices=TRUTHS, default="error-model",
                    help="error-model (report 000) or kinematic (reports 001/003)")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--chunk-size", type=int, default=None,
+    p.add_argument("--seed", type=_v.flag_seed, default=0)
+    p.add_argument("--chunk-size", type=_v.flag_int(minimum=1), default=None,
                    help="runs per task (default 1000); does not change the result")
     p.add_argument("--dask", default=None, metavar="local|tcp://host:port",
                    help="run on a Dask LocalCluster or a running scheduler (optional extra)")
-    p.add_argument("--alpha", type=float, default=0.01,
+    p.add_argument("--alpha", type=_v.flag_probability, default=0.01,
                    help="family-wise false-alarm rate of the verdict table (default 0.01)")
-    p.add_argument("--out", type=Path, default=Path("out"), help="folder for figures (out/)")
+    p.add_argument("--out", type=_v.output_dir, default="out", help="folder for figures (out/)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_montecarlo)
 
     p = sub.add_parser("ship", help="the ship (report 004): RMSE/NEES of monorate, multirate, "
                                     "zeroed gain; wind states")
-    p.add_argument("--runs", type=int, default=200, help="Monte Carlo runs (default 200)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--runs", type=_v.flag_int(minimum=2), default=200,
+                   help="Monte Carlo runs (default 200)")
+    p.add_argument("--seed", type=_v.flag_seed, default=0)
     p.set_defaults(func=_cmd_ship)
 
     p = sub.add_parser("check", help="check students' kalman_filter files (homework checker)")
     p.add_argument("paths", nargs="+", type=Path,
                    help="submission files, or folders searched for *.py files")
-    p.add_argument("--json", type=Path, default=None, metavar="FILE",
+    p.add_argument("--json", type=_v.output_file, default=None, metavar="FILE",
                    help="write every finding and number to FILE (e.g. results.json)")
-    p.add_argument("--runs", type=int, default=200, help="realizations per check (default 200)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the realizations (default 0)")
-    p.add_argument("--timeout", type=float, default=60.0,
+    p.add_argument("--runs", type=_v.flag_int(minimum=2), default=200,
+                   help="realizations per check (default 200)")
+    p.add_argument("--seed", type=_v.flag_seed, default=0,
+                   help="seed of the realizations (default 0)")
+    p.add_argument("--timeout", type=_v.flag_float(0.0, open_min=True), default=60.0,
                    help="time limit per submission, s (default 60)")
-    p.add_argument("--workers", type=int, default=None,
+    p.add_argument("--workers", type=_v.flag_int(minimum=1), default=None,
                    help="parallel local processes (default: one per CPU; 1 = one at a time)")
     p.add_argument("--dask", default=None, metavar="local|tcp://host:port",
                    help="check on a Dask LocalCluster or a running scheduler instead")
@@ -311,13 +323,43 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with a one-line error: ``gpsaccel check: error: argument --runs: must be ...``.
+
+    Every flag's ``type=`` is a validator of :mod:`gpsaccel._validation` (``flag_int``,
+    ``flag_float``, ``flag_seed``, ``flag_probability``, ``output_dir``, ``output_file``), so a bad
+    number or an unusable output path is refused here, exit 2, before any work; sub-commands
+    added later should use the same ones.
+    """
+
+    def error(self, message: str):  # type: ignore[override]
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    """Parse, run, and turn the expected failures into one line on stderr.
+
+    Exit codes: 0 success; 1 a sub-command's own "not all passed" (``check``); 2 bad input
+    (ValueError) or a file-system error (OSError: disk full, permission, ...); 130 interrupted
+    (Ctrl-C), after which no half-written file is left (:mod:`gpsaccel._atomic`).
+    """
+    try:
+        args = build_parser().parse_args(argv)
+    except KeyboardInterrupt:
+        print("gpsaccel: interrupted", file=sys.stderr)
+        return 130
     try:
         return int(args.func(args) or 0)
     except ValueError as exc:  # bad input: one clear line, not a traceback
         print(f"gpsaccel {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:  # the file system said no: say what and where, in one line
+        where = f": {exc.filename}" if getattr(exc, "filename", None) else ""
+        print(f"gpsaccel {args.command}: error: {exc.strerror or exc}{where}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"gpsaccel {args.command}: interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

@@ -118,11 +118,23 @@ class ResolvedExecutor:
     def __enter__(self) -> cf.Executor:
         return self.executor
 
-    def __exit__(self, *exc_info: object) -> None:
+    def __exit__(self, exc_type: type | None, *exc_info: object) -> None:
+        if (exc_type is not None and issubclass(exc_type, KeyboardInterrupt) and self.owned
+                and isinstance(self.executor, cf.ThreadPoolExecutor | cf.ProcessPoolExecutor)):
+            # interrupted: drop the queued tasks instead of running them before shutting down
+            self.executor.shutdown(wait=False, cancel_futures=True)
         self.close()
 
     def __repr__(self) -> str:
         return f"ResolvedExecutor({self.description!r}, owned={self.owned})"
+
+
+def _ignore_interrupt() -> None:
+    """Pool workers ignore SIGINT: Ctrl-C reaches the whole process group, and the parent alone
+    should handle it (one "interrupted" line, not a traceback per worker)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def is_executor(obj: object) -> bool:
@@ -163,7 +175,7 @@ def resolve_executor(spec: object = None, max_workers: int | None = None) -> Res
         ex = cf.ThreadPoolExecutor(max_workers=n)
         return ResolvedExecutor(ex, f"{n} threads", True, n, [ex.shutdown])
     if spec in ("processes", "local"):
-        ex = cf.ProcessPoolExecutor(max_workers=n)
+        ex = cf.ProcessPoolExecutor(max_workers=n, initializer=_ignore_interrupt)
         return ResolvedExecutor(ex, f"{n} processes", True, n, [ex.shutdown])
     if spec == "dask-local":
         distributed = _import_distributed()

@@ -9,6 +9,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from gpsaccel._atomic import write_text
+
 #: The environment variable that overrides every lesson's ensemble size.
 RUNS_VARIABLE = "GPSACCEL_LESSON_RUNS"
 
@@ -70,6 +72,6 @@ def render_html(paths: list[Path], out: Path | str, runs: int | None = None) -> 
         nb = execute(path, runs=runs)
         body, _ = HTMLExporter().from_notebook_node(nb)
         target = out / (Path(path).stem + ".html")
-        target.write_text(body, encoding="utf-8")
+        write_text(target, body)  # whole or not at all
         written.append(target)
     return written

@@ -235,7 +235,9 @@ def compare(*forms: str, model: CalibrationModel | None = None, seed: int = 0,
     forms : names of built-in forms (see :data:`~gpsaccel.calibration.forms.FORMS`); with neither
         ``forms`` nor ``filters``, every built-in form.
     model : the problem (report 000's defaults when None).
-    seed : seed of the realization (``numpy.random.default_rng(seed)``).
+    seed : seed of the realization (``numpy.random.default_rng(seed)``), a non-negative integer;
+        None is refused, since a comparison on a realization nobody can draw again is not
+        reproducible.
     truth : ``"error-model"`` or ``"kinematic"``, see :func:`gpsaccel.simulate`.
     filters : name -> ``kalman_filter(z) -> (x_hat, P)``; :func:`gpsaccel.check.student_filter`
         makes one of a student's file.  A callable that raises gets a row saying what it raised; one
@@ -244,6 +246,7 @@ def compare(*forms: str, model: CalibrationModel | None = None, seed: int = 0,
     digits : significant decimal digits of the exact answer.
     """
     model = CalibrationModel() if model is None else model
+    seed = _v.integer("seed", seed, minimum=0)
     truth = _v.choice("truth", truth, TRUTHS)
     repeat = _v.integer("repeat", repeat, minimum=1)
     if not forms and not filters:
@@ -340,6 +343,7 @@ def sweep(kind: str, factors: Sequence[float] | None = None, forms: Sequence[str
     seed : one seed for every point (the same noise draws, scaled).
     """
     kind = _v.choice("kind", kind, SWEEPS)
+    seed = _v.integer("seed", seed, minimum=0)  # None would draw a sweep nobody can redraw
     truth = _v.choice("truth", truth, TRUTHS)
     factors = DEFAULT_FACTORS[kind] if factors is None else np.asarray(factors, dtype=float)
     forms = tuple(FORMS) if forms is None else tuple(_v.choice("forms", f, FORMS) for f in forms)

@@ -14,6 +14,8 @@ import os
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
+from gpsaccel import _validation as _v
+from gpsaccel._atomic import write_text
 from gpsaccel.check.whole_filter import submission
 from gpsaccel.executors import resolve_executor
 
@@ -58,8 +60,12 @@ def check_many(paths: Sequence[str | os.PathLike], n_runs: int = 200, seed: int 
 
     ``executor`` is anything :func:`gpsaccel.executors.resolve_executor` accepts (``None`` runs
     them one after the other in this process).  Every submission sees the same realizations
-    (``seed``), so their results are comparable.
+    (``seed``), so their results are comparable.  ``n_runs``, ``seed`` and ``timeout`` are checked
+    here, before any submission runs (a bad one would otherwise fail every check alike).
     """
+    n_runs = _v.integer("n_runs", n_runs, minimum=2)
+    seed = _v.integer("seed", seed, minimum=0)
+    timeout = _v.positive_float("timeout", timeout)
     files, _ = find_submissions(paths)
     with resolve_executor(executor, max_workers=max_workers) as ex:
         futures = [ex.submit(_check_one, str(f), n_runs, seed, timeout) for f in files]
@@ -94,6 +100,6 @@ def write_json(results: Sequence[dict], path: str | os.PathLike, **settings: obj
     """Write ``{"settings": ..., "results": [...]}`` to ``path`` (UTF-8, indented)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps({"settings": settings, "results": list(results)}, indent=2,
-                               ensure_ascii=False), encoding="utf-8")
+    write_text(path, json.dumps({"settings": settings, "results": list(results)}, indent=2,
+                                ensure_ascii=False))  # whole or not at all
     return path

@@ -182,7 +182,8 @@ def run_student(path: Path, z: np.ndarray, timeout: float) -> StudentRun:
                 proc.wait(timeout=timeout)
             except subprocess.TimeoutExpired:
                 timed_out = True
-            _kill(proc)  # also whatever the student's code started and left running
+            finally:  # also on Ctrl-C: the child is in a session of its own and would live on
+                _kill(proc)  # also whatever the student's code started and left running
         runs_done = len(prog.read_text(encoding="utf-8").split())
         text, chars = _tail(log, OUTPUT_KEEP)
         x = P = None

@@ -23,6 +23,8 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
+from gpsaccel._atomic import savefig, write_text
+
 #: Every report of the course, in reading order, with the module that draws it.
 REPORT_MODULES = {
     "000": "gpsaccel.figures.r000",
@@ -77,7 +79,7 @@ def write_figures(reports: list[str], out: Path | str, runs: int | None = None, 
         n = module.DEFAULT_RUNS if runs is None else runs
         for fig in module.figures(n, seed):
             path = out / fig.filename
-            fig.figure.savefig(path, dpi=dpi)
+            savefig(fig.figure, path, dpi=dpi)  # whole or not at all
             plt.close(fig.figure)
             fig.figure = None  # drawn and saved; keep only the caption
             written.append((module.TITLE, fig, path))
@@ -99,7 +101,7 @@ def _write_index(path: Path, written: list, runs: int | None, seed: int) -> None
         parts.append(f"<figure><img src='{png.name}' alt='{html.escape(fig.slug)}'>"
                      f"<figcaption><b>Figure {fig.number}.</b> {html.escape(fig.caption)}"
                      f"</figcaption></figure>")
-    path.write_text("\n".join(parts) + "\n", encoding="utf-8")
+    write_text(path, "\n".join(parts) + "\n")
 
 
 def iter_report(report: str, runs: int | None = None, seed: int = 0) -> Iterator[ReportFigure]:

@@ -1,0 +1,248 @@
+"""The command's front door: bad requests refused before any work, one line, the right exit code.
+
+The CLI cases run the real command (``python -m gpsaccel.cli``) in a subprocess in an empty
+working folder and check the exit code, that stderr is one line naming the flag, that nothing was
+printed on stdout (no work was done) and that nothing was written.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import matplotlib
+import pytest
+
+matplotlib.use("Agg")
+
+from gpsaccel import _atomic  # noqa: E402
+from gpsaccel import _validation as _v  # noqa: E402
+from gpsaccel.cli import build_parser, main  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+SUBMISSION = ROOT / "tests" / "submissions" / "correct_joseph.py"
+
+
+def gpsaccel(*args: str, cwd: Path, timeout: float = 120) -> subprocess.CompletedProcess:
+    env = dict(os.environ, PYTHONPATH=str(ROOT), MPLBACKEND="Agg")
+    return subprocess.run([sys.executable, "-m", "gpsaccel.cli", *args], cwd=cwd, env=env,
+                          capture_output=True, text=True, timeout=timeout)
+
+
+def assert_refused(res: subprocess.CompletedProcess, *words: str) -> None:
+    assert res.returncode == 2, res
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1, res.stderr
+    assert "Traceback" not in res.stderr
+    for w in words:
+        assert w in lines[0], (w, lines[0])
+    assert res.stdout == ""  # nothing was computed (every command prints before it writes)
+
+
+def files_in(folder: Path) -> list[str]:
+    return sorted(str(p.relative_to(folder)) for p in folder.rglob("*"))
+
+
+# ------------------------------------------------------------------------------ numeric flags
+BAD_NUMBERS = [
+    (["check", str(SUBMISSION), "--runs", "0"], "--runs", "integer >= 2"),
+    (["check", str(SUBMISSION), "--runs", "-1"], "--runs", "integer >= 2"),
+    (["check", str(SUBMISSION), "--timeout", "0"], "--timeout", "> 0"),
+    (["check", str(SUBMISSION), "--seed", "-1"], "--seed", "integer >= 0"),
+    (["check", str(SUBMISSION), "--workers", "0"], "--workers", "integer >= 1"),
+    (["montecarlo", "--runs", "1"], "--runs", "integer >= 2"),
+    (["montecarlo", "--chunk-size", "0"], "--chunk-size", "integer >= 1"),
+    (["montecarlo", "--alpha", "1.5"], "--alpha", "(0, 1)"),
+    (["run", "--seed", "-1"], "--seed", "integer >= 0"),
+    (["figures", "--runs", "1.5"], "--runs", "must be an integer"),
+    (["compare", "--seed", "-1"], "--seed", "integer >= 0"),
+    (["coop", "--sets", "0"], "--sets", "integer >= 1"),
+    (["coop", "--alpha", "nan"], "--alpha", "finite"),
+    (["ship", "--runs", "0"], "--runs", "integer >= 2"),
+    (["lessons", "--runs", "1"], "--runs", "integer >= 2"),
+]
+
+
+@pytest.mark.parametrize("argv, flag, expected", BAD_NUMBERS, ids=lambda v: None)
+def test_bad_number_is_refused_before_any_work(tmp_path, argv, flag, expected):
+    res = gpsaccel(*argv, cwd=tmp_path)
+    assert_refused(res, f"argument {flag}:", expected, f"gpsaccel {argv[0]}: error")
+    assert files_in(tmp_path) == []
+
+
+def _numeric_actions():
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    for name, p in sub.choices.items():
+        for action in p._actions:
+            if isinstance(action.default, int | float) and not isinstance(action.default, bool) \
+                    or action.type in (int, float):
+                yield name, action
+
+
+def test_every_numeric_flag_of_every_subcommand_uses_a_shared_validator():
+    """A sub-command added later with ``type=int`` would let ``--runs 0`` through to the work."""
+    seen = list(_numeric_actions())
+    assert len(seen) >= 15
+    for name, action in seen:
+        assert action.type not in (int, float, None), (name, action.option_strings)
+        assert action.type.__module__ == _v.__name__, (name, action.option_strings)
+        if "--seed" in action.option_strings:
+            assert action.type is _v.flag_seed, name
+
+
+@pytest.mark.parametrize("text", ["-1", "x", "1e3", "2.0"])
+def test_seed_flag_names_itself(text):
+    with pytest.raises(argparse.ArgumentTypeError, match="must be an integer"):
+        _v.flag_seed(text)
+
+
+def test_flag_float_bounds():
+    parse = _v.flag_float(0.0, 1.0, open_min=True, open_max=True)
+    assert parse("0.5") == 0.5
+    for bad in ("0", "1", "inf", "-inf", "nan", "abc"):
+        with pytest.raises(argparse.ArgumentTypeError):
+            parse(bad)
+    assert _v.flag_float(0.0)("0") == 0.0
+    with pytest.raises(argparse.ArgumentTypeError, match=">= 0"):
+        _v.flag_float(0.0)("-1e-300")
+
+
+# ------------------------------------------------------------------------------ output paths
+def test_output_paths_are_checked_before_any_work(tmp_path):
+    a_file = tmp_path / "a-file"
+    a_file.write_text("x")
+    cases = [
+        (["montecarlo", "--runs", "2000000", "--out", str(a_file)], "--out", "not a folder"),
+        (["run", "--out", str(a_file / "sub")], "--out", "not a folder"),
+        (["figures", "--out", "/proc/gpsaccel-figures"], "--out", "not writable"),
+        (["check", str(SUBMISSION), "--json", str(tmp_path)], "--json", "is a folder"),
+        (["check", str(SUBMISSION), "--json", "/proc/x/results.json"], "--json", "not writable"),
+        (["lessons", "--html", "/proc/gpsaccel-html"], "--html", "not writable"),
+    ]
+    for argv, flag, expected in cases:
+        t0 = time.perf_counter()
+        res = gpsaccel(*argv, cwd=tmp_path)
+        assert_refused(res, f"argument {flag}:", expected)
+        assert time.perf_counter() - t0 < 60  # not after a 2,000,000-run ensemble (generous)
+    assert files_in(tmp_path) == ["a-file"]
+
+
+def test_output_dir_probe_leaves_nothing(tmp_path):
+    target = tmp_path / "new" / "deeper"
+    assert _v.output_dir(str(target)) == target
+    assert not (tmp_path / "new").exists() and list(tmp_path.iterdir()) == []
+
+
+def test_oserror_during_the_work_is_one_line_exit_2(tmp_path):
+    """A figure's name taken by a folder: the rename fails after the work; one line, exit 2."""
+    out = tmp_path / "out"
+    (out / "montecarlo-error-model-pave-minus-p.png").mkdir(parents=True)
+    res = gpsaccel("montecarlo", "--runs", "20", "--no-progress", "--out", str(out), cwd=tmp_path)
+    assert res.returncode == 2, res
+    err = res.stderr.strip().splitlines()
+    assert len(err) == 1 and "Traceback" not in res.stderr
+    assert err[0].startswith("gpsaccel montecarlo: error: ") and "pave-minus-p.png" in err[0]
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no temporary file left
+
+
+def test_oserror_in_main_is_one_line(monkeypatch, capsys):
+    import gpsaccel.calibration.compare as cmp
+
+    def full_disk(**kwargs):
+        raise OSError(28, "No space left on device", "/somewhere/file.png")
+
+    monkeypatch.setattr(cmp, "compare", full_disk)
+    assert main(["compare"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["gpsaccel compare: error: No space left on device: /somewhere/file.png"]
+
+
+# ------------------------------------------------------------------------------ Ctrl-C
+def _cpu_seconds(pid: int) -> float:
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc")
+def test_ctrl_c_is_one_line_exit_130_and_writes_nothing(tmp_path):
+    out = tmp_path / "out"
+    env = dict(os.environ, PYTHONPATH=str(ROOT), MPLBACKEND="Agg")
+    proc = subprocess.Popen([sys.executable, "-m", "gpsaccel.cli", "montecarlo", "--runs",
+                             "2000000", "--no-progress", "--out", str(out)], cwd=tmp_path,
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    try:
+        # interrupt once it is surely past its imports and into the ensemble (CPU time, not wall
+        # clock: the imports take well under 2 s of CPU; the 2,000,000 runs take minutes)
+        deadline = time.monotonic() + 120
+        while _cpu_seconds(proc.pid) < 2.5 and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert proc.poll() is None
+        os.killpg(proc.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole process group
+        stdout, stderr = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 130, stderr
+    assert stderr.strip().splitlines() == ["gpsaccel montecarlo: interrupted"]
+    assert stdout == ""
+    assert not out.exists() or files_in(out) == []
+
+
+class _Interrupting:
+    """An artist whose drawing is interrupted halfway, as by Ctrl-C during savefig."""
+
+    def __init__(self, fig):
+        from matplotlib.artist import Artist
+
+        class Boom(Artist):
+            def draw(self, renderer):
+                raise KeyboardInterrupt
+
+        fig.add_artist(Boom())
+
+
+def test_interrupted_figure_leaves_neither_file_nor_temporary(tmp_path):
+    from matplotlib.figure import Figure
+
+    target = tmp_path / "figure.png"
+    good = Figure()
+    good.add_subplot().plot([0, 1])
+    _atomic.savefig(good, target, dpi=50)
+    before = target.read_bytes()
+    assert before.startswith(b"\x89PNG") and oct(target.stat().st_mode & 0o777) != "0o600"
+    bad = Figure()
+    bad.add_subplot().plot([1, 0])
+    _Interrupting(bad)
+    with pytest.raises(KeyboardInterrupt):
+        _atomic.savefig(bad, target, dpi=50)
+    assert target.read_bytes() == before  # the previous, complete file is still there
+    assert files_in(tmp_path) == ["figure.png"]
+    with pytest.raises(KeyboardInterrupt):
+        _atomic.savefig(bad, tmp_path / "new.png", dpi=50)
+    assert files_in(tmp_path) == ["figure.png"]
+
+
+# ------------------------------------------------------------------------------ seeds
+def test_compare_refuses_an_unreproducible_seed():
+    from gpsaccel.calibration.compare import compare
+
+    for bad in (None, -1, 1.5):
+        with pytest.raises(ValueError, match="seed must be an integer"):
+            compare(seed=bad)
+
+
+def test_check_many_refuses_bad_numbers_before_running_anyone(tmp_path):
+    from gpsaccel.check.batch import check_many
+
+    for kwargs, name in (({"n_runs": 0}, "n_runs"), ({"seed": -1}, "seed"),
+                         ({"timeout": 0}, "timeout")):
+        with pytest.raises(ValueError, match=name):
+            check_many([SUBMISSION], executor=None, **kwargs)
