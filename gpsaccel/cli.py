@@ -71,7 +71,7 @@ def _cmd_montecarlo(args: argparse.Namespace) -> int:
 
     from gpsaccel import plots
     from gpsaccel.calibration.model import CalibrationModel
-    from gpsaccel.calibration.montecarlo import monte_carlo
+    from gpsaccel.calibration.montecarlo import BLOCK_RUNS, monte_carlo, whole_blocks
     from gpsaccel.executors import resolve_executor
 
     resolved = resolve_executor(_dask_spec(args.dask))
@@ -79,10 +79,13 @@ def _cmd_montecarlo(args: argparse.Namespace) -> int:
         t0 = time.perf_counter()
         mc = monte_carlo(CalibrationModel(), args.runs, seed=args.seed, truth=args.truth,
                          chunk_size=args.chunk_size, executor=ex,
-                         progress=not args.no_progress)
+                         progress=not args.no_progress, max_lag=args.max_lag)
         seconds = time.perf_counter() - t0
     print(f"gpsaccel montecarlo: {mc.n_runs:,} runs, truth {mc.truth}, seed {mc.seed}, "
           f"{seconds:.2f} s ({resolved.description})")
+    if args.chunk_size is not None and whole_blocks(args.chunk_size) != args.chunk_size:
+        print(f"note: --chunk-size {args.chunk_size} rounded up to {whole_blocks(args.chunk_size)}, "
+              f"a whole number of random blocks ({BLOCK_RUNS} runs drawn together)")
     print(mc.consistency(alpha=args.alpha))
     print()
     print(mc.summary())
@@ -285,11 +288,15 @@ def build_parser() -> argparse.ArgumentParser:
                    help="error-model (report 000) or kinematic (reports 001/003)")
     p.add_argument("--seed", type=_v.flag_seed, default=0)
     p.add_argument("--chunk-size", type=_v.flag_int(minimum=1), default=None,
-                   help="runs per task (default 1000); does not change the result")
+                   help="runs per task (default 1000, rounded up to whole blocks of 1000); "
+                        "does not change the result")
     p.add_argument("--dask", default=None, metavar="local|tcp://host:port",
                    help="run on a Dask LocalCluster or a running scheduler (optional extra)")
     p.add_argument("--alpha", type=_v.flag_probability, default=0.01,
                    help="family-wise false-alarm rate of the verdict table (default 0.01)")
+    p.add_argument("--max-lag", type=_v.flag_int(minimum=0), default=50,
+                   help="residual products kept and tested up to this lag, in GPS epochs "
+                        "(default 50; memory grows with it, linearly)")
     p.add_argument("--out", type=_v.output_dir, default="out", help="folder for figures (out/)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_montecarlo)
@@ -345,6 +352,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     try:
         args = build_parser().parse_args(argv)
+    except SystemExit as exc:  # --help (0) or a refused flag (2): returned, for callers in-process
+        return exc.code if isinstance(exc.code, int) else 2
     except KeyboardInterrupt:
         print("gpsaccel: interrupted", file=sys.stderr)
         return 130

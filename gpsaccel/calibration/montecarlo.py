@@ -77,7 +77,7 @@ from __future__ import annotations
 
 import sys
 from collections import deque
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -103,6 +103,14 @@ from gpsaccel.kalman.update import epoch_transition, joseph_update
 
 #: Runs per random block: one ``SeedSequence`` child each, and the largest array pass.
 BLOCK_RUNS = 1000
+#: Residual products kept by default: Σ r(t_i) r(t_{i−k})ᵀ for every epoch and k = 0 .. 50 (10 s at
+#: 5 Hz: the pairs the three reports print are lags 1, 10 and 50).
+DEFAULT_MAX_LAG = 50
+#: A block's standard normals are drawn as one array when it takes at most this many bytes (runs
+#: up to ≈ 400 s on the defaults); longer runs stream them, a few epochs at a time (same numbers).
+WHOLE_DRAW_BYTES = 64 * 2**20
+#: Epochs per streamed slab of normals.
+STREAM_EPOCHS = 64
 
 
 # ------------------------------------------------------------------------------ the plan
@@ -117,6 +125,8 @@ class EnsemblePlan:
     P_inv, S_inv (n, 3, 3), (n, 2, 2): inverses of P and S (for Σ NEES = tr(P⁻¹ Σ e eᵀ));
     mean_e, mean_xprior, mean_xhat (n, 3) and mean_r (n, 2): the expected error, prior, estimate
     and residual (the filter run on the offset alone; zero for the error model).
+    What is accumulated of the residual products: max_lag (lags 0 .. max_lag of every epoch, at
+    most n − 1), pairs ((i, m) with i − m > max_lag, sorted) and full (the whole (2n)² matrix).
     """
 
     truth: str
@@ -142,6 +152,9 @@ class EnsemblePlan:
     mean_xprior: np.ndarray
     mean_xhat: np.ndarray
     mean_r: np.ndarray
+    max_lag: int = DEFAULT_MAX_LAG
+    pairs: tuple[tuple[int, int], ...] = ()
+    full: bool = False
 
     @property
     def n_normals(self) -> int:
@@ -159,8 +172,11 @@ def gps_interval_noise(model: CalibrationModel) -> tuple[np.ndarray, np.ndarray]
     return epoch_transition(model.Phi, model.Q, model.gps_every)
 
 
-def plan(model: CalibrationModel, truth: str = "error-model") -> EnsemblePlan:
-    """The gains, covariances, noise factors and truth offset of ``model`` (see module docstring).
+def plan(model: CalibrationModel, truth: str = "error-model", max_lag: int = DEFAULT_MAX_LAG,
+         residual_pairs: Iterable[tuple[int, int]] = (),
+         full_residual_matrix: bool = False) -> EnsemblePlan:
+    """The gains, covariances, noise factors and truth offset of ``model`` (see module docstring),
+    and which residual products to accumulate (see :func:`monte_carlo`).
 
     Besides the filter's M, K, P, S it propagates the covariance X of the true error state
     (X_0 = M0, X_{i+1} = Φ_N X_i Φ_Nᵀ + Q_N) and the covariance of the estimate,
@@ -173,6 +189,10 @@ def plan(model: CalibrationModel, truth: str = "error-model") -> EnsemblePlan:
         raise ValueError(f"model must be a CalibrationModel, got {type(model).__name__}")
     truth = _v.choice("truth", truth, TRUTHS)
     n = model.n_gps
+    max_lag = min(_v.integer("max_lag", max_lag, minimum=0), n - 1)
+    pairs = _residual_pairs(residual_pairs, n, max_lag)
+    if not isinstance(full_residual_matrix, bool):
+        raise ValueError(f"full_residual_matrix must be True or False, got {full_residual_matrix!r}")
     H, V = model.H, model.V
     Phi_N, Q_N = gps_interval_noise(model)
     M = np.empty((n, 3, 3))
@@ -209,7 +229,29 @@ def plan(model: CalibrationModel, truth: str = "error-model") -> EnsemblePlan:
         mean_xhat[i] = mean_xprior[i] + K[i] @ mean_r[i]
     return EnsemblePlan(truth, n, model.t_gps, H, Phi_N, Q_N, np.linalg.cholesky(model.M0), LQ,
                         np.linalg.cholesky(V), M, K, P, S, np.linalg.inv(P), np.linalg.inv(S), X,
-                        Xhat, offset, x0, offset - mean_xhat, mean_xprior, mean_xhat, mean_r)
+                        Xhat, offset, x0, offset - mean_xhat, mean_xprior, mean_xhat, mean_r,
+                        max_lag, pairs, full_residual_matrix)
+
+
+def _residual_pairs(pairs: Iterable[tuple[int, int]], n: int,
+                    max_lag: int) -> tuple[tuple[int, int], ...]:
+    """Requested epoch pairs as sorted (later, earlier) with a lag beyond max_lag (the others are
+    in the lag band anyway); ValueError naming ``residual_pairs`` for anything else."""
+    try:
+        pairs = [tuple(p) for p in pairs]
+    except TypeError:
+        raise ValueError("residual_pairs must be a sequence of (i, m) epoch-index pairs") from None
+    out = set()
+    for p in pairs:
+        if len(p) != 2:
+            raise ValueError(f"residual_pairs: each pair must be (i, m), got {p!r}")
+        i, m = (_v.integer("residual_pairs index", q, minimum=0) for q in p)
+        if max(i, m) >= n:
+            raise ValueError(f"residual_pairs: epoch indices must be < n_gps = {n}, got {p!r}")
+        i, m = max(i, m), min(i, m)
+        if i - m > max_lag:
+            out.add((i, m))
+    return tuple(sorted(out))
 
 
 # ------------------------------------------------------------------------------ draws and filter
@@ -230,17 +272,81 @@ def _standard_normals(seed: int, n_normals: int, start: int, stop: int) -> np.nd
     return parts[0] if len(parts) == 1 else np.concatenate(parts, axis=1)
 
 
-def _run_block(pl: EnsemblePlan, xi: np.ndarray,
+class _ArrayNormals:
+    """The normals of some runs as one (n_normals, m) array (see :func:`_standard_normals`), read
+    epoch by epoch: x_0's three rows, then per epoch i the rows of u_{i−1} (i > 0) and of η_i."""
+
+    def __init__(self, xi: np.ndarray, n_gps: int) -> None:
+        self.xi, self.n, self.m = xi, n_gps, xi.shape[1]
+        self.x0 = xi[:3]
+
+    def epochs(self) -> Iterator[tuple[int, np.ndarray | None, np.ndarray]]:
+        xi, nu = self.xi, 3 + 2 * (self.n - 1)
+        for i in range(self.n):
+            yield i, (xi[1 + 2 * i:3 + 2 * i] if i else None), xi[nu + 2 * i:nu + 2 * i + 2]
+
+
+class _StreamedNormals(_ArrayNormals):
+    """The same normals of runs ``lo:hi`` of block ``b``, drawn STREAM_EPOCHS epochs at a time.
+
+    The block's stream is x_0 (3 rows), u_0 .. u_{n−2} (2 rows each), η_0 .. η_{n−1} (2 rows
+    each), each row BLOCK_RUNS normals; numpy's Generator gives the same numbers whether an array
+    is drawn whole or in consecutive pieces.  Two generators walk it in step: one from the start
+    (x_0 and the u's), one from the first η, which it reaches by drawing the u rows once and
+    discarding them (the price of streaming: the u's are drawn twice).  Memory: two slabs of
+    2 · STREAM_EPOCHS rows, not the 4 n_gps rows of the whole block.
+    """
+
+    def __init__(self, seed: int, n_gps: int, b: int, lo: int, hi: int) -> None:
+        self.n, self.m, self.cols = n_gps, hi - lo, slice(lo, hi)
+        ss = np.random.SeedSequence(seed, spawn_key=(b,))
+        self.gu = np.random.default_rng(ss)
+        self.ge = np.random.default_rng(ss)
+        self.x0 = self.gu.standard_normal((3, BLOCK_RUNS))[:, self.cols]
+        self.ge.standard_normal((3, BLOCK_RUNS))
+        left = n_gps - 1
+        while left:
+            k = min(left, STREAM_EPOCHS)
+            self.ge.standard_normal((2 * k, BLOCK_RUNS))
+            left -= k
+
+    def epochs(self) -> Iterator[tuple[int, np.ndarray | None, np.ndarray]]:
+        i = 0
+        while i < self.n:
+            k = min(self.n - i, STREAM_EPOCHS)
+            ku = k - 1 if i == 0 else k  # there is no u before epoch 0
+            U = self.gu.standard_normal((2 * ku, BLOCK_RUNS))[:, self.cols] if ku else None
+            E = self.ge.standard_normal((2 * k, BLOCK_RUNS))[:, self.cols]
+            for j in range(k):
+                ju = j - 1 if i == 0 else j
+                yield i + j, (U[2 * ju:2 * ju + 2] if i + j else None), E[2 * j:2 * j + 2]
+            i += k
+
+
+def _block_normals(seed: int, n_gps: int, lo: int, hi: int) -> _ArrayNormals:
+    """Normals of runs ``lo:hi`` (within one block): drawn whole if that is small, else streamed."""
+    b = lo // BLOCK_RUNS
+    n_normals = 3 + 2 * (n_gps - 1) + 2 * n_gps
+    if 8 * n_normals * BLOCK_RUNS <= WHOLE_DRAW_BYTES:
+        return _ArrayNormals(_standard_normals(seed, n_normals, lo, hi), n_gps)
+    return _StreamedNormals(seed, n_gps, b, lo - b * BLOCK_RUNS, hi - b * BLOCK_RUNS)
+
+
+def _run_block(pl: EnsemblePlan, xi: np.ndarray | _ArrayNormals,
                keep: bool = False) -> tuple[EnsembleSums, dict[str, np.ndarray] | None]:
     """Truth, measurements, filter and sums for each column of standard normals xi (n_normals, m).
 
     Everything is linear, so every quantity is its expected value (``pl.mean_*``, the filter run
     on the deterministic offset; zero for the error model) plus a zero-mean part driven by the
-    noise.  The loop runs the zero-mean part only — x̃_i = Φ_N x̃_{i−1} + u_{i−1},
+    noise.  ``xi`` is the (n_normals, m) array of standard normals or a streamed source of them.
+    The loop runs the zero-mean part only — x̃_i = Φ_N x̃_{i−1} + u_{i−1},
     r̃_i = x̃_i[:2] + η_i − x̄̃_i[:2], x̂̃_i = x̄̃_i + K_i r̃_i, ẽ_i = x̃_i − x̂̃_i — with every
     quantity a (component, run) array, so that each step is one small matrix times m columns.
     Per epoch it accumulates G_i = Σ w wᵀ of w = [ẽ; x̂̃; 1] (which holds Σ ẽ ẽᵀ, Σ ẽ x̂̃ᵀ and
-    the sums Σ ẽ, Σ x̂̃), and keeps r̃ for Σ r̃ r̃ᵀ.  The expected values go back in afterwards,
+    the sums Σ ẽ, Σ x̂̃), and the residual products Σ r̃_i r̃_{i−k}ᵀ for k = 0 .. max_lag from a
+    ring of the last max_lag + 1 residuals (each written twice, at q and q + max_lag + 1 with
+    q = −i mod (max_lag + 1), so that r̃_i, r̃_{i−1}, ... r̃_{i−k} are one contiguous slice), the
+    requested pairs, and with ``full`` every residual.  The expected values go back in afterwards,
     exactly: with r = r̃ + ρ, Σ r rᵀ = Σ r̃ r̃ᵀ + ρ (Σ r̃)ᵀ + (Σ r̃) ρᵀ + m ρ ρᵀ, and likewise
     Σ e eᵀ for NEES = tr(P⁻¹ e eᵀ) and NIS = tr(S⁻¹ r rᵀ).  The co-moments are centred on the
     expected values, so no precision is lost to a large mean.
@@ -248,45 +354,64 @@ def _run_block(pl: EnsemblePlan, xi: np.ndarray,
     With ``keep`` it also returns the full arrays (epoch, component, run): x (true error state),
     z, x_bar, x_hat, r.
     """
-    m, n = xi.shape[1], pl.n_gps
-    xiT = xi  # (n_normals, m): row k = normal k of every run
-    nu = 3 + 2 * (n - 1)
-    # u_i = L_Q ξ and η_i = L_V ξ for all epochs at once (both factors are lower triangular 2x2)
-    un = xiT[3:nu].reshape(n - 1, 2, m)
-    en = xiT[nu:].reshape(n, 2, m)
-    U = np.empty((n - 1, 2, m))
-    E = np.empty((n, 2, m))
-    for out, L, xn in ((U, pl.LQ[:2, :2], un), (E, pl.LV, en)):
-        np.multiply(L[0, 0], xn[:, 0], out=out[:, 0])
-        np.multiply(L[1, 0], xn[:, 0], out=out[:, 1])
-        out[:, 1] += L[1, 1] * xn[:, 1]
+    normals = xi if isinstance(xi, _ArrayNormals) else _ArrayNormals(xi, pl.n_gps)
+    m, n, L = normals.m, pl.n_gps, pl.max_lag
     Phi_N, K = pl.Phi_N, pl.K
-    r_all = np.empty((2 * n, m))  # stacked r̃: rows r̃_0[p], r̃_0[v], r̃_1[p], ...
+    LQ, LV = pl.LQ[:2, :2], pl.LV
     w = np.empty((7, m))  # [ẽ; x̂̃; 1]
     w[6] = 1.0
     xhat = w[3:6]
     G = np.empty((n, 7, 7))
     Kr = np.empty((3, m))
-    x = pl.L0 @ xiT[:3]  # x̃_0 ~ N(0, M0)
+    ring = np.empty((2 * (L + 1), 2, m))  # r̃_i at q and q + L + 1, q = −i mod (L + 1)
+    band = np.zeros((n, L + 1, 2, 2))  # Σ r̃_i r̃_{i−k}ᵀ
+    s_r = np.empty((n, 2))  # Σ r̃_i
+    earlier = {mm: None for _, mm in pl.pairs}  # r̃_m kept for the requested pairs
+    later: dict[int, list[int]] = {}
+    for j, (i, mm) in enumerate(pl.pairs):
+        later.setdefault(i, []).append(j)
+    pair_sums = np.zeros((len(pl.pairs), 2, 2))
+    r_all = np.empty((2 * n, m)) if pl.full else None  # stacked r̃: r̃_0[p], r̃_0[v], r̃_1[p], ...
+    ubuf, ebuf = np.empty((2, m)), np.empty((2, m))
+    x = pl.L0 @ normals.x0  # x̃_0 ~ N(0, M0)
     xbar = np.zeros((3, m))  # x̄_0 = x0 is deterministic
     if keep:
         kept = {k: np.empty((n, d, m)) for k, d in
                 (("x", 3), ("z", 2), ("x_bar", 3), ("x_hat", 3), ("r", 2))}
-    for i in range(n):
+    for i, un, en in normals.epochs():
+        # u_{i−1} = L_Q ξ and η_i = L_V ξ (both factors lower triangular 2x2)
+        for out, Lf, xn in ((ubuf, LQ, un), (ebuf, LV, en)):
+            if xn is None:
+                continue
+            np.multiply(Lf[0, 0], xn[0], out=out[0])
+            np.multiply(Lf[1, 0], xn[0], out=out[1])
+            out[1] += Lf[1, 1] * xn[1]
         if i > 0:
             x = Phi_N @ x
-            x[:2] += U[i - 1]  # x̃_i = Φ_N x̃_{i−1} + u_{i−1}
+            x[:2] += ubuf  # x̃_i = Φ_N x̃_{i−1} + u_{i−1}
             xbar = Phi_N @ xhat  # x̄̃_i = Φ_N x̂̃_{i−1}
-        r = r_all[2 * i:2 * i + 2]
-        np.add(x[:2], E[i], out=r)
+        q = (-i) % (L + 1)
+        r = ring[q]
+        np.add(x[:2], ebuf, out=r)
         r -= xbar[:2]  # r̃_i = H x̃_i + η_i − H x̄̃_i
+        ring[q + L + 1] = r
+        k = min(i, L)
+        window = ring[q:q + k + 1].reshape(2 * (k + 1), m)  # r̃_i, r̃_{i−1}, ..., r̃_{i−k}
+        band[i, :k + 1] = (r @ window.T).reshape(2, k + 1, 2).transpose(1, 0, 2)
+        s_r[i] = r.sum(axis=1)
+        for j in later.get(i, ()):
+            pair_sums[j] = r @ earlier[pl.pairs[j][1]].T
+        if i in earlier:
+            earlier[i] = r.copy()
+        if r_all is not None:
+            r_all[2 * i:2 * i + 2] = r
         np.matmul(K[i], r, out=Kr)
         np.add(xbar, Kr, out=xhat)  # x̂̃_i = x̄̃_i + K_i r̃_i
         np.subtract(x, xhat, out=w[:3])  # ẽ_i
         np.matmul(w, w.T, out=G[i])
         if keep:
             kept["x"][i], kept["x_bar"][i], kept["x_hat"][i] = x, xbar, xhat
-            kept["z"][i], kept["r"][i] = x[:2] + E[i], r
+            kept["z"][i], kept["r"][i] = x[:2] + ebuf, r
     # -- the sums, expected values put back
     sw = G[:, 6, :6]  # Σ w (n, 6)
     de, dx = sw[:, :3] / m, sw[:, 3:] / m  # block means of ẽ and x̂̃
@@ -294,18 +419,32 @@ def _run_block(pl: EnsemblePlan, xi: np.ndarray,
     mu = pl.mean_e
     see = G[:, :3, :3] + mu[:, :, None] * sw[:, None, :3] + sw[:, :3, None] * mu[:, None, :] \
         + m * mu[:, :, None] * mu[:, None, :]  # Σ e eᵀ
-    rr = r_all @ r_all.T
-    s_r = r_all.sum(axis=1)
-    rho = pl.mean_r.reshape(-1)
+    rho = pl.mean_r  # (n, 2): Σ r_i r_mᵀ = Σ r̃_i r̃_mᵀ + ρ_i (Σ r̃_m)ᵀ + (Σ r̃_i) ρ_mᵀ + m ρ_i ρ_mᵀ
+    rr_full = None
+    if r_all is not None:
+        rr_full = r_all @ r_all.T
     if rho.any():
-        rr += np.outer(rho, s_r)
-        rr += np.outer(s_r, rho)
-        rr += m * np.outer(rho, rho)
-    rr_diag = np.einsum("iaib->iab", rr.reshape(n, 2, n, 2))  # Σ r_i r_iᵀ
+        def shift(i, mm):
+            return (rho[i][..., :, None] * s_r[mm][..., None, :]
+                    + s_r[i][..., :, None] * rho[mm][..., None, :]
+                    + m * rho[i][..., :, None] * rho[mm][..., None, :])
+        ii = np.arange(n)[:, None]
+        mm = ii - np.arange(L + 1)[None, :]
+        band += np.where((mm >= 0)[..., None, None], shift(ii, np.maximum(mm, 0)), 0.0)
+        if pl.pairs:
+            pi, pm = np.array(pl.pairs).T
+            pair_sums += shift(pi, pm)
+        if rr_full is not None:
+            rv, sv = rho.reshape(-1), s_r.reshape(-1)
+            rr_full += np.outer(rv, sv)
+            rr_full += np.outer(sv, rv)
+            rr_full += m * np.outer(rv, rv)
+    rr_diag = band[:, 0]  # Σ r_i r_iᵀ
     sums = EnsembleSums(
         n=m, mean_e=mu + de, mean_xhat=pl.mean_xhat + dx,
-        mean_r=pl.mean_r + s_r.reshape(n, 2) / m,
-        C_ee=C[:, :3, :3], C_ex=C[:, :3, 3:], C_xx=C[:, 3:, 3:], rr=rr,
+        mean_r=pl.mean_r + s_r / m,
+        C_ee=C[:, :3, :3], C_ex=C[:, :3, 3:], C_xx=C[:, 3:, 3:], rr_band=band,
+        rr_pairs=pair_sums, rr_full=rr_full,
         nees=np.einsum("iab,iba->i", pl.P_inv, see),
         nis=np.einsum("iab,iba->i", pl.S_inv, rr_diag))
     if not keep:
@@ -360,7 +499,10 @@ class EnsembleSums:
     n : runs.  mean_e, mean_xhat (n_gps, 3) and mean_r (n_gps, 2): means.
     C_ee, C_ex, C_xx (n_gps, 3, 3): centred co-moments Σ (e − ē)(e − ē)ᵀ, Σ (e − ē)(x̂ − x̂̄)ᵀ,
     Σ (x̂ − x̂̄)(x̂ − x̂̄)ᵀ.
-    rr (2 n_gps, 2 n_gps): Σ r rᵀ over the stacked residuals [r_0; r_1; ...].
+    rr_band (n_gps, max_lag + 1, 2, 2): Σ r_i r_{i−k}ᵀ (zero where i − k < 0).
+    rr_pairs (len(pairs), 2, 2): Σ r_i r_mᵀ for the plan's requested pairs (i, m).
+    rr_full (2 n_gps, 2 n_gps) or None: Σ r rᵀ over the stacked residuals [r_0; r_1; ...], only
+    when the full matrix was asked for.
     nees, nis (n_gps,): Σ eᵀ P⁻¹ e and Σ rᵀ S⁻¹ r.
     """
 
@@ -371,12 +513,19 @@ class EnsembleSums:
     C_ee: np.ndarray
     C_ex: np.ndarray
     C_xx: np.ndarray
-    rr: np.ndarray
+    rr_band: np.ndarray
+    rr_pairs: np.ndarray
+    rr_full: np.ndarray | None
     nees: np.ndarray
     nis: np.ndarray
 
-    def merge(self, other: EnsembleSums) -> EnsembleSums:
-        """The sums of both sets (Chan, Golub & LeVeque's pairwise update of the co-moments)."""
+    def merge(self, other: EnsembleSums, in_place: bool = False) -> EnsembleSums:
+        """The sums of both sets (Chan, Golub & LeVeque's pairwise update of the co-moments).
+
+        With ``in_place`` the residual products (the largest arrays, O(n_gps · max_lag)) are
+        added into this object's arrays, which the result then shares: the engine's running
+        total uses it, so that a merge holds two copies of them, not three.
+        """
         n = self.n + other.n
         fa, fb = self.n / n, other.n / n
         de = other.mean_e - self.mean_e
@@ -390,7 +539,9 @@ class EnsembleSums:
             self.C_ee + other.C_ee + w * de[:, :, None] * de[:, None, :],
             self.C_ex + other.C_ex + w * de[:, :, None] * dx[:, None, :],
             self.C_xx + other.C_xx + w * dx[:, :, None] * dx[:, None, :],
-            self.rr + other.rr,
+            *(None if a is None else (np.add(a, b, out=a) if in_place else a + b)
+              for a, b in ((self.rr_band, other.rr_band), (self.rr_pairs, other.rr_pairs),
+                           (self.rr_full, other.rr_full))),
             self.nees + other.nees,
             self.nis + other.nis,
         )
@@ -407,8 +558,8 @@ def _chunk_sums(pl: EnsemblePlan, seed: int, start: int, stop: int) -> EnsembleS
     with single_threaded_blas():
         while lo < stop:
             hi = min(stop, (lo // BLOCK_RUNS + 1) * BLOCK_RUNS)
-            part = _run_block(pl, _standard_normals(seed, pl.n_normals, lo, hi))[0]
-            acc = part if acc is None else acc.merge(part)
+            part = _run_block(pl, _block_normals(seed, pl.n_gps, lo, hi))[0]
+            acc = part if acc is None else acc.merge(part, in_place=True)
             lo = hi
     return acc
 
@@ -426,8 +577,13 @@ class MonteCarloResult:
     P_ave : (n, 3, 3) sample error covariance with the N − 1 divisor (reports' Eq. 16).
     P : (n, 3, 3) the filter's a posteriori covariance.
     orthogonality : (n, 3, 3) (1/N) Σ (e − e_ave) x̂ᵀ (reports' Eq. 17).
-    residual_correlation : (n, n, 2, 2) (1/N) Σ r(t_i) r(t_m)ᵀ for every pair (i, m) (Eq. 18);
-        e.g. report 000's r(30 s) r(29.8 s)ᵀ is ``residual_correlation[-1, -2]``.
+    residual_lags : (n, L + 1, 2, 2) (1/N) Σ r(t_i) r(t_{i−k})ᵀ for k = 0 .. L = ``max_lag``
+        (Eq. 18 for every pair up to that lag; NaN where i − k < 0).  Any product is read with
+        :meth:`residual_product`: report 000's r(30 s) r(29.8 s)ᵀ is ``residual_product(150, 149)``.
+    residual_pairs : the requested pairs (i, m), i > m, beyond ``max_lag``, and
+        residual_pair_products : (len(residual_pairs), 2, 2) their (1/N) Σ r(t_i) r(t_m)ᵀ.
+    residual_full : (n, n, 2, 2) every pair, only with ``full_residual_matrix=True`` (else None);
+        also as :attr:`residual_correlation`.
     residual_mean : (n, 2) (1/N) Σ r.
     S : (n, 2, 2) the residual covariance H M Hᵀ + V.
     nees, nis : (n,) ensemble averages of eᵀ P⁻¹ e and rᵀ S⁻¹ r.
@@ -445,7 +601,10 @@ class MonteCarloResult:
     P_ave: np.ndarray
     P: np.ndarray
     orthogonality: np.ndarray
-    residual_correlation: np.ndarray
+    residual_lags: np.ndarray
+    residual_pairs: tuple[tuple[int, int], ...]
+    residual_pair_products: np.ndarray
+    residual_full: np.ndarray | None
     residual_mean: np.ndarray
     S: np.ndarray
     nees: np.ndarray
@@ -480,9 +639,54 @@ class MonteCarloResult:
         d_x = np.diagonal(self.estimate_covariance, axis1=1, axis2=2)
         return cross_moment_se(d_e[:, :, None], d_x[:, None, :], self.n_runs, centered=True)
 
+    @property
+    def max_lag(self) -> int:
+        """The largest lag k of :attr:`residual_lags` (every product Σ r_i r_{i−k}ᵀ up to it)."""
+        return self.residual_lags.shape[1] - 1
+
+    @property
+    def residual_correlation(self) -> np.ndarray:
+        """(n, n, 2, 2) (1/N) Σ r(t_i) r(t_m)ᵀ for every pair: only kept on request, since it
+        takes 32 n² bytes (10 GB for an hour at 5 Hz); ValueError otherwise."""
+        if self.residual_full is None:
+            raise ValueError(
+                "residual_correlation: the full matrix of residual products was not kept; run "
+                "monte_carlo(..., full_residual_matrix=True), or read single products with "
+                f"residual_product(i, m) (lags up to max_lag = {self.max_lag}, plus "
+                "residual_pairs=...)")
+        return self.residual_full
+
+    def residual_product(self, i: int, m: int) -> np.ndarray:
+        """(2, 2) (1/N) Σ r(t_i) r(t_m)ᵀ, from the lag band, the requested pairs or the full
+        matrix; ValueError saying how to keep it when none has it.  Negative indices count from
+        the end, as in numpy."""
+        n = self.t.size
+        i, m = (_v.integer(name, v, minimum=-n) % n for name, v in (("i", i), ("m", m)))
+        if max(i, m) >= n:
+            raise ValueError(f"i and m must be epoch indices < {n}, got {(i, m)}")
+        if self.residual_full is not None:
+            return self.residual_full[i, m]
+        if abs(i - m) <= self.max_lag:
+            return self.residual_lags[i, i - m] if i >= m else self.residual_lags[m, m - i].T
+        later, earlier = max(i, m), min(i, m)
+        if (later, earlier) in self.residual_pairs:
+            out = self.residual_pair_products[self.residual_pairs.index((later, earlier))]
+            return out if i > m else out.T
+        raise ValueError(
+            f"residual_product({i}, {m}): lag {abs(i - m)} > max_lag = {self.max_lag} and the pair "
+            f"was not requested; run monte_carlo(..., residual_pairs=[({i}, {m})]) or a larger "
+            f"max_lag")
+
+    def residual_product_se(self, i: int, m: int) -> np.ndarray:
+        """(2, 2) standard error of :meth:`residual_product` (i ≠ m), √(S_i,aa S_m,bb / N) for
+        independent residuals."""
+        d = np.diagonal(self.S, axis1=1, axis2=2)
+        return cross_moment_se(d[i][:, None], d[m][None, :], self.n_runs)
+
     def residual_correlation_se(self) -> np.ndarray:
-        """(n, n, 2, 2) standard error of residual_correlation off the diagonal (i ≠ m),
-        √(S_i,aa S_m,bb / N) for independent residuals."""
+        """(n, n, 2, 2) standard error of :attr:`residual_correlation` off the diagonal (i ≠ m),
+        √(S_i,aa S_m,bb / N) for independent residuals (32 n² bytes; see
+        :meth:`residual_product_se` for one pair)."""
         d = np.diagonal(self.S, axis1=1, axis2=2)
         return cross_moment_se(d[:, None, :, None], d[None, :, None, :], self.n_runs)
 
@@ -496,8 +700,11 @@ class MonteCarloResult:
             :func:`~gpsaccel.kalman.consistency.z_sample_covariance` (element (a, b) conditions on b).
         ``orthogonality`` (n, 3, 3): N O_ab / √(P_aa Σ (x̂_b − x̂̄_b)²), exact because e is
             independent of x̂ (:func:`~gpsaccel.kalman.consistency.z_cross_products`).
-        ``residual_correlation`` (n, n, 2, 2): for t_m < t_i, N R_im,ab / √(S_i,aa Σ r_m,b²),
-            exact because r_i is independent of r_m; NaN for i ≤ m (each pair counts once).
+        ``residual_lags`` (n, L + 1, 2, 2): for the pair (t_i, t_{i−k}), k ≥ 1,
+            N R_ab / √(S_i,aa Σ r_{i−k},b²), exact because r_i is independent of r_{i−k}; NaN for
+            k = 0 and where i − k < 0.  ``residual_pairs`` (len(residual_pairs), 2, 2): the same
+            for the requested pairs.  ``residual_correlation`` (n, n, 2, 2), only when the full
+            matrix was kept: every pair t_m < t_i, NaN for i ≤ m (each pair counts once).
         ``nees``, ``nis`` (n,): N·NEES ~ χ²(3N), N·NIS ~ χ²(2N).
 
         The standard errors (:attr:`e_ave_se`, :attr:`P_ave_se`, :attr:`orthogonality_se`,
@@ -510,15 +717,29 @@ class MonteCarloResult:
         d_X = np.diagonal(self.estimate_sample_covariance, axis1=1, axis2=2) * (N - 1)
         ortho = z_cross_products(N * self.orthogonality, d_P[:, :, None], d_X[:, None, :])
         d_S = np.diagonal(self.S, axis1=1, axis2=2)
-        power = N * np.einsum("mmbb->mb", self.residual_correlation)  # Σ_l r_m,b²
-        rz = z_cross_products(N * self.residual_correlation, d_S[:, None, :, None],
-                              power[None, :, None, :])
-        rz[np.triu_indices(n)] = np.nan  # keep pairs t_m < t_i only
+        power = N * np.einsum("mbb->mb", self.residual_lags[:, 0])  # Σ_l r_m,b²
+        L = self.max_lag
+        later = np.arange(n)[:, None] - np.arange(L + 1)[None, :]  # epoch i − k
+        lz = z_cross_products(N * np.nan_to_num(self.residual_lags), d_S[:, None, :, None],
+                              power[np.maximum(later, 0)][:, :, None, :])
+        lz[(later < 0) | (np.arange(L + 1)[None, :] == 0)] = np.nan
+        pi = np.array([p[0] for p in self.residual_pairs], dtype=int)
+        pm = np.array([p[1] for p in self.residual_pairs], dtype=int)
+        pz = z_cross_products(N * self.residual_pair_products, d_S[pi][:, :, None],
+                              power[pm][:, None, :])
+        extra = {}
+        if self.residual_full is not None:
+            rz = z_cross_products(N * self.residual_full, d_S[:, None, :, None],
+                                  power[None, :, None, :])
+            rz[np.triu_indices(n)] = np.nan  # keep pairs t_m < t_i only
+            extra["residual_correlation"] = rz
         return {
             "e_ave": z_sample_mean(self.e_ave, d_P, N),
             "P_ave": z_sample_covariance(self.P_ave, self.P, N),
             "orthogonality": ortho,
-            "residual_correlation": rz,
+            "residual_lags": lz,
+            "residual_pairs": pz,
+            **extra,
             "nees": z_ensemble_normalized_squared(self.nees, 3, N),
             "nis": z_ensemble_normalized_squared(self.nis, 2, N),
         }
@@ -534,7 +755,7 @@ class MonteCarloResult:
         d0, se0 = self.P_ave[0, 0, 0] - self.P[0, 0, 0], self.P_ave_se[0, 0, 0]
         lines = [f"P_ave − P at t = 0 for (δp, δp): {d0:+.4f} m² (standard error {se0:.4f} m², "
                  f"z = {d0 / se0:+.2f}; report 000 printed −0.013)"]
-        rc, rc_se = self.residual_correlation[-1, -2], self.residual_correlation_se()[-1, -2]
+        rc, rc_se = self.residual_product(-1, -2), self.residual_product_se(-1, -2)
         lines.append(f"residual correlation r({self.t[-1]:g} s) r({self.t[-2]:g} s)ᵀ (report "
                      f"000's pair) ± its standard error:")
         for a in range(2):
@@ -556,7 +777,9 @@ class MonteCarloResult:
         """Verdicts on every statistic, family-wise false-alarm rate ``alpha`` for the table.
 
         Rows: e_ave per state; P_ave − P per diagonal element (exact χ²) and off the diagonal;
-        orthogonality (9 elements); residual whiteness (every pair t_m < t_i, 4 elements each);
+        orthogonality (9 elements); residual whiteness (4 elements for every pair of epochs up to
+        ``max_lag`` apart and every requested pair; every pair t_m < t_i when the full matrix was
+        kept);
         ensemble NEES (χ²(3N)) and NIS (χ²(2N)).  Each row reports its largest |z| over time with
         its location and value; it fails when that exceeds the Bonferroni bound of its own tests
         at ``alpha / rows``.
@@ -595,12 +818,28 @@ class MonteCarloResult:
             lambda i: f"t = {t[i[0]]:g} s, ({STATE_NAMES[i[1]]},{STATE_NAMES[i[2]]}): "
                       f"{self.orthogonality[i]:.3g} (SE {se_o[i]:.2g})",
             a))
-        rc = self.residual_correlation
-        verdicts.append(verdict_from_z(
-            "residual whiteness", z["residual_correlation"],
-            lambda i: f"r({t[i[0]]:g} s)[{'pv'[i[2]]}] r({t[i[1]]:g} s)[{'pv'[i[3]]}]: "
-                      f"{rc[i]:.3g}",
-            a))
+        if self.residual_full is not None:
+            rc = self.residual_full
+            verdicts.append(verdict_from_z(
+                "residual whiteness", z["residual_correlation"],
+                lambda i: f"r({t[i[0]]:g} s)[{'pv'[i[2]]}] r({t[i[1]]:g} s)[{'pv'[i[3]]}]: "
+                          f"{rc[i]:.3g}",
+                a))
+        else:  # the lag band and the requested pairs, as one family of tests
+            band, pairs = z["residual_lags"], z["residual_pairs"]
+            n_band = t.size * (self.max_lag + 1)
+
+            def where(idx):
+                j, a_, b_ = idx[0] // 4, idx[0] % 4 // 2, idx[0] % 2
+                if j < n_band:
+                    i, mm = j // (self.max_lag + 1), j // (self.max_lag + 1) - j % (self.max_lag + 1)
+                else:
+                    i, mm = self.residual_pairs[j - n_band]
+                val = self.residual_product(i, mm)[a_, b_]
+                return f"r({t[i]:g} s)[{'pv'[a_]}] r({t[mm]:g} s)[{'pv'[b_]}]: {val:.3g}"
+
+            verdicts.append(verdict_from_z(
+                "residual whiteness", np.concatenate([band.reshape(-1), pairs.reshape(-1)]), where, a))
         for name, key, dof in (("NEES", "nees", 3), ("NIS", "nis", 2)):
             vals = getattr(self, key)
             bounds = chi2_bounds(dof, N, 0.05)
@@ -613,7 +852,10 @@ class MonteCarloResult:
                 a))
         assert len(verdicts) == rows
         title = (f"Monte Carlo consistency: {N} runs, truth {self.truth}, seed {self.seed}, "
-                 f"{t.size} GPS epochs")
+                 f"{t.size} GPS epochs; residual whiteness over " +
+                 ("every pair of epochs" if self.residual_full is not None else
+                  f"lags ≤ {self.max_lag}" + (f" and {len(self.residual_pairs)} more pairs"
+                                              if self.residual_pairs else "")))
         return ConsistencyReport(title, tuple(verdicts), float(alpha))
 
 
@@ -632,7 +874,9 @@ def _progress_bar(progress: bool, total: int, desc: str):
 
 def monte_carlo(model: CalibrationModel, n_runs: int, seed: int = 0, truth: str = "error-model",
                 chunk_size: int | None = None, executor: object = None,
-                progress: bool = True) -> MonteCarloResult:
+                progress: bool = True, max_lag: int = DEFAULT_MAX_LAG,
+                residual_pairs: Iterable[tuple[int, int]] = (),
+                full_residual_matrix: bool = False) -> MonteCarloResult:
     """The reports' Monte Carlo validation of the calibration filter, as arrays, streamed.
 
     Parameters
@@ -643,15 +887,36 @@ def monte_carlo(model: CalibrationModel, n_runs: int, seed: int = 0, truth: str 
         executor (see the module docstring; the stream differs from :func:`gpsaccel.simulate`'s).
     truth : ``"error-model"`` (report 000) or ``"kinematic"`` (reports 001/003), as in
         :func:`gpsaccel.simulate`.
-    chunk_size : runs per task submitted to the executor (default :data:`BLOCK_RUNS`).  A task
-        works one random block at a time, so its memory stays at about 10 MB whatever the size;
-        results do not depend on it beyond rounding.  At most 2 × workers tasks are in flight.
+    chunk_size : runs per task submitted to the executor (default :data:`BLOCK_RUNS`), rounded
+        up to a whole number of random blocks (:data:`BLOCK_RUNS` runs): a block's normals are
+        drawn together, so a task of part of a block would pay for drawing all of it (10,000 runs
+        in chunks of 1 took 70 s instead of 0.2 s).  Results do not depend on it beyond rounding.
+        At most 2 × workers tasks are in flight.
     executor : None (in this process), any :class:`concurrent.futures.Executor` (a process pool,
         ``dask.distributed.Client(...).get_executor()``), a ``dask.distributed.Client`` (left
         open), or a specification understood by
         :func:`gpsaccel.executors.resolve_executor` (``"processes"``, ``"dask-local"``,
         ``"tcp://host:port"``), which is then opened and closed here.
     progress : show a tqdm bar (only when stderr is a terminal).
+    max_lag : residual products Σ r(t_i) r(t_{i−k})ᵀ are kept for every epoch i and every lag
+        k = 0 .. max_lag (default :data:`DEFAULT_MAX_LAG` = 50, i.e. 10 s at 5 Hz; clipped to
+        n_gps − 1); the whiteness verdict tests all of them.
+    residual_pairs : further epoch pairs (i, m) whose product to keep, at any lag.
+    full_residual_matrix : keep every pair, the (2 n_gps)² matrix of the engine before 0.2
+        (:attr:`MonteCarloResult.residual_correlation`): memory quadratic in the duration, 32 n²
+        bytes per task and per result (0.7 MB at 30 s, 10 GB at 3,600 s).
+
+    Memory (n = n_gps epochs, L = max_lag, B = BLOCK_RUNS, 8-byte floats).  What grows with the
+    duration is the per-epoch sums: 4(L + 1) floats of residual products and ≈ 100 of moments
+    per epoch, held at most two or three times over (a block's sums, the running total, the
+    result), and the plan and model (≈ 150 per epoch); a block in flight adds its working arrays,
+    8 B (4L + 40) bytes, and its draws, D = 8 (4n + 1) B bytes when that is at most
+    WHOLE_DRAW_BYTES (n ≲ 2,000, drawn whole), else 16 · STREAM_EPOCHS · B · 2 (streamed).
+    Measured peak (tracemalloc, in-process) ≤ 8 n (10 L + 300) bytes + 3 MB: linear in the
+    duration, flat in ``n_runs``; ≈ 80 MB for an hour at 5 Hz (n = 18,001, L = 50).  With
+    ``full_residual_matrix`` add 32 n² bytes ×3 (sums, running total, result; 10 GB each for
+    an hour).  Each worker of a pool holds its own block.  Measured side by side with the engine
+    that kept every pair: ``benchmarks/montecarlo_memory.py``.
 
     Returns a :class:`MonteCarloResult`; ``result.consistency()`` gives the verdicts.
     """
@@ -662,13 +927,19 @@ def monte_carlo(model: CalibrationModel, n_runs: int, seed: int = 0, truth: str 
     truth = _v.choice("truth", truth, TRUTHS)
     chunk_size = BLOCK_RUNS if chunk_size is None else _v.integer("chunk_size", chunk_size,
                                                                   minimum=1)
-    pl = plan(model, truth)
+    chunk_size = whole_blocks(chunk_size)
+    pl = plan(model, truth, max_lag, residual_pairs, full_residual_matrix)
     resolved = resolve_executor(executor)  # ValueError naming ``executor`` for anything else
     with resolved as ex:
         window = 1 if resolved.max_workers == 1 else 2 * max(2, resolved.max_workers or 2)
         sums = _run_ordered(ex, pl, seed, n_runs, chunk_size, window,
                             _progress_bar(progress, n_runs, f"monte carlo ({truth})"))
     return _result(model, pl, sums, seed)
+
+
+def whole_blocks(chunk_size: int) -> int:
+    """``chunk_size`` rounded up to a multiple of :data:`BLOCK_RUNS` (see :func:`monte_carlo`)."""
+    return -(-chunk_size // BLOCK_RUNS) * BLOCK_RUNS
 
 
 def _run_ordered(ex, pl: EnsemblePlan, seed: int, n_runs: int, chunk_size: int, window: int,
@@ -694,17 +965,23 @@ def _run_ordered(ex, pl: EnsemblePlan, seed: int, n_runs: int, chunk_size: int, 
 def _take(future, acc: EnsembleSums | None, bar) -> EnsembleSums:
     part = future.result()
     bar.update(part.n)
-    return part if acc is None else acc.merge(part)
+    return part if acc is None else acc.merge(part, in_place=True)
 
 
 def _result(model: CalibrationModel, pl: EnsemblePlan, s: EnsembleSums,
             seed: int) -> MonteCarloResult:
     N, n = s.n, pl.n_gps
-    rc = (s.rr / N).reshape(n, 2, n, 2).transpose(0, 2, 1, 3)
+    lags = s.rr_band  # divided in place: one copy of the band, not two, at the peak
+    lags /= N
+    lags[np.arange(n)[:, None] < np.arange(pl.max_lag + 1)[None, :]] = np.nan  # i − k < 0
+    full = None
+    if s.rr_full is not None:
+        full = np.ascontiguousarray((s.rr_full / N).reshape(n, 2, n, 2).transpose(0, 2, 1, 3))
     return MonteCarloResult(
         n_runs=N, seed=seed, truth=pl.truth, t=pl.t.copy(), e_ave=s.mean_e,
         P_ave=s.C_ee / (N - 1), P=pl.P.copy(), orthogonality=s.C_ex / N,
-        residual_correlation=np.ascontiguousarray(rc), residual_mean=s.mean_r, S=pl.S.copy(),
+        residual_lags=lags, residual_pairs=pl.pairs, residual_pair_products=s.rr_pairs / N,
+        residual_full=full, residual_mean=s.mean_r, S=pl.S.copy(),
         nees=s.nees / N, nis=s.nis / N, estimate_covariance=pl.Xhat.copy(),
         estimate_sample_covariance=s.C_xx / (N - 1),
         predicted_mean_error=pl.mean_e.copy(), model=model)
