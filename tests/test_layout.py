@@ -1,6 +1,6 @@
 """The package's layers: imports point down only, and the systems never import each other.
 
-Floors, bottom up: infrastructure (``_validation``, ``_blas``, ``executors``) -> ``kalman`` ->
+Floors, bottom up: infrastructure (``_validation``, ``_blas``, ``_atomic``, ``executors``) -> ``kalman`` ->
 the systems (``calibration``, ``ship``, ``coop``, side by side) -> ``check`` -> ``plots`` ->
 ``figures`` -> ``lessons``, ``cli``.  Read from the source with ``ast`` (every ``import`` and
 ``from ... import``, at module level or inside a function), so a lazy import counts too.
@@ -14,11 +14,11 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1] / "gpsaccel"
-INFRA = {"_validation", "_blas", "executors"}
+INFRA = {"_validation", "_blas", "_atomic", "executors"}
 SYSTEMS = {"calibration", "ship", "coop"}
 # what each unit may import (besides itself); "top" is gpsaccel/__init__.py, the façade
 ALLOWED = {
-    "_validation": set(), "_blas": set(), "executors": {"_validation"},
+    "_validation": set(), "_blas": set(), "_atomic": set(), "executors": {"_validation"},
     "kalman": INFRA,
     **{s: INFRA | {"kalman"} for s in SYSTEMS},
     "check": INFRA | {"kalman"} | SYSTEMS,
