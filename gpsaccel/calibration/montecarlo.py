@@ -368,7 +368,7 @@ def _run_block(pl: EnsemblePlan, xi: np.ndarray | _ArrayNormals,
     s_r = np.empty((n, 2))  # Σ r̃_i
     earlier = {mm: None for _, mm in pl.pairs}  # r̃_m kept for the requested pairs
     later: dict[int, list[int]] = {}
-    for j, (i, mm) in enumerate(pl.pairs):
+    for j, (i, _) in enumerate(pl.pairs):
         later.setdefault(i, []).append(j)
     pair_sums = np.zeros((len(pl.pairs), 2, 2))
     r_all = np.empty((2 * n, m)) if pl.full else None  # stacked r̃: r̃_0[p], r̃_0[v], r̃_1[p], ...

@@ -82,7 +82,7 @@ def test_statistics_equal_filterpy_run_once_per_realization(truth):
     with pytest.raises(ValueError, match="max_lag = 7 and the pair was not requested"):
         band.residual_product(100, 50)
     with pytest.raises(ValueError, match="full_residual_matrix=True"):
-        band.residual_correlation
+        _ = band.residual_correlation
     assert_close(mc.nees, np.mean(nees_l, axis=0), 1e-10)
     assert_close(mc.nis, np.mean(nis_l, axis=0), 1e-10)
 
