@@ -16,6 +16,7 @@ from gpsaccel.calibration.simulation import Realization, simulate
 from gpsaccel.coop.model import CoopModel
 from gpsaccel.kalman.multirate import MultirateResult, run_multirate
 from gpsaccel.kalman.schedule import Schedule
+from gpsaccel.kalman.update import NumericalWarning
 from gpsaccel.ship.model import ShipModel
 
 __all__ = [
@@ -23,6 +24,7 @@ __all__ = [
     "CoopModel",
     "MonteCarloResult",
     "MultirateResult",
+    "NumericalWarning",
     "Realization",
     "Schedule",
     "ShipModel",

@@ -99,7 +99,7 @@ from gpsaccel.kalman.consistency import (
     z_sample_covariance,
     z_sample_mean,
 )
-from gpsaccel.kalman.update import epoch_transition, joseph_update
+from gpsaccel.kalman.update import CovarianceGuard, epoch_transition, joseph_update
 
 #: Runs per random block: one ``SeedSequence`` child each, and the largest array pass.
 BLOCK_RUNS = 1000
@@ -212,6 +212,13 @@ def plan(model: CalibrationModel, truth: str = "error-model", max_lag: int = DEF
         K[i] = Mi @ H.T @ np.linalg.inv(S[i])  # as filterpy computes it
         P[i] = joseph_update(Mi, K[i], H, V)
         Xhat[i] = Cbar + K[i] @ S[i] @ K[i].T
+    guard = CovarianceGuard(
+        "monte_carlo", "The ensemble engine runs the covariance (Joseph) form; its statistics "
+        "are measured against this P. Check the filter with run_multirate(..., "
+        "method=\"information\") on this model (README: which form when).")
+    for i in range(n):
+        guard.check(i, float(model.t_gps[i]), M=M[i], P=P[i])
+    guard.warn(stacklevel=4)
     LQ = np.zeros((3, 3))
     LQ[:2, :2] = np.linalg.cholesky(Q_N[:2, :2])  # Q_N has no bias part: Γ's third entry is 0
     # Expected values: E x_i = d_i (the offset; x_0 and the noise have zero mean), and the filter,

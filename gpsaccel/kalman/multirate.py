@@ -29,7 +29,7 @@ import numpy as np
 from gpsaccel import _validation as _v
 from gpsaccel.kalman.information import InformationFilter
 from gpsaccel.kalman.schedule import Schedule
-from gpsaccel.kalman.update import step_schedule
+from gpsaccel.kalman.update import CovarianceGuard, step_schedule
 
 METHODS = ("filterpy", "information")
 
@@ -181,7 +181,7 @@ def optimal_update(kf, i: int, z: np.ndarray, rows: np.ndarray, H: np.ndarray,
 def run_multirate(model: LinearGaussianModel, z: np.ndarray, method: str = "filterpy",
                   schedule: Schedule | None = None, u: np.ndarray | None = None,
                   update: UpdateHook = optimal_update,
-                  kf: object | None = None) -> MultirateResult:
+                  kf: object | None = None, check: bool = True) -> MultirateResult:
     """Filter measurements ``z`` (n_epochs, p) taken on ``schedule`` (default ``model.schedule()``).
 
     At every fast step the filter predicts with Φ and Q (and ``B u_k`` when a known input ``u``,
@@ -192,6 +192,14 @@ def run_multirate(model: LinearGaussianModel, z: np.ndarray, method: str = "filt
     ``kf`` runs a filter object of one's own in place of ``method``'s (any with filterpy's
     ``KalmanFilter`` interface as used here: ``x``, ``P``, ``K``, ``predict()`` and
     ``update(z, R=..., H=...)``, initialised at (x0, M0)); ``method`` then only names the result.
+
+    ``check``: every epoch's M and P are checked for symmetry and positive definiteness
+    (:class:`~gpsaccel.kalman.update.CovarianceGuard`); the first failure gives one
+    :class:`~gpsaccel.kalman.update.NumericalWarning` naming the epoch.  For an information
+    filter (one that carries ``Y``, M⁻¹ or P⁻¹) its P⁻¹ is checked instead, the matrix x̂, K
+    and σ come from (its M⁻¹ may round indefinite in a direction nothing has measured yet, with
+    no harm to x̂).  ``check=False`` for filters that are wrong on purpose (the report's
+    unsymmetrised (I − KH)M).
     """
     if kf is None:
         method = _v.choice("method", method, METHODS)
@@ -222,6 +230,14 @@ def run_multirate(model: LinearGaussianModel, z: np.ndarray, method: str = "filt
     def record(k: int) -> None:
         x_fast[k], M_fast[k] = kf.x[:, 0], kf.P
 
+    carries_information = isinstance(getattr(kf, "Y", None), np.ndarray)
+    guard = None
+    if check:
+        guard = CovarianceGuard(f"run_multirate(method={method!r})", None if not carries_information
+                                else "Even the information form cannot hold this problem in "
+                                     "float64: rescale the states, or see "
+                                     "gpsaccel.calibration.exact for a high-precision reference.")
+
     def update_at(i: int) -> None:
         x_bar[i], M[i] = kf.x[:, 0], kf.P
         S[i] = H @ kf.P @ H.T + V
@@ -229,8 +245,16 @@ def run_multirate(model: LinearGaussianModel, z: np.ndarray, method: str = "filt
         r[i, rows] = z[i, rows] - H[rows] @ x_bar[i]
         K[i] = update(kf, i, z[i], rows, H, V)
         x_hat[i], P[i] = kf.x[:, 0], kf.P
+        if guard is not None:
+            if carries_information:
+                guard.check(i, steps_t[i], **{"P⁻¹": kf.Y})
+            else:
+                guard.check(i, steps_t[i], M=M[i], P=P[i])
 
+    steps_t = np.asarray(schedule.steps) * model.dt
     step_schedule(schedule, predict, update_at, record)
+    if guard is not None:
+        guard.warn(stacklevel=3)
 
     t = np.arange(n_fast) * model.dt
     return MultirateResult(method, t, t[schedule.steps], schedule.steps, x_bar, M, x_hat, P,

@@ -22,10 +22,19 @@ and updating at the epochs of a :class:`~gpsaccel.kalman.schedule.Schedule`.
 :func:`step_schedule` is that loop, once, with hooks: what a prediction does, what an update does
 (the optimal update with the rows that arrived, or a system's own variant such as report 004's
 zeroed gain), and what to record at every fast step.
+
+Numerical guard.  In float64 a covariance can stop being one: with a diffuse prior (M0 = 10¹²·I)
+or very precise measurements the Joseph form's P turns asymmetric (10⁻⁶), then indefinite, and σ
+becomes NaN, all without an error.  :class:`CovarianceGuard` checks every M and P of a run
+(symmetry to :data:`SYMMETRY_RTOL` of √(A_ii A_jj), positive definiteness by a Cholesky
+factorisation, a few µs for these sizes) and issues one :class:`NumericalWarning` per run naming
+the first epoch that failed and suggesting ``method="information"``, which carries M⁻¹ and stays
+exact there (:mod:`gpsaccel.kalman.information`).
 """
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 
 import numpy as np
@@ -98,3 +107,76 @@ def step_schedule(schedule: Schedule, predict: Callable[[int], None],
         step += 1
         if on_step is not None:
             on_step(step)
+
+
+# ------------------------------------------------------------------------------ numerical guard
+class NumericalWarning(RuntimeWarning):
+    """A covariance lost symmetry or positive definiteness in floating point: the numbers of that
+    run are not to be trusted to the digits printed (see :class:`CovarianceGuard`)."""
+
+
+#: Largest |A_ij − A_ji| / √(A_ii A_jj) a covariance may have: rounding leaves ~10⁻¹⁵ on a
+#: well-conditioned problem, a diffuse prior drives the Joseph form's P to 10⁻⁶.
+SYMMETRY_RTOL = 1e-10
+
+
+def covariance_defect(A: np.ndarray) -> str | None:
+    """None if ``A`` (n, n) is a covariance to working precision, else what is wrong with it:
+    a NaN or infinite element, a variance ≤ 0, asymmetry above :data:`SYMMETRY_RTOL` (relative
+    to √(A_ii A_jj)), or no Cholesky factor (not positive definite)."""
+    A = np.asarray(A, dtype=float)
+    if not np.all(np.isfinite(A)):
+        return "has a NaN or infinite element"
+    d = np.diagonal(A)
+    if np.any(d <= 0.0):
+        k = int(np.argmin(d))
+        return f"has a variance ≤ 0 (element [{k}, {k}] = {d[k]:.3g})"
+    asym = float(np.max(np.abs(A - A.T) / np.sqrt(np.outer(d, d))))
+    if asym > SYMMETRY_RTOL:
+        return f"is not symmetric (max |A_ij − A_ji| / √(A_ii A_jj) = {asym:.2g})"
+    try:
+        np.linalg.cholesky((A + A.T) / 2)
+    except np.linalg.LinAlgError:
+        lam = float(np.linalg.eigvalsh((A + A.T) / 2)[0])
+        return f"is not positive definite (smallest eigenvalue {lam:.3g})"
+    return None
+
+
+class CovarianceGuard:
+    """Checks a run's covariances epoch by epoch; :meth:`warn` reports the first failure once.
+
+    ``who`` names the run in the message (e.g. ``"run_multirate(method='filterpy')"``) and
+    ``advice`` says what to do (by default: use the information form).
+    """
+
+    def __init__(self, who: str, advice: str | None = None) -> None:
+        self.who = who
+        self.advice = advice if advice is not None else (
+            'The covariance form rounds badly for this prior or noise (a diffuse or very tight '
+            'M0, very precise measurements); method="information" carries M⁻¹ and stays exact '
+            'there (README: which form when)')
+        self.first: tuple[int, float, str, str] | None = None
+        self.bad_epochs = 0
+        self.epochs = 0
+
+    def check(self, i: int, t: float, **covariances: np.ndarray) -> bool:
+        """Check each named covariance of epoch ``i`` (time ``t``, s); True if all are sound."""
+        self.epochs += 1
+        for name, A in covariances.items():
+            defect = covariance_defect(A)
+            if defect is not None:
+                self.bad_epochs += 1
+                if self.first is None:
+                    self.first = (i, t, name, defect)
+                return False
+        return True
+
+    def warn(self, stacklevel: int = 3) -> None:
+        """One :class:`NumericalWarning` if any epoch failed (none otherwise)."""
+        if self.first is None:
+            return
+        i, t, name, defect = self.first
+        warnings.warn(NumericalWarning(
+            f"{self.who}: {name} at epoch {i} (t = {t:g} s) {defect}; {self.bad_epochs} of "
+            f"{self.epochs} epochs affected, so x̂ and σ there are not to be trusted. "
+            f"{self.advice}"), stacklevel=stacklevel)
