@@ -88,9 +88,14 @@ class InformationFilter:
         else:
             A = self._Phi_inv.T @ self.Y @ self._Phi_inv
             AG = A @ self._G
-            Y = A - AG @ np.linalg.solve(np.eye(AG.shape[1]) + self._G.T @ AG, AG.T)
+            C = self._G.T @ AG
+            if C.shape == (1, 1):  # Q of rank 1 (the calibration model): a scalar division
+                Y = A - (AG / (1.0 + C[0, 0])) @ AG.T
+            else:
+                Y = A - AG @ np.linalg.solve(np.eye(C.shape[0]) + C, AG.T)
             self.Y = (Y + Y.T) / 2
-            self.P = _spd_inverse(self.Y)
+            M = np.linalg.inv(self.Y)  # for reading only: the recursion goes on with Y
+            self.P = (M + M.T) / 2
         self.x_bar, self.M = self.x, self.P
 
     def update(self, z: np.ndarray, R: np.ndarray | None = None,
