@@ -81,6 +81,7 @@ def finite_array(name: str, value: object, shape: tuple[int | None, ...] | None 
 
     With ``allow_nan`` a NaN is accepted (it means "not measured"); +-inf never is.
     """
+    _real(name, value)
     try:
         arr = np.array(value, dtype=float)
     except (TypeError, ValueError) as exc:
@@ -99,12 +100,25 @@ def finite_array(name: str, value: object, shape: tuple[int | None, ...] | None 
     return arr
 
 
+def _real(name: str, value: object) -> None:
+    """ValueError if ``value`` holds complex numbers (numpy would drop the imaginary part with
+    only a warning)."""
+    try:
+        arr = np.asarray(value)
+    except (TypeError, ValueError):
+        return  # not an array at all: the caller's conversion says so
+    if np.iscomplexobj(arr) or (arr.dtype == object and any(
+            isinstance(v, complex | np.complexfloating) for v in arr.flat)):
+        raise ValueError(f"{name} must be real; got complex values")
+
+
 def spd_matrix(name: str, value: object, n: int | None = None, rtol: float = 1e-10) -> np.ndarray:
     """``value`` as an n x n symmetric positive definite float matrix.
 
     A scalar is accepted for n == 1.  Symmetry is checked to ``rtol`` of the largest element;
     positive definiteness by a Cholesky factorisation.
     """
+    _real(name, value)
     arr = np.array(value, dtype=float)
     if arr.ndim == 0 and n in (None, 1):
         arr = arr.reshape(1, 1)

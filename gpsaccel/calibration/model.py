@@ -133,6 +133,17 @@ class CalibrationModel:
             set_(self, "frequency_hz", _v.positive_float("frequency_hz", self.frequency_hz))
         set_(self, "p0_mean", _v.finite_float("p0_mean", self.p0_mean))
         set_(self, "v0_mean", _v.finite_float("v0_mean", self.v0_mean))
+        # every truth integrates a(t): |v − v0| ≤ |A| T and |p − p0 − v0 T| ≤ |A| T² must be
+        # numbers, as must the (v0 ± 5σ) T of the drawn initial state
+        T = self.duration
+        reach = max(abs(self.accel_amplitude) * T * max(T, 1.0),
+                    (abs(self.v0_mean) + 5.0 * math.sqrt(self.M0[1, 1])) * T
+                    + abs(self.p0_mean) + 5.0 * math.sqrt(self.M0[0, 0]))
+        if not math.isfinite(reach) or reach > 1e300:
+            raise ValueError(
+                f"accel_amplitude = {self.accel_amplitude!r} m/s² (with v0_mean, p0_mean and M0) "
+                f"over duration = {T!r} s: position and velocity would reach ≈ {reach:.3g}, "
+                f"beyond float64; choose a smaller amplitude, prior or duration")
 
     # ----------------------------------------------------------------- time grid
     @property
@@ -223,18 +234,48 @@ class CalibrationModel:
         return self.accel_amplitude * np.sin(self.angular_frequency * np.asarray(t))
 
     def velocity(self, t: np.ndarray, v0: float) -> np.ndarray:
-        """Closed-form true velocity v(t) = v0 + A/ω (1 − cos ω t) (m/s)."""
+        """Closed-form true velocity v(t) = v0 + A/ω (1 − cos ω t) (m/s).
+
+        Evaluated as v0 + A t f(ω t), f(x) = (1 − cos x)/x = 2 sin²(x/2)/x: no A/ω, which
+        overflows for a tiny ω, and no 1 − cos x, which cancels for a small ω t."""
         w, A = self.angular_frequency, self.accel_amplitude
-        return v0 + A / w * (1.0 - np.cos(w * np.asarray(t)))
+        t = np.asarray(t, dtype=float)
+        return v0 + A * t * _one_minus_cos_over(w * t)
 
     def position(self, t: np.ndarray, p0: float, v0: float) -> np.ndarray:
-        """Closed-form true position p(t) = p0 + (v0 + A/ω) t − A/ω² sin ω t (m)."""
+        """Closed-form true position p(t) = p0 + (v0 + A/ω) t − A/ω² sin ω t (m).
+
+        Evaluated as p0 + v0 t + A t² g(ω t), g(x) = (x − sin x)/x² (a series for small x), which
+        is the same number without the A/ω² that is infinite for ω = 10⁻³⁰⁰ and without the
+        cancellation of (A/ω) t against A/ω² sin ω t."""
         w, A = self.angular_frequency, self.accel_amplitude
-        t = np.asarray(t)
-        return p0 + (v0 + A / w) * t - A / w**2 * np.sin(w * t)
+        t = np.asarray(t, dtype=float)
+        return p0 + v0 * t + A * t * t * _x_minus_sin_over_square(w * t)
 
     def replace(self, **changes: object) -> CalibrationModel:
         """A copy with some fields changed (validated again)."""
         from dataclasses import replace
 
         return replace(self, **changes)
+
+
+def _one_minus_cos_over(x: np.ndarray) -> np.ndarray:
+    """(1 − cos x)/x = 2 sin²(x/2)/x, with the limit 0 at x = 0 (no cancellation)."""
+    x = np.asarray(x, dtype=float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = 2.0 * np.sin(x / 2) ** 2 / x
+    return np.where(np.abs(x) < 1e-150, x / 2, out)
+
+
+def _x_minus_sin_over_square(x: np.ndarray) -> np.ndarray:
+    """(x − sin x)/x², by its series Σ (−1)ᵏ x^(2k+1)/(2k+3)! (nine terms, Horner) for |x| < 1,
+    where the direct form cancels (10⁻¹¹ relative at x = 0.01), else directly."""
+    x = np.asarray(x, dtype=float)
+    x2 = x * x
+    series = np.ones_like(x2)
+    for d in (342.0, 272.0, 210.0, 156.0, 110.0, 72.0, 42.0, 20.0):  # (2k+2)(2k+3), k = 8 .. 1
+        series = 1.0 - x2 / d * series
+    series = x / 6.0 * series
+    with np.errstate(invalid="ignore", divide="ignore"):
+        direct = (x - np.sin(x)) / x2
+    return np.where(np.abs(x) < 1.0, series, direct)

@@ -276,7 +276,22 @@ def run_ekf(model: CoopModel, y: np.ndarray, Q: np.ndarray | None = None,
 
 def ukf_points(alpha: float = UKF_ALPHA, beta: float = UKF_BETA,
                kappa: float = UKF_KAPPA) -> MerweScaledSigmaPoints:
-    """filterpy's Merwe sigma points for the 6 states, sigma points built with wrapped angles."""
+    """filterpy's Merwe sigma points for the 6 states, sigma points built with wrapped angles.
+
+    0 < α ≤ 1 (the spread of the points; α = 0 divides by zero in the weights, a negative α
+    mirrors them), β ≥ 0 (prior knowledge of the distribution, 2 for a Gaussian) and n + κ > 0
+    (otherwise the points' covariance n + λ = α²(n + κ) is not positive), all finite.
+    """
+    alpha = _v.finite_float("alpha", alpha)
+    if not 0.0 < alpha <= 1.0:
+        raise ValueError(f"alpha must be in (0, 1] (the sigma points' spread), got {alpha!r}")
+    beta = _v.finite_float("beta", beta)
+    if beta < 0.0:
+        raise ValueError(f"beta must be >= 0 (2 for a Gaussian prior), got {beta!r}")
+    kappa = _v.finite_float("kappa", kappa)
+    if N_STATES + kappa <= 0.0:
+        raise ValueError(f"kappa must be > -{N_STATES} (n + kappa > 0 for n = {N_STATES} states), "
+                         f"got {kappa!r}")
     return MerweScaledSigmaPoints(N_STATES, alpha=alpha, beta=beta, kappa=kappa,
                                   subtract=state_residual)
 
@@ -348,6 +363,8 @@ def run_batch(method: str, model: CoopModel, y: np.ndarray, Q: np.ndarray | None
     wholly finite across all runs (the Monte Carlo case); otherwise use the single-run filters.
     """
     method = _v.choice("method", method, METHODS)
+    if np.ndim(y) == 3 and np.shape(y)[0] == 0:
+        raise ValueError("y holds no run (shape (0, ...)): run_batch needs at least one log")
     y, Q, R, x0, P0 = _check(model, y, Q, R, x0, P0, method, batch=True)
     nan = np.isnan(y)
     rows = nan.all(axis=(0, 2))

@@ -389,6 +389,9 @@ class CoopModel:
         Random numbers are drawn in a fixed order: x(0) for all runs, w for all steps, v for all
         steps, so a seed fixes everything.
         """
+        if not isinstance(rng, np.random.Generator):
+            raise ValueError(f"rng must be a numpy.random.Generator (e.g. "
+                             f"numpy.random.default_rng(0)), got {type(rng).__name__} {rng!r}")
         n_runs = _v.integer("n_runs", n_runs, minimum=1)
         Q = self.Qtrue if Q is None else _v.spd_matrix("Q", Q, N_STATES)
         K = self.n_steps

@@ -21,6 +21,7 @@ K = 0 and P = M there.  Infinite values are an error.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -32,6 +33,12 @@ from gpsaccel.kalman.schedule import Schedule
 from gpsaccel.kalman.update import CovarianceGuard, step_schedule
 
 METHODS = ("filterpy", "information")
+#: What :func:`run_multirate` needs of a model (``schedule`` is a method).
+MODEL_ATTRIBUTES = ("Phi", "Q", "H", "V", "M0", "x0", "dt", "schedule")
+
+
+class MissingInputWarning(UserWarning):
+    """A model with a control input was filtered without its input ``u``."""
 
 
 class LinearGaussianModel(Protocol):
@@ -131,6 +138,15 @@ def check_inputs(model: LinearGaussianModel, z: np.ndarray, schedule: Schedule |
     (not measured) and no inf; a known input ``u`` must be (n_steps, m) and the model must have a
     matching ``B`` (n, m).
     """
+    missing = [a for a in MODEL_ATTRIBUTES if not hasattr(model, a)]
+    if missing:
+        raise ValueError(
+            f"model must be a linear-Gaussian model (CalibrationModel, ShipModel, ...) with "
+            f"{', '.join(MODEL_ATTRIBUTES[:-1])} and schedule(); got {type(model).__name__} "
+            f"without {', '.join(missing)}")
+    if schedule is not None and not isinstance(schedule, Schedule):
+        raise ValueError(f"schedule must be a gpsaccel.Schedule (None: model.schedule()), got "
+                         f"{type(schedule).__name__} {schedule!r}"[:200])
     schedule = model.schedule() if schedule is None else schedule
     H, V = np.asarray(model.H, dtype=float), np.asarray(model.V, dtype=float)
     p, n = H.shape
@@ -138,6 +154,13 @@ def check_inputs(model: LinearGaussianModel, z: np.ndarray, schedule: Schedule |
         raise ValueError(f"schedule delivers {schedule.dim_z} components but H has {p} rows")
     z = _v.finite_array("z", z, (schedule.n_epochs, p), allow_nan=True)
     B = None
+    B_model = getattr(model, "B", None)
+    if u is None and B_model is not None and np.any(np.asarray(B_model, dtype=float) != 0):
+        warnings.warn(
+            f"{type(model).__name__} has a control input (B) but no u was given: the filter "
+            f"predicts as if u = 0, which for the ship's thrust and torque is a wrong model "
+            f"(RMSE of x, y many times larger); pass u=..., e.g. the voyage's or ensemble's .u",
+            MissingInputWarning, stacklevel=3)
     if u is not None:
         B = getattr(model, "B", None)
         if B is None:
@@ -201,10 +224,10 @@ def run_multirate(model: LinearGaussianModel, z: np.ndarray, method: str = "filt
     no harm to x̂).  ``check=False`` for filters that are wrong on purpose (the report's
     unsymmetrised (I − KH)M).
     """
+    inputs = check_inputs(model, z, schedule, u)
     if kf is None:
         method = _v.choice("method", method, METHODS)
         kf = make_filter(model, method)
-    inputs = check_inputs(model, z, schedule, u)
     schedule, H, V, z, B, u = (inputs.schedule, inputs.H, inputs.V, inputs.z, inputs.B, inputs.u)
     p, n = H.shape
 
