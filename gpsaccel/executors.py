@@ -129,12 +129,43 @@ class ResolvedExecutor:
         return f"ResolvedExecutor({self.description!r}, owned={self.owned})"
 
 
-def _ignore_interrupt() -> None:
-    """Pool workers ignore SIGINT: Ctrl-C reaches the whole process group, and the parent alone
-    should handle it (one "interrupted" line, not a traceback per worker)."""
+_IN_TASK = False  # per worker process: is a task running?
+
+
+def _worker_sigint(signum: int, frame: object) -> None:
+    """SIGINT in a pool worker: interrupt the task it runs (its ``finally`` blocks run, e.g. the
+    checker kills the student's process), ignore it between tasks (where a KeyboardInterrupt
+    would kill the worker with a traceback)."""
+    if _IN_TASK:
+        raise KeyboardInterrupt
+
+
+def _worker_init() -> None:
     import signal
 
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGINT, _worker_sigint)
+
+
+def _in_task(fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> Any:
+    global _IN_TASK
+    _IN_TASK = True
+    try:
+        return fn(*args, **kwargs)
+    finally:
+        _IN_TASK = False
+
+
+class _InterruptiblePool(cf.ProcessPoolExecutor):
+    """A process pool for Ctrl-C: it reaches the whole process group, so every worker gets SIGINT
+    too.  A worker running a task stops it (the KeyboardInterrupt comes back through the task's
+    Future, as any exception does); an idle worker ignores it.  The parent handles it alone: one
+    "interrupted" line, no traceback per worker, no task left running."""
+
+    def __init__(self, max_workers: int | None = None) -> None:
+        super().__init__(max_workers=max_workers, initializer=_worker_init)
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> cf.Future:
+        return super().submit(_in_task, fn, *args, **kwargs)
 
 
 def is_executor(obj: object) -> bool:
@@ -175,7 +206,7 @@ def resolve_executor(spec: object = None, max_workers: int | None = None) -> Res
         ex = cf.ThreadPoolExecutor(max_workers=n)
         return ResolvedExecutor(ex, f"{n} threads", True, n, [ex.shutdown])
     if spec in ("processes", "local"):
-        ex = cf.ProcessPoolExecutor(max_workers=n, initializer=_ignore_interrupt)
+        ex = _InterruptiblePool(max_workers=n)
         return ResolvedExecutor(ex, f"{n} processes", True, n, [ex.shutdown])
     if spec == "dask-local":
         distributed = _import_distributed()

@@ -246,3 +246,54 @@ def test_check_many_refuses_bad_numbers_before_running_anyone(tmp_path):
                          ({"timeout": 0}, "timeout")):
         with pytest.raises(ValueError, match=name):
             check_many([SUBMISSION], executor=None, **kwargs)
+
+
+def _students_running(folder: Path) -> set[str]:
+    """Names of the files in ``folder`` whose checker process (its cmdline names the file) runs."""
+    pids = []
+    for proc in Path("/proc").iterdir():
+        if not proc.name.isdigit():
+            continue
+        try:
+            cmd = (proc / "cmdline").read_bytes().split(b"\0")
+        except OSError:
+            continue
+        if b"-P" in cmd:
+            pids += [Path(part.decode()).name for part in cmd if str(folder).encode() in part]
+    return set(pids)
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc")
+def test_ctrl_c_during_a_parallel_check_stops_workers_and_students(tmp_path):
+    """Ctrl-C reaches the whole group: the busy workers stop their task (the student's process,
+    in a session of its own, is killed on the way out) and the idle one (carol's check is done)
+    ignores it, instead of each printing a traceback or waiting for the students' time limit."""
+    subs = tmp_path / "subs"
+    subs.mkdir()
+    loop = (ROOT / "tests" / "submissions" / "broken_infinite_loop.py").read_text()
+    for name in ("alice.py", "bob.py"):
+        (subs / name).write_text(loop)
+    (subs / "carol.py").write_text(SUBMISSION.read_text())
+    env = dict(os.environ, PYTHONPATH=str(ROOT), MPLBACKEND="Agg")
+    proc = subprocess.Popen([sys.executable, "-m", "gpsaccel.cli", "check", str(subs), "--runs",
+                             "2", "--workers", "3", "--timeout", "300"], cwd=tmp_path, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while _students_running(subs) != {"alice.py", "bob.py"} and time.monotonic() < deadline:
+            time.sleep(0.2)  # until carol's two runs are done (her worker idle), the others loop
+        assert _students_running(subs) == {"alice.py", "bob.py"}
+        t0 = time.monotonic()
+        os.killpg(proc.pid, signal.SIGINT)
+        stdout, stderr = proc.communicate(timeout=60)
+        seconds = time.monotonic() - t0
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == 130, stderr
+    assert stderr.strip().splitlines() == ["gpsaccel check: interrupted"], stderr
+    assert seconds < 60  # not the 300 s time limit of the students
+    time.sleep(0.5)
+    assert _students_running(subs) == set()
