@@ -63,11 +63,14 @@ Random draws, reproducible and mergeable
 ----------------------------------------
 Run number l uses column ``l mod BLOCK_RUNS`` of the block ``b = l // BLOCK_RUNS``, whose
 standard normals come from ``numpy.random.default_rng(SeedSequence(seed, spawn_key=(b,)))`` — the
-b-th child of ``SeedSequence(seed)`` — drawn whole as one (605, BLOCK_RUNS) array (row k: normal k
-of every run; the layout the array filter reads without a transpose).  Run l is therefore the
-same realization whatever ``n_runs``, ``chunk_size``, executor or number of workers.  Each chunk
-returns its sums (count, means, centred co-moments, Σ r rᵀ, Σ NEES, Σ NIS) and chunks merge in
-order (Chan et al.'s pairwise update), so memory does not grow with ``n_runs`` and the statistics
+b-th child of ``SeedSequence(seed)`` — drawn as one (605, BLOCK_RUNS) array in C order (row k:
+normal k of every run; the layout the array filter reads without a transpose), whole for runs up
+to ≈ 400 s, streamed a few epochs at a time beyond (the same numbers: numpy's Generator draws an
+array whole or in consecutive pieces alike).  Run l is therefore the same realization whatever
+``n_runs``, ``chunk_size``, executor or number of workers.  Each chunk returns its sums (count,
+means, centred co-moments, the residual products Σ r_i r_{i−k}ᵀ up to ``max_lag`` and any pairs
+asked for, Σ NEES, Σ NIS) and chunks merge in order (Chan et al.'s pairwise update), so memory
+does not grow with ``n_runs``, only linearly with the duration, and the statistics
 depend on the chunking only through floating-point rounding (≪ 1e-12 relative).  These draws are
 *not* those of :func:`gpsaccel.simulate` (a different random stream, and no per-step noise): use
 :func:`realizations` to get the engine's measurements and truths.
