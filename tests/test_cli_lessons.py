@@ -16,4 +16,4 @@ def test_lessons_refuses_an_unknown_lesson_and_a_tiny_ensemble(capsys):
     assert main(["lessons", "--only", "99"]) == 2
     assert "--only" in capsys.readouterr().err
     assert main(["lessons", "--only", "02", "--runs", "1"]) == 2
-    assert "--runs must be >= 2" in capsys.readouterr().err
+    assert "argument --runs: must be an integer >= 2" in capsys.readouterr().err
