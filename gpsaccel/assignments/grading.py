@@ -106,8 +106,8 @@ def _feedback(grade: Grade, output_tail: str) -> str:
     lines = [f"{grade.submission}: {grade.total:g} / {grade.max_total:g} points "
              f"({grade.status})", ""]
     if grade.status == "timeout":
-        lines += [f"The notebook did not finish within the time limit; nothing after that was "
-                  f"graded. Look for a loop that never ends or a very slow cell.", ""]
+        lines += ["The notebook did not finish within the time limit; nothing after that was "
+                  "graded. Look for a loop that never ends or a very slow cell.", ""]
     elif grade.status == "error":
         lines += ["The notebook could not be graded (no results came back). The grader's last "
                   "output:", "", output_tail[-3000:], ""]
