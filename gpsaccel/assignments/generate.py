@@ -69,7 +69,7 @@ class Generated:
 
 def generate(name: str, out: Path | str, run_tests: bool = True, timeout: float = 900
              ) -> Generated:
-    """``otter assign`` homework ``name`` into ``out`` (created; replaced if it exists).
+    """``otter assign`` homework ``name`` into ``out`` (created; an earlier output is replaced).
 
     ``out/student/NAME.ipynb`` is handed out; ``out/NAME-autograder.zip`` grades (``gpsaccel
     grade`` or Gradescope); ``out/autograder/NAME.ipynb`` is the solved notebook.  With
@@ -79,7 +79,13 @@ def generate(name: str, out: Path | str, run_tests: bool = True, timeout: float 
     master = master_notebook(name)
     out = Path(out)
     if out.exists():
-        shutil.rmtree(out)
+        if out.is_dir() and not any(out.iterdir()):
+            out.rmdir()
+        elif (out / "autograder").is_dir() and (out / "student").is_dir():
+            shutil.rmtree(out)  # a previous output of this function
+        else:
+            raise ValueError(f"out: {out} exists and is not an earlier `gpsaccel assignment` "
+                             f"output; give a new or empty folder")
     with tempfile.TemporaryDirectory(prefix="gpsaccel-assign-") as tmp:
         # otter assign writes next to the master's copy; keep the checkout clean
         work = Path(tmp) / name

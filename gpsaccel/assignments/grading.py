@@ -131,7 +131,12 @@ def grade_one(submission: Path, autograder: Path, possible: dict[str, float],
         results.mkdir(parents=True)
         # the notebook's own name is not trusted either: otter gets a fixed one
         nb = job / "submission.ipynb"
-        shutil.copyfile(submission, nb)
+        try:
+            shutil.copyfile(submission, nb)
+        except OSError as exc:
+            grade = Grade(submission.name, {q: 0.0 for q in possible}, possible, "error", "", 0.0)
+            grade.feedback = _feedback(grade, f"cannot read {submission.name}: {exc}")
+            return grade
         cmd = [sys.executable, "-m", "otter", "run", "--no-logo", "-a", str(autograder.resolve()),
                "-o", str(results), str(nb)]
         job_result = run_isolated(cmd, job, timeout)

@@ -93,3 +93,30 @@ def test_cli_assignment_and_grade(tmp_path, capsys):
     assert text[1].startswith("broken.ipynb,0,0,0,10,error,")
     assert main(["grade", str(tmp_path / "nope"), "--assignment", "ship"]) == 2
     assert "submissions must be a folder" in capsys.readouterr().err
+
+
+def test_generate_does_not_delete_a_folder_it_did_not_write(tmp_path):
+    from gpsaccel.assignments import generate
+
+    (tmp_path / "notes.txt").write_text("keep me", encoding="utf-8")
+    with pytest.raises(ValueError, match="not an earlier"):
+        generate("ship", tmp_path)
+    assert (tmp_path / "notes.txt").read_text(encoding="utf-8") == "keep me"
+
+
+@pytest.mark.parametrize("name", ["calibration", "coop", "ship"])
+def test_masters_are_committed_clean_with_public_and_hidden_tests(name):
+    import nbformat
+
+    from gpsaccel.assignments import master_notebook, questions
+
+    path = master_notebook(name)
+    nb = nbformat.read(str(path), as_version=4)
+    for cell in nb.cells:
+        if cell.cell_type == "code":
+            assert not cell.get("outputs") and cell.get("execution_count") is None
+    code = [c.source for c in nb.cells if c.cell_type == "code"]
+    for q in questions(path):
+        public = [s for s in code if s.startswith(f"def test_{q}_")]
+        hidden = [s for s in code if s.startswith(f"# HIDDEN\ndef test_{q}_")]
+        assert public and hidden, f"{name} {q}: a public and a hidden test"
