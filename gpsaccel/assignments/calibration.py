@@ -39,15 +39,16 @@ def calibration_ensemble(n_runs: int = 50, seed: int = 2026
 
 @lru_cache(maxsize=2)
 def _ensemble(n_runs: int, seed: int) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
-    from gpsaccel import CalibrationModel, run_multirate, simulate
+    from gpsaccel.calibration.model import CalibrationModel
+    from gpsaccel.calibration.simulation import simulate
+    from gpsaccel.kalman.multirate import run_multirate
 
     model = CalibrationModel()
     rng = np.random.default_rng(seed)
     runs = [simulate(model, rng) for _ in range(n_runs)]
     results = [run_multirate(model, r.z) for r in runs]
-    x_hat = np.stack([r.x_hat if hasattr(r, "x_hat") else r.x_post
-                      for r in results])  # x_post until the results take the course's names
-    return n_runs, np.stack([r.x_gps for r in runs]), x_hat, np.stack([r.P for r in results])
+    return (n_runs, np.stack([r.x_gps for r in runs]), np.stack([r.x_hat for r in results]),
+            np.stack([r.P for r in results]))
 
 
 def nees_reference(x_true: np.ndarray, x_hat: np.ndarray, P: np.ndarray, k: int = -1

@@ -77,9 +77,9 @@ def test_reference_ekf_equals_the_package_ekf_and_each_mistake_is_recognised():
     y = model.log()
     ref = run_ekf(model, y, Q=model.Qtrue)
     x, P = coop.reference_ekf(model, y, model.x0, model.P0, model.Qtrue, model.Rtrue)
-    assert np.abs(cm.state_residual(x, ref.x_post)).max() < 1e-9
-    assert np.abs(P - ref.P_post).max() < 1e-9
-    assert coop.ekf(lambda y, x0, P0, Q, R: (ref.x_post, ref.P_post), y).passed
+    assert np.abs(cm.state_residual(x, ref.x_hat)).max() < 1e-9
+    assert np.abs(P - ref.P).max() < 1e-9
+    assert coop.ekf(lambda y, x0, P0, Q, R: (ref.x_hat, ref.P), y).passed
     for code in coop.EKF_MISTAKES:
         def student(y, x0, P0, Q, R, code=code):
             return coop.reference_ekf(model, y, x0, P0, Q, R, code)

@@ -10,7 +10,7 @@ import pytest
 
 from gpsaccel.assignments import generate, grade, ship
 from gpsaccel.ship.model import ShipModel
-from gpsaccel.ship.zeroed_gain import joseph
+from gpsaccel.kalman.update import joseph_update
 
 UPDATE = """    rows = np.flatnonzero(~np.isnan(z))
     if rows.size == 0:
@@ -67,7 +67,7 @@ def test_zeroed_update_is_the_package_zeroed_gain_and_differs_from_the_optimal()
         miss = np.isnan(z)
         K = np.linalg.solve(H @ M @ H.T + V, H @ M).T
         K[:, miss] = 0
-        np.testing.assert_allclose(P_z, joseph(M, K, H, V), rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(P_z, joseph_update(M, K, H, V), rtol=1e-12, atol=1e-15)
         if 0 < miss.sum() < 9:
             assert not np.allclose(x_opt, x_z, rtol=1e-8, atol=0)
         else:  # nothing or everything missing: the two updates agree
