@@ -13,7 +13,10 @@ from pathlib import Path
 import nbformat
 import pytest
 
-pytest.importorskip("otter", reason="the assignments extra (otter-grader) is not installed")
+try:  # the assignments extra (otter-grader); the test extra installs it
+    import otter  # noqa: F401
+except ImportError:  # pragma: no cover
+    collect_ignore_glob = ["test_*.py"]
 
 
 def variant(solution: Path, target: Path, edits: list[tuple[str, str]],
