@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from gpsaccel.assignments import generate, grade, ship
-from gpsaccel.ship.model import ShipModel
 from gpsaccel.kalman.update import joseph_update
+from gpsaccel.ship.model import ShipModel
 
 UPDATE = """    rows = np.flatnonzero(~np.isnan(z))
     if rows.size == 0:
