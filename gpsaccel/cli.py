@@ -223,6 +223,32 @@ def _cmd_check(args: argparse.Namespace) -> int:
     return 0 if all(r["passed"] for r in results) else 1
 
 
+def _cmd_assignment(args: argparse.Namespace) -> int:
+    """``otter assign`` a homework: the student notebook and the autograder zip."""
+    from gpsaccel.assignments import generate
+
+    g = generate(args.name, args.out, run_tests=not args.no_run_tests)
+    print(f"hand out:  {g.student}\ngrade with: {g.autograder}\nsolution:  {g.solution}")
+    return 0
+
+
+def _cmd_grade(args: argparse.Namespace) -> int:
+    """Grade a folder of notebooks with ``otter run``; grades.csv and feedback/ in --out."""
+    from gpsaccel.assignments import grade
+
+    out = args.out if args.out is not None else args.submissions / "grades"
+    grades = grade(args.submissions, args.assignment, out=out, autograder=args.autograder,
+                   jobs=args.jobs, timeout=args.timeout)
+    if not grades:
+        raise ValueError(f"submissions: no .ipynb file in {args.submissions}")
+    width = max(len(g.submission) for g in grades)
+    for g in grades:
+        print(f"{g.submission:<{width}}  {g.total:>5g} / {g.max_total:g}  {g.status:<8} "
+              f"{g.seconds:5.1f} s")
+    print(f"wrote {out / 'grades.csv'} and {out / 'feedback'}/")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     from gpsaccel.calibration.simulation import TRUTHS
 
@@ -325,6 +351,26 @@ def build_parser() -> argparse.ArgumentParser:
                    help="check on a Dask LocalCluster or a running scheduler instead")
     p.add_argument("-v", "--verbose", action="store_true", help="print every report in full")
     p.set_defaults(func=_cmd_check)
+
+    p = sub.add_parser("assignment", help="otter assign a homework: student notebook + autograder")
+    p.add_argument("name", choices=("calibration", "coop", "ship"))
+    p.add_argument("--out", type=Path, required=True, help="folder to write (replaced)")
+    p.add_argument("--no-run-tests", action="store_true",
+                   help="do not execute the solution against its tests first (faster)")
+    p.set_defaults(func=_cmd_assignment)
+
+    p = sub.add_parser("grade", help="grade a folder of homework notebooks with otter run")
+    p.add_argument("submissions", type=Path, help="folder of submitted .ipynb files")
+    p.add_argument("--assignment", required=True, choices=("calibration", "coop", "ship"))
+    p.add_argument("--autograder", type=Path, default=None,
+                   help="the zip of `gpsaccel assignment` (default: generated from the master)")
+    p.add_argument("--out", type=Path, default=None,
+                   help="folder for grades.csv and feedback/ (default SUBMISSIONS/grades)")
+    p.add_argument("--jobs", type=int, default=None,
+                   help="notebooks graded at once (default: CPUs, at most 4)")
+    p.add_argument("--timeout", type=float, default=600.0,
+                   help="time limit per notebook, s (default 600)")
+    p.set_defaults(func=_cmd_grade)
 
     # Further sub-commands register here (montecarlo, check, lessons, ...).
     return parser

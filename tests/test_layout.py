@@ -1,7 +1,8 @@
 """The package's layers: imports point down only, and the systems never import each other.
 
 Floors, bottom up: infrastructure (``_validation``, ``_blas``, ``_atomic``, ``executors``) -> ``kalman`` ->
-the systems (``calibration``, ``ship``, ``coop``, side by side) -> ``check`` -> ``plots`` ->
+the systems (``calibration``, ``ship``, ``coop``, side by side) -> ``check`` (-> ``assignments``, the
+homework, which only ``cli`` imports) -> ``plots`` ->
 ``figures`` -> ``lessons``, ``cli``.  Read from the source with ``ast`` (every ``import`` and
 ``from ... import``, at module level or inside a function), so a lazy import counts too.
 """
@@ -25,7 +26,8 @@ ALLOWED = {
     "plots": INFRA | {"kalman"} | SYSTEMS,
     "figures": INFRA | {"kalman", "plots"} | SYSTEMS,
     "lessons": INFRA,
-    "cli": INFRA | {"kalman", "plots", "figures", "lessons", "check"} | SYSTEMS,
+    "assignments": INFRA | {"kalman", "check"} | SYSTEMS,
+    "cli": INFRA | {"kalman", "plots", "figures", "lessons", "check", "assignments"} | SYSTEMS,
     "top": INFRA | {"kalman"} | SYSTEMS,
 }
 

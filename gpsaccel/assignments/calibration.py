@@ -1,0 +1,137 @@
+r"""The calibration homework's own checks (question 3: Monte Carlo NEES at 30 s).
+
+Questions 1 and 2 are graded by :mod:`gpsaccel.check` (the matrix and whole-filter checkers).
+Question 3 asks for the ensemble-average NEES at t = 30 s over N runs of the course filter and the
+two-sided 95 % bounds it should lie within::
+
+    ε̄ = (1/N) Σᵢ eᵢᵀ Pᵢ⁻¹ eᵢ,     N ε̄ ~ χ²(3N)  →  [r1, r2] = χ²⁻¹_{3N}(0.025, 0.975) / N
+
+:func:`calibration_ensemble` rebuilds the ensemble the notebook gives the student (same seed), so a
+hidden test does not trust the student's arrays; :func:`check_nees_answer` compares the answers
+and names the typical mistakes under stable codes.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+import numpy as np
+from scipy import stats
+
+from gpsaccel.check.report import Report
+
+#: Relative tolerance of the NEES answer (it is a deterministic function of the seeded ensemble).
+RTOL = 1e-6
+
+
+def calibration_ensemble(n_runs: int = 50, seed: int = 2026
+                         ) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+    """The notebook's ensemble: (N, x_true (N, n_gps, 3), x_hat (N, n_gps, 3), P (N, n_gps, 3, 3)).
+
+    ``n_runs`` realizations of report 000's problem from ``numpy.random.default_rng(seed)``, each
+    filtered by the package's multirate filter (:func:`gpsaccel.run_multirate`).  Computed once
+    per process and seed; every call returns fresh copies (a notebook may change its arrays).
+    """
+    N, *arrays = _ensemble(int(n_runs), int(seed))
+    return (N, *(a.copy() for a in arrays))
+
+
+@lru_cache(maxsize=2)
+def _ensemble(n_runs: int, seed: int) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+    from gpsaccel.calibration.model import CalibrationModel
+    from gpsaccel.calibration.simulation import simulate
+    from gpsaccel.kalman.multirate import run_multirate
+
+    model = CalibrationModel()
+    rng = np.random.default_rng(seed)
+    runs = [simulate(model, rng) for _ in range(n_runs)]
+    results = [run_multirate(model, r.z) for r in runs]
+    return (n_runs, np.stack([r.x_gps for r in runs]), np.stack([r.x_hat for r in results]),
+            np.stack([r.P for r in results]))
+
+
+def nees_reference(x_true: np.ndarray, x_hat: np.ndarray, P: np.ndarray, k: int = -1
+                   ) -> tuple[float, tuple[float, float]]:
+    """(ε̄ at GPS index ``k``, its two-sided 95 % bounds) for the ensemble."""
+    N, n = x_true.shape[0], x_true.shape[-1]
+    e = x_true[:, k] - x_hat[:, k]
+    eps = float(np.mean(np.einsum("ri,ri->r", e, np.linalg.solve(P[:, k], e[..., None])[..., 0])))
+    lo, hi = stats.chi2.ppf([0.025, 0.975], n * N) / N
+    return eps, (float(lo), float(hi))
+
+
+def _number(report: Report, name: str, value: object) -> float | None:
+    try:
+        out = float(np.asarray(value, dtype=float).reshape(()))
+    except (TypeError, ValueError):
+        report.add("not-a-number", f"{name} must be one number; got {type(value).__name__} "
+                   f"{str(value)[:80]}.")
+        return None
+    if not math.isfinite(out):
+        report.add("not-a-number", f"{name} = {out}: it must be a finite number.")
+        return None
+    return out
+
+
+def nees_answer(nees_30: object, nees_bounds: object, N: int, x_true: np.ndarray,
+                x_hat: np.ndarray, P: np.ndarray) -> Report:
+    """Check ``nees_30`` and ``nees_bounds = (r1, r2)`` against the ensemble; never raises."""
+    report = Report("question 3: NEES at 30 s")
+    eps, (lo, hi) = nees_reference(x_true, x_hat, P)
+    n = x_true.shape[-1]
+    value = _number(report, "nees_30", nees_30)
+    if value is not None and not math.isclose(value, eps, rel_tol=RTOL):
+        e = x_true[:, -1] - x_hat[:, -1]
+        with_P = float(np.mean(np.einsum("ri,rij,rj->r", e, P[:, -1], e)))
+        sd = np.sqrt(np.diagonal(P[:, -1], axis1=1, axis2=2))
+        if math.isclose(value, N * eps, rel_tol=RTOL):
+            report.add("nees-sum", f"nees_30 = {value:.6g} is the sum over the {N} runs, "
+                       f"N·ε̄; the ensemble average is ε̄ = {eps:.6g}.")
+        elif math.isclose(value, with_P, rel_tol=RTOL):
+            report.add("nees-not-inverted", f"nees_30 = {value:.6g} is eᵀ P e; the NEES weighs "
+                       f"the error by the inverse covariance, eᵀ P⁻¹ e (np.linalg.solve(P, e)).")
+        elif math.isclose(value, float(np.mean(np.sum((e / sd) ** 2, axis=1))), rel_tol=RTOL):
+            report.add("nees-diagonal", f"nees_30 = {value:.6g} uses only the variances "
+                       f"(Σ eᵢ²/Pᵢᵢ); the NEES is eᵀ P⁻¹ e with the whole P (its correlations).")
+        elif math.isclose(value, eps / n, rel_tol=RTOL):
+            report.add("nees-per-state", f"nees_30 = {value:.6g} is divided by the {n} states; "
+                       f"the NEES is eᵀ P⁻¹ e, of mean {n} for a consistent filter.")
+        else:
+            report.add("nees-value", f"nees_30 = {value:.6g}; the ensemble-average NEES at "
+                       f"t = 30 s (last GPS time) is ε̄ = {eps:.4g} (within {RTOL:g}). Use "
+                       f"e = x_true[:, -1] − x_hat[:, -1] and P[:, -1].")
+    try:
+        bounds = [float(b) for b in np.asarray(nees_bounds, dtype=float).reshape(-1)]
+    except (TypeError, ValueError):
+        bounds = []
+    if len(bounds) != 2:
+        report.add("nees-bounds", f"nees_bounds must be two numbers (r1, r2); got "
+                   f"{str(nees_bounds)[:80]}.")
+    elif not all(math.isclose(b, w, rel_tol=1e-4) for b, w in zip(bounds, (lo, hi), strict=True)):
+        r1, r2 = bounds
+        one = stats.chi2.ppf([0.025, 0.975], n)
+        if all(math.isclose(b, w, rel_tol=1e-4) for b, w in zip(bounds, one, strict=True)):
+            report.add("nees-bounds-one-run", f"nees_bounds = ({r1:.4g}, {r2:.4g}) are the 95 % "
+                       f"bounds of a single run's NEES, χ²({n}). The average of N = {N} runs "
+                       f"is much tighter: N·ε̄ ~ χ²({n}·N), so r = χ²⁻¹_{{{n * N}}}(0.025, 0.975)"
+                       f" / N = ({lo:.4g}, {hi:.4g}).")
+        else:
+            report.add("nees-bounds", f"nees_bounds = ({r1:.4g}, {r2:.4g}); N·ε̄ ~ χ²({n}·N) "
+                       f"with N = {N}, so the two-sided 95 % bounds are ({lo:.4g}, {hi:.4g}).")
+    if report.passed:
+        inside = lo <= eps <= hi
+        report.add("ok", f"ε̄(30 s) = {eps:.4g}, bounds ({lo:.4g}, {hi:.4g}): "
+                   + ("inside, the filter is consistent at 30 s." if inside else
+                      "outside (it happens 5 % of the time for a consistent filter)."), "note")
+    report.sort()
+    return report
+
+
+def check_nees_answer(nees_30: object, nees_bounds: object, N: int, x_true: np.ndarray,
+                      x_hat: np.ndarray, P: np.ndarray) -> Report:
+    """:func:`nees_answer` for a test cell: AssertionError with the findings when it fails."""
+    report = nees_answer(nees_30, nees_bounds, N, x_true, x_hat, P)
+    if not report.passed:
+        raise AssertionError("\n" + str(report))
+    return report

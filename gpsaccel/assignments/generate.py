@@ -1,0 +1,107 @@
+"""The homework notebooks: where the masters are, their questions, ``otter assign`` on them.
+
+A master notebook (``assignments/NAME/NAME.ipynb`` in a source checkout) is in otter-grader's
+assign format: raw cells ``# BEGIN QUESTION`` (name, points), ``# BEGIN SOLUTION``, ``# BEGIN
+TESTS`` ...; solutions and hidden tests live only there.  :func:`generate` runs ``otter assign``
+and returns the student notebook (solutions stripped, public tests only) and the autograder zip
+(every test), ready to hand out and to grade.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import yaml
+
+#: The homeworks, in course order.
+ASSIGNMENTS = ("calibration", "coop", "ship")
+
+
+def assignments_dir() -> Path:
+    """The ``assignments/`` folder of a source checkout."""
+    return Path(__file__).resolve().parents[2] / "assignments"
+
+
+def master_notebook(name: str) -> Path:
+    """The master notebook of homework ``name`` (ValueError for an unknown name)."""
+    if name not in ASSIGNMENTS:
+        raise ValueError(f"assignment must be one of {', '.join(ASSIGNMENTS)}, got {name!r}")
+    path = assignments_dir() / name / f"{name}.ipynb"
+    if not path.is_file():
+        raise FileNotFoundError(f"master notebook {path} not found (the assignments ship with a "
+                                f"source checkout of gpsaccel, not with the wheel)")
+    return path
+
+
+def questions(master: Path | str) -> dict[str, float]:
+    """Question name -> points of a master notebook, read from its ``# BEGIN QUESTION`` cells.
+
+    A question's ``points`` is a number or one number per test case (their sum).
+    """
+    import nbformat
+
+    nb = nbformat.read(str(master), as_version=4)
+    out: dict[str, float] = {}
+    for cell in nb.cells:
+        lines = cell.source.strip().splitlines()
+        if cell.cell_type != "raw" or not lines or lines[0].strip() != "# BEGIN QUESTION":
+            continue
+        config = yaml.safe_load("\n".join(lines[1:])) or {}
+        points = config.get("points", 1)
+        out[str(config["name"])] = float(sum(points) if isinstance(points, list) else points)
+    return out
+
+
+@dataclass(frozen=True)
+class Generated:
+    """What :func:`generate` wrote: the student notebook, the autograder zip, the solution."""
+
+    student: Path
+    autograder: Path
+    solution: Path
+    out: Path
+
+
+def generate(name: str, out: Path | str, run_tests: bool = True, timeout: float = 900
+             ) -> Generated:
+    """``otter assign`` homework ``name`` into ``out`` (created; an earlier output is replaced).
+
+    ``out/student/NAME.ipynb`` is handed out; ``out/NAME-autograder.zip`` grades (``gpsaccel
+    grade`` or Gradescope); ``out/autograder/NAME.ipynb`` is the solved notebook.  With
+    ``run_tests`` otter executes the solution against every test first (slower; a failing master
+    raises RuntimeError with otter's output).
+    """
+    master = master_notebook(name)
+    out = Path(out)
+    if out.exists():
+        if out.is_dir() and not any(out.iterdir()):
+            out.rmdir()
+        elif (out / "autograder").is_dir() and (out / "student").is_dir():
+            shutil.rmtree(out)  # a previous output of this function
+        else:
+            raise ValueError(f"out: {out} exists and is not an earlier `gpsaccel assignment` "
+                             f"output; give a new or empty folder")
+    with tempfile.TemporaryDirectory(prefix="gpsaccel-assign-") as tmp:
+        # otter assign writes next to the master's copy; keep the checkout clean
+        work = Path(tmp) / name
+        shutil.copytree(master.parent, work, ignore=shutil.ignore_patterns(
+            "*.zip", "dist", "__pycache__", ".ipynb_checkpoints", "kalman_filter.py"))
+        cmd = [sys.executable, "-m", "otter", "assign", str(work / master.name), str(out)]
+        if not run_tests:
+            cmd.insert(4, "--no-run-tests")
+        proc = subprocess.run(cmd, cwd=work, capture_output=True, text=True, timeout=timeout)
+    if proc.returncode != 0:
+        raise RuntimeError(f"otter assign failed on {master} (exit {proc.returncode}):\n"
+                           f"{proc.stdout[-4000:]}\n{proc.stderr[-4000:]}")
+    zips = sorted((out / "autograder").glob(f"{name}-autograder_*.zip"))
+    if not zips:
+        raise RuntimeError(f"otter assign wrote no autograder zip into {out / 'autograder'}")
+    autograder = out / f"{name}-autograder.zip"
+    shutil.copy(zips[-1], autograder)  # a stable name for the instructor's commands
+    return Generated(out / "student" / master.name, autograder, out / "autograder" / master.name,
+                     out)

@@ -1,0 +1,218 @@
+r"""The ship homework's checks: the multirate update with the rows that arrived; the zeroed gain.
+
+Report 004's ship (:mod:`gpsaccel.ship.model`): 9 states, every one measured (H = I), the GPS rows
+(x, y positions) at 1 Hz, the IMU rows at 10 Hz.  At a step where only some rows r arrived, the
+optimal update uses those rows only::
+
+    K_r = M H_rᵀ (H_r M H_rᵀ + V_r)⁻¹,   x̂ = x̄ + K_r (z_r − H_r x̄),
+    P = (I − K_r H_r) M (I − K_r H_r)ᵀ + K_r V_r K_rᵀ
+
+The report instead computes the full gain and zeroes the columns of the missing rows
+(:mod:`gpsaccel.ship.zeroed_gain`).  Question 1 checks the student's ``update(x_bar, M, z, H, V)``
+(NaN in z = not arrived) on cases built from the ship's own covariances; question 2 asks what the
+zeroed gain costs, computed with the package's two filters.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+import numpy as np
+
+from gpsaccel.assignments._answers import array, assert_report, call
+from gpsaccel.check.report import Report
+from gpsaccel.ship.model import GPS_ROWS, ShipModel
+
+__all__ = ["assert_report", "cost_answer", "optimal_update", "update_answer", "zeroed_update"]
+
+#: Distance (units of the reference σ) within which x̂ and P count as equal.
+TOL = 1e-6
+
+#: Relative tolerance of the numeric answers of question 2.
+RTOL = 1e-4
+
+
+def optimal_update(x_bar, M, z, H, V):
+    """The update with the rows of z that are finite (module docstring); (x̂, P)."""
+    rows = np.flatnonzero(np.isfinite(z))
+    if rows.size == 0:
+        return x_bar.copy(), M.copy()
+    Hr, Vr = H[rows], V[np.ix_(rows, rows)]
+    K = np.linalg.solve(Hr @ M @ Hr.T + Vr, Hr @ M).T
+    A = np.eye(M.shape[0]) - K @ Hr
+    return x_bar + K @ (z[rows] - Hr @ x_bar), A @ M @ A.T + K @ Vr @ K.T
+
+
+def zeroed_update(x_bar, M, z, H, V, short_form: bool = False):
+    """Report 004's update: full gain, columns of the missing rows zeroed; (x̂, P)."""
+    miss = ~np.isfinite(z)
+    K = np.linalg.solve(H @ M @ H.T + V, H @ M).T
+    K[:, miss] = 0.0
+    r = np.where(miss, 0.0, z - H @ x_bar)
+    A = np.eye(M.shape[0]) - K @ H
+    P = A @ M if short_form else A @ M @ A.T + K @ V @ K.T
+    return x_bar + K @ r, P
+
+
+def missing_as_zero(x_bar, M, z, H, V):
+    """The slip of using every row, with NaN replaced by 0."""
+    return optimal_update(x_bar, M, np.nan_to_num(z, nan=0.0), H, V)
+
+
+MISTAKES = {
+    "zeroed-gain": (lambda *a: zeroed_update(*a),
+                    "the full gain M Hᵀ (H M Hᵀ + V)⁻¹ with the columns of the missing rows set "
+                    "to zero (report 004's BD(:,1,n) = 0)"),
+    "zeroed-gain-short-form": (lambda *a: zeroed_update(*a, short_form=True),
+                               "report 004's zeroed gain with P = (I − K H) M"),
+    "missing-as-zero": (missing_as_zero, "the missing rows used as measurements of 0"),
+}
+
+_HINTS = {
+    "zeroed-gain": "The kept columns of the full gain were computed as if the missing rows would "
+    "also correct the estimate, so they under-weight what did arrive. Use only the rows r that "
+    "arrived: K_r = M H_rᵀ (H_r M H_rᵀ + V_r)⁻¹.",
+    "zeroed-gain-short-form": "Besides the zeroed gain (use K_r = M H_rᵀ (H_r M H_rᵀ + V_r)⁻¹ "
+    "with the rows r that arrived), P = (I − K H) M holds only for the optimal gain: with any "
+    "other it is not even symmetric. The Joseph form holds for every gain.",
+    "missing-as-zero": "A NaN means the row did not arrive: leave it out (H_r, V_r, z_r), do not "
+    "replace it with 0.",
+}
+
+
+@lru_cache(maxsize=1)
+def _ship_covariances() -> tuple[np.ndarray, np.ndarray]:
+    """A priori covariances M of the ship's multirate filter at an IMU-only and a GPS epoch."""
+    from gpsaccel.kalman.multirate import run_multirate
+    from gpsaccel.ship.simulation import simulate_ship
+
+    model = ShipModel()
+    voyage = simulate_ship(model, np.random.default_rng(0))
+    sched = model.schedule()
+    res = run_multirate(model, voyage.measurements(sched), schedule=sched, u=voyage.u)
+    gps = np.flatnonzero(res.used[:, GPS_ROWS[0]])
+    imu_only = np.flatnonzero(~res.used[:, GPS_ROWS[0]] & res.used[:, 1])
+    return res.M[imu_only[5]].copy(), res.M[gps[3]].copy()
+
+
+def cases(seed: int = 0) -> list[tuple[str, tuple[np.ndarray, ...]]]:
+    """(label, (x_bar, M, z, H, V)) test cases: IMU-only, all rows, one GPS row, none arrived."""
+    model = ShipModel()
+    H, V = model.H, model.V
+    rng = np.random.default_rng(seed)
+    M_imu, M_gps = _ship_covariances()
+    L = rng.standard_normal((9, 9))
+    M_rand = L @ L.T / 9 + np.diag(rng.uniform(0.1, 1.0, 9))
+    out = []
+    for label, M, missing in (("IMU rows only (GPS missing)", M_imu, list(GPS_ROWS)),
+                              ("every row arrived", M_gps, []),
+                              ("x position only missing, random M", M_rand, [GPS_ROWS[0]]),
+                              ("nothing arrived", M_rand, list(range(9)))):
+        x_bar = rng.standard_normal(9)
+        z = H @ x_bar + rng.standard_normal(9) * np.sqrt(np.diag(V)) * 2
+        z[missing] = np.nan
+        out.append((label, (x_bar, M.copy(), z, H.copy(), V.copy())))
+    return out
+
+
+def _matches(x, P, x_ref, P_ref) -> tuple[bool, float, float]:
+    sd = np.sqrt(np.diag(P_ref))
+    dx = float(np.max(np.abs(x - x_ref) / sd))
+    dP = float(np.max(np.abs(P - P_ref) / np.outer(sd, sd)))
+    return dx <= TOL and dP <= TOL, dx, dP
+
+
+def update_answer(update: object, seed: int = 0) -> Report:
+    """Check ``update(x_bar, M, z, H, V) -> (x_hat, P)`` on :func:`cases`; never raises."""
+    report = Report("question 1: the multirate update")
+    for label, args in cases(seed):
+        out = call(report, "update(x_bar, M, z, H, V)", update, *(a.copy() for a in args))
+        if out is None:
+            break
+        if not isinstance(out, (tuple, list)) or len(out) != 2:
+            report.add("return-value", f"update must return a pair (x_hat, P); it returned a "
+                       f"{type(out).__name__}.")
+            break
+        x = array(report, "x_hat", out[0], (9,))
+        P = array(report, "P", out[1], (9, 9))
+        if x is None or P is None:
+            break
+        x_ref, P_ref = optimal_update(*args)
+        ok, dx, dP = _matches(x, P, x_ref, P_ref)
+        if ok:
+            continue
+        for code, (fun, what) in MISTAKES.items():
+            xm, Pm = fun(*args)
+            if _matches(x, P, xm, Pm)[0]:
+                report.add(code, f"Case “{label}”: your update is {what}. {_HINTS[code]}")
+                break
+        else:
+            report.add("update-mismatch", f"Case “{label}”: x̂ differs from the update with the "
+                       f"rows that arrived by up to {dx:.3g} σ and P by up to {dP:.3g} σσ. "
+                       f"Use the rows r where z is not NaN: K_r = M H_rᵀ (H_r M H_rᵀ + V_r)⁻¹, "
+                       f"x̂ = x̄ + K_r (z_r − H_r x̄), P in Joseph form."
+                       + (" With nothing arrived, x̂ = x̄ and P = M." if label ==
+                          "nothing arrived" else ""))
+        break
+    if report.passed:
+        report.add("ok", f"The update matches the optimal one with the rows that arrived on "
+                   f"{len(cases(seed))} cases (IMU-only, all rows, one row missing, none).",
+                   "note")
+    report.sort()
+    return report
+
+
+@lru_cache(maxsize=1)
+def zeroed_gain_cost() -> dict[str, float]:
+    """Question 2's answers: σ of x at the end of the voyage for the optimal multirate filter,
+    the report's zeroed-gain filter's claim ((I − K H) M) and its actual error (Joseph)."""
+    from gpsaccel.kalman.multirate import run_multirate
+    from gpsaccel.ship.simulation import simulate_ship
+    from gpsaccel.ship.zeroed_gain import run_zeroed_gain
+
+    model = ShipModel()
+    voyage = simulate_ship(model, np.random.default_rng(0))
+    sched = model.schedule()
+    z = voyage.measurements(sched)
+    opt = run_multirate(model, z, schedule=sched, u=voyage.u)
+    rep = run_zeroed_gain(model, z, schedule=sched, covariance="report", u=voyage.u)
+    return {"sigma_optimal": math.sqrt(opt.P[-1][0, 0]),
+            "sigma_claimed": math.sqrt(rep.P[-1][0, 0]),
+            "sigma_actual": math.sqrt(rep.P_actual[-1][0, 0])}
+
+
+def cost_answer(sigma_optimal: object, sigma_zeroed: object) -> Report:
+    """Check question 2: σ_x at t = 100 s of the optimal filter and the zeroed gain's *actual*."""
+    report = Report("question 2: what the zeroed gain costs")
+    want = zeroed_gain_cost()
+    for name, value, key in (("sigma_optimal", sigma_optimal, "sigma_optimal"),
+                             ("sigma_zeroed", sigma_zeroed, "sigma_actual")):
+        try:
+            v = float(np.asarray(value, dtype=float).reshape(()))
+        except (TypeError, ValueError):
+            report.add("not-a-number", f"{name} must be one number; got {str(value)[:60]}.")
+            continue
+        right = want[key]
+        if math.isclose(v, right, rel_tol=RTOL):
+            continue
+        if math.isclose(v, right**2, rel_tol=RTOL):
+            report.add("std-as-variance", f"{name} = {v:.6g} is the variance P₁₁; the question "
+                       f"asks for the standard deviation σ = √P₁₁ = {right:.4g} m.")
+        elif key == "sigma_actual" and math.isclose(v, want["sigma_claimed"], rel_tol=RTOL):
+            report.add("claimed-not-actual", f"sigma_zeroed = {v:.6g} m is what the report's "
+                       f"filter claims, from its P = (I − K H) M. That formula holds only for the "
+                       f"optimal gain; the zeroed gain's actual error covariance is the Joseph "
+                       f"form of the gains it applied (P_actual), σ = {right:.4g} m.")
+        elif key == "sigma_actual" and math.isclose(v, want["sigma_optimal"], rel_tol=RTOL):
+            report.add("sigma-value", f"sigma_zeroed = {v:.6g} m is the optimal filter's σ; use "
+                       f"the zeroed-gain filter's P_actual.")
+        else:
+            report.add("sigma-value", f"{name} = {v:.6g} m; expected {right:.4g} m (σ of the x "
+                       f"position at the last step, t = 100 s).")
+    if report.passed:
+        report.add("ok", f"σ_x(100 s): optimal {want['sigma_optimal']:.4g} m, zeroed gain "
+                   f"{want['sigma_actual']:.4g} m actual (it claims "
+                   f"{want['sigma_claimed']:.4g} m).", "note")
+    report.sort()
+    return report
