@@ -1,46 +1,92 @@
-"""Run a student's ``kalman_filter(z)`` on given measurements, in a process of its own.
+"""Run named functions of a student's submission on given arrays, inside a sandbox.
 
-Usage (by :func:`gpsaccel.check.whole_filter.run_student`, not by hand)::
+Usage (by :mod:`gpsaccel.check.sandbox`, not by hand)::
 
-    python -P path/to/gpsaccel/check/_runner.py SUBMISSION.py INPUT.npz OUTPUT.npz PROGRESS.txt
+    python -I -S -B _runner.py CONTROL_DIR SUBMISSION_DIR RESULT_FD
 
-It is run as a script (``-P``: its own folder is not put on ``sys.path``) and imports only the
-standard library and numpy, so the child starts in a fraction of a second and a student's module
-named like one of ours (``report.py``) is not shadowed.
+It is started as a script in isolated mode (``-I``: no environment variables, no user site, its
+own folder not on ``sys.path``) without the ``site`` module (``-S``: no ``.pth`` file runs, so an
+editable install of gpsaccel is not on the path).  It imports only the standard library before it
+has read its plan, then numpy, then the student's file.
 
-INPUT.npz holds ``z`` (n_runs, n_gps, 2).  The runner imports SUBMISSION.py as a module (its
-``if __name__ == "__main__":`` block does not run), calls ``kalman_filter(z[r].copy())`` for each
-run and writes OUTPUT.npz with ``x`` (n_runs, n_gps, 3) and ``P`` (n_runs, n_gps, 3, 3), NaN
-where nothing came back, and ``status``: a JSON text saying how far it got and, at the first
-problem, what went wrong (the student's traceback, the types and shapes returned).  It stops at
-the first problem: one broken run says everything a student needs.  After every run it appends a
-line to PROGRESS.txt, so a caller that has to kill it knows how far it got.
+CONTROL_DIR holds ``plan.json`` (written by the sandbox)::
+
+    {"entry": "filter.py",                 # the student's file, relative to SUBMISSION_DIR
+     "sys_path": [...],                    # site-packages folders (numpy, scipy, filterpy)
+     "block": ["gpsaccel"],                # packages the submission may not import
+     "calls": [{"function": "kalman_filter", "n_args": 1,
+                "outputs": [{"name": "x_hat", "shape": [151, 3], "dtype": "float64"}, ...]}]}
+
+and ``inputs.npz`` with the arguments of call ``i`` as ``c{i}_{j}``.  The runner imports the
+student's file as a module (its ``if __name__ == "__main__":`` block does not run), makes each call
+in order, and stops at the first problem: one broken call says everything a student needs.
+
+What comes back goes over the pipe RESULT_FD as frames: a 4-byte big-endian length, a JSON
+header, and for a ``result`` frame the declared arrays' bytes (C order, native byte order, the
+declared dtype).  The parent reads them against the shapes it declared itself and refuses
+anything else (:class:`gpsaccel.check.sandbox.FrameReader`), so nothing the student's code does
+to this process (patching numpy, writing to the pipe) can hand back more than an answer of the
+declared size.  Frames: ``uses-checker`` (an import of a blocked package was attempted),
+``imported``, ``result`` (one per call), ``problem`` (the first problem; the runner stops) and
+``done``.
 
 Nothing here trusts the student's code: every call into it is wrapped, ``SystemExit`` included.
-The time limit is the caller's (it kills this process).
+The limits (time, memory, processes, files, output) are the sandbox's.
 """
 
 from __future__ import annotations
 
+import errno
+import importlib.abc
 import importlib.util
 import json
 import os
+import struct
 import sys
 import time
 import traceback
 from pathlib import Path
 
-import numpy as np
-
-#: Frames of the student's traceback kept in a finding (the last ones, nearest the error).
+#: Frames of the student's traceback kept in a problem (the last lines, nearest the error).
 TRACEBACK_LINES = 12
 
+_FD = -1
 
-def _student_traceback(exc: BaseException, path: Path) -> str:
-    """The traceback from the first frame in the student's file on, last lines only."""
+
+def _send(header: dict, payload: bytes = b"") -> None:
+    data = json.dumps(header).encode()
+    blob = struct.pack(">I", len(data)) + data + payload
+    view = memoryview(blob)
+    while view:
+        n = os.write(_FD, view)
+        view = view[n:]
+
+
+class _Blocker(importlib.abc.MetaPathFinder):
+    """Refuse (and report) imports of the checker's own package."""
+
+    def __init__(self, names: list[str]) -> None:
+        self.names = tuple(names)
+        self.reported = False
+
+    def find_spec(self, fullname, path=None, target=None):  # noqa: ANN001, ANN201
+        top = fullname.partition(".")[0]
+        if top in self.names:
+            if not self.reported:
+                self.reported = True
+                _send({"t": "uses-checker", "module": fullname})
+            raise ModuleNotFoundError(
+                f"{top} is not available to submissions during a check: compute the answer "
+                f"with your own code", name=fullname)
+        return None
+
+
+def _student_traceback(exc: BaseException, root: Path) -> str:
+    """The traceback from the first frame in the student's files on, last lines only."""
     tb = traceback.extract_tb(exc.__traceback__)
     for i, frame in enumerate(tb):
-        if Path(frame.filename).resolve() == path:
+        if not frame.filename.startswith("<") and \
+                Path(frame.filename).resolve().is_relative_to(root):
             tb = tb[i:]
             break
     else:  # not in the student's code (a SyntaxError, say): leave out the runner and importlib
@@ -52,8 +98,28 @@ def _student_traceback(exc: BaseException, path: Path) -> str:
     return "\n".join(text[-TRACEBACK_LINES:])
 
 
+def _limit_hit(exc: BaseException) -> str | None:
+    """Which limit of the sandbox an exception (or its cause) comes from, if any."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        seen.add(id(exc))
+        if isinstance(exc, MemoryError):
+            return "memory"
+        if isinstance(exc, OSError):
+            if exc.errno in (errno.EFBIG, errno.ENOSPC, errno.EDQUOT):
+                return "file"
+            if exc.errno == errno.EAGAIN and isinstance(exc, BlockingIOError):
+                return "process"  # fork() refused at RLIMIT_NPROC
+            if exc.errno == errno.EMFILE:
+                return "open-files"
+        exc = exc.__cause__ or exc.__context__
+    return None
+
+
 def _describe(value: object) -> dict:
     """Type and (if it has one) shape of something the student returned."""
+    import numpy as np
+
     out: dict = {"type": type(value).__module__ + "." + type(value).__qualname__}
     if isinstance(value, np.ndarray):
         out["shape"] = list(value.shape)
@@ -66,14 +132,36 @@ def _describe(value: object) -> dict:
     return out
 
 
-def run(path: Path, z: np.ndarray, progress: Path) -> tuple[np.ndarray, np.ndarray, dict]:
-    n_runs, n_gps = z.shape[0], z.shape[1]
-    x_all = np.full((n_runs, n_gps, 3), np.nan)
-    P_all = np.full((n_runs, n_gps, 3, 3), np.nan)
-    status: dict = {"stage": "import", "runs_done": 0, "problem": None}
+def _problem(kind: str, exc: BaseException | None = None, root: Path | None = None,
+             **fields: object) -> None:
+    header = {"t": "problem", "kind": kind, **fields}
+    if exc is not None:
+        header["exception"] = type(exc).__name__
+        header["limit"] = _limit_hit(exc)
+        header["traceback"] = _student_traceback(exc, root) if root else ""
+    _send(header)
+
+
+def run(control: Path, root: Path) -> None:
+    plan = json.loads((control / "plan.json").read_text(encoding="utf-8"))
+    sys.path[:0] = [str(root)]
+    sys.path.extend(plan["sys_path"])
+    # one BLAS thread: the sandbox's memory limit counts every thread's stack, and the machine is
+    # shared; matplotlib never opens a window
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ[var] = "1"
+    os.environ["MPLBACKEND"] = "Agg"
+    import numpy as np
+
+    with np.load(control / "inputs.npz", allow_pickle=False) as data:
+        inputs = {k: data[k] for k in data.files}
+    calls = plan["calls"]
+    if plan["block"]:
+        sys.meta_path.insert(0, _Blocker(plan["block"]))
+    path = root / plan["entry"]
+    os.chdir(path.parent)
     t0 = time.perf_counter()
     try:
-        sys.path.insert(0, str(path.parent))
         spec = importlib.util.spec_from_file_location("student_submission", path)
         if spec is None or spec.loader is None:
             raise ImportError(f"cannot load {path.name} as a Python module")
@@ -81,70 +169,69 @@ def run(path: Path, z: np.ndarray, progress: Path) -> tuple[np.ndarray, np.ndarr
         sys.modules["student_submission"] = module
         spec.loader.exec_module(module)
     except BaseException as exc:  # noqa: BLE001 - the student's code may raise anything
-        status["problem"] = {"kind": "import-error", "traceback": _student_traceback(exc, path)}
-        return x_all, P_all, status
-    status["import_seconds"] = time.perf_counter() - t0
-    f = getattr(module, "kalman_filter", None)
-    if f is None or not callable(f):
-        names = sorted(n for n in vars(module) if not n.startswith("_") and callable(
-            getattr(module, n)))
-        status["problem"] = {"kind": "no-kalman-filter", "callables": names[:20],
-                             "found": None if f is None else _describe(f)}
-        return x_all, P_all, status
-    status["stage"] = "runs"
+        _problem("import-error", exc, root)
+        return
+    _send({"t": "imported", "seconds": time.perf_counter() - t0})
     t1 = time.perf_counter()
-    with open(progress, "a", encoding="utf-8") as prog:
-        for r in range(n_runs):
+    for i, call in enumerate(calls):
+        name = call["function"]
+        f = getattr(module, name, None)
+        if f is None or not callable(f):
+            names = sorted(n for n in vars(module) if not n.startswith("_") and callable(
+                getattr(module, n)))
+            _problem("no-function", function=name, callables=names[:20],
+                     found=None if f is None else _describe(f))
+            return
+        args = [inputs[f"c{i}_{j}"].copy() for j in range(call["n_args"])]
+        try:
+            out = f(*args)
+        except BaseException as exc:  # noqa: BLE001
+            _problem("exception", exc, root, call=i, function=name)
+            return
+        specs = call["outputs"]
+        if len(specs) > 1:
+            if not isinstance(out, (tuple, list)) or len(out) != len(specs):
+                _problem("return-value", call=i, function=name, returned=_describe(out),
+                         length=len(out) if isinstance(out, (tuple, list)) else None,
+                         expected=len(specs))
+                return
+            values = list(out)
+        else:
+            values = [out]
+        payload = []
+        returned = {}
+        for spec_, value in zip(specs, values, strict=True):
+            returned[spec_["name"]] = _describe(value)
             try:
-                out = f(z[r].copy())
-            except BaseException as exc:  # noqa: BLE001
-                status["problem"] = {"kind": "exception", "run": r,
-                                     "traceback": _student_traceback(exc, path)}
-                break
-            if not isinstance(out, (tuple, list)) or len(out) != 2:
-                status["problem"] = {"kind": "return-value", "run": r, "returned": _describe(out),
-                                     "length": len(out) if isinstance(out, (tuple, list))
-                                     else None}
-                break
-            x_hat, P = out
-            if r == 0:
-                status["returned"] = {"x_hat": _describe(x_hat), "P": _describe(P)}
-            arrays = []
-            for name, value in (("x_hat", x_hat), ("P", P)):
-                try:
-                    arrays.append(np.array(value, dtype=float))
-                except (TypeError, ValueError) as exc:
-                    status["problem"] = {"kind": "not-numeric", "run": r, "name": name,
-                                         "returned": _describe(value), "error": str(exc)}
-                    break
-            if status["problem"]:
-                break
-            xa, Pa = arrays
-            if xa.shape != (n_gps, 3) or Pa.shape != (n_gps, 3, 3):
-                status["problem"] = {"kind": "wrong-shape", "run": r,
-                                     "x_hat": list(xa.shape), "P": list(Pa.shape)}
-                break
-            x_all[r], P_all[r] = xa, Pa
-            status["runs_done"] = r + 1
-            prog.write(f"{r + 1}\n")
-            prog.flush()
-    status["run_seconds"] = time.perf_counter() - t1
-    status["stage"] = "done"
-    return x_all, P_all, status
+                arr = np.array(value, dtype=spec_["dtype"])
+            except BaseException as exc:  # noqa: BLE001 - a student's __array__ may raise anything
+                _problem("not-numeric", call=i, function=name, name=spec_["name"],
+                         returned=_describe(value), error=str(exc)[:500])
+                return
+            if arr.shape != tuple(spec_["shape"]):
+                _problem("wrong-shape", call=i, function=name,
+                         shapes={s["name"]: _describe(v).get("shape")
+                                 for s, v in zip(specs, values, strict=True)},
+                         got=list(arr.shape), name=spec_["name"])
+                return
+            payload.append(np.ascontiguousarray(arr).tobytes())
+        _send({"t": "result", "call": i, "returned": returned}, b"".join(payload))
+    _send({"t": "done", "import_seconds": t1 - t0, "run_seconds": time.perf_counter() - t1})
 
 
 def main(argv: list[str]) -> int:
-    path, inp, out, progress = (Path(a) for a in argv)
-    z = np.load(inp)["z"]
-    x, P, status = run(path.resolve(), z, progress)
-    tmp = out.with_suffix(".tmp.npz")
-    np.savez(tmp, x=x, P=P, status=np.array(json.dumps(status)))
-    tmp.replace(out)  # a result file exists only once complete
+    global _FD
+    control, root, fd = Path(argv[0]), Path(argv[1]).resolve(), int(argv[2])
+    _FD = fd
+    os.set_inheritable(fd, False)  # a subprocess of the student's does not get the channel
+    run(control, root)
     return 0
 
 
 if __name__ == "__main__":
     code = main(sys.argv[1:])
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(code)  # do not wait for threads the student's code may have left running
+    try:
+        sys.stdout.flush()
+        sys.stderr.flush()
+    finally:
+        os._exit(code)  # do not wait for threads the student's code may have left running

@@ -7,17 +7,17 @@
     from gpsaccel.calibration.compare import compare
     print(compare("joseph", "square-root", filters={"alice": check.student_filter("alice.py")}))
 
-Each call runs the file in a child process (the checker's runner, see
-:func:`gpsaccel.check.whole_filter.run_student`: its own session, a time limit, nothing of the
-student's imported into this process) on ``repeat`` copies of ``z`` and hands back the first run's
-(x_hat, P).  The time per run is measured in the child around the student's calls only, and set as
-the callable's ``seconds`` (``compare`` reports it instead of the process's start-up).
+Each call runs the file in a sandbox (:mod:`gpsaccel.check.sandbox`, as
+:func:`gpsaccel.check.whole_filter.run_student` does for a check: a box of its own with limits,
+nothing of the student's imported into this process) on ``repeat`` copies of ``z`` and hands back
+the first run's (x_hat, P).  The time per run is measured in the child around the student's calls
+only, and set as the callable's ``seconds`` (``compare`` reports it instead of the box's start-up).
 
 Whatever goes wrong in the student's code (it raises, loops, returns the wrong shapes, kills its
-process) raises :class:`StudentFilterError` here with the checker's message for it, which
-``compare`` prints in the filter's row.  The results that come back are untrusted: loaded with
-``allow_pickle=False`` and checked for shape; NaN and inf are passed on (``compare`` counts them as
-infinitely wrong).
+process, breaks a limit) raises :class:`StudentFilterError` here with the checker's message for
+it, which ``compare`` prints in the filter's row.  The results that come back are untrusted: read
+against the declared shapes (anything else is refused); NaN and inf are passed on (``compare``
+counts them as infinitely wrong).
 """
 
 from __future__ import annotations
@@ -28,8 +28,10 @@ from pathlib import Path
 import numpy as np
 
 from gpsaccel import _validation as _v
+from gpsaccel.calibration.model import CalibrationModel
+from gpsaccel.check import sandbox as sb
 from gpsaccel.check.report import Report
-from gpsaccel.check.whole_filter import _run_findings, run_student
+from gpsaccel.check.whole_filter import FUNCTION, _run_findings, run_student
 
 
 class StudentFilterError(RuntimeError):
@@ -44,16 +46,19 @@ class StudentFilter:
     path : the student's ``.py`` file, defining ``kalman_filter(z)`` for report 000's problem.
     timeout : wall-clock limit (s) of one call (import and ``repeat`` runs).
     repeat : runs per call, for the time per run (the mean of the runs, measured in the child).
+    sandbox : ``"auto"``, ``"bwrap"`` or ``"basic"`` (:mod:`gpsaccel.check.sandbox`).
 
     After a call, ``seconds`` is the time of one run (s).
     """
 
-    def __init__(self, path: str | os.PathLike, timeout: float = 60.0, repeat: int = 3) -> None:
+    def __init__(self, path: str | os.PathLike, timeout: float = 60.0, repeat: int = 3,
+                 sandbox: str = "auto") -> None:
         self.path = Path(path)
         if not self.path.is_file():
             raise ValueError(f"path: {self.path} is not a file")
         self.timeout = _v.positive_float("timeout", timeout)
         self.repeat = _v.integer("repeat", repeat, minimum=1)
+        self.sandbox = sb.resolve_backend(sandbox)
         self.seconds: float | None = None
         self.description = f"student file {self.path.name} (own process)"
         self.__name__ = self.path.stem
@@ -61,26 +66,29 @@ class StudentFilter:
     def __call__(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         z = _v.finite_array("z", z, (None, 2), allow_nan=True)
         self.seconds = None
-        run = run_student(self.path.resolve(), np.repeat(z[None], self.repeat, axis=0),
-                          self.timeout)
+        try:
+            sub = sb.load_submission(self.path, FUNCTION)
+        except sb.SubmissionError as exc:
+            raise StudentFilterError(str(exc)) from None
+        limits = sb.Limits(time=self.timeout)
+        box, x, P = run_student(sub, np.repeat(z[None], self.repeat, axis=0), limits,
+                                self.sandbox)
         report = Report(self.path.name)
-        if not _run_findings(report, run, self.timeout, self.repeat, (z.shape[0], 3)):
+        if not _run_findings(report, box, limits, self.repeat, CalibrationModel()):
             raise StudentFilterError("\n".join(f.message for f in report.findings
                                                 if f.severity == "error") or "no result")
-        x, P = np.asarray(run.x[0], dtype=float), np.asarray(run.P[0], dtype=float)
-        if x.shape != (z.shape[0], 3) or P.shape != (z.shape[0], 3, 3):
-            raise StudentFilterError(f"the runner gave back shapes {x.shape} and {P.shape}")
-        # the child's own clock, not trusted beyond the wall clock of the whole process (start-up
+        x, P = x[0], P[0]  # the declared shapes, (n, 3) and (n, 3, 3)
+        # the child's own clock, not trusted beyond the wall clock of the whole box (start-up
         # and import included); a hostile file can still under-report it, so it is indicative
         done = self.repeat  # no problem reported: every run came back
-        wall = run.seconds / done
-        reported = run.status.get("run_seconds")
+        wall = box.seconds / done
+        reported = box.run_seconds
         per_run = float(reported) / done if isinstance(reported, (int, float)) else np.nan
         self.seconds = per_run if np.isfinite(per_run) and 0 < per_run <= wall else wall
         return x, P
 
 
-def student_filter(path: str | os.PathLike, timeout: float = 60.0, repeat: int = 3
-                   ) -> StudentFilter:
+def student_filter(path: str | os.PathLike, timeout: float = 60.0, repeat: int = 3,
+                   sandbox: str = "auto") -> StudentFilter:
     """The student's file ``path`` as a ``kalman_filter(z)`` callable (see :class:`StudentFilter`)."""
-    return StudentFilter(path, timeout=timeout, repeat=repeat)
+    return StudentFilter(path, timeout=timeout, repeat=repeat, sandbox=sandbox)

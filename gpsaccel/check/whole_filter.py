@@ -42,12 +42,7 @@ alarmed once in 540 correct checks (0.19 %; Bonferroni over correlated times is 
 
 from __future__ import annotations
 
-import json
 import os
-import signal
-import subprocess
-import sys
-import tempfile
 import time
 from dataclasses import dataclass
 from functools import lru_cache
@@ -59,6 +54,7 @@ from gpsaccel import _validation as _v
 from gpsaccel.calibration import mistakes as cat
 from gpsaccel.calibration.model import STATE_NAMES, CalibrationModel
 from gpsaccel.calibration.simulation import simulate
+from gpsaccel.check import sandbox as sb
 from gpsaccel.check.report import Report
 from gpsaccel.kalman.consistency import (
     chi2_bounds,
@@ -75,8 +71,8 @@ from gpsaccel.kalman.consistency import (
 #: within which a catalogue entry counts as matching.
 TOLERANCE = 1e-6
 
-#: The script that runs the student's code in the child process.
-RUNNER = Path(__file__).with_name("_runner.py")
+#: The function a submission defines.
+FUNCTION = "kalman_filter"
 
 #: Characters of the student's printed output kept in a finding.
 OUTPUT_KEEP = 1500
@@ -88,125 +84,84 @@ OUTPUT_WARN = 20_000
 
 # ---------------------------------------------------------------------------------- the data
 @dataclass(frozen=True, eq=False)
-class Problem:
-    """The realizations a check runs on, and the optimal filter's answer on them.
+class Data:
+    """The realizations a check runs on (no answer in it).
 
     z : (n_runs, n_gps, 2) measurements; x_true : (n_runs, n_gps, 3) true error states.
-    x_ref : (n_runs, n_gps, 3) optimal x̂; P_ref : (n_gps, 3, 3) optimal P; sd : √diag P_ref.
     """
 
     model: CalibrationModel
     seed: int
     z: np.ndarray
     x_true: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class Problem(Data):
+    """The realizations and the optimal filter's answer on them.
+
+    x_ref : (n_runs, n_gps, 3) optimal x̂; P_ref : (n_gps, 3, 3) optimal P; sd : √diag P_ref.
+    """
+
     x_ref: np.ndarray
     P_ref: np.ndarray
     sd: np.ndarray
 
 
-def make_problem(model: CalibrationModel, n_runs: int, seed: int) -> Problem:
+def make_data(model: CalibrationModel, n_runs: int, seed: int) -> Data:
     rng = np.random.default_rng(seed)
     runs = [simulate(model, rng) for _ in range(n_runs)]
-    z = np.stack([r.z for r in runs])
-    x_true = np.stack([r.x_gps for r in runs])
-    x_ref, P_ref = cat.reference(model).apply(z)
+    return Data(model, seed, np.stack([r.z for r in runs]), np.stack([r.x_gps for r in runs]))
+
+
+def with_answer(data: Data) -> Problem:
+    """The optimal filter run on ``data`` (computed only once no student process is alive)."""
+    x_ref, P_ref = cat.reference(data.model).apply(data.z)
     sd = np.sqrt(np.diagonal(P_ref, axis1=1, axis2=2))
-    return Problem(model, seed, z, x_true, x_ref, P_ref, sd)
+    return Problem(data.model, data.seed, data.z, data.x_true, x_ref, P_ref, sd)
+
+
+def make_problem(model: CalibrationModel, n_runs: int, seed: int) -> Problem:
+    return with_answer(make_data(model, n_runs, seed))
 
 
 @lru_cache(maxsize=4)
-def _default_problem(n_runs: int, seed: int) -> Problem:
-    return make_problem(CalibrationModel(), n_runs, seed)
+def _default_data(n_runs: int, seed: int) -> Data:
+    return make_data(CalibrationModel(), n_runs, seed)
 
 
-def _problem(model: CalibrationModel | None, n_runs: int, seed: int) -> Problem:
+def _data(model: CalibrationModel | None, n_runs: int, seed: int) -> Data:
     if model is None:
-        return _default_problem(n_runs, seed)
-    return make_problem(model, n_runs, seed)
+        return _default_data(n_runs, seed)
+    return make_data(model, n_runs, seed)
+
+
+def forget_answers() -> None:
+    """Drop every cached answer (the catalogue's covariances, the optimal P among them), so none
+    is in this process's memory while a student's code runs."""
+    _candidates.cache_clear()
 
 
 # ---------------------------------------------------------------------- running the student
-@dataclass(frozen=True)
-class StudentRun:
-    """What came back from the student's process.
-
-    x, P : (n_runs, n_gps, 3) and (n_runs, n_gps, 3, 3), NaN where nothing came back (None if the
-        process wrote no result).
-    status : the runner's status (see :mod:`gpsaccel.check._runner`).
-    timed_out : the process was killed at the time limit; runs_done : runs finished by then.
-    output : the tail of what the student's code printed (stdout and stderr); output_chars : its
-        full length.  returncode : the process's exit code.  seconds : wall-clock time.
-    """
-
-    x: np.ndarray | None
-    P: np.ndarray | None
-    status: dict
-    timed_out: bool
-    runs_done: int
-    output: str
-    output_chars: int
-    returncode: int | None
-    seconds: float
+def calls(z: np.ndarray) -> list[sb.Call]:
+    """One sandbox call ``kalman_filter(z[r])`` per run, returning x̂ (n_gps, 3), P (n_gps, 3, 3)."""
+    n_gps = z.shape[1]
+    outputs = (sb.Output("x_hat", (n_gps, 3)), sb.Output("P", (n_gps, 3, 3)))
+    return [sb.Call(FUNCTION, (z[r],), outputs) for r in range(z.shape[0])]
 
 
-def _tail(path: Path, keep: int) -> tuple[str, int]:
-    size = path.stat().st_size if path.exists() else 0
-    with open(path, "rb") as f:
-        if size > keep * 4:
-            f.seek(size - keep * 4)
-        text = f.read().decode("utf-8", errors="replace")
-    return text[-keep:], size
-
-
-def run_student(path: Path, z: np.ndarray, timeout: float) -> StudentRun:
-    """Run ``kalman_filter`` of the file ``path`` on every ``z[r]`` in a child process."""
-    t0 = time.perf_counter()
-    with tempfile.TemporaryDirectory(prefix="gpsaccel-check-") as tmp:
-        tmp = Path(tmp)
-        inp, out, prog, log = (tmp / "input.npz", tmp / "output.npz", tmp / "progress.txt",
-                               tmp / "output.txt")
-        np.savez(inp, z=z)
-        prog.touch()
-        env = dict(os.environ, MPLBACKEND="Agg", PYTHONHASHSEED="0", PYTHONIOENCODING="utf-8")
-        # the runner as a script with -P (its folder not on sys.path: a student's "import report"
-        # must not find ours), so the child imports numpy and the student's file, not gpsaccel
-        cmd = [sys.executable, "-P", str(RUNNER), str(path), str(inp), str(out), str(prog)]
-        work = tmp / "cwd"
-        work.mkdir()
-        timed_out = False
-        with open(log, "wb") as logf:
-            proc = subprocess.Popen(cmd, stdout=logf, stderr=subprocess.STDOUT,
-                                    stdin=subprocess.DEVNULL, cwd=work, env=env,
-                                    start_new_session=True)
-            try:
-                proc.wait(timeout=timeout)
-            except subprocess.TimeoutExpired:
-                timed_out = True
-            finally:  # also on Ctrl-C: the child is in a session of its own and would live on
-                _kill(proc)  # also whatever the student's code started and left running
-        runs_done = len(prog.read_text(encoding="utf-8").split())
-        text, chars = _tail(log, OUTPUT_KEEP)
-        x = P = None
-        status: dict = {}
-        if out.exists():
-            with np.load(out) as data:
-                x, P = data["x"], data["P"]
-                status = json.loads(str(data["status"]))
-        return StudentRun(x, P, status, timed_out, runs_done, text, chars, proc.returncode,
-                          time.perf_counter() - t0)
-
-
-def _kill(proc: subprocess.Popen) -> None:
-    """Kill the child and whatever it started: the process group it leads (it was started in a
-    session of its own, so the group holds only its processes)."""
-    if hasattr(os, "killpg"):
-        try:
-            os.killpg(proc.pid, signal.SIGKILL)
-        except (ProcessLookupError, PermissionError):
-            pass  # the group is already empty
-    if proc.poll() is None:
-        proc.kill()
-    proc.wait()
+def run_student(sub: sb.Submission, z: np.ndarray, limits: sb.Limits, backend: str = "auto",
+                allow_gpsaccel: bool = False) -> tuple[sb.BoxResult, np.ndarray, np.ndarray]:
+    """Run the submission on every ``z[r]`` in a sandbox; x (n_runs, n_gps, 3) and P (n_runs,
+    n_gps, 3, 3) hold what came back, NaN where nothing did."""
+    forget_answers()
+    box = sb.run(sub, calls(z), limits, backend, allow_gpsaccel)
+    n_runs, n_gps = z.shape[:2]
+    x = np.full((n_runs, n_gps, 3), np.nan)
+    P = np.full((n_runs, n_gps, 3, 3), np.nan)
+    for r, out in enumerate(box.results):
+        x[r], P[r] = out["x_hat"], out["P"]
+    return box, x, P
 
 
 # --------------------------------------------------------------------------- the findings
@@ -218,49 +173,83 @@ def _where(sd: np.ndarray, t: np.ndarray, idx: tuple[int, ...], kind: str) -> st
     return f"t = {t[i]:g} s, element P{a + 1}{b + 1}"
 
 
-def _run_findings(report: Report, run: StudentRun, timeout: float, n_runs: int,
-                  model: CalibrationModel) -> bool:
-    """Findings about the process itself; True when there are results to examine."""
-    st = run.status
-    problem = st.get("problem")
-    if run.output_chars > OUTPUT_WARN:
-        report.add("prints-a-lot", f"Your code printed {run.output_chars:,} characters during the "
+def _run_findings(report: Report, box: sb.BoxResult, limits: sb.Limits, n_runs: int,
+                  model: CalibrationModel, allow_gpsaccel: bool = False) -> bool:
+    """Findings about the box itself; True when there are results to examine."""
+    report.details["sandbox"] = box.backend
+    failure, problem = box.failure, box.problem or {}
+    done = len(box.results)
+    if box.output_bytes > OUTPUT_WARN and failure != "output-limit":
+        report.add("prints-a-lot", f"Your code printed {box.output_bytes:,} bytes during the "
                    f"check ({n_runs} runs). Remove debug prints from kalman_filter: they slow it "
                    f"down and bury the messages that matter. The last lines were:\n"
-                   + _indent_tail(run.output, 6), "warning")
-    if run.timed_out:
-        done = run.runs_done
-        rate = (f" (≈ {timeout / done:.2g} s per run, {n_runs} runs needed)" if done else "")
+                   + _indent_tail(box.output[-OUTPUT_KEEP:], 6), "warning")
+    if box.killed:
+        report.details["processes_killed"] = box.killed
+    if failure is None:
+        _returned_notes(report, box.returned or {})
+        return True
+    mib = limits.memory / 2**20
+    tb = ("; the traceback ends with:\n" + _indent(problem["traceback"])
+          if problem.get("traceback") else ".")
+    last = "\nIts last output:\n" + _indent_tail(box.output[-OUTPUT_KEEP:], 8)
+    if failure == "timeout":
+        rate = (f" (≈ {limits.time / done:.2g} s per run, {n_runs} runs needed)" if done else "")
         report.add("timeout", f"Your kalman_filter did not finish within the time limit of "
-                   f"{timeout:g} s: it completed {done} of {n_runs} runs{rate}. "
+                   f"{limits.time:g} s: it completed {done} of {n_runs} runs{rate}. "
                    + ("It never returned once: look for a loop whose condition never changes "
                       "(e.g. while k < n without k += 1) or input() waiting for a keyboard."
                       if done == 0 else f"It is too slow: {model.n_steps} accelerometer steps "
                       f"per run should take well under a second."))
-        return False
-    if not st:
+    elif failure == "memory-limit":
+        report.add("memory-limit", f"Your code ran out of memory: a check may use {mib:g} MiB "
+                   f"of address space, and your file asked for more (after {done} of {n_runs} "
+                   f"runs){tb} A filter for {model.n_gps} GPS times needs a few kilobytes: "
+                   f"look for an array sized by the accelerometer steps squared, or a list that "
+                   f"grows in a loop that never ends.")
+    elif failure == "output-limit":
+        report.add("output-limit", f"Your code printed more than {limits.output:,} bytes, the "
+                   f"most a check keeps, so it was stopped after {done} of {n_runs} runs. "
+                   f"Remove the prints from kalman_filter (or print only when debugging)." + last)
+    elif failure == "file-limit":
+        report.add("file-limit", f"Your code wrote a file larger than the {limits.file_size:,} "
+                   f"bytes a check allows (or filled its working folder){tb} A filter needs no "
+                   f"files: return x_hat and P instead of saving them.")
+    elif failure == "process-limit":
+        report.add("process-limit", f"Your code started more processes than the "
+                   f"{limits.processes} a check allows (after {done} of {n_runs} runs){tb} "
+                   f"kalman_filter must compute its result in its own process: remove "
+                   f"os.fork, subprocess and multiprocessing.")
+    elif failure == "uses-checker":
+        report.add("uses-checker", "Your file imports gpsaccel, the package that checks it. "
+                   "During a check the submission must compute x̂ and P with its own code (numpy, "
+                   "scipy and filterpy are available); remove the import of gpsaccel"
+                   + (". (Your instructor allowed gpsaccel for this check.)" if allow_gpsaccel
+                      else "."))
+    elif failure == "result-refused":
+        report.add("result-refused", f"What your code handed back to the checker was refused "
+                   f"({box.detail}). Only kalman_filter's return value counts: do not write to "
+                   f"the checker's file descriptors or replace the checker's functions.")
+    elif failure == "crashed":
         report.add("crashed", f"The Python process running your file ended without a result "
-                   f"(exit code {run.returncode}). Does your file call os._exit(), or use a lot "
-                   f"of memory? Its last output:\n" + _indent_tail(run.output, 8))
-        return False
-    if problem is None:
-        _returned_notes(report, st)
-        return True
-    kind = problem["kind"]
-    if kind == "import-error":
+                   f"({box.detail}) after {done} of {n_runs} runs. Does your file call "
+                   f"os._exit() or kill a process?" + last)
+    elif failure == "import-error":
         report.add("import-error", "Your file raises an error when it is imported (before "
                    "kalman_filter is called); the traceback ends with:\n"
-                   + _indent(problem["traceback"]))
-    elif kind == "no-kalman-filter":
+                   + _indent(problem.get("traceback", "")))
+    elif failure == "no-function":
         found = problem.get("found")
         report.add("no-kalman-filter", "Your file does not define a function kalman_filter(z)"
                    + (f" (kalman_filter is a {found['type']}, not a function)" if found else "")
-                   + ". Functions it defines: " + (", ".join(problem["callables"]) or "none")
+                   + ". Functions it defines: " + (", ".join(problem.get("callables", []))
+                                                    or "none")
                    + ". Name your filter kalman_filter, taking z and returning (x_hat, P).")
-    elif kind == "exception":
-        report.add("exception", f"kalman_filter(z) raised an exception on run {problem['run']}; "
-                   f"the traceback ends with:\n" + _indent(problem["traceback"]))
-    elif kind == "return-value":
+    elif failure == "exception":
+        report.add("exception", f"kalman_filter(z) raised an exception on run "
+                   f"{problem.get('call')}; the traceback ends with:\n"
+                   + _indent(problem.get("traceback", "")))
+    elif failure == "return-value":
         ret = problem["returned"]
         shape_text = f" of shape {tuple(ret['shape'])}" if ret.get("shape") else ""
         length = problem.get("length")
@@ -268,20 +257,20 @@ def _run_findings(report: Report, run: StudentRun, timeout: float, n_runs: int,
                    f"a {ret['type']}{shape_text}"
                    + (f" with {length} items" if length is not None else "")
                    + ". End it with: return x_hat, P.")
-    elif kind == "not-numeric":
+    elif failure == "not-numeric":
         report.add("not-numeric", f"{problem['name']} returned by kalman_filter is not an array "
                    f"of numbers ({problem['returned']['type']}): np.array({problem['name']}, "
                    f"dtype=float) fails with: {problem['error'].rstrip('.')}.")
-    elif kind == "wrong-shape":
-        report.add("wrong-shape", _shape_message(tuple(problem["x_hat"]), tuple(problem["P"]),
-                                                 model))
-    else:  # a kind this version does not know: say what the runner said
-        report.add("runner", f"The check could not run your filter: {problem}")
+    elif failure == "wrong-shape":
+        shapes = problem.get("shapes", {})
+        report.add("wrong-shape", _shape_message(tuple(shapes.get("x_hat") or ()),
+                                                 tuple(shapes.get("P") or ()), model))
+    else:  # a code this version does not know: say what the sandbox said
+        report.add("runner", f"The check could not run your filter: {failure} {box.detail}")
     return False
 
 
-def _returned_notes(report: Report, st: dict) -> None:
-    ret = st.get("returned", {})
+def _returned_notes(report: Report, ret: dict) -> None:
     for name in ("x_hat", "P"):
         typ = ret.get(name, {}).get("type", "")
         if typ in ("builtins.list", "builtins.tuple"):
@@ -526,21 +515,28 @@ def _consistency(report: Report, problem: Problem, x: np.ndarray, P: np.ndarray,
 
 def submission(path: str | os.PathLike, n_runs: int = 200, seed: int = 0, timeout: float = 60,
                model: CalibrationModel | None = None, alpha: float = 0.01,
-               tol: float = TOLERANCE) -> Report:
-    """Check the student file ``path`` that defines ``kalman_filter(z) -> (x_hat, P)``.
+               tol: float = TOLERANCE, sandbox: str = "auto", limits: sb.Limits | None = None,
+               allow_gpsaccel: bool = False) -> Report:
+    """Check the submission ``path`` that defines ``kalman_filter(z) -> (x_hat, P)``.
 
     Parameters
     ----------
-    path : the student's ``.py`` file.
+    path : the student's ``.py`` file, or a folder (one student's) holding one file that defines
+        kalman_filter and its helper modules and data files (:func:`sandbox.load_submission`).
     n_runs : realizations to run it on (≥ 2).
     seed : seed of the realizations (``numpy.random.default_rng(seed)``).
-    timeout : wall-clock limit (s) for the student's process (import and all runs).
+    timeout : wall-clock limit (s) for the student's box (import and all runs).
     model : the problem (report 000's defaults when None).
     alpha : family-wise false-alarm rate of each consistency test.
     tol : distance (units of the optimal σ) within which P and x̂ count as equal.
+    sandbox : ``"auto"``, ``"bwrap"`` or ``"basic"`` (:mod:`gpsaccel.check.sandbox`).
+    limits : the box's limits (:class:`sandbox.Limits`; its ``time`` is replaced by ``timeout``).
+    allow_gpsaccel : let the submission import gpsaccel (e.g. for the model matrices).
 
-    Returns a :class:`~gpsaccel.check.report.Report`; it does not raise for anything the student's
-    file does.  Arguments of the caller are validated (ValueError naming the argument).
+    The optimal filter is run only after the box is empty: no process of the student's is alive
+    while the answer is in memory.  Returns a :class:`~gpsaccel.check.report.Report`; it does not
+    raise for anything the student's file does.  Arguments of the caller are validated
+    (ValueError naming the argument).
     """
     t0 = time.perf_counter()
     n_runs = _v.integer("n_runs", n_runs, minimum=2)
@@ -548,25 +544,37 @@ def submission(path: str | os.PathLike, n_runs: int = 200, seed: int = 0, timeou
     timeout = _v.positive_float("timeout", timeout)
     alpha = _v.probability("alpha", alpha)
     tol = _v.positive_float("tol", tol)
+    if limits is not None and not isinstance(limits, sb.Limits):
+        raise ValueError(f"limits must be a gpsaccel.check.sandbox.Limits, got {limits!r}")
+    limits = sb.Limits(**{**vars(limits or sb.Limits()), "time": timeout})
+    backend = sb.resolve_backend(sandbox)
     path = Path(path)
     report = Report(path.name)
-    report.details.update({"path": str(path), "n_runs": n_runs, "seed": seed, "timeout": timeout})
-    if not path.is_file():
-        report.add("not-found", f"{path} is not a file.")
+    report.details.update({"path": str(path), "n_runs": n_runs, "seed": seed, "timeout": timeout,
+                           "sandbox": backend})
+    try:
+        sub = sb.load_submission(path, FUNCTION)
+    except sb.SubmissionError as exc:
+        code = "no-kalman-filter" if exc.code == "no-function" else exc.code
+        report.add(code, str(exc))
         report.seconds = time.perf_counter() - t0
         return report
-    problem = _problem(model, n_runs, seed)
-    run = run_student(path.resolve(), problem.z, timeout)
-    report.details["student_seconds"] = round(run.seconds, 3)
-    if _run_findings(report, run, timeout, n_runs, problem.model) and \
-            _value_findings(report, run.x, run.P, problem.model.t_gps):
-        P_ok, x_ok = _comparison(report, problem, run.x, run.P, tol)
+    if sub.files != (sub.entry,):
+        report.details["files"] = list(sub.files)
+        report.details["entry"] = sub.entry
+    data = _data(model, n_runs, seed)
+    box, x, P = run_student(sub, data.z, limits, backend, allow_gpsaccel)
+    report.details["student_seconds"] = round(box.seconds, 3)
+    if _run_findings(report, box, limits, n_runs, data.model, allow_gpsaccel) and \
+            _value_findings(report, x, P, data.model.t_gps):
+        problem = with_answer(data)  # the box is empty: now the answer may exist
+        P_ok, x_ok = _comparison(report, problem, x, P, tol)
         if P_ok and x_ok:
             report.add("matches-optimal", f"P and x̂ match the optimal filter to "
                        f"{tol:g} σ on all {n_runs} runs.", "note")
         else:
-            _diagnosis_findings(report, problem, run.x, run.P, tol)
-        _consistency(report, problem, run.x, run.P, alpha)
+            _diagnosis_findings(report, problem, x, P, tol)
+        _consistency(report, problem, x, P, alpha)
     report.sort()
     report.seconds = time.perf_counter() - t0
     return report
