@@ -193,32 +193,67 @@ def _cmd_ship(args: argparse.Namespace) -> int:
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
-    """Check students' kalman_filter files in parallel; table on stdout, --json for the details."""
+    """Check students' submissions, each in a sandbox; table on stdout, --json for the details."""
     import time
 
-    from gpsaccel.check.batch import check_many, find_submissions, table, write_json
+    from gpsaccel.check import sandbox
+    from gpsaccel.check.batch import (
+        Interrupted,
+        appender,
+        check_many,
+        find_submissions,
+        log_path,
+        table,
+        write_json,
+    )
 
     files, notes = find_submissions(args.paths)
     for note in notes:
         print(note, file=sys.stderr)
     if not files:
-        raise ValueError("paths: no .py file was found")
+        raise ValueError("paths: no .py file or submission folder was found")
     spec = _dask_spec(args.dask)
     if spec is None:
-        spec = None if args.workers == 1 else "processes"
+        spec = "processes"  # a process per check, even with --workers 1
+    try:
+        limits = sandbox.Limits(memory=int(args.memory * 2**20), time=args.timeout,
+                                file_size=int(args.max_file_size * 2**20),
+                                processes=args.max_processes,
+                                output=int(args.max_output * 2**20))
+    except ValueError as exc:
+        raise ValueError(str(exc).replace("limits.", "--")) from None
+    backend = sandbox.resolve_backend(args.sandbox)
+    settings = {"runs": args.runs, "seed": args.seed, "timeout": args.timeout,
+                "sandbox": backend, "allow_gpsaccel": args.allow_gpsaccel,
+                "limits": {k: v for k, v in vars(limits).items()}}
+    print(f"sandbox: {backend}" + ("" if backend == "bwrap" else
+                                   " (bubblewrap not available: apt-get install bubblewrap)"),
+          file=sys.stderr)
+    on_result = appender(log_path(args.json)) if args.json is not None else None
     t0 = time.perf_counter()
-    results = check_many(files, n_runs=args.runs, seed=args.seed, timeout=args.timeout,
-                         executor=spec, max_workers=args.workers)
+    try:
+        results = check_many(files, n_runs=args.runs, seed=args.seed, timeout=args.timeout,
+                             executor=spec, max_workers=args.workers, sandbox=backend,
+                             limits=limits, allow_gpsaccel=args.allow_gpsaccel,
+                             on_result=on_result)
+    except Interrupted as exc:
+        done = [r for r in exc.results if r is not None]
+        if done:
+            print(table(done))
+        if args.json is not None:
+            write_json(done, args.json, interrupted=True, **settings)
+            print(f"wrote {args.json} ({len(done)} of {len(files)} checked)")
+        print("gpsaccel check: interrupted", file=sys.stderr)
+        return 130
     seconds = time.perf_counter() - t0
     if args.verbose:
         for r in results:
             print(r["text"], end="\n\n")
     print(table(results))
     print(f"{len(results)} submissions, {args.runs} runs each (seed {args.seed}), "
-          f"{seconds:.1f} s")
+          f"sandbox {backend}, {seconds:.1f} s")
     if args.json is not None:
-        path = write_json(results, args.json, runs=args.runs, seed=args.seed,
-                          timeout=args.timeout)
+        path = write_json(results, args.json, **settings)
         print(f"wrote {path}")
     return 0 if all(r["passed"] for r in results) else 1
 
@@ -336,7 +371,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("check", help="check students' kalman_filter files (homework checker)")
     p.add_argument("paths", nargs="+", type=Path,
-                   help="submission files, or folders searched for *.py files")
+                   help="submission files, or folders whose every top-level .py file or "
+                        "sub-folder is one submission")
     p.add_argument("--json", type=_v.output_file, default=None, metavar="FILE",
                    help="write every finding and number to FILE (e.g. results.json)")
     p.add_argument("--runs", type=_v.flag_int(minimum=2), default=200,
@@ -349,6 +385,21 @@ def build_parser() -> argparse.ArgumentParser:
                    help="parallel local processes (default: one per CPU; 1 = one at a time)")
     p.add_argument("--dask", default=None, metavar="local|tcp://host:port",
                    help="check on a Dask LocalCluster or a running scheduler instead")
+    p.add_argument("--sandbox", choices=("auto", "bwrap", "basic"), default="auto",
+                   help="isolation of each submission: bwrap (bubblewrap namespaces), basic "
+                        "(limits, scrubbed environment, private folder) or auto (bwrap when it "
+                        "works; default)")
+    p.add_argument("--memory", type=float, default=1024, metavar="MIB",
+                   help="address space per student process, MiB (default 1024)")
+    p.add_argument("--max-output", type=float, default=1, metavar="MIB",
+                   help="printed output per submission, MiB (default 1)")
+    p.add_argument("--max-file-size", type=float, default=64, metavar="MIB",
+                   help="largest file a submission may write, MiB (default 64)")
+    p.add_argument("--max-processes", type=int, default=64,
+                   help="processes per submission at once (default 64)")
+    p.add_argument("--allow-gpsaccel", action="store_true",
+                   help="let submissions import gpsaccel (by default an import is the finding "
+                        "uses-checker)")
     p.add_argument("-v", "--verbose", action="store_true", help="print every report in full")
     p.set_defaults(func=_cmd_check)
 

@@ -1,87 +1,295 @@
-"""Check many submissions at once, in parallel, for an instructor (``gpsaccel check PATH ...``).
+"""Check a whole class at once (``gpsaccel check DIR ...``), in a batch nothing can take down.
 
-Each submission is checked by :func:`gpsaccel.check.submission` in a worker of an executor from
-:func:`gpsaccel.executors.resolve_executor` — local processes by default, a Dask cluster on
-request — and each worker starts the student's code in a child process of its own, as a single
-check does.  Results come back as plain dictionaries (:meth:`Report.to_dict` plus the text), so
-any executor can carry them.
+What a submission is: each top-level entry of a folder given on the command line is one
+submission, a ``.py`` file or a folder (one student's: the file that defines ``kalman_filter`` and
+its helpers and data; see :func:`gpsaccel.check.sandbox.load_submission`).  A file given on the
+command line is one submission.  A helper module inside a student's folder is part of that
+submission, never a failing submission of its own.
+
+How the batch runs (:func:`check_many` with the default ``executor="processes"``): each check
+runs in a process of its own, forked for that one file (``--workers 1`` too), which runs the
+student's box, then computes the optimal answer, then hands back a plain dictionary over a pipe and
+exits.  So:
+
+- a check whose process dies (a student who killed its parent, a crash of the checker) is
+  recorded as ``checker-error`` for that file only, and the batch goes on: there is no pool to
+  break, the next file gets a fresh process;
+- the batch's own process is a child subreaper while it runs: whatever a dead check leaves behind
+  (a box whose parent was killed) is re-parented to it and killed; at the end, every process it
+  started is confirmed gone before :func:`check_many` returns;
+- Ctrl-C kills every check and every process of the students', and raises :class:`Interrupted`
+  holding the results finished so far.
+
+``executor=None`` checks the files one after the other in this process (each still in its box);
+a Dask specification (``"dask-local"``, ``"tcp://..."``) or an ``Executor`` sends each check to
+that executor (its workers run the boxes; a worker killed by a student is then Dask's to handle).
 """
 
 from __future__ import annotations
 
 import json
+import multiprocessing as mp
+import multiprocessing.connection as mpc
 import os
-from collections.abc import Iterable, Sequence
+import signal
+import time
+from collections import deque
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 
 from gpsaccel import _validation as _v
 from gpsaccel._atomic import write_text
+from gpsaccel.check import sandbox as sb
 from gpsaccel.check.whole_filter import submission
 from gpsaccel.executors import resolve_executor
 
+#: Seconds a check's process may take beyond the student's time limit (simulating the data,
+#: comparing, diagnosing) before it is killed as a checker error.
+CHECK_SLACK = 120.0
+
+
+class Interrupted(Exception):
+    """The batch was interrupted (Ctrl-C); ``results`` holds the checks that finished, in order
+    (None where a check did not finish)."""
+
+    def __init__(self, results: list[dict | None]) -> None:
+        super().__init__("interrupted")
+        self.results = results
+
 
 def find_submissions(paths: Iterable[str | os.PathLike]) -> tuple[list[Path], list[str]]:
-    """The ``.py`` files named by ``paths`` (files, or folders searched recursively), sorted.
+    """The submissions named by ``paths``: a file is one; a folder holds one per top-level entry
+    (a ``.py`` file, or a sub-folder for one student).  Returns (submissions, notes on what was
+    skipped).
 
-    In a folder every ``.py`` file counts except ``__init__.py``, hidden folders and
-    ``__pycache__``: a student who misnamed the function must show up as ``no-kalman-filter``,
-    not vanish.  Returns (files, messages about what was skipped).
+    Left out of a folder: hidden entries, ``__pycache__``, ``__init__.py`` and files that are not
+    ``.py``.  A misnamed filter stays in (it must show up as ``no-kalman-filter``, not vanish).
     """
-    files: list[Path] = []
+    found: list[Path] = []
     notes: list[str] = []
     for p in map(Path, paths):
-        if p.is_dir():
-            found = sorted(f for f in p.rglob("*.py")
-                           if not any(part.startswith(".") or part == "__pycache__"
-                                      for part in f.relative_to(p).parts))
-            for f in found:
-                if f.name == "__init__.py":
-                    notes.append(f"{f}: skipped (a package's __init__.py)")
-                else:
-                    files.append(f)
-            if not found:
-                notes.append(f"{p}: no .py file in this folder")
-        else:
-            files.append(p)  # a missing file becomes a "not-found" finding, not an error here
-    return list(dict.fromkeys(files)), notes
+        if not p.is_dir():
+            found.append(p)  # a missing file becomes a "not-found" finding, not an error here
+            continue
+        entries = sorted(p.iterdir())
+        n = len(found)
+        for e in entries:
+            if e.name.startswith(".") or e.name == "__pycache__":
+                continue
+            if e.is_dir():
+                found.append(e)
+            elif e.name == "__init__.py":
+                notes.append(f"{e}: skipped (a package's __init__.py)")
+            elif e.suffix == ".py":
+                found.append(e)
+            else:
+                notes.append(f"{e}: skipped (not a .py file or a folder)")
+        if len(found) == n:
+            notes.append(f"{p}: no .py file or folder in it")
+    return list(dict.fromkeys(found)), notes
 
 
-def _check_one(path: str, n_runs: int, seed: int, timeout: float) -> dict:
-    report = submission(path, n_runs=n_runs, seed=seed, timeout=timeout)
+def _check_one(path: str, n_runs: int, seed: int, timeout: float, **options: object) -> dict:
+    report = submission(path, n_runs=n_runs, seed=seed, timeout=timeout, **options)
     out = report.to_dict()
     out["text"] = str(report)
     return out
 
 
+def checker_error(path: Path | str, message: str) -> dict:
+    """The result of a check that did not complete (its process died, or the checker failed)."""
+    path = Path(path)
+    return {"subject": path.name, "passed": False, "codes": ["checker-error"],
+            "findings": [{"code": "checker-error", "severity": "error", "message": message}],
+            "details": {"path": str(path)}, "seconds": 0.0,
+            "text": f"{path.name}: FAILED (checker-error)\n  - {message}"}
+
+
 def check_many(paths: Sequence[str | os.PathLike], n_runs: int = 200, seed: int = 0,
                timeout: float = 60, executor: object = "processes",
-               max_workers: int | None = None) -> list[dict]:
-    """Check every file of ``paths`` (see :func:`find_submissions`); one dict per file, in order.
+               max_workers: int | None = None, sandbox: str = "auto",
+               limits: sb.Limits | None = None, allow_gpsaccel: bool = False,
+               on_result: Callable[[dict], None] | None = None) -> list[dict]:
+    """Check every submission of ``paths`` (see :func:`find_submissions`); one dict per
+    submission, in order.
 
-    ``executor`` is anything :func:`gpsaccel.executors.resolve_executor` accepts (``None`` runs
-    them one after the other in this process).  Every submission sees the same realizations
+    ``executor``: ``"processes"`` (default; a process per check, see the module docstring),
+    ``None`` (in this process, one after the other) or anything
+    :func:`gpsaccel.executors.resolve_executor` accepts.  ``on_result(result)`` is called as each
+    check finishes (e.g. to append it to a log).  Every submission sees the same realizations
     (``seed``), so their results are comparable.  ``n_runs``, ``seed`` and ``timeout`` are checked
-    here, before any submission runs (a bad one would otherwise fail every check alike).
+    here, before any submission runs (a bad one would otherwise fail every check alike).  Raises
+    :class:`Interrupted` on Ctrl-C.
     """
     n_runs = _v.integer("n_runs", n_runs, minimum=2)
     seed = _v.integer("seed", seed, minimum=0)
     timeout = _v.positive_float("timeout", timeout)
     files, _ = find_submissions(paths)
+    backend = sb.resolve_backend(sandbox)  # once, and a clear error before anything runs
+    options = {"sandbox": backend, "limits": limits, "allow_gpsaccel": allow_gpsaccel}
+    args = (n_runs, seed, timeout)
+    if executor in ("processes", "local"):
+        return _isolated(files, args, options, max_workers or os.cpu_count() or 1, timeout,
+                         on_result)
+    results = []
     with resolve_executor(executor, max_workers=max_workers) as ex:
-        futures = [ex.submit(_check_one, str(f), n_runs, seed, timeout) for f in files]
-        results = []
+        futures = [ex.submit(_check_one, str(f), *args, **options) for f in files]
         for f, fut in zip(files, futures, strict=True):
             try:
-                results.append(fut.result())
+                result = fut.result()
             except Exception as exc:  # the checker itself failed: report it, go on
-                results.append({"subject": f.name, "passed": False, "codes": ["checker-error"],
-                                "findings": [{"code": "checker-error", "severity": "error",
-                                              "message": f"{type(exc).__name__}: {exc}"}],
-                                "details": {"path": str(f)}, "seconds": 0.0,
-                                "text": f"{f.name}: checker error {type(exc).__name__}: {exc}"})
+                result = checker_error(f, f"{type(exc).__name__}: {exc}")
+            results.append(result)
+            if on_result is not None:
+                on_result(result)
     return results
 
 
+# ------------------------------------------------------------------ a process per check
+def _worker(conn: mpc.Connection, path: str, args: tuple, options: dict) -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the batch's to handle
+    try:
+        result = _check_one(path, *args, **options)
+    except Exception as exc:  # noqa: BLE001 - a bug of the checker: one file's error
+        result = checker_error(path, f"the checker failed: {type(exc).__name__}: {exc}")
+    conn.send(result)
+    conn.close()
+
+
+def _context() -> mp.context.BaseContext:
+    methods = mp.get_all_start_methods()
+    return mp.get_context("fork" if "fork" in methods else "spawn")
+
+
+def _orphans(workers: set[int]) -> list[int]:
+    """Live processes under this one that belong to no running check: what a dead check's box
+    left behind (re-parented here, the subreaper), with their descendants."""
+    table = sb._proc_table()
+    children: dict[int, list[int]] = {}
+    for pid, (ppid, _) in table.items():
+        children.setdefault(ppid, []).append(pid)
+    stack = [p for p in children.get(os.getpid(), []) if p not in workers]
+    out: list[int] = []
+    while stack:
+        pid = stack.pop()
+        if pid not in out:
+            out.append(pid)
+            stack.extend(children.get(pid, []))
+    return [p for p in out if table[p][1] not in ("Z", "X")]
+
+
+def _reap_zombies(workers: set[int]) -> None:
+    me = os.getpid()
+    for pid, (ppid, state) in sb._proc_table().items():
+        if ppid == me and pid not in workers and state in ("Z", "X"):
+            try:
+                os.waitpid(pid, os.WNOHANG)
+            except ChildProcessError:
+                pass
+
+
+def sweep(workers: set[int] = frozenset()) -> int:
+    """Kill (SIGKILL, until a scan finds none) every process under this one except the running
+    checks ``workers``; returns how many were killed."""
+    killed: set[int] = set()
+    for _ in range(200):
+        alive = _orphans(set(workers))
+        if not alive:
+            break
+        for pid in alive:
+            try:
+                os.kill(pid, signal.SIGKILL)
+                killed.add(pid)
+            except (ProcessLookupError, PermissionError):
+                pass
+        time.sleep(0.01)
+        _reap_zombies(set(workers))
+    _reap_zombies(set(workers))
+    return len(killed)
+
+
+def _isolated(files: list[Path], args: tuple, options: dict, workers: int, timeout: float,
+              on_result: Callable[[dict], None] | None) -> list[dict]:
+    ctx = _context()
+    was_subreaper = sb._get_subreaper()
+    sb.set_subreaper(True)
+    pending = deque(enumerate(files))
+    running: dict[int, tuple[mp.Process, mpc.Connection, float]] = {}
+    results: list[dict | None] = [None] * len(files)
+
+    def finish(i: int, result: dict) -> None:
+        results[i] = result
+        if on_result is not None:
+            on_result(result)
+
+    try:
+        while pending or running:
+            while pending and len(running) < workers:
+                i, f = pending.popleft()
+                recv, send = ctx.Pipe(duplex=False)
+                proc = ctx.Process(target=_worker, args=(send, str(f), args, options),
+                                   daemon=True, name=f"gpsaccel-check-{i}")
+                proc.start()
+                send.close()
+                running[i] = (proc, recv, time.monotonic() + timeout + CHECK_SLACK)
+            waitables = [c for _, c, _ in running.values()] + \
+                        [p.sentinel for p, _, _ in running.values()]
+            mpc.wait(waitables, timeout=1.0)
+            now = time.monotonic()
+            for i in list(running):
+                proc, conn, deadline = running[i]
+                result = None
+                if conn.poll():
+                    try:
+                        result = conn.recv()
+                    except (EOFError, OSError):
+                        result = None
+                    else:
+                        if not isinstance(result, dict):
+                            result = checker_error(files[i], "the check's process returned "
+                                                             "no report")
+                if result is None and proc.exitcode is None and now < deadline:
+                    continue  # still running
+                if result is None:
+                    if proc.exitcode is None:
+                        proc.kill()
+                        why = (f"the check took more than {timeout + CHECK_SLACK:g} s "
+                               f"(time limit plus {CHECK_SLACK:g} s) and was stopped")
+                    else:
+                        code = proc.exitcode
+                        how = (f"signal {signal.Signals(-code).name}" if code < 0
+                               else f"exit status {code}")
+                        why = (f"the process checking this file died ({how}) before it "
+                               f"reported; a submission that kills its parent process ends "
+                               f"like this")
+                    result = checker_error(files[i], why)
+                proc.join(timeout=5)
+                if proc.exitcode is None:
+                    proc.kill()
+                    proc.join()
+                conn.close()
+                del running[i]
+                sweep({p.pid for p, _, _ in running.values()})
+                finish(i, result)
+    except KeyboardInterrupt:
+        for proc, _, _ in running.values():
+            proc.kill()
+        for proc, conn, _ in running.values():
+            proc.join()
+            conn.close()
+        running.clear()
+        sweep()
+        raise Interrupted(results) from None
+    finally:
+        for proc, _, _ in running.values():  # an exception of ours: leave nothing behind
+            proc.kill()
+            proc.join()
+        sweep()
+        sb.set_subreaper(bool(was_subreaper))
+    return [r for r in results if r is not None]
+
+
+# ------------------------------------------------------------------------------- output
 def table(results: Sequence[dict]) -> str:
     """The instructor's table: submission, passed, codes, seconds."""
     name_w = max([len(r["details"].get("path", r["subject"])) for r in results] + [10])
@@ -97,9 +305,31 @@ def table(results: Sequence[dict]) -> str:
 
 
 def write_json(results: Sequence[dict], path: str | os.PathLike, **settings: object) -> Path:
-    """Write ``{"settings": ..., "results": [...]}`` to ``path`` (UTF-8, indented)."""
+    """Write ``{"settings": ..., "results": [...]}`` to ``path`` (UTF-8, indented), atomically
+    (:mod:`gpsaccel._atomic`: a temporary file in the same folder, renamed once complete)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     write_text(path, json.dumps({"settings": settings, "results": list(results)}, indent=2,
                                 ensure_ascii=False))  # whole or not at all
     return path
+
+
+def log_path(json_path: str | os.PathLike) -> Path:
+    """Where results are appended as each check finishes: ``results.json`` -> ``results.jsonl``."""
+    p = Path(json_path)
+    return p.with_name(p.stem + ".jsonl")
+
+
+def appender(path: str | os.PathLike) -> Callable[[dict], None]:
+    """``on_result`` that appends each result as one JSON line to ``path`` (started empty)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("", encoding="utf-8")
+
+    def append(result: dict) -> None:
+        with open(path, "a", encoding="utf-8") as f:
+            f.write(json.dumps(result, ensure_ascii=False) + "\n")
+            f.flush()
+            os.fsync(f.fileno())
+
+    return append
