@@ -659,10 +659,12 @@ def run(sub: Submission, calls: Sequence[Call], limits: Limits = Limits(),
         _write_control(tmp / "control", sub, calls, sys_path, allow_gpsaccel)
         res_r, res_w = os.pipe()
         out_r, out_w = os.pipe()
+        owned = [res_r, res_w, out_r, out_w]  # closed once, here or when handed to the child
         fds: list[int] = []
         try:
             if backend == "bwrap":
                 cmd, fds = _bwrap_command(bwrap_path(), tmp, sub, limits, allow_gpsaccel, res_w)
+                owned += fds
                 cwd, env, drop = str(tmp), _environment("/box"), False
             else:
                 box = tmp / "box"
@@ -671,10 +673,10 @@ def run(sub: Submission, calls: Sequence[Call], limits: Limits = Limits(),
                 cmd = [_python(), "-I", "-S", "-B", str(tmp / "control" / "_runner.py"),
                        str(tmp / "control"), str(box), str(res_w)]
                 cwd, env, drop = str(box), _environment(str(box)), os.geteuid() == 0
-            return _supervise(backend, cmd, cwd, env, drop, limits, calls, res_r, res_w, out_r,
-                              out_w, fds, t0)
+            return _supervise(backend, cmd, cwd, env, drop, limits, calls, res_r, out_r,
+                              [res_w, out_w, *fds], owned, t0)
         finally:
-            for fd in (res_r, res_w, out_r, out_w, *fds):
+            for fd in owned:
                 try:
                     os.close(fd)
                 except OSError:
@@ -682,8 +684,8 @@ def run(sub: Submission, calls: Sequence[Call], limits: Limits = Limits(),
 
 
 def _supervise(backend: str, cmd: list[str], cwd: str, env: dict, drop_caps: bool,
-               limits: Limits, calls: list[Call], res_r: int, res_w: int, out_r: int, out_w: int,
-               fds: list[int], t0: float) -> BoxResult:
+               limits: Limits, calls: list[Call], res_r: int, out_r: int,
+               child_fds: list[int], owned: list[int], t0: float) -> BoxResult:
     result = BoxResult(backend)
     reader = FrameReader(calls)
     tail = bytearray()
@@ -696,14 +698,16 @@ def _supervise(backend: str, cmd: list[str], cwd: str, env: dict, drop_caps: boo
     hit: str | None = None
     refused: str | None = None
     proc = None
+    sel = None
     try:
+        res_w, out_w = child_fds[:2]
         proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=out_w, stderr=out_w,
-                                cwd=cwd, env=env, pass_fds=(res_w, *fds), close_fds=True,
+                                cwd=cwd, env=env, pass_fds=(res_w, *child_fds[2:]), close_fds=True,
                                 start_new_session=True,
                                 preexec_fn=functools.partial(_preexec, limits, drop_caps))
-        for fd in (res_w, out_w, *fds):
+        for fd in child_fds:  # the parent keeps only the reading ends
             os.close(fd)
-        fds.clear()
+            owned.remove(fd)
         deadline = time.monotonic() + limits.time
         sel = selectors.DefaultSelector()
         sel.register(res_r, selectors.EVENT_READ, "res")
@@ -772,12 +776,8 @@ def _supervise(backend: str, cmd: list[str], cwd: str, env: dict, drop_caps: boo
                         hit = hit or "result-refused"
         result.returncode = proc.returncode
     finally:
-        if proc is None:
-            for fd in (res_w, out_w):
-                try:
-                    os.close(fd)
-                except OSError:
-                    pass
+        if sel is not None:
+            sel.close()
         set_subreaper(bool(was_subreaper))
         if was_dumpable > 0:
             _prctl(PR_SET_DUMPABLE, was_dumpable)
