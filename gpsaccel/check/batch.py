@@ -166,7 +166,7 @@ def _orphans(workers: set[int]) -> list[int]:
     left behind (re-parented here, the subreaper), with their descendants."""
     table = sb._proc_table()
     children: dict[int, list[int]] = {}
-    for pid, (ppid, _) in table.items():
+    for pid, (ppid, _, _) in table.items():
         children.setdefault(ppid, []).append(pid)
     stack = [p for p in children.get(os.getpid(), []) if p not in workers]
     out: list[int] = []
@@ -180,7 +180,7 @@ def _orphans(workers: set[int]) -> list[int]:
 
 def _reap_zombies(workers: set[int]) -> None:
     me = os.getpid()
-    for pid, (ppid, state) in sb._proc_table().items():
+    for pid, (ppid, state, _) in sb._proc_table().items():
         if ppid == me and pid not in workers and state in ("Z", "X"):
             try:
                 os.waitpid(pid, os.WNOHANG)

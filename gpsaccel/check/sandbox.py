@@ -280,7 +280,8 @@ class BoxResult:
     output : the tail of what the student printed; output_bytes : its full length.
     returncode : exit status of the box's first process (negative: killed by that signal).
     seconds : wall-clock time of the box; import_seconds, run_seconds as the runner measured.
-    killed : processes of the box that were still alive at the end and were killed.
+    killed : processes the student's code had started and left alive (besides the runner),
+        killed at the end.
     """
 
     backend: str
@@ -477,8 +478,8 @@ def _preexec(limits: Limits, drop_caps: bool) -> None:
         _prctl(PR_SET_NO_NEW_PRIVS, 1)
 
 
-def _proc_table() -> dict[int, tuple[int, str]]:
-    """pid -> (ppid, state) of every process visible in /proc."""
+def _proc_table() -> dict[int, tuple[int, str, str]]:
+    """pid -> (ppid, state, comm) of every process visible in /proc."""
     table = {}
     for entry in os.scandir("/proc"):
         if not entry.name.isdigit():
@@ -488,8 +489,10 @@ def _proc_table() -> dict[int, tuple[int, str]]:
                 stat = f.read()
         except OSError:
             continue
-        rest = stat[stat.rfind(b")") + 2:].split()
-        table[int(entry.name)] = (int(rest[1]), rest[0].decode())
+        close = stat.rfind(b")")
+        rest = stat[close + 2:].split()
+        comm = stat[stat.find(b"(") + 1:close].decode(errors="replace")
+        table[int(entry.name)] = (int(rest[1]), rest[0].decode(), comm)
     return table
 
 
@@ -499,7 +502,7 @@ def box_processes(first: int, adopted_from: set[int] | None) -> list[int]:
     with its descendants.  Zombies are not counted."""
     table = _proc_table()
     children: dict[int, list[int]] = {}
-    for pid, (ppid, _) in table.items():
+    for pid, (ppid, _, _) in table.items():
         children.setdefault(ppid, []).append(pid)
     roots = [first] if first in table else []
     if adopted_from is not None:
@@ -512,21 +515,23 @@ def box_processes(first: int, adopted_from: set[int] | None) -> list[int]:
             continue
         out.append(pid)
         stack.extend(children.get(pid, []))
-    return [p for p in out if table.get(p, (0, "Z"))[1] not in ("Z", "X")]
+    return [p for p in out if table.get(p, (0, "Z", ""))[1] not in ("Z", "X")]
 
 
 def _kill_box(proc: subprocess.Popen, before: set[int]) -> int:
-    """SIGKILL every process of the box until none is alive; reap them.  Returns how many were
-    found alive (the first process included)."""
-    killed: set[int] = set()
+    """SIGKILL every process of the box until none is alive; reap them.  Returns how many
+    processes (bwrap's own not counted) were alive when the kill began."""
+    found: int | None = None
     for _ in range(200):
         alive = box_processes(proc.pid, before)
+        if found is None:
+            table = _proc_table()
+            found = sum(table.get(p, (0, "", ""))[2] != "bwrap" for p in alive)
         if not alive:
             break
         for pid in alive:
             try:
                 os.kill(pid, signal.SIGKILL)
-                killed.add(pid)
             except (ProcessLookupError, PermissionError):
                 pass
         if proc.poll() is None:
@@ -539,12 +544,12 @@ def _kill_box(proc: subprocess.Popen, before: set[int]) -> int:
         raise RuntimeError(f"the sandbox could not kill processes {alive}")
     proc.wait()
     _reap_adopted(before, proc.pid)
-    return len(killed)
+    return found or 0
 
 
 def _reap_adopted(before: set[int], first: int) -> None:
     """waitpid every exited child of this process that the box left (orphans adopted)."""
-    for pid, (ppid, state) in _proc_table().items():
+    for pid, (ppid, state, _) in _proc_table().items():
         if ppid == os.getpid() and pid not in before and pid != first and state in ("Z", "X"):
             try:
                 os.waitpid(pid, os.WNOHANG)
@@ -554,7 +559,7 @@ def _reap_adopted(before: set[int], first: int) -> None:
 
 def _my_children() -> set[int]:
     me = os.getpid()
-    return {pid for pid, (ppid, _) in _proc_table().items() if ppid == me}
+    return {pid for pid, (ppid, _, _) in _proc_table().items() if ppid == me}
 
 
 # --------------------------------------------------------------------------- preparing a box
@@ -753,7 +758,12 @@ def _supervise(backend: str, cmd: list[str], cwd: str, env: dict, drop_caps: boo
                 if n - (2 if backend == "bwrap" else 0) > limits.processes:
                     hit = "process-limit"
                     break
-        result.killed = max(0, _kill_box(proc, before) - (1 if proc.returncode is None else 0))
+        # the runner is still alive when the box's first process is (basic) or when anything
+        # is (bwrap: the PID namespace ends with the runner); what else lived, the student left
+        runner_alive = proc.poll() is None
+        found = _kill_box(proc, before)
+        result.killed = max(0, found - (1 if (runner_alive if backend == "basic" else found)
+                                        else 0))
         # every writer is dead: what is left in the pipes is all there will be
         for fd, what in ((res_r, "res"), (out_r, "out")):
             os.set_blocking(fd, False)

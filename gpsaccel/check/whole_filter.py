@@ -186,6 +186,9 @@ def _run_findings(report: Report, box: sb.BoxResult, limits: sb.Limits, n_runs: 
                    + _indent_tail(box.output[-OUTPUT_KEEP:], 6), "warning")
     if box.killed:
         report.details["processes_killed"] = box.killed
+        report.add("left-processes", f"Your code left {box.killed} process(es) running after "
+                   f"it returned; the checker killed them. kalman_filter should not start "
+                   f"processes (os.fork, subprocess, multiprocessing).", "warning")
     if failure is None:
         _returned_notes(report, box.returned or {})
         return True

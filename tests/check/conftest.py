@@ -1,0 +1,89 @@
+"""Shared by the sandbox and batch tests: a ``backend`` parameter (every sandbox backend that works
+here; bwrap is skipped, with its reason, where it does not) and ``hostile``: where the hostile
+submissions are and a watcher that finds their processes by PID from outside any PID namespace."""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+
+from gpsaccel.check import sandbox as sb
+
+SUBMISSIONS = Path(__file__).parent.parent / "submissions"
+HOSTILE = SUBMISSIONS / "hostile"
+
+#: The ``comm`` every process of a hostile submission gives itself (see hostile/README.md).
+MARKER = "gpsacc-hostile"
+
+BACKENDS = [
+    "basic",
+    pytest.param("bwrap", marks=pytest.mark.skipif(
+        sb.bwrap_path() is None, reason="bubblewrap is not installed or cannot create "
+                                        "namespaces here")),
+]
+
+
+def marked_pids() -> set[int]:
+    """Live (not zombie) processes whose comm is :data:`MARKER`."""
+    return {pid for pid, (_, state, comm) in sb._proc_table().items()
+            if comm == MARKER and state not in ("Z", "X")}
+
+
+def alive(pids: set[int]) -> set[int]:
+    """Those of ``pids`` that are still live processes with the marker."""
+    return pids & marked_pids()
+
+
+class Watch:
+    """Collect, every 10 ms in a thread, the PIDs of every marked process that appears."""
+
+    def __init__(self) -> None:
+        self.seen: set[int] = set()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            self.seen |= marked_pids()
+            time.sleep(0.01)
+
+    def __enter__(self) -> Watch:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._stop.set()
+        self._thread.join()
+
+
+def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
+    if "backend" in metafunc.fixturenames:
+        metafunc.parametrize("backend", BACKENDS)
+
+
+@pytest.fixture
+def watch():
+    """A running :class:`Watch`; the test asserts on ``watch.seen``."""
+    assert not marked_pids(), f"marked processes before the test: {marked_pids()}"
+    with Watch() as w:
+        yield w
+
+
+def env_with_package() -> dict[str, str]:
+    """The environment for a ``python -m gpsaccel.cli`` child: this checkout first on the path."""
+    root = str(Path(__file__).resolve().parents[2])
+    return dict(os.environ, PYTHONPATH=root + os.pathsep + os.environ.get("PYTHONPATH", ""),
+                MPLBACKEND="Agg")
+
+
+@pytest.fixture
+def hostile():
+    """Paths and helpers of the hostile tests."""
+    return SimpleNamespace(DIR=HOSTILE, SUBMISSIONS=SUBMISSIONS, MARKER=MARKER,
+                           marked_pids=marked_pids, alive=alive, Watch=Watch,
+                           env=env_with_package)
