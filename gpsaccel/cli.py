@@ -391,8 +391,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "works; default)")
     p.add_argument("--memory", type=float, default=1024, metavar="MIB",
                    help="address space per student process, MiB (default 1024)")
-    p.add_argument("--max-output", type=float, default=1, metavar="MIB",
-                   help="printed output per submission, MiB (default 1)")
+    p.add_argument("--max-output", type=float, default=16, metavar="MIB",
+                   help="printed output per submission, MiB (default 16)")
     p.add_argument("--max-file-size", type=float, default=64, metavar="MIB",
                    help="largest file a submission may write, MiB (default 64)")
     p.add_argument("--max-processes", type=int, default=64,

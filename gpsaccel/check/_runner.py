@@ -219,8 +219,22 @@ def run(control: Path, root: Path) -> None:
     _send({"t": "done", "import_seconds": t1 - t0, "run_seconds": time.perf_counter() - t1})
 
 
+def _not_dumpable() -> None:
+    """Close this process's /proc memory to other processes of the same user: under the basic
+    sandbox another student's box runs as the same user (the student's own code could undo this
+    for itself, never for a classmate's box)."""
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            ctypes.CDLL(None).prctl(4, 0, 0, 0, 0)  # PR_SET_DUMPABLE, 0
+        except (OSError, AttributeError):
+            pass
+
+
 def main(argv: list[str]) -> int:
     global _FD
+    _not_dumpable()
     control, root, fd = Path(argv[0]), Path(argv[1]).resolve(), int(argv[2])
     _FD = fd
     os.set_inheritable(fd, False)  # a subprocess of the student's does not get the channel

@@ -148,6 +148,8 @@ def check_many(paths: Sequence[str | os.PathLike], n_runs: int = 200, seed: int 
 # ------------------------------------------------------------------ a process per check
 def _worker(conn: mpc.Connection, path: str, args: tuple, options: dict) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the batch's to handle
+    # for its whole life: after its box it holds the answer, while other boxes may still run
+    sb._prctl(sb.PR_SET_DUMPABLE, 0)
     try:
         result = _check_one(path, *args, **options)
     except Exception as exc:  # noqa: BLE001 - a bug of the checker: one file's error
@@ -161,14 +163,15 @@ def _context() -> mp.context.BaseContext:
     return mp.get_context("fork" if "fork" in methods else "spawn")
 
 
-def _orphans(workers: set[int]) -> list[int]:
-    """Live processes under this one that belong to no running check: what a dead check's box
-    left behind (re-parented here, the subreaper), with their descendants."""
+def _orphans(keep: set[int]) -> list[int]:
+    """Live processes under this one, except ``keep`` (the running checks, and the children this
+    process had before the batch) and theirs: what a dead check's box left behind (re-parented
+    here, the subreaper), with their descendants."""
     table = sb._proc_table()
     children: dict[int, list[int]] = {}
     for pid, (ppid, _, _) in table.items():
         children.setdefault(ppid, []).append(pid)
-    stack = [p for p in children.get(os.getpid(), []) if p not in workers]
+    stack = [p for p in children.get(os.getpid(), []) if p not in keep]
     out: list[int] = []
     while stack:
         pid = stack.pop()
@@ -189,8 +192,9 @@ def _reap_zombies(workers: set[int]) -> None:
 
 
 def sweep(workers: set[int] = frozenset()) -> int:
-    """Kill (SIGKILL, until a scan finds none) every process under this one except the running
-    checks ``workers``; returns how many were killed."""
+    """Kill (SIGKILL, until a scan finds none) every process under this one except ``workers``
+    (the running checks, the children it had before) and theirs; returns how many were
+    killed."""
     killed: set[int] = set()
     for _ in range(200):
         alive = _orphans(set(workers))
@@ -213,6 +217,7 @@ def _isolated(files: list[Path], args: tuple, options: dict, workers: int, timeo
     ctx = _context()
     was_subreaper = sb._get_subreaper()
     sb.set_subreaper(True)
+    before = sb._my_children()  # not the batch's: never swept
     pending = deque(enumerate(files))
     running: dict[int, tuple[mp.Process, mpc.Connection, float]] = {}
     results: list[dict | None] = [None] * len(files)
@@ -269,7 +274,7 @@ def _isolated(files: list[Path], args: tuple, options: dict, workers: int, timeo
                     proc.join()
                 conn.close()
                 del running[i]
-                sweep({p.pid for p, _, _ in running.values()})
+                sweep(before | {p.pid for p, _, _ in running.values()})
                 finish(i, result)
     except KeyboardInterrupt:
         for proc, _, _ in running.values():
@@ -278,13 +283,13 @@ def _isolated(files: list[Path], args: tuple, options: dict, workers: int, timeo
             proc.join()
             conn.close()
         running.clear()
-        sweep()
+        sweep(before)
         raise Interrupted(results) from None
     finally:
         for proc, _, _ in running.values():  # an exception of ours: leave nothing behind
             proc.kill()
             proc.join()
-        sweep()
+        sweep(before)
         sb.set_subreaper(bool(was_subreaper))
     return [r for r in results if r is not None]
 

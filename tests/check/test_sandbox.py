@@ -18,7 +18,7 @@ from gpsaccel import check
 from gpsaccel.check import sandbox as sb
 from gpsaccel.check import whole_filter as wf
 
-LIMITS = sb.Limits(memory=512 << 20, file_size=16 << 20, time=20)
+LIMITS = sb.Limits(memory=512 << 20, file_size=16 << 20, output=1 << 20, time=20)
 
 
 def _frame(header: dict, payload: bytes = b"") -> bytes:
