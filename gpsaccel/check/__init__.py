@@ -8,9 +8,12 @@ Two checks, one kind of answer (a :class:`Report` of :class:`Finding` s with sta
 
 :func:`assert_model_matrices` and :func:`assert_submission` raise ``AssertionError`` with the
 findings instead, for a grader's test cell (nbgrader, otter-grader).  The known mistakes and their
-codes are in :mod:`gpsaccel.calibration.mistakes`; ``gpsaccel check PATH ...`` checks many files.
-:func:`student_filter` makes a file a ``kalman_filter(z)`` callable (run in its own process) for
-:func:`gpsaccel.calibration.compare.compare`.
+codes are in :mod:`gpsaccel.calibration.mistakes`; ``gpsaccel check PATH ...`` checks many files
+(:mod:`gpsaccel.check.batch`).  :func:`student_filter` makes a file a ``kalman_filter(z)`` callable
+(run in its own box) for :func:`gpsaccel.calibration.compare.compare`.  Students' code runs only
+inside a sandbox (:mod:`gpsaccel.check.sandbox`: bubblewrap namespaces or a portable basic box,
+with limits), whose generic interface (named functions, numpy inputs, declared outputs) other
+checkers build on.
 """
 
 from gpsaccel.calibration.mistakes import codes

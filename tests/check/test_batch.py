@@ -137,3 +137,20 @@ def test_json_is_written_atomically(tmp_path):
     write_json([{"subject": "a"}], path, runs=3)
     assert json.loads(path.read_text())["settings"] == {"runs": 3}
     assert [p.name for p in path.parent.iterdir()] == ["results.json"]  # no temporary left
+
+
+def test_cli_names_a_bad_limit_and_a_missing_bwrap(tmp_path, hostile, monkeypatch, capsys):
+    from gpsaccel.check import sandbox as sb
+    from gpsaccel.cli import main
+
+    path = hostile.SUBMISSIONS / "correct_gps_rate.py"
+    assert main(["check", str(path), "--memory", "100"]) == 2
+    assert "--memory must be at least 256 MiB" in capsys.readouterr().err
+    monkeypatch.setattr(sb, "bwrap_path", lambda: None)
+    assert main(["check", str(path), "--sandbox", "bwrap"]) == 2
+    assert "apt-get install bubblewrap" in capsys.readouterr().err
+    assert sb.resolve_backend("auto") == "basic"
+    out = tmp_path / "r.json"
+    assert main(["check", str(path), "--runs", "3", "--json", str(out)]) == 0
+    assert "sandbox: basic (bubblewrap not available" in capsys.readouterr().err
+    assert json.loads(out.read_text())["settings"]["sandbox"] == "basic"
