@@ -115,7 +115,7 @@ class Limits:
     processes : processes of the box at once (the runner included).
     open_files : open file descriptors per process (RLIMIT_NOFILE).
     output : bytes the student may print (stdout and stderr together); the box is stopped there
-        (default 16 MiB: a correct filter that prints every GPS time prints 7.5 MB in a 200-run
+        (default 16 MiB: a correct filter that prints every GPS time prints 6.3 MB in a 200-run
         check; the checker keeps only the last 64 KiB, so the limit bounds wasted time, not
         memory).
     """

@@ -9,10 +9,12 @@ What :func:`submission` does
 ----------------------------
 1. Simulates ``n_runs`` realizations from ``numpy.random.default_rng(seed)`` with the error-model
    truth (:func:`gpsaccel.simulate`), so it knows the true state of each.
-2. Runs the student's file in a separate Python process (``python -P .../check/_runner.py``)
-   with a time limit; a crash, an endless loop, wrong shapes, NaN, lists, a flood of prints each
-   become a finding, never an exception here.
-3. Compares P and x̂ with the optimal filter on the same data.  Distances are in units of the
+2. Runs the student's file (or folder) in a sandbox (:mod:`gpsaccel.check.sandbox`: bwrap or
+   basic, with time, memory, file, process and output limits), one call ``kalman_filter(z[r])``
+   per run; a crash, an endless loop, wrong shapes, NaN, lists, a flood of prints, a broken limit,
+   an import of gpsaccel each become a finding, never an exception here.
+3. Only then, with every process of the student's gone, runs the optimal filter on the same data
+   and compares P and x̂ with it.  Distances are in units of the
    optimal σ = √diag P_ref::
 
        d_P = max |P_ij − P_ref,ij| / (σ_i σ_j)     d_x = max |x̂_i − x̂_ref,i| / σ_i
