@@ -81,6 +81,46 @@ class _Blocker(importlib.abc.MetaPathFinder):
         return None
 
 
+def _audit_hook(names: list[str], dirs: list[str]):  # noqa: ANN202
+    """An audit hook (it cannot be removed once added) that reports, then refuses, an import of
+    a blocked package or an open of a file under a blocked folder, even after the student's code
+    took the import blocker off ``sys.meta_path``.  It uses only objects bound here, so patching
+    modules (json, os, this runner) does not silence it."""
+    names_t, dirs_t = tuple(names), tuple(d.rstrip("/") + "/" for d in dirs)
+    data = json.dumps({"t": "uses-checker", "module": "gpsaccel"}).encode()
+    frame = struct.pack(">I", len(data)) + data
+    write, fd, abspath, fspath = os.write, _FD, os.path.abspath, os.fspath
+    sent = []
+
+    def blocked(path: object) -> bool:
+        try:
+            p = fspath(path)
+        except TypeError:
+            return False
+        if isinstance(p, bytes):
+            p = p.decode(errors="replace")
+        return isinstance(p, str) and (abspath(p) + "/").startswith(dirs_t)
+
+    def hook(event: str, args: tuple) -> None:
+        hit = False
+        if event == "import" and args and isinstance(args[0], str):
+            hit = args[0].partition(".")[0] in names_t
+        elif event in ("open", "os.symlink", "os.link", "shutil.copyfile", "os.listdir",
+                       "os.scandir") and args:
+            hit = blocked(args[0])
+        if hit:
+            if not sent:
+                sent.append(True)
+                try:
+                    write(fd, frame)
+                except OSError:
+                    pass
+            raise PermissionError(f"{args[0]!r}: the checker's package is not available to "
+                                  f"submissions during a check")
+
+    return hook
+
+
 def _student_traceback(exc: BaseException, root: Path) -> str:
     """The traceback from the first frame in the student's files on, last lines only."""
     tb = traceback.extract_tb(exc.__traceback__)
@@ -158,6 +198,7 @@ def run(control: Path, root: Path) -> None:
     calls = plan["calls"]
     if plan["block"]:
         sys.meta_path.insert(0, _Blocker(plan["block"]))
+        sys.addaudithook(_audit_hook(plan["block"], plan["block_dirs"]))
     path = root / plan["entry"]
     os.chdir(path.parent)
     t0 = time.perf_counter()

@@ -611,6 +611,7 @@ def _write_control(control: Path, sub: Submission, calls: Sequence[Call], sys_pa
             raise ValueError(f"call arguments must be numeric arrays; {k} is {a.dtype}")
     np.savez(control / "inputs.npz", **arrays)
     plan = {"entry": sub.entry, "sys_path": sys_path, "block": [] if allow else list(BLOCKED),
+            "block_dirs": [] if allow else _blocked_dirs(),
             "calls": [{"function": c.function, "n_args": len(c.args),
                        "outputs": [{"name": o.name, "shape": list(o.shape), "dtype": o.dtype}
                                    for o in c.outputs]} for c in calls]}
@@ -618,6 +619,28 @@ def _write_control(control: Path, sub: Submission, calls: Sequence[Call], sys_pa
     for p in control.iterdir():
         p.chmod(0o444)
     control.chmod(0o555)
+
+
+def _blocked_dirs() -> list[str]:
+    """Folders of the checker's package: this one, and where an installed copy (editable or not)
+    lives, as the interpreter would find it without this checkout on its path."""
+    dirs = {str(PACKAGE_DIR)}
+    for d in _site_dirs():
+        if os.path.isdir(os.path.join(d, PACKAGE_DIR.name)):
+            dirs.add(os.path.join(d, PACKAGE_DIR.name))
+        for f in Path(d).glob(f"__editable__*{PACKAGE_DIR.name}*finder.py"):
+            try:  # setuptools' editable finder maps the package to its source folder
+                text = f.read_text(encoding="utf-8")
+            except OSError:
+                continue
+            for line in text.splitlines():
+                if line.startswith("MAPPING") and "{" in line:
+                    try:
+                        mapping = ast.literal_eval(line.split("=", 1)[1].strip())
+                    except (ValueError, SyntaxError):
+                        continue
+                    dirs.update(str(v) for v in mapping.values())
+    return sorted(dirs)
 
 
 def _python() -> str:

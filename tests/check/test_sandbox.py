@@ -165,6 +165,7 @@ def test_what_is_not_a_submission(tmp_path):
 # ------------------------------------------------------------------------------- hostile
 HOSTILE = [  # file, expected codes (both backends unless a dict by backend)
     ("imports_gpsaccel.py", ["uses-checker"]),
+    ("sneaky_import.py", ["uses-checker"]),
     ("patches_runner.py", ["result-refused"]),
     ("classmates/copier.py", ["import-error"]),
     ("memory_hog.py", ["memory-limit"]),
