@@ -238,14 +238,17 @@ def _cmd_check(args: argparse.Namespace) -> int:
                              on_result=on_result)
     except Interrupted as exc:
         done = [r for r in exc.results if r is not None]
+        if args.json is not None:  # first: the terminal may be gone
+            write_json(done, args.json, interrupted=True, **settings)
         if done:
             print(table(done))
         if args.json is not None:
-            write_json(done, args.json, interrupted=True, **settings)
             print(f"wrote {args.json} ({len(done)} of {len(files)} checked)")
         print("gpsaccel check: interrupted", file=sys.stderr)
         return 130
     seconds = time.perf_counter() - t0
+    if args.json is not None:  # first: printing can fail (a closed terminal), the file must not
+        path = write_json(results, args.json, **settings)
     if args.verbose:
         for r in results:
             print(r["text"], end="\n\n")
@@ -253,7 +256,6 @@ def _cmd_check(args: argparse.Namespace) -> int:
     print(f"{len(results)} submissions, {args.runs} runs each (seed {args.seed}), "
           f"sandbox {backend}, {seconds:.1f} s")
     if args.json is not None:
-        path = write_json(results, args.json, **settings)
         print(f"wrote {path}")
     return 0 if all(r["passed"] for r in results) else 1
 

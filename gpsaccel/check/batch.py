@@ -32,6 +32,7 @@ import multiprocessing as mp
 import multiprocessing.connection as mpc
 import os
 import signal
+import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterable, Sequence
@@ -218,6 +219,12 @@ def _isolated(files: list[Path], args: tuple, options: dict, workers: int, timeo
     was_subreaper = sb._get_subreaper()
     sb.set_subreaper(True)
     before = sb._my_children()  # not the batch's: never swept
+    # Ctrl-C sets a flag that the loop reads: a KeyboardInterrupt raised wherever the signal lands
+    # (inside fork's at-fork handlers, say) can be swallowed, and then nothing stops
+    interrupted: list[int] = []
+    previous = None
+    if threading.current_thread() is threading.main_thread():
+        previous = signal.signal(signal.SIGINT, lambda signum, frame: interrupted.append(signum))
     pending = deque(enumerate(files))
     running: dict[int, tuple[mp.Process, mpc.Connection, float]] = {}
     results: list[dict | None] = [None] * len(files)
@@ -229,6 +236,8 @@ def _isolated(files: list[Path], args: tuple, options: dict, workers: int, timeo
 
     try:
         while pending or running:
+            if interrupted:
+                raise KeyboardInterrupt
             while pending and len(running) < workers:
                 i, f = pending.popleft()
                 recv, send = ctx.Pipe(duplex=False)
@@ -239,7 +248,7 @@ def _isolated(files: list[Path], args: tuple, options: dict, workers: int, timeo
                 running[i] = (proc, recv, time.monotonic() + timeout + CHECK_SLACK)
             waitables = [c for _, c, _ in running.values()] + \
                         [p.sentinel for p, _, _ in running.values()]
-            mpc.wait(waitables, timeout=1.0)
+            mpc.wait(waitables, timeout=0.1)
             now = time.monotonic()
             for i in list(running):
                 proc, conn, deadline = running[i]
@@ -291,6 +300,8 @@ def _isolated(files: list[Path], args: tuple, options: dict, workers: int, timeo
             proc.join()
         sweep(before)
         sb.set_subreaper(bool(was_subreaper))
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
     return [r for r in results if r is not None]
 
 

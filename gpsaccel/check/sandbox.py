@@ -476,8 +476,11 @@ def _user_tasks() -> int:
             except OSError:
                 continue
             fields = dict(line.split(b":", 1) for line in status.splitlines() if b":" in line)
-            if int(fields.get(b"Uid", b"-1 0").split()[0]) == uid:
-                n += int(fields.get(b"Threads", b"1"))
+            try:
+                if int(fields.get(b"Uid", b"-1 0").split()[0]) == uid:
+                    n += int(fields.get(b"Threads", b"1"))
+            except (ValueError, IndexError):
+                continue
     return n
 
 
@@ -528,6 +531,8 @@ def _proc_table() -> dict[int, tuple[int, str, str]]:
             continue
         close = stat.rfind(b")")
         rest = stat[close + 2:].split()
+        if close < 0 or len(rest) < 2:
+            continue  # the process went away while it was read
         comm = stat[stat.find(b"(") + 1:close].decode(errors="replace")
         table[int(entry.name)] = (int(rest[1]), rest[0].decode(), comm)
     return table

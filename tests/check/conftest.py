@@ -5,6 +5,7 @@ submissions are and a watcher that finds their processes by PID from outside any
 from __future__ import annotations
 
 import os
+import signal
 import threading
 import time
 from pathlib import Path
@@ -49,7 +50,10 @@ class Watch:
 
     def _run(self) -> None:
         while not self._stop.is_set():
-            self.seen |= marked_pids()
+            try:
+                self.seen |= marked_pids()
+            except Exception:  # noqa: BLE001 - a process that vanished mid-scan: scan again
+                pass
             time.sleep(0.01)
 
     def __enter__(self) -> Watch:
@@ -72,6 +76,11 @@ def watch():
     assert not marked_pids(), f"marked processes before the test: {marked_pids()}"
     with Watch() as w:
         yield w
+    for pid in alive(w.seen):  # a failed test must not leave them to the next one
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except OSError:
+            pass
 
 
 def env_with_package() -> dict[str, str]:

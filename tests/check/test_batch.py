@@ -95,6 +95,15 @@ def test_ctrl_c_kills_every_student_process_and_writes_what_is_done(tmp_path, ba
     out = tmp_path / "results.json"
     proc = _cli([folder, "--runs", "2", "--workers", "2", "--sandbox", backend, "--timeout",
                  "60", "--json", out], hostile)
+    try:
+        _interrupt(proc, out, watch, hostile)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+
+
+def _interrupt(proc, out, watch, hostile):
     deadline = time.monotonic() + 60
     log = log_path(out)
 
