@@ -83,8 +83,9 @@ def test_a_class_with_hostile_files_keeps_every_honest_verdict(tmp_path, backend
     assert not hostile.alive(watch.seen), f"alive after the command: {hostile.alive(watch.seen)}"
 
 
-def test_ctrl_c_kills_every_student_process_and_writes_what_is_done(tmp_path, backend, hostile,
-                                                                    watch):
+@pytest.mark.parametrize("workers", [1, 2])
+def test_ctrl_c_kills_every_student_process_and_writes_what_is_done(tmp_path, backend, workers,
+                                                                    hostile, watch):
     folder = tmp_path / "class"
     folder.mkdir()
     shutil.copy(hostile.SUBMISSIONS / "correct_gps_rate.py", folder / "a_correct.py")
@@ -93,8 +94,8 @@ def test_ctrl_c_kills_every_student_process_and_writes_what_is_done(tmp_path, ba
         "def kalman_filter(z):\n    while True:\n        pass\n")
     shutil.copy(folder / "b_spins.py", folder / "c_spins.py")
     out = tmp_path / "results.json"
-    proc = _cli([folder, "--runs", "2", "--workers", "2", "--sandbox", backend, "--timeout",
-                 "60", "--json", out], hostile)
+    proc = _cli([folder, "--runs", "2", "--workers", workers, "--sandbox", backend,
+                 "--timeout", "60", "--json", out], hostile)
     try:
         _interrupt(proc, out, watch, hostile)
     finally:
