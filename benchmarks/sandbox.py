@@ -3,7 +3,8 @@
 A trivial submission (``f(z)`` returns ``z``) is run in a box with 1 call and with 200 calls (a
 check's usual number of runs), alternating the backends, 7 times each; the table shows the median
 wall time, and, as the floor any checker that runs students in a separate Python pays, a bare
-``python -I -S -c "import numpy"`` (one BLAS thread, as in a box).  The sandbox's overhead is a box's time minus that floor.
+``python -I -S -c "import numpy"`` (one BLAS thread, as in a box).  The sandbox's overhead is a
+box's time minus that floor.
 """
 
 from __future__ import annotations

@@ -226,8 +226,8 @@ def _cmd_check(args: argparse.Namespace) -> int:
     settings = {"runs": args.runs, "seed": args.seed, "timeout": args.timeout,
                 "sandbox": backend, "allow_gpsaccel": args.allow_gpsaccel,
                 "limits": {k: v for k, v in vars(limits).items()}}
-    print(f"sandbox: {backend}" + ("" if backend == "bwrap" else
-                                   " (bubblewrap not available: apt-get install bubblewrap)"),
+    print(f"sandbox: {backend}" + (" (bubblewrap not available: apt-get install bubblewrap)"
+                                   if backend != "bwrap" and args.sandbox == "auto" else ""),
           file=sys.stderr)
     on_result = appender(log_path(args.json)) if args.json is not None else None
     t0 = time.perf_counter()
