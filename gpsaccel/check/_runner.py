@@ -184,7 +184,6 @@ def _problem(kind: str, exc: BaseException | None = None, root: Path | None = No
 
 def run(control: Path, root: Path) -> None:
     plan = json.loads((control / "plan.json").read_text(encoding="utf-8"))
-    sys.path[:0] = [str(root)]
     sys.path.extend(plan["sys_path"])
     # one BLAS thread: the sandbox's memory limit counts every thread's stack, and the machine is
     # shared; matplotlib never opens a window
@@ -199,6 +198,8 @@ def run(control: Path, root: Path) -> None:
     if plan["block"]:
         sys.meta_path.insert(0, _Blocker(plan["block"]))
         sys.addaudithook(_audit_hook(plan["block"], plan["block_dirs"]))
+    # only now the student's folder: a numpy.py of theirs must not run before the hook is in
+    sys.path.insert(0, str(root))
     path = root / plan["entry"]
     os.chdir(path.parent)
     t0 = time.perf_counter()

@@ -192,11 +192,6 @@ class Submission:
     entry: str
     files: tuple[str, ...]
 
-    @property
-    def name(self) -> str:
-        return self.root.name if len(self.files) > 1 or self.entry != self.files[0] or \
-            self.root.joinpath(self.entry).parent != self.root else self.entry
-
 
 class SubmissionError(ValueError):
     """What is handed in is not a submission; ``code`` is the finding to report."""

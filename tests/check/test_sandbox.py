@@ -145,6 +145,18 @@ def test_a_students_folder_with_helpers_and_data(tmp_path, backend):
     assert report.details["entry"] == "filter.py" and report.details["sandbox"] == backend
 
 
+def test_a_students_numpy_py_does_not_run_before_the_checkers_guards(tmp_path, backend):
+    folder = tmp_path / "eve"
+    folder.mkdir()
+    (folder / "numpy.py").write_text("print('SHADOW')\nimport gpsaccel\n")
+    (folder / "filter.py").write_text(
+        "import numpy as np\n\ndef kalman_filter(z):\n"
+        "    return np.zeros((len(z), 3)), np.tile(np.eye(3), (len(z), 1, 1))\n")
+    box = sb.run(sb.load_submission(folder, "kalman_filter"), wf.calls(np.zeros((2, 151, 2))),
+                 LIMITS, backend)
+    assert box.failure is None and not box.uses_checker and "SHADOW" not in box.output
+
+
 def test_what_is_not_a_submission(tmp_path):
     (tmp_path / "a").mkdir()
     (tmp_path / "a" / "helpers.py").write_text("def propagate(x):\n    return x\n")
