@@ -768,6 +768,7 @@ def _supervise(backend: str, cmd: list[str], cwd: str, env: dict, drop_caps: boo
     refused: str | None = None
     proc = None
     sel = None
+    emptied = False
     try:
         res_w, out_w = child_fds[:2]
         proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=out_w, stderr=out_w,
@@ -828,6 +829,7 @@ def _supervise(backend: str, cmd: list[str], cwd: str, env: dict, drop_caps: boo
         # is (bwrap: the PID namespace ends with the runner); what else lived, the student left
         runner_alive = proc.poll() is None
         found = _kill_box(proc, before)
+        emptied = True
         result.killed = max(0, found - (1 if (runner_alive if backend == "basic" else found)
                                         else 0))
         # every writer is dead: what is left in the pipes is all there will be
@@ -852,6 +854,8 @@ def _supervise(backend: str, cmd: list[str], cwd: str, env: dict, drop_caps: boo
                         hit = hit or "result-refused"
         result.returncode = proc.returncode
     finally:
+        if proc is not None and not emptied:  # Ctrl-C or an error of ours: the box goes too
+            _kill_box(proc, before)
         if sel is not None:
             sel.close()
         set_subreaper(bool(was_subreaper))

@@ -275,3 +275,32 @@ def test_every_correct_fixture_passes_under_every_backend(name, backend, hostile
     report = check.submission(hostile.SUBMISSIONS / name, n_runs=5, seed=1, sandbox=backend)
     assert report.passed, report
     assert report.details["sandbox"] == backend
+
+
+def test_ctrl_c_during_a_single_check_kills_the_box(tmp_path, backend, hostile, watch):
+    """A notebook's check.submission interrupted: nothing of the student's spins on."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    spin = tmp_path / "spin.py"
+    spin.write_text("import ctypes\n\nctypes.CDLL(None).prctl(15, b'gpsacc-hostile', 0, 0, 0)\n\n\n"
+                    "def kalman_filter(z):\n    while True:\n        pass\n")
+    code = (f"from gpsaccel import check\n"
+            f"check.submission({str(spin)!r}, n_runs=2, timeout=60, sandbox={backend!r})\n")
+    proc = subprocess.Popen([sys.executable, "-c", code], env=hostile.env(),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        deadline = time.monotonic() + 60
+        while not watch.seen and time.monotonic() < deadline and proc.poll() is None:
+            time.sleep(0.05)
+        assert watch.seen, proc.communicate(timeout=5)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=30)
+        assert b"KeyboardInterrupt" in err
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert not hostile.alive(watch.seen), f"alive after Ctrl-C: {hostile.alive(watch.seen)}"
