@@ -391,13 +391,15 @@ def build_parser() -> argparse.ArgumentParser:
                    help="isolation of each submission: bwrap (bubblewrap namespaces), basic "
                         "(limits, scrubbed environment, private folder) or auto (bwrap when it "
                         "works; default)")
-    p.add_argument("--memory", type=float, default=1024, metavar="MIB",
+    p.add_argument("--memory", type=_v.flag_float(256.0), default=1024, metavar="MIB",
                    help="address space per student process, MiB (default 1024)")
-    p.add_argument("--max-output", type=float, default=16, metavar="MIB",
+    p.add_argument("--max-output", type=_v.flag_float(0.0, open_min=True), default=16,
+                   metavar="MIB",
                    help="printed output per submission, MiB (default 16)")
-    p.add_argument("--max-file-size", type=float, default=64, metavar="MIB",
+    p.add_argument("--max-file-size", type=_v.flag_float(0.0, open_min=True), default=64,
+                   metavar="MIB",
                    help="largest file a submission may write, MiB (default 64)")
-    p.add_argument("--max-processes", type=int, default=64,
+    p.add_argument("--max-processes", type=_v.flag_int(minimum=1), default=64,
                    help="processes per submission at once (default 64)")
     p.add_argument("--allow-gpsaccel", action="store_true",
                    help="let submissions import gpsaccel (by default an import is the finding "
