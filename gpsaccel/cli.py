@@ -409,7 +409,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("assignment", help="otter assign a homework: student notebook + autograder")
     p.add_argument("name", choices=("calibration", "coop", "ship"))
-    p.add_argument("--out", type=Path, required=True, help="folder to write (replaced)")
+    p.add_argument("--out", type=_v.output_dir, required=True, help="folder to write (replaced)")
     p.add_argument("--no-run-tests", action="store_true",
                    help="do not execute the solution against its tests first (faster)")
     p.set_defaults(func=_cmd_assignment)
@@ -419,11 +419,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--assignment", required=True, choices=("calibration", "coop", "ship"))
     p.add_argument("--autograder", type=Path, default=None,
                    help="the zip of `gpsaccel assignment` (default: generated from the master)")
-    p.add_argument("--out", type=Path, default=None,
+    p.add_argument("--out", type=_v.output_dir, default=None,
                    help="folder for grades.csv and feedback/ (default SUBMISSIONS/grades)")
-    p.add_argument("--jobs", type=int, default=None,
+    p.add_argument("--jobs", type=_v.flag_int(minimum=1), default=None,
                    help="notebooks graded at once (default: CPUs, at most 4)")
-    p.add_argument("--timeout", type=float, default=600.0,
+    p.add_argument("--timeout", type=_v.flag_float(0.0, open_min=True), default=600.0,
                    help="time limit per notebook, s (default 600)")
     p.set_defaults(func=_cmd_grade)
 
