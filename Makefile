@@ -1,10 +1,11 @@
 # Two entry points (see README): `make run` and `make test`. Each creates .venv when missing.
+# `make lab` opens the lessons in JupyterLab with the project's kernel.
 PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test lint bench lessons-html clean
+.PHONY: run test lab lint bench lessons-html clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -20,6 +21,11 @@ run: $(STAMP)
 
 test: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q
+
+# LAB_FLAGS: e.g. --no-browser, --port 8890, or --allow-root inside a container run as root.
+LAB_FLAGS ?=
+lab: $(STAMP)
+	$(BIN)/jupyter lab --notebook-dir=lessons $(LAB_FLAGS)
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

@@ -7,6 +7,8 @@ notebook quickly (``GPSACCEL_LESSON_RUNS=50``) while a student gets the report's
 from __future__ import annotations
 
 import os
+import tempfile
+from contextlib import contextmanager
 from pathlib import Path
 
 from gpsaccel._atomic import write_text
@@ -50,8 +52,9 @@ def execute(path: Path | str, timeout: int = 600, runs: int | None = None):
         os.environ[RUNS_VARIABLE] = str(runs)
     os.environ.setdefault("MPLBACKEND", "Agg")
     try:
-        NotebookClient(nb, timeout=timeout, kernel_name="python3",
-                       resources={"metadata": {"path": str(path.parent)}}).execute()
+        with _local_kernel() as km:
+            NotebookClient(nb, km=km, timeout=timeout, kernel_name="python3",
+                           resources={"metadata": {"path": str(path.parent)}}).execute()
     finally:
         if runs is not None:
             if env_before is None:
@@ -59,6 +62,26 @@ def execute(path: Path | str, timeout: int = 600, runs: int | None = None):
             else:
                 os.environ[RUNS_VARIABLE] = env_before
     return nb
+
+
+@contextmanager
+def _local_kernel():
+    """A kernel manager whose kernel talks over Unix sockets in a private temporary folder.
+
+    The default TCP transport makes every kernel warn "Kernel is running over TCP without
+    encryption" on the terminal of ``gpsaccel lessons``; the kernel runs on this machine only, so
+    IPC sockets (readable by this user alone) are both quieter and safer.  The kernel is shut down
+    and the folder removed on exit.
+    """
+    from jupyter_client.manager import KernelManager
+
+    with tempfile.TemporaryDirectory(prefix="gpsaccel-kernel-") as folder:
+        km = KernelManager(kernel_name="python3", transport="ipc", ip=os.path.join(folder, "kernel"))
+        try:
+            yield km
+        finally:
+            if km.has_kernel:
+                km.shutdown_kernel(now=True)
 
 
 def render_html(paths: list[Path], out: Path | str, runs: int | None = None) -> list[Path]:

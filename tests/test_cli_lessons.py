@@ -17,3 +17,11 @@ def test_lessons_refuses_an_unknown_lesson_and_a_tiny_ensemble(capsys):
     assert "--only" in capsys.readouterr().err
     assert main(["lessons", "--only", "02", "--runs", "1"]) == 2
     assert "argument --runs: must be an integer >= 2" in capsys.readouterr().err
+
+
+def test_lessons_kernel_does_not_warn_about_tcp(tmp_path, capfd):
+    """The kernel talks over private Unix sockets: no "running over TCP without encryption"."""
+    assert main(["lessons", "--only", "02", "--runs", "10"]) == 0
+    out, err = capfd.readouterr()
+    assert "without encryption" not in out + err
+    assert "1 lessons executed" in out
