@@ -304,18 +304,22 @@ def _ratio_unit(u1: str, u2: str) -> str:
 # Ensembles (report 000 figure 7, 001 figures 10b-12, 003 figures 4-6)
 
 def matrix_lines(t: np.ndarray, values: np.ndarray, *, title: str, quantity: str,
-                 ax: Axes | None = None) -> Figure:
+                 ax: Axes | None = None, unitless: bool = False) -> Figure:
     """All n² elements of a matrix over time on one axes (report 000's figure 7): values (n_t, n, n).
 
-    The elements have different units; each legend entry names its own.
+    The elements have different units; each legend entry names its own (``unitless``: the values
+    are already normalised, one axis in 1).
     """
     fig, ax = axes(ax, figsize=(8.5, 4.5))
     n = values.shape[1]
     for i in range(n):
         for j in range(n):
             unit = product_unit(CALIBRATION_STATES[i][1], CALIBRATION_STATES[j][1])
-            ax.plot(t, values[:, i, j], lw=1.0, label=f"({i + 1},{j + 1}) [{unit}]")
-    finish(ax, title, "time (s)", f"{quantity} (element's unit, see legend)", legend=False)
+            ax.plot(t, values[:, i, j], lw=1.0,
+                    label=f"({i + 1},{j + 1})" + ("" if unitless else f" [{unit}]"))
+    finish(ax, title, "time (s)",
+           f"{quantity} (1)" if unitless else f"{quantity} (element's unit, see legend)",
+           legend=False)
     ax.legend(loc="best", fontsize="x-small", ncol=3)
     return fig
 
@@ -434,13 +438,14 @@ _ROLE_STYLE = {
 
 
 def overlay_panels(panels_: Sequence[tuple[str, str, Sequence[tuple]]], *, title: str = "",
-                   xlabel: str = "time (s)", fig: Figure | None = None) -> Figure:
+                   xlabel: str = "time (s)", fig: Figure | None = None,
+                   height: float = 2.3) -> Figure:
     """Stacked panels, several signals each: ``panels_`` = [(quantity, unit, lines), ...].
 
     ``lines`` = [(t, values, label, role), ...]; ``role`` is one of ``measurement`` (markers),
     ``truth``, ``estimate``, ``error``, ``bound``, ``alternative`` (lines in the house colours).
     """
-    fig, axs = panels(len(panels_), fig, title=title)
+    fig, axs = panels(len(panels_), fig, title=title, height=height)
     for ax, (quantity, unit, lines) in zip(axs, panels_, strict=True):
         for t, values, label, role in lines:
             ax.plot(t, values, label=label, **_ROLE_STYLE[role])
@@ -487,12 +492,28 @@ def ensemble_mean_error(mc, *, sigma: bool = False, k: float = 1.0,
     return fig
 
 
-def pave_minus_p(mc, *, grid: bool = True, title: str | None = None,
+def pave_minus_p(mc, *, grid: bool = True, normalised: bool = False, title: str | None = None,
                  fig: Figure | None = None) -> Figure:
     """P_ave − P over time: a 3x3 grid with ±2 standard errors of P_ave shaded (``grid``), or all
-    nine elements on one axes as report 000's figure 7."""
-    title = title or f"P_ave − P, N = {mc.n_runs:,} ({mc.truth} truth)"
+    nine elements on one axes as report 000's figure 7.
+
+    ``normalised`` divides each element by its own standard error (one axis, unitless): on report
+    000's layout element (1,1) (m², ~0.01) hides the others (the bias terms are ~1e-8); in
+    standard errors all nine are visible and comparable with ±2.
+    """
+    title = title or (f"{'(P_ave − P) / standard error' if normalised else 'P_ave − P'}, "
+                      f"N = {mc.n_runs:,} ({mc.truth} truth)")
     diff = mc.P_ave - mc.P
+    if normalised:
+        fig = matrix_lines(mc.t, diff / mc.P_ave_se, title=title, unitless=True,
+                           quantity="(P_ave − P) / standard error", ax=None if fig is None
+                           else fig.add_subplot())
+        ax = fig.axes[0]
+        for z in (-2.0, 2.0):
+            ax.axhline(z, color=STYLE["bound"], ls="--", lw=1.0)
+        ax.text(0.01, 0.02, "dashed: ±2 (about 95 % of a consistent filter's values inside)",
+                transform=ax.transAxes, fontsize="x-small", color=STYLE["bound"])
+        return fig
     if not grid:
         if fig is not None:
             return matrix_lines(mc.t, diff, title=title, quantity="P_ave − P", ax=fig.add_subplot())

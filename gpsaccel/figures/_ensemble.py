@@ -27,6 +27,10 @@ def _captions(mc: MonteCarloResult) -> dict[str, str]:
                         "element, with ±2 standard errors of P_ave shaded." + n,
         "pave-minus-p-lines": "P_ave − P, all nine elements over time (each in its own unit: "
                               "m², m²/s, ...)." + n,
+        "pave-minus-p-normalised": "P_ave − P, all nine elements each divided by its own standard "
+                                   "error (the companion of report 000's figure 7, where element "
+                                   "(1,1) hides the rest; (i,j) and (j,i) coincide); a consistent "
+                                   "filter stays within ±2 about 95 % of the time." + n,
         "orthogonality": "Orthogonality of the error and the estimate, (1/N) Σ (e − e_ave) x̂ᵀ, "
                          "nine elements, ±2 standard errors shaded." + n,
     }
@@ -35,7 +39,7 @@ def _captions(mc: MonteCarloResult) -> dict[str, str]:
 def ensemble_set(report: str, runs: int, seed: int,
                  wanted: list[tuple[str, str]]) -> Iterator[ReportFigure]:
     """``report``'s Monte Carlo figures: ``wanted`` = [(number, kind), ...] with kinds
-    ensemble-mean-error[-sigma], pave-minus-p[-lines], orthogonality."""
+    ensemble-mean-error[-sigma], pave-minus-p[-lines|-normalised], orthogonality."""
     mc = report_ensemble(report, runs, seed)
     captions = _captions(mc)
     draw = {
@@ -43,6 +47,7 @@ def ensemble_set(report: str, runs: int, seed: int,
         "ensemble-mean-error-sigma": lambda: plots.ensemble_mean_error(mc, sigma=True),
         "pave-minus-p": lambda: plots.pave_minus_p(mc),
         "pave-minus-p-lines": lambda: plots.pave_minus_p(mc, grid=False),
+        "pave-minus-p-normalised": lambda: plots.pave_minus_p(mc, normalised=True),
         "orthogonality": lambda: plots.orthogonality(mc),
     }
     for number, kind in wanted:

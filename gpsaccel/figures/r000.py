@@ -3,7 +3,8 @@
 Figures 1-6 are one realization (seed ``seed``) filtered by filterpy under the multirate driver,
 with the error-model truth as report 000's code builds it.  Figure 7 is the Monte Carlo ensemble
 (``runs`` realizations, :func:`gpsaccel.figures._shared.ensemble`), drawn like the report: the
-nine elements of P_ave − P on one axes.
+nine elements of P_ave − P on one axes; 7b (not in the report) the same nine elements each in
+units of its own standard error, so that more than element (1,1) is visible.
 """
 
 from __future__ import annotations
@@ -49,4 +50,5 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
         yield ReportFigure("000", num, slug, cap + f" (seed {seed}).", fig)
     from gpsaccel.figures._ensemble import ensemble_set
 
-    yield from ensemble_set("000", runs, seed, [("07", "pave-minus-p-lines")])
+    yield from ensemble_set("000", runs, seed, [("07", "pave-minus-p-lines"),
+                                                ("07b", "pave-minus-p-normalised")])

@@ -1,0 +1,85 @@
+"""Every figure each course report lists is walked through in a lesson; the HTML pages show them.
+
+A lesson walks through a figure in a markdown cell that names it ("Report 004, figures 9–11")
+directly before the code cell that draws it.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+
+import pytest
+
+from gpsaccel.lessons import REPORT_FIGURES, _mentions, lessons_dir
+
+LESSONS = sorted(lessons_dir().glob("*.ipynb"))
+
+
+def _walked_through() -> dict[tuple[str, str], list[str]]:
+    shown: dict[tuple[str, str], list[str]] = {}
+    for path in LESSONS:
+        cells = json.loads(path.read_text(encoding="utf-8"))["cells"]
+        for cell, nxt in zip(cells, cells[1:] + [None], strict=True):
+            if cell["cell_type"] == "markdown" and nxt is not None and nxt["cell_type"] == "code":
+                for key in _mentions("".join(cell["source"])):
+                    shown.setdefault(key, []).append(path.stem)
+    return shown
+
+
+def test_mentions_parse_ranges_lists_and_letters():
+    assert _mentions("**Report 004, figures 1–3 and 9**; report 000, figure 3b; Report 002, "
+                     "figures 8/9, 10, 11") == [
+        ("004", "1"), ("004", "2"), ("004", "3"), ("004", "9"), ("000", "3b"), ("002", "8"),
+        ("002", "9"), ("002", "10"), ("002", "11")]
+
+
+@pytest.mark.parametrize("report", list(REPORT_FIGURES))
+def test_every_listed_figure_is_walked_through_in_a_lesson(report):
+    shown = _walked_through()
+    missing = [n for n in REPORT_FIGURES[report] if (report, n) not in shown]
+    assert not missing, f"report {report}: figures {missing} are in no lesson"
+
+
+def test_solutions_and_checks_are_collapsed_in_jupyterlab():
+    """A cell tagged solution or check has its source hidden (JupyterLab shows it collapsed)."""
+    n = 0
+    for path in LESSONS:
+        for cell in json.loads(path.read_text(encoding="utf-8"))["cells"]:
+            tags = cell["metadata"].get("tags", [])
+            if "solution" in tags or "check" in tags:
+                n += 1
+                assert cell["metadata"].get("jupyter", {}).get("source_hidden"), \
+                    f"{path.name}: cell {cell['id']} is a solution/check but not collapsed"
+    assert n > 0
+
+
+def test_cell_ids_are_unique_and_stable(tmp_path):
+    for path in LESSONS:
+        ids = [c["id"] for c in json.loads(path.read_text(encoding="utf-8"))["cells"]]
+        assert len(ids) == len(set(ids)) and all(ids), path.name
+
+
+def _browser() -> str | None:
+    for name in ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable"):
+        if shutil.which(name):
+            return shutil.which(name)
+    return None
+
+
+def test_rendered_lesson_and_index_in_a_headless_browser(tmp_path):
+    """Render lesson 02 and the index, load them in headless Chromium, read back the DOM."""
+    browser = _browser()
+    if browser is None:
+        pytest.skip("no Chromium/Chrome installed (apt-get install chromium)")
+    from gpsaccel.lessons import render_html
+
+    render_html([lessons_dir() / "02-error-model.ipynb"], tmp_path, runs=10)
+    for page, must in [("02-error-model.html", ["Deriving", "<img", "Solution (click to reveal)"]),
+                       ("index.html", ["02-error-model.html", "Report 004"])]:
+        dom = subprocess.run(
+            [browser, "--headless", "--no-sandbox", "--disable-gpu", "--dump-dom",
+             (tmp_path / page).as_uri()], capture_output=True, text=True, timeout=120).stdout
+        for text in must:
+            assert text in dom, f"{page}: {text!r} not in the page the browser built"
