@@ -33,3 +33,15 @@ __all__ = [
     "simulate",
 ]
 __version__ = "0.1.0"
+
+#: Sub-packages reachable as attributes after a bare ``import gpsaccel`` (a lesson's
+#: ``gpsaccel.check.model_matrices(...)`` typed as given), imported on first use.
+_LAZY = ("calibration", "check", "coop", "figures", "kalman", "lessons", "plots", "ship")
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        return importlib.import_module(f"gpsaccel.{name}")
+    raise AttributeError(f"module 'gpsaccel' has no attribute {name!r}")

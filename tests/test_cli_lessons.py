@@ -25,3 +25,18 @@ def test_lessons_kernel_does_not_warn_about_tcp(tmp_path, capfd):
     out, err = capfd.readouterr()
     assert "without encryption" not in out + err
     assert "1 lessons executed" in out
+
+
+def test_names_the_lessons_type_are_reachable_after_import_gpsaccel():
+    """Exercise code is typed as given: ``import gpsaccel`` then ``gpsaccel.check.…`` and so on."""
+    import gpsaccel
+
+    assert callable(gpsaccel.check.model_matrices)
+    assert callable(gpsaccel.calibration.compare.reference_filter)
+    assert callable(gpsaccel.calibration.mistakes.mutant)
+    assert callable(gpsaccel.lessons.check_answer)
+    assert callable(gpsaccel.kalman.update.epoch_transition)
+    import pytest
+
+    with pytest.raises(AttributeError, match="no attribute 'nonsense'"):
+        gpsaccel.nonsense  # noqa: B018
