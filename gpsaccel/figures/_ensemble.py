@@ -18,13 +18,16 @@ def _captions(mc: MonteCarloResult) -> dict[str, str]:
     n = f" N = {mc.n_runs:,} realizations, seed {mc.seed}, {mc.truth} truth."
     kin = (" With the closed-form truth e_ave is not zero: the dotted line is the mean error the "
            "Euler model's integration error predicts.") if mc.truth == "kinematic" else ""
+    centred = (" Centred statistics: e_ave is subtracted before averaging, so the deterministic "
+               "mean error of the closed-form truth drops out and this looks like the error-model "
+               "truth's.") if mc.truth == "kinematic" else ""
     return {
         "ensemble-mean-error": "Ensemble-mean error e_ave of position, velocity and bias, with "
                                "±2 standard errors (2σ/√N) shaded." + kin + n,
         "ensemble-mean-error-sigma": "Ensemble-average error with the filter's ±σ (dashed) and "
                                      "±2σ/√N (shaded)." + kin + n,
         "pave-minus-p": "P_ave − P, the sample error covariance minus the filter's, element by "
-                        "element, with ±2 standard errors of P_ave shaded." + n,
+                        "element, with ±2 standard errors of P_ave shaded." + centred + n,
         "pave-minus-p-lines": "P_ave − P, all nine elements over time (each in its own unit: "
                               "m², m²/s, ...)." + n,
         "pave-minus-p-normalised": "P_ave − P, all nine elements each divided by its own standard "
@@ -32,7 +35,7 @@ def _captions(mc: MonteCarloResult) -> dict[str, str]:
                                    "(1,1) hides the rest; (i,j) and (j,i) coincide); a consistent "
                                    "filter stays within ±2 about 95 % of the time." + n,
         "orthogonality": "Orthogonality of the error and the estimate, (1/N) Σ (e − e_ave) x̂ᵀ, "
-                         "nine elements, ±2 standard errors shaded." + n,
+                         "nine elements, ±2 standard errors shaded." + centred + n,
     }
 
 

@@ -36,7 +36,10 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
     fig = plots.error_band(res.t_gps[last], e[last, 2], sd[last, 2], label="b − b̂", unit="m/s²",
                            title="Bias error, last 10 s")
     yield ReportFigure("000", "03b", "bias-error-zoom",
-                       "Bias error b − b̂ with ±1σ, the last 10 s zoomed.", fig)
+                       "Bias error b − b̂ with ±1σ, the last 10 s zoomed. One run's error may sit "
+                       "outside ±1σ for seconds: a third of a consistent filter's errors fall "
+                       "outside, and the bias error changes slowly, so it stays out for many fixes "
+                       "in a row.", fig)
     gps = run.gps_steps
     series = [("04", "position-estimate", "Position estimate p̂ = p_c + δp̂ against the truth",
                run.p, run.p_c[gps] + res.x_hat[:, 0], "position p", "m"),
