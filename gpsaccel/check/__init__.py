@@ -17,6 +17,7 @@ checkers build on.
 """
 
 from gpsaccel.calibration.mistakes import codes
+from gpsaccel.check.jacobians import assert_jacobians, dt_model, jacobians
 from gpsaccel.check.matrices import assert_model_matrices, model_matrices
 from gpsaccel.check.report import Finding, Report
 from gpsaccel.check.student_filter import StudentFilterError, student_filter
@@ -27,9 +28,12 @@ __all__ = [
     "Finding",
     "Report",
     "StudentFilterError",
+    "assert_jacobians",
     "assert_model_matrices",
     "assert_submission",
     "codes",
+    "dt_model",
+    "jacobians",
     "model_matrices",
     "student_filter",
     "submission",

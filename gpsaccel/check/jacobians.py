@@ -1,0 +1,494 @@
+r"""Check a student's cooperative-localization Jacobians and DT linearization (report 002).
+
+The model (state x = [ξg, ηg, θg, ξa, ηa, θa], input u = [vg, φg, va, ωa], wheelbase L)::
+
+    A = ∂f/∂x:  A₁₃ = −vg sin θg   A₂₃ = vg cos θg   A₄₆ = −va sin θa   A₅₆ = va cos θa
+    B = ∂f/∂u:  B₁₁ = cos θg  B₂₁ = sin θg  B₃₁ = tan φg / L  B₃₂ = vg / (L cos² φg)
+                B₄₃ = cos θa  B₅₃ = sin θa  B₆₄ = 1
+    C = ∂h/∂x, with Δξ = ξa − ξg, Δη = ηa − ηg, ρ² = Δξ² + Δη²:
+        bearing rows 1 and 3 (both relative to a heading):  ∂/∂ξg = Δη/ρ²  ∂/∂ηg = −Δξ/ρ²
+            ∂/∂ξa = −Δη/ρ²  ∂/∂ηa = Δξ/ρ²;  C₁₃ = ∂γag/∂θg = −1,  C₃₆ = ∂γga/∂θa = −1
+        range row 2: ∂ρ/∂ξg = −Δξ/ρ  ∂ρ/∂ηg = −Δη/ρ  ∂ρ/∂ξa = Δξ/ρ  ∂ρ/∂ηa = Δη/ρ
+        GPS rows 4, 5: C₄₄ = C₅₅ = 1
+
+:func:`jacobians` calls the student's ``A(x, u)``, ``B(x, u)`` and ``C(x)`` at :func:`check_states`:
+states along the course's nominal trajectory and random states around it, headings at and near
+±π and 0, geometries that put a bearing at ±π (the UAV straight behind the UGV's heading, so the
+wrapped measurement jumps there), and near-coincident vehicles (ρ = 1 cm).  An element is right
+when it agrees with the analytic value to ``rtol`` relative to the element's own size plus
+``rtol`` times the largest element of that matrix at that state (the analytic matrices are exact
+to rounding; a central finite difference with a good step is 1e-8 relative away, and passes).
+
+:func:`dt_model` checks the DT perturbation model F = I + ΔT·A, G = ΔT·B, H = C (and, if given,
+the process noise Ω / Q of the course: Qtrue is already the covariance per DT step, so Ω = I).
+A is nilpotent here (A² = 0), so the exact e^{ΔT·A} equals I + ΔT·A and passes too.
+
+Every wrong element is named in 1-based course notation (A₁₃), with the expected expression, the
+student's and the right value at the first state where it differs, and, for the recognised
+mistakes, the likely cause.  Codes: ``jacobian-A``, ``jacobian-B``, ``jacobian-C``,
+``dt-linearization``, ``omega-dt-gamma``; ``not-callable``, ``exception``, ``shape``,
+``not-finite`` for what cannot be checked.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import traceback
+from collections.abc import Callable
+
+import numpy as np
+
+from gpsaccel.check.report import Report
+from gpsaccel.coop.model import (
+    CoopModel,
+    jacobian_A,
+    jacobian_B,
+    jacobian_C,
+    wrap_state,
+)
+
+#: Relative tolerance of an element (see the module docstring).
+RTOL = 1e-6
+
+#: The most wrong elements one finding lists (the rest are counted).
+MAX_LISTED = 6
+
+_SUB = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
+
+#: The expected expression of every element that is not identically zero.
+FORMULAS: dict[str, dict[tuple[int, int], str]] = {
+    "A": {(0, 2): "−vg·sin θg", (1, 2): "vg·cos θg", (3, 5): "−va·sin θa", (4, 5): "va·cos θa"},
+    "B": {(0, 0): "cos θg", (1, 0): "sin θg", (2, 0): "tan φg / L", (2, 1): "vg / (L·cos² φg)",
+          (3, 2): "cos θa", (4, 2): "sin θa", (5, 3): "1"},
+    "C": {(0, 0): "Δη/ρ²", (0, 1): "−Δξ/ρ²", (0, 2): "−1", (0, 3): "−Δη/ρ²", (0, 4): "Δξ/ρ²",
+          (1, 0): "−Δξ/ρ", (1, 1): "−Δη/ρ", (1, 3): "Δξ/ρ", (1, 4): "Δη/ρ",
+          (2, 0): "Δη/ρ²", (2, 1): "−Δξ/ρ²", (2, 3): "−Δη/ρ²", (2, 4): "Δξ/ρ²", (2, 5): "−1",
+          (3, 3): "1", (4, 4): "1"},
+}
+SHAPES = {"A": (6, 6), "B": (6, 4), "C": (5, 6)}
+ARGS = {"A": "A(x, u)", "B": "B(x, u)", "C": "C(x)"}
+
+
+def _elem(name: str, i: int, j: int) -> str:
+    return name + f"{i + 1}{j + 1}".translate(_SUB)
+
+
+# --------------------------------------------------------------------------- the test states
+def check_states(model: CoopModel | None = None, n_random: int = 60, seed: int = 0
+                ) -> tuple[np.ndarray, list[str]]:
+    """States (n, 6) the Jacobians are checked at, and a label for each.
+
+    Every 50th step of the nominal trajectory; ``n_random`` states drawn around it (positions
+    ±200 m, headings uniform on [−π, π)); headings θg, θa at −π, −π + 1e-7, 0, π − 1e-7 (with the
+    other vehicle placed so the UGV's bearing to the UAV is exactly ±π, the wrap's jump, and just
+    either side of it); the UAV 1 cm from the UGV.
+    """
+    model = CoopModel() if model is None else model
+    rng = np.random.default_rng(seed)
+    states, labels = [], []
+    nominal = model.nominal()
+    for k in range(0, model.n_steps + 1, 50):
+        states.append(nominal[k])
+        labels.append(f"nominal, t = {model.t[k]:g} s")
+    for i in range(n_random):
+        x = np.empty(6)
+        x[[0, 1, 3, 4]] = rng.uniform(-200, 200, 4)
+        x[[2, 5]] = rng.uniform(-math.pi, math.pi, 2)
+        states.append(x)
+        labels.append(f"random state {i}")
+    for th in (-math.pi, -math.pi + 1e-7, 0.0, math.pi - 1e-7):
+        for eps in (0.0, 1e-7, -1e-7):
+            # UAV 50 m straight behind the UGV (bearing atan2 − θg = ±π) ...
+            x = np.array([10.0, -5.0, th, 10.0 - 50 * math.cos(th) + eps,
+                          -5.0 - 50 * math.sin(th) + eps, th])
+            states.append(x)
+            labels.append(f"θg = θa = {th:.7g} rad, UAV behind the UGV (bearing ≈ ±π)")
+    # ... and the UGV straight behind the UAV's heading (the second bearing at ±π)
+    states.append(np.array([-30.0, 0.0, 0.3, 0.0, 0.0, 0.0]))
+    labels.append("UAV heading east, UGV straight behind it (γga = ±π)")
+    states.append(np.array([3.0, 4.0, 1.0, 3.0 + 0.006, 4.0 + 0.008, -2.0]))
+    labels.append("vehicles 1 cm apart")
+    return np.array(states), labels
+
+
+def _inputs(model: CoopModel, n: int, seed: int) -> np.ndarray:
+    """u for every state: u0 for the first, then inputs drawn around it (so no element is
+    compared only at one value of vg, φg, va)."""
+    rng = np.random.default_rng(seed + 1)
+    u = np.broadcast_to(model.u0, (n, 4)).copy()
+    u[1::2] *= rng.uniform(0.5, 1.5, (len(u[1::2]), 4))
+    return u
+
+
+# --------------------------------------------------------------------------- calling the student
+def _call(report: Report, name: str, fn: object, args: tuple, shape: tuple[int, int],
+          what: str) -> np.ndarray | None:
+    """fn(*args) as a float array of ``shape``, or None with a finding."""
+    try:
+        out = fn(*args)
+    except Exception as exc:  # noqa: BLE001 - the student's function may raise anything
+        tb = "".join(traceback.format_exception_only(type(exc), exc)).strip()
+        report.add("exception", f"{what} raised {tb} at x = {np.round(args[0], 4).tolist()}.")
+        return None
+    try:
+        arr = np.array(out, dtype=float)
+    except (TypeError, ValueError) as exc:
+        report.add("not-a-matrix", f"{what} returned a {type(out).__name__}; np.array(..., "
+                   f"dtype=float) fails: {exc}")
+        return None
+    if arr.shape != shape:
+        report.add("shape", f"{what} returned shape {arr.shape}; it must be "
+                   f"{shape[0]} x {shape[1]}" + (" (it looks transposed)"
+                                                 if arr.shape == shape[::-1] else "") + ".")
+        return None
+    if not np.isfinite(arr).all():
+        report.add("not-finite", f"{what} contains NaN or inf at x = "
+                   f"{np.round(args[0], 6).tolist()}" + (
+                       " (the vehicles are 1 cm apart there: ρ² is small but not zero)"
+                       if np.hypot(args[0][3] - args[0][0], args[0][4] - args[0][1]) < 0.1
+                       else "") + ".")
+        return None
+    return arr
+
+
+def _evaluate(report: Report, name: str, fn: object, X: np.ndarray, U: np.ndarray,
+              display: str | None = None) -> np.ndarray | None:
+    display = display or name
+    if not callable(fn):
+        report.add("not-callable", f"{display} must be a function {ARGS[name].replace(name, display, 1)} "
+                   f"returning the matrix at a state; got a {type(fn).__name__}. "
+                   f"(To check matrices at one state, use check.dt_model.)")
+        return None
+    shape = SHAPES[name]
+    out = np.empty((len(X),) + shape)
+    for i, (x, u) in enumerate(zip(X, U, strict=True)):
+        args = (x.copy(),) if name == "C" else (x.copy(), u.copy())
+        what = f"{display}({'x' if name == 'C' else 'x, u'})"
+        got = _call(report, name, fn, args, shape, what)
+        if got is None:
+            return None
+        out[i] = got
+    return out
+
+
+def _expected(name: str, X: np.ndarray, U: np.ndarray, model: CoopModel) -> np.ndarray:
+    if name == "A":
+        return np.stack([jacobian_A(x, u) for x, u in zip(X, U, strict=True)])
+    if name == "B":
+        return np.stack([jacobian_B(x, u, model.L) for x, u in zip(X, U, strict=True)])
+    return jacobian_C(X)
+
+
+# --------------------------------------------------------------------------- comparing
+def _bad(actual: np.ndarray, expected: np.ndarray, rtol: float) -> np.ndarray:
+    """(n, r, c) bool: elements that differ beyond the tolerance."""
+    scale = np.abs(expected).max(axis=(1, 2), keepdims=True)
+    return np.abs(actual - expected) > rtol * (np.abs(expected) + scale)
+
+
+def _close(a: np.ndarray, b: np.ndarray, rtol: float) -> bool:
+    return not _bad(a, b, rtol).any()
+
+
+def _element_cause(name: str, idx: tuple[int, int], a: np.ndarray, e: np.ndarray,
+                   labels_bad: list[str], rtol: float) -> str:
+    """The likely cause of element ``idx`` being wrong, from its values over all states."""
+    i, j = idx
+    tol = rtol * (np.abs(e) + np.abs(e).max() + 1e-300)
+    if np.all(np.abs(a + e) <= tol) and np.abs(e).max() > 0:
+        if name == "C" and j in (2, 5):
+            return ("the sign is wrong: the bearing is measured relative to the heading, "
+                    "γ = atan2(Δη, Δξ) − θ, so ∂γ/∂θ = −1")
+        if name == "C" and i in (0, 2):
+            return ("a sign error in ∂atan2: ∂atan2(Δη, Δξ)/∂Δξ = −Δη/ρ² and ∂/∂Δη = Δξ/ρ², and "
+                    "Δξ = ξa − ξg enters with − for the UGV's own position")
+        if name == "C" and i == 1:
+            return "the sign is wrong: ρ grows with ξa − ξg, so ∂ρ/∂ξa = +Δξ/ρ and ∂ρ/∂ξg = −Δξ/ρ"
+        return "the sign is wrong (∂cos θ/∂θ = −sin θ, ∂sin θ/∂θ = cos θ)"
+    if np.all(np.abs(a) <= tol):
+        if name == "C" and j in (2, 5):
+            return ("the bearing is measured relative to the vehicle's heading, γ = atan2(Δη, Δξ) "
+                    "− θ, so it depends on θ: ∂γ/∂θ = −1")
+        return "it is missing (zero)"
+    if name == "C" and j in (2, 5) and np.all(np.abs(a - 1) <= tol):
+        return ("the bearing is measured relative to the heading, γ = atan2(Δη, Δξ) − θ, so "
+                "∂γ/∂θ = −1, not +1")
+    if name == "B" and idx == (2, 1):
+        return ("∂(vg tan φg / L)/∂φg = vg / (L cos² φg) = vg sec² φg / L (the derivative of "
+                "tan is sec²)")
+    if all("±π" in s or "1 cm" in s for s in labels_bad):
+        return ("it is right elsewhere and wrong only where a bearing is at ±π or the vehicles "
+                "nearly coincide: a numerical derivative through the wrapped h (or a step too "
+                "large for ρ = 1 cm) — differentiate the formula, not the wrapped measurement")
+    return ""
+
+
+def _matrix_finding(report: Report, code: str, name: str, actual: np.ndarray,
+                    expected: np.ndarray, X: np.ndarray, labels: list[str], rtol: float,
+                    display: str | None = None, formulas: dict | None = None,
+                    unit_hint: str = "") -> bool:
+    """A finding for every wrong element of ``name`` (over all states); True when all right."""
+    bad = _bad(actual, expected, rtol)
+    if not bad.any():
+        return True
+    display = display or name
+    formulas = FORMULAS.get(name, {}) if formulas is None else formulas
+    elems = [tuple(int(v) for v in idx) for idx in np.argwhere(bad.any(axis=0))]
+    per_state = bad.reshape(len(X), -1).sum(axis=1)
+    s = int(np.argmax(per_state))  # the state where most elements are wrong: show values there
+    groups: dict[str, list[str]] = {}
+    for idx in elems[:MAX_LISTED]:
+        states = np.flatnonzero(bad[:, idx[0], idx[1]])
+        k = s if bad[s][idx] else int(states[0])
+        cause = _element_cause(name, idx, actual[:, idx[0], idx[1]],
+                               expected[:, idx[0], idx[1]], [labels[j] for j in states], rtol)
+        where = "" if k == s else f" at {labels[k]}"
+        groups.setdefault(cause, []).append(
+            f"{_elem(display, *idx)} = {actual[k][idx]:.6g}, should be "
+            f"{formulas.get(idx, '0')} = {expected[k][idx]:.6g}{where} (wrong at {states.size} "
+            f"of {len(X)} states)")
+    parts = [f"At {labels[s]} (x = {np.round(X[s], 4).tolist()}):"]
+    for cause, items in groups.items():
+        parts.append("; ".join(items) + (f". Likely cause: {cause}." if cause else "."))
+    more = len(elems) - MAX_LISTED
+    if more > 0:
+        parts.append(f"And {more} more elements.")
+    if unit_hint:
+        parts.append(unit_hint)
+    report.add(code, " ".join(parts))
+    return False
+
+
+def _whole_matrix_causes(report: Report, name: str, actual: np.ndarray, expected: np.ndarray,
+                         model: CoopModel, rtol: float) -> bool:
+    """Recognise a whole-matrix mistake (transposed-free: DT instead of CT); True if found."""
+    dt = model.dt
+    code = f"jacobian-{name}"
+    if name == "A":
+        eye = np.eye(6)
+        if _close(actual, eye + dt * expected, rtol):
+            report.add(code, f"Your A is F = I + ΔT·A (ΔT = {dt:g} s), the DT transition; A is "
+                       f"the continuous-time Jacobian ∂f/∂x, without I and without ΔT "
+                       f"(A₁₃ = −vg·sin θg). Check F with check.dt_model.")
+            return True
+        if _close(actual, dt * expected, rtol):
+            report.add(code, f"Your A is ΔT·A (ΔT = {dt:g} s); A is the continuous-time Jacobian "
+                       f"∂f/∂x, not multiplied by ΔT.")
+            return True
+    if name == "B" and _close(actual, dt * expected, rtol):
+        report.add(code, f"Your B is G = ΔT·B (ΔT = {dt:g} s); B is the continuous-time ∂f/∂u.")
+        return True
+    return False
+
+
+def jacobians(A: Callable | None = None, B: Callable | None = None, C: Callable | None = None,
+              model: CoopModel | None = None, n_random: int = 60, seed: int = 0,
+              rtol: float = RTOL) -> Report:
+    """Check the student's Jacobian functions of the cooperative-localization model.
+
+    Parameters
+    ----------
+    A : callable A(x, u) → (6, 6) ∂f/∂x at state x (6,) [ξg (m), ηg (m), θg (rad), ξa, ηa, θa]
+        and input u (4,) [vg (m/s), φg (rad), va (m/s), ωa (rad/s)].
+    B : callable B(x, u) → (6, 4) ∂f/∂u.
+    C : callable C(x) → (5, 6) ∂h/∂x.
+    model : the problem (report 002's defaults when None): L, the nominal trajectory, u0.
+    n_random : random states beyond the fixed ones (:func:`check_states`).
+    seed : seed of the random states and inputs.
+    rtol : relative tolerance per element (module docstring).
+
+    Any left as None is not checked.  Returns a :class:`~gpsaccel.check.report.Report`; nothing the
+    student's functions do raises here.
+    """
+    t0 = time.perf_counter()
+    model = CoopModel() if model is None else model
+    X, labels = check_states(model, n_random, seed)
+    U = _inputs(model, len(X), seed)
+    report = Report("Jacobians A, B, C")
+    report.details.update({"n_states": len(X), "rtol": rtol})
+    checked = []
+    for name, fn in (("A", A), ("B", B), ("C", C)):
+        if fn is None:
+            continue
+        checked.append(name)
+        got = _evaluate(report, name, fn, X, U)
+        if got is None:
+            continue
+        want = _expected(name, X, U, model)
+        if not _whole_matrix_causes(report, name, got, want, model, rtol):
+            _matrix_finding(report, f"jacobian-{name}", name, got, want, X, labels, rtol)
+    if not checked:
+        raise ValueError("pass at least one of A, B, C (the student's Jacobian functions)")
+    if report.passed:
+        report.add("jacobians-right", f"{', '.join(checked)} agree with the analytic Jacobians "
+                   f"at all {len(X)} states (headings at ±π, bearings at ±π, vehicles 1 cm "
+                   f"apart included), to {rtol:g} relative.", "note")
+    report.sort()
+    report.seconds = time.perf_counter() - t0
+    return report
+
+
+def assert_jacobians(**kwargs: object) -> Report:
+    """:func:`jacobians` for a grader cell: raise AssertionError with the findings if it fails."""
+    report = jacobians(**kwargs)
+    if not report.passed:
+        raise AssertionError("\n" + str(report))
+    return report
+
+
+# --------------------------------------------------------------------------- the DT model
+def _dt_value(report: Report, name: str, value: object, X: np.ndarray, U: np.ndarray,
+              shape: tuple[int, int]) -> np.ndarray | None:
+    """The student's F, G or H at every state: a callable is evaluated, an array is taken as the
+    value at the first state (X has one state then)."""
+    base = {"F": "A", "G": "B", "H": "C"}[name]
+    if callable(value):
+        return _evaluate(report, base, value, X, U, display=name)
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        report.add("not-a-matrix", f"{name} must be an array of numbers (or a function "
+                   f"{ARGS[base].replace(base, name, 1)}); np.array({name}, dtype=float) fails: "
+                   f"{exc}")
+        return None
+    if arr.shape != shape:
+        report.add("shape", f"{name} has shape {arr.shape}; it must be {shape[0]} x {shape[1]}.")
+        return None
+    if not np.isfinite(arr).all():
+        report.add("not-finite", f"{name} contains NaN or inf.")
+        return None
+    return arr[None]
+
+
+def dt_model(F: object = None, G: object = None, H: object = None, Omega: object = None,
+             Q: object = None, x: object = None, u: object = None,
+             model: CoopModel | None = None, n_random: int = 20, seed: int = 0,
+             rtol: float = RTOL) -> Report:
+    """Check the student's DT linearization F = I + ΔT·A, G = ΔT·B, H = C (report 002, part 1).
+
+    Parameters
+    ----------
+    F, G, H : each either a callable (F(x, u) → 6x6, G(x, u) → 6x4, H(x) → 5x6, checked at the
+        same states as :func:`jacobians`) or a matrix, checked at the state ``x`` and input ``u``.
+    Omega : the process-noise input matrix Ω of x_{k+1} = F x_k + G u_k + Ω w_k (6x6), if the
+        student forms one; with the course's per-step Qtrue it is the identity.
+    Q : the DT process-noise covariance the student's filter adds per step (6x6): Qtrue for the
+        truth model (any Q is allowed in a filter; only Q = ΔT·Qtrue or ΔT²·Qtrue is flagged).
+    x, u : state (6,) and input (4,) for matrix-valued F, G, H (default the nominal x0, u0).
+    model, n_random, seed, rtol : as in :func:`jacobians`.
+    """
+    t0 = time.perf_counter()
+    model = CoopModel() if model is None else model
+    dt = model.dt
+    if all(callable(v) or v is None for v in (F, G, H)):
+        X, labels = check_states(model, n_random, seed)
+        U = _inputs(model, len(X), seed)
+    else:
+        xs = model.x0 if x is None else np.asarray(x, dtype=float)
+        us = model.u0 if u is None else np.asarray(u, dtype=float)
+        if xs.shape != (6,) or us.shape != (4,) or not (np.isfinite(xs).all()
+                                                         and np.isfinite(us).all()):
+            raise ValueError(f"x must be a finite state (6,) and u a finite input (4,), got "
+                             f"shapes {xs.shape} and {us.shape}")
+        X, U = wrap_state(xs)[None], us[None]
+        labels = [f"x = {np.round(xs, 4).tolist()}"]
+    report = Report("DT linearization F, G, H")
+    report.details.update({"n_states": len(X), "rtol": rtol, "dt": dt})
+    eye = np.eye(6)
+    for name, value, shape in (("F", F, (6, 6)), ("G", G, (6, 4)), ("H", H, (5, 6))):
+        if value is None:
+            continue
+        got = _dt_value(report, name, value, X, U, shape)
+        if got is None:
+            continue
+        if len(got) == 1 and len(X) > 1:
+            got = np.broadcast_to(got, (len(X),) + shape)
+        if name == "F":
+            A = _expected("A", X, U, model)
+            want = eye + dt * A
+            if _close(got, want, rtol):
+                continue
+            for cand, why in ((A, "F = A, the continuous-time Jacobian; the DT transition is "
+                                  f"F = I + ΔT·A (ΔT = {dt:g} s)"),
+                              (dt * A, "F = ΔT·A: the identity is missing; F = I + ΔT·A"),
+                              (eye + A, f"F = I + A: ΔT = {dt:g} s is missing; F = I + ΔT·A")):
+                if _close(got, cand, rtol):
+                    report.add("dt-linearization", f"Your {why}.")
+                    break
+            else:
+                _matrix_finding(report, "dt-linearization", "F", got, want, X, labels, rtol,
+                                formulas={(i, i): "1" for i in range(6)} | {
+                                    k: f"ΔT·({v})" for k, v in FORMULAS["A"].items()},
+                                unit_hint=f"F = I + ΔT·A with ΔT = {dt:g} s.")
+        elif name == "G":
+            Bm = _expected("B", X, U, model)
+            want = dt * Bm
+            if _close(got, want, rtol):
+                continue
+            if _close(got, Bm, rtol):
+                report.add("dt-linearization", f"Your G = B, the continuous-time ∂f/∂u; the DT "
+                           f"input matrix is G = ΔT·B (ΔT = {dt:g} s).")
+            else:
+                _matrix_finding(report, "dt-linearization", "G", got, want, X, labels, rtol,
+                                formulas={k: f"ΔT·{v}" for k, v in FORMULAS["B"].items()},
+                                unit_hint=f"G = ΔT·B with ΔT = {dt:g} s.")
+        else:
+            want = _expected("C", X, U, model)
+            if _close(got, want, rtol):
+                continue
+            if _close(got, dt * want, rtol):
+                report.add("dt-linearization", f"Your H = ΔT·C; the measurement is taken at an "
+                           f"instant, so H = C (no ΔT).")
+            else:
+                _matrix_finding(report, "dt-linearization", "H", got, want, X, labels, rtol,
+                                formulas=FORMULAS["C"], unit_hint="H = C = ∂h/∂x.")
+    _check_noise(report, Omega, Q, model, rtol)
+    if F is None and G is None and H is None and Omega is None and Q is None:
+        raise ValueError("pass at least one of F, G, H, Omega, Q")
+    if report.passed:
+        report.add("dt-model-right", f"F = I + ΔT·A, G = ΔT·B, H = C at all {len(X)} states "
+                   f"(ΔT = {dt:g} s), to {rtol:g} relative.", "note")
+    report.sort()
+    report.seconds = time.perf_counter() - t0
+    return report
+
+
+def _matrix(report: Report, name: str, value: object, n: int) -> np.ndarray | None:
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        report.add("not-a-matrix", f"{name} must be an array of numbers; {exc}")
+        return None
+    if arr.shape != (n, n) or not np.isfinite(arr).all():
+        report.add("shape", f"{name} must be a finite {n} x {n} matrix, got shape {arr.shape}.")
+        return None
+    return arr
+
+
+def _check_noise(report: Report, Omega: object, Q: object, model: CoopModel, rtol: float) -> None:
+    dt, Qt = model.dt, model.Qtrue
+    if Omega is not None:
+        Om = _matrix(report, "Omega", Omega, 6)
+        if Om is not None and not _close(Om[None], np.eye(6)[None], rtol):
+            if _close(Om[None], dt * np.eye(6)[None], rtol):
+                report.add("omega-dt-gamma", f"Ω = ΔT·Γ = {dt:g}·I: the course's Qtrue is "
+                           f"already the covariance of the noise added per DT step "
+                           f"(x_{{k+1}} = F x_k + G u_k + w_k, w_k ~ N(0, Qtrue)), so Ω = I. "
+                           f"Ω = ΔT·Γ belongs to a continuous-time noise intensity; here it "
+                           f"shrinks Q by ΔT² = {dt**2:g}.")
+            else:
+                report.add("omega-dt-gamma", f"Ω should be the identity (the course's Qtrue is "
+                           f"the per-step DT covariance); yours has diagonal "
+                           f"{np.round(np.diag(Om), 6).tolist()}.")
+    if Q is not None:
+        Qs = _matrix(report, "Q", Q, 6)
+        if Qs is None:
+            return
+        for scale, what in ((dt, "ΔT·Qtrue"), (dt**2, "ΔT²·Qtrue = Ω Qtrue Ωᵀ with Ω = ΔT·I")):
+            if _close(Qs[None], scale * Qt[None], rtol):
+                report.add("omega-dt-gamma", f"Your Q = {what}: the course's Qtrue is already "
+                           f"the covariance of the process noise per DT step of {dt:g} s, "
+                           f"so the filter's Q is Qtrue (or a tuned multiple of it), not scaled "
+                           f"by ΔT.")
+                return
