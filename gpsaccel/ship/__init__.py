@@ -4,10 +4,11 @@
 * :mod:`~gpsaccel.ship.plan`: the racetrack thrust/torque input;
 * :mod:`~gpsaccel.ship.simulation`: a voyage or an ensemble of voyages;
 * :mod:`~gpsaccel.ship.zeroed_gain`: the report's full-gain-then-zero-columns update;
+* :mod:`~gpsaccel.ship.mistakes`: the homework's known mistakes as runnable filters;
 * :mod:`~gpsaccel.ship.comparison`: the four multirate filters compared by Monte Carlo.
 """
 
-from gpsaccel.ship import comparison, model, plan, simulation, zeroed_gain
+from gpsaccel.ship import comparison, mistakes, model, plan, simulation, zeroed_gain
 from gpsaccel.ship.model import ShipModel
 
-__all__ = ["ShipModel", "comparison", "model", "plan", "simulation", "zeroed_gain"]
+__all__ = ["ShipModel", "comparison", "mistakes", "model", "plan", "simulation", "zeroed_gain"]

@@ -1,0 +1,170 @@
+r"""Known mistakes in a student's multirate ship filter (report 004), as runnable filters.
+
+A student's ``multirate_filter(z, u)`` gets z (N, 9), row k the sensors at t_k = k·Ts with NaN
+where a sensor did not report (row 0 all NaN), and the known input u (N − 1, 3); it returns x̂_k
+and P_k at every step k = 0..N−1 (row 0: x0 and M0, nothing is measured there).  The optimal
+filter updates with exactly the rows that arrived::
+
+    x̄_{k+1} = Φ x̂_k + B u_k,   M_{k+1} = Φ P_k Φᵀ + Q
+    a = the components measured at k+1,  K = M H_aᵀ (H_a M H_aᵀ + V_aa)⁻¹
+    x̂ = x̄ + K (z_a − H_a x̄),   P = (I − K H_a) M (I − K H_a)ᵀ + K V_aa Kᵀ
+
+The report's filter differs in up to three ways, and a student can forget the input:
+
+``zeroed-gain``       the full 9-column gain M Hᵀ (H M Hᵀ + V)⁻¹ with the columns of the missing
+                      sensors set to zero (:mod:`gpsaccel.ship.zeroed_gain`): near-optimal, not
+                      optimal; its cost is the exact σ excess of its true covariance;
+``report-covariance`` with that gain, P = (I − K H) M, which is not the covariance of a
+                      suboptimal gain (and is not symmetric);
+``monorate-gain``     at the GPS fixes (all nine components) the gain of the *monorate* filter
+                      (every sensor every step) instead of the filter's own;
+``no-input``          the prediction without B u_k.
+
+:func:`run` runs any combination on an ensemble at once: the gains do not depend on the data,
+so one covariance recursion serves every run and the means move as (R, 9) arrays.
+:func:`variants` lists every combination the checker matches against (:func:`run` with none of
+them is the optimal filter, equal to :func:`gpsaccel.kalman.multirate.run_multirate` to
+rounding).
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+
+from gpsaccel.ship.model import ShipModel
+from gpsaccel.ship.plan import driving_input
+
+CODES = ("zeroed-gain", "report-covariance", "monorate-gain", "no-input")
+
+
+@dataclass(frozen=True)
+class Variant:
+    """One filter of the catalogue: the codes it makes and the settings of :func:`run`."""
+
+    codes: tuple[str, ...]
+    zeroed: bool = False
+    report_covariance: bool = False
+    monorate_gain: bool = False
+    no_input: bool = False
+
+    def __str__(self) -> str:
+        return " + ".join(self.codes) or "optimal"
+
+
+def variants() -> tuple[Variant, ...]:
+    """The optimal filter first, then every valid combination of the catalogue's mistakes.
+
+    ``report-covariance`` needs ``zeroed-gain`` (with the optimal gain (I − KH) M equals the Joseph
+    form, so it is not a mistake there).
+    """
+    out = [Variant(())]
+    for zeroed, report, mono, no_input in itertools.product((False, True), repeat=4):
+        if report and not zeroed or not (zeroed or report or mono or no_input):
+            continue
+        codes = tuple(c for c, on in zip(CODES, (zeroed, report, mono, no_input), strict=True)
+                      if on)
+        out.append(Variant(codes, zeroed, report, mono, no_input))
+    return tuple(out)
+
+
+@dataclass
+class Output:
+    """What a filter of the catalogue returns on an ensemble.
+
+    x_hat : (R, N, n) a posteriori means (row 0 the prior x0).  P : (N, n, n) the covariance the
+    filter carries and returns.  P_true : (N, n, n) the true covariance of its error (Joseph form
+    of the gains it applied).  K : (N, n, 9) the gains (zero at k = 0).
+    """
+
+    x_hat: np.ndarray
+    P: np.ndarray
+    P_true: np.ndarray
+    K: np.ndarray
+
+
+def availability(z: np.ndarray) -> np.ndarray:
+    """(N, 9) bool: the components measured at each step, from one run's z (finite = measured)."""
+    return np.isfinite(np.asarray(z, dtype=float))
+
+
+def run(model: ShipModel, z: np.ndarray, u: np.ndarray | None = None,
+        variant: Variant = Variant(()), mono_K: np.ndarray | None = None) -> Output:
+    """Run ``variant`` on z (R, N, 9) (every run with the same NaN pattern) and input u (N−1, 3).
+
+    ``u`` defaults to the model's driving input; ``mono_K`` (N, n, 9), the monorate filter's gains,
+    is computed when the variant needs it and it is not given.
+    """
+    z = np.asarray(z, dtype=float)
+    if z.ndim == 2:
+        z = z[None]
+    R, N, p = z.shape
+    avail = availability(z[0])
+    if (availability(z) != avail).any():
+        raise ValueError("z: every run must have the same NaN pattern (the same schedule)")
+    u = driving_input(model) if u is None else np.asarray(u, dtype=float)
+    Phi, Q, H, V, B = model.Phi, model.Q, model.H, model.V, model.B
+    n = Phi.shape[0]
+    I = np.eye(n)
+    if variant.monorate_gain and mono_K is None:
+        mono_K = monorate_gains(model)
+    x = np.broadcast_to(model.x0, (R, n)).copy()
+    C = model.M0.copy()
+    Ct = C.copy()
+    x_hat = np.empty((R, N, n))
+    P = np.empty((N, n, n))
+    P_true = np.empty((N, n, n))
+    K_all = np.zeros((N, n, p))
+    x_hat[:, 0], P[0], P_true[0] = x, C, Ct
+    for k in range(N - 1):
+        j = k + 1
+        x = x @ Phi.T + (0.0 if variant.no_input else B @ u[k])
+        C = Phi @ C @ Phi.T + Q
+        Ct = Phi @ Ct @ Phi.T + Q
+        rows = np.flatnonzero(avail[j])
+        K = np.zeros((n, p))
+        if rows.size:
+            if variant.monorate_gain and rows.size == p:
+                K = mono_K[j]
+            elif variant.zeroed:
+                S = H @ C @ H.T + V
+                K[:, rows] = np.linalg.solve(S, H @ C.T).T[:, rows]
+            else:
+                Ha = H[rows]
+                S = Ha @ C @ Ha.T + V[np.ix_(rows, rows)]
+                K[:, rows] = np.linalg.solve(S, Ha @ C.T).T
+            r = np.zeros((R, p))
+            r[:, rows] = z[:, j, rows] - x @ H[rows].T
+            x = x + r @ K.T
+            IKH = I - K @ H
+            C = IKH @ C if variant.report_covariance else IKH @ C @ IKH.T + K @ V @ K.T
+            Ct = IKH @ Ct @ IKH.T + K @ V @ K.T
+        K_all[j] = K
+        x_hat[:, j], P[j], P_true[j] = x, C, Ct
+    return Output(x_hat, P, P_true, K_all)
+
+
+def monorate_gains(model: ShipModel) -> np.ndarray:
+    """(N, n, 9) the gains of the monorate filter (every component at every step k ≥ 1)."""
+    N = model.n_samples
+    z = np.zeros((1, N, 9))
+    z[:, 0] = np.nan
+    return run(model, z, np.zeros((N - 1, 3)), Variant(())).K
+
+
+def schedule_z(model: ShipModel, z_all: np.ndarray) -> np.ndarray:
+    """The report's multirate layout: z_all (..., N, 9) with NaN where the multirate schedule
+    (GPS at ``gps_rate_hz``, IMU at ``imu_rate_hz``, nothing at k = 0) delivers nothing."""
+    k = np.arange(model.n_samples)[:, None]
+    avail = (k % model.periods(multirate=True) == 0) & (k >= 1)
+    out = np.array(z_all, dtype=float, copy=True)
+    out[..., ~avail] = np.nan
+    return out
+
+
+def sigma_excess(P_true: np.ndarray, P_opt: np.ndarray) -> np.ndarray:
+    """(N, n) √diag P_true / √diag P_opt − 1: the exact loss in σ of each state (≥ 0)."""
+    return np.sqrt(np.diagonal(P_true, axis1=-2, axis2=-1)
+                   / np.diagonal(P_opt, axis1=-2, axis2=-1)) - 1

@@ -1,0 +1,48 @@
+"""The coop mistake catalogue: without a mistake it is the reference filter; each entry moves it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gpsaccel.coop import filters, mistakes
+from gpsaccel.coop.model import CoopModel
+
+M = CoopModel(duration=30.0)
+TRUTH = M.simulate(np.random.default_rng(3), 3)
+
+
+def _dist(out, ref):
+    sd = np.sqrt(np.diagonal(ref.P, axis1=-2, axis2=-1))
+    dx = np.abs(mistakes.wrapped_difference(out.x_hat, ref.x_hat)) / sd
+    dP = np.abs(out.P - ref.P) / (sd[..., :, None] * sd[..., None, :])
+    return float(dx.max()), float(dP.max())
+
+
+@pytest.mark.parametrize("kind", mistakes.KINDS)
+def test_no_mistake_is_the_reference_filter(kind):
+    ref = filters.run_batch(kind, M, TRUTH.y, M.Qtrue, M.Rtrue)
+    dx, dP = _dist(mistakes.run(M, TRUTH.y, M.Qtrue, M.Rtrue, kind), ref)
+    assert dx < 1e-10 and dP < 1e-12
+
+
+@pytest.mark.parametrize("kind", mistakes.KINDS)
+def test_every_mistake_changes_the_output_or_its_range(kind):
+    ref = filters.run_batch(kind, M, TRUTH.y, M.Qtrue, M.Rtrue)
+    for m in mistakes.catalogue(M, kind):
+        out = mistakes.run(M, TRUTH.y, M.Qtrue, M.Rtrue, kind, (m,))
+        dx, dP = _dist(out, ref)
+        if m.code == "no-state-wrap":
+            assert dx < 1e-9 and mistakes.heading_range(out.x_hat) > np.pi + 1, m
+        elif m.code == "p-not-symmetric":
+            assert dx < 1e-9 and dP < 1e-12, m  # the same filter in exact arithmetic
+        else:
+            assert max(dx, dP) > 1e-2, (m, dx, dP)
+
+
+def test_codes_of_each_kind():
+    assert "jacobian-point" in mistakes.codes("ekf")
+    assert "jacobian-point" not in mistakes.codes("lkf")
+    for code in ("no-angle-wrap", "no-state-wrap", "dt-linearization", "process-noise",
+                 "std-as-variance", "epoch-shift", "p-not-symmetric"):
+        assert code in mistakes.codes("lkf") and code in mistakes.codes("ekf")

@@ -1,0 +1,45 @@
+"""The ship mistake catalogue: without a mistake it is the optimal multirate filter."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gpsaccel.kalman.multirate import run_multirate
+from gpsaccel.ship import mistakes
+from gpsaccel.ship.model import ShipModel
+from gpsaccel.ship.simulation import simulate_ensemble
+from gpsaccel.ship.zeroed_gain import run_zeroed_gain
+
+M = ShipModel(n_samples=300)
+ENS = simulate_ensemble(M, 3, np.random.default_rng(1))
+Z = mistakes.schedule_z(M, ENS.z)
+SCHED = M.schedule(multirate=True)
+
+
+def test_optimal_variant_is_run_multirate_and_zeroed_is_run_zeroed_gain():
+    ref = mistakes.run(M, Z, ENS.u)
+    for r in range(3):
+        res = run_multirate(M, Z[r][SCHED.steps], schedule=SCHED, u=ENS.u)
+        np.testing.assert_allclose(ref.x_hat[r, 1:], res.x_hat, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(ref.P[1:], res.P, rtol=0, atol=1e-12)
+    for cov, report in (("joseph", False), ("report", True)):
+        v = mistakes.Variant(("zeroed-gain",), zeroed=True, report_covariance=report)
+        out = mistakes.run(M, Z, ENS.u, v)
+        zg = run_zeroed_gain(M, Z[0][SCHED.steps], schedule=SCHED, covariance=cov, u=ENS.u)
+        np.testing.assert_allclose(out.x_hat[0, 1:], zg.x_hat, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(out.P[1:], zg.P, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(out.P_true[1:], zg.P_actual, rtol=0, atol=1e-12)
+
+
+def test_variants_are_distinct_and_the_zeroed_gain_costs_little():
+    ref = mistakes.run(M, Z, ENS.u)
+    sd = np.sqrt(np.diagonal(ref.P, axis1=-2, axis2=-1))
+    vs = mistakes.variants()
+    assert vs[0].codes == () and len(vs) == 12
+    for v in vs[1:]:
+        out = mistakes.run(M, Z, ENS.u, v)
+        assert (np.abs(out.x_hat - ref.x_hat) / sd).max() > 1e-3, v
+        excess = mistakes.sigma_excess(out.P_true, ref.P)
+        assert excess.min() > -1e-9  # nothing beats the optimal gain
+        if v.codes == ("zeroed-gain",):
+            assert 0 < excess.max() < 1e-3
