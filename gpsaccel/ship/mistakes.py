@@ -128,13 +128,13 @@ def run(model: ShipModel, z: np.ndarray, u: np.ndarray | None = None,
         if rows.size:
             if variant.monorate_gain and rows.size == p:
                 K = mono_K[j]
-            elif variant.zeroed:
-                S = H @ C @ H.T + V
-                K[:, rows] = np.linalg.solve(S, H @ C.T).T[:, rows]
+            elif variant.zeroed:  # K = M Hᵀ S⁻¹ as written (M is not symmetric with
+                S = H @ C @ H.T + V    # report-covariance, so the order matters)
+                K[:, rows] = np.linalg.solve(S.T, H @ C.T).T[:, rows]
             else:
                 Ha = H[rows]
                 S = Ha @ C @ Ha.T + V[np.ix_(rows, rows)]
-                K[:, rows] = np.linalg.solve(S, Ha @ C.T).T
+                K[:, rows] = np.linalg.solve(S.T, Ha @ C.T).T
             r = np.zeros((R, p))
             r[:, rows] = z[:, j, rows] - x @ H[rows].T
             x = x + r @ K.T
