@@ -1,27 +1,34 @@
-"""Homework checkers for the report-000 calibration filter.
+"""Homework checkers for the course's three systems, one kind of answer for all.
 
-Two checks, one kind of answer (a :class:`Report` of :class:`Finding` s with stable codes)::
+Every check returns a :class:`Report` of :class:`Finding` s with stable codes::
 
     from gpsaccel import check
-    print(check.model_matrices(Phi=Phi, Gamma=Gamma, H=H, V=V, W=W, M0=M0))
-    print(check.submission("my_filter.py"))       # the file defines kalman_filter(z) -> (x_hat, P)
+    print(check.model_matrices(Phi=Phi, Gamma=Gamma, H=H, V=V, W=W, M0=M0))   # report 000
+    print(check.jacobians(A=A, B=B, C=C))                # report 002: the student's Jacobians
+    print(check.dt_model(F=F, G=G, H=H))                 # report 002: F = I + ΔT·A, G, H
+    print(check.submission("my_filter.py"))              # kalman_filter(z) (calibration)
+    print(check.submission("coop.py", problem="coop"))   # ekf(y, Q, R) and/or lkf(y, Q, R)
+    print(check.submission("ship.py", problem="ship"))   # multirate_filter(z, u)
 
-:func:`assert_model_matrices` and :func:`assert_submission` raise ``AssertionError`` with the
-findings instead, for a grader's test cell (nbgrader, otter-grader).  The known mistakes and their
-codes are in :mod:`gpsaccel.calibration.mistakes`; ``gpsaccel check PATH ...`` checks many files
-(:mod:`gpsaccel.check.batch`).  :func:`student_filter` makes a file a ``kalman_filter(z)`` callable
-(run in its own box) for :func:`gpsaccel.calibration.compare.compare`.  Students' code runs only
-inside a sandbox (:mod:`gpsaccel.check.sandbox`: bubblewrap namespaces or a portable basic box,
-with limits), whose generic interface (named functions, numpy inputs, declared outputs) other
-checkers build on.
+The problems (contract, simulated data, reference, tolerance, catalogue of mistakes) are described
+in :mod:`gpsaccel.check.problems`.  Every ``assert_*`` form raises ``AssertionError`` with the
+findings instead, for a grader's test cell (nbgrader, otter-grader).  The catalogues of known
+mistakes live with their systems (:mod:`gpsaccel.calibration.mistakes`,
+:mod:`gpsaccel.coop.mistakes`, :mod:`gpsaccel.ship.mistakes`); ``gpsaccel check PATH --problem
+...`` checks many files (:mod:`gpsaccel.check.batch`).  :func:`student_filter` makes a file a
+``kalman_filter(z)`` callable (run in its own box) for :func:`gpsaccel.calibration.compare.compare`.
+Students' code runs only inside a sandbox (:mod:`gpsaccel.check.sandbox`: bubblewrap namespaces or
+a portable basic box, with limits), whose generic interface (named functions, numpy inputs,
+declared outputs) the problem checkers use through :mod:`gpsaccel.check.student`.
 """
 
 from gpsaccel.calibration.mistakes import codes
 from gpsaccel.check.jacobians import assert_jacobians, dt_model, jacobians
 from gpsaccel.check.matrices import assert_model_matrices, model_matrices
+from gpsaccel.check.problems import assert_submission, submission
 from gpsaccel.check.report import Finding, Report
 from gpsaccel.check.student_filter import StudentFilterError, student_filter
-from gpsaccel.check.whole_filter import TOLERANCE, assert_submission, submission
+from gpsaccel.check.whole_filter import TOLERANCE
 
 __all__ = [
     "TOLERANCE",

@@ -365,6 +365,7 @@ class CoopProblem(Problem):
             Function("lkf", args, outs, "the LKF about the nominal from x0 (solve_ivp or closed "
                                         "form); row k is x̂ = x* + δx̂, P at t_k"))
         self._Q = Q or {}
+        self._cache: dict = {}
 
     def Q(self, kind: str) -> np.ndarray:
         from gpsaccel.coop.filters import tuned_q
@@ -384,9 +385,17 @@ class CoopProblem(Problem):
         return [Call(function.name, (y, Q, R), function.outputs) for y in cases.y]
 
     def _reference(self, cases: CoopCases, kind: str, mistakes: tuple = ()):
+        """The reference (no mistakes) or a catalogue filter on the cases; cached, since every
+        check of a class runs on the same cases."""
         from gpsaccel.coop import mistakes as cm
 
-        return cm.run(self.model, cases.y, self.Q(kind), self.model.Rtrue, kind, mistakes)
+        key = (id(cases), kind, mistakes)
+        if key not in self._cache:
+            if len(self._cache) > 64:
+                self._cache.clear()
+            out = cm.run(self.model, cases.y, self.Q(kind), self.model.Rtrue, kind, mistakes)
+            self._cache[key] = (out, cases)  # cases kept alive so its id stays unique
+        return self._cache[key][0]
 
     def evaluate(self, report: Report, cases: CoopCases, function: Function,
                  results: list[dict[str, np.ndarray]]) -> None:
@@ -718,7 +727,7 @@ def get(problem: str | Problem) -> Problem:
     return PROBLEMS[name]
 
 
-def submission(path: str | os.PathLike, problem: str | Problem = "calibration",
+def submission(path: str | os.PathLike, *, problem: str | Problem = "calibration",
                **options: object) -> Report:
     """Check the student's file ``path`` for ``problem``; the options are those of
     :meth:`Problem.check` (n_runs, seed, timeout; the calibration problem takes every option of
@@ -726,10 +735,10 @@ def submission(path: str | os.PathLike, problem: str | Problem = "calibration",
     return get(problem).check(path, **options)
 
 
-def assert_submission(path: str | os.PathLike, problem: str | Problem = "calibration",
+def assert_submission(path: str | os.PathLike, *, problem: str | Problem = "calibration",
                       **options: object) -> Report:
     """:func:`submission` for a grader cell: raise AssertionError with the findings if it fails."""
-    report = submission(path, problem, **options)
+    report = submission(path, problem=problem, **options)
     if not report.passed:
         raise AssertionError("\n" + str(report))
     return report
