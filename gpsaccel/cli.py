@@ -193,7 +193,8 @@ def _cmd_ship(args: argparse.Namespace) -> int:
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
-    """Check students' submissions, each in a sandbox; table on stdout, --json for the details."""
+    """Check students' submissions for one problem, each in a sandbox; table on stdout, --json
+    for the details."""
     import time
 
     from gpsaccel.check import sandbox
@@ -223,7 +224,8 @@ def _cmd_check(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise ValueError(str(exc).replace("limits.", "--")) from None
     backend = sandbox.resolve_backend(args.sandbox)
-    settings = {"runs": args.runs, "seed": args.seed, "timeout": args.timeout,
+    settings = {"problem": args.problem, "runs": args.runs, "seed": args.seed,
+                "timeout": args.timeout,
                 "sandbox": backend, "allow_gpsaccel": args.allow_gpsaccel,
                 "limits": {k: v for k, v in vars(limits).items()}}
     print(f"sandbox: {backend}" + (" (bubblewrap not available: apt-get install bubblewrap)"
@@ -235,7 +237,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
         results = check_many(files, n_runs=args.runs, seed=args.seed, timeout=args.timeout,
                              executor=spec, max_workers=args.workers, sandbox=backend,
                              limits=limits, allow_gpsaccel=args.allow_gpsaccel,
-                             on_result=on_result)
+                             on_result=on_result, problem=args.problem)
     except Interrupted as exc:
         done = [r for r in exc.results if r is not None]
         if args.json is not None:  # first: the terminal may be gone
@@ -253,8 +255,9 @@ def _cmd_check(args: argparse.Namespace) -> int:
         for r in results:
             print(r["text"], end="\n\n")
     print(table(results))
-    print(f"{len(results)} submissions, {args.runs} runs each (seed {args.seed}), "
-          f"sandbox {backend}, {seconds:.1f} s")
+    runs = results[0]["details"].get("n_runs", args.runs) if results else args.runs
+    print(f"{len(results)} submissions, problem {args.problem}, {runs} runs each (seed "
+          f"{args.seed}), sandbox {backend}, {seconds:.1f} s")
     if args.json is not None:
         print(f"wrote {path}")
     return 0 if all(r["passed"] for r in results) else 1
@@ -371,14 +374,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=_v.flag_seed, default=0)
     p.set_defaults(func=_cmd_ship)
 
-    p = sub.add_parser("check", help="check students' kalman_filter files (homework checker)")
+    p = sub.add_parser("check", help="check students' homework files (calibration, coop, ship)")
     p.add_argument("paths", nargs="+", type=Path,
                    help="submission files, or folders whose every top-level .py file or "
                         "sub-folder is one submission")
+    p.add_argument("--problem", choices=("calibration", "coop", "ship"), default="calibration",
+                   help="calibration: kalman_filter(z) (report 000, default); coop: ekf(y, Q, R) "
+                        "and/or lkf(y, Q, R) (report 002); ship: multirate_filter(z, u) "
+                        "(report 004)")
     p.add_argument("--json", type=_v.output_file, default=None, metavar="FILE",
                    help="write every finding and number to FILE (e.g. results.json)")
-    p.add_argument("--runs", type=_v.flag_int(minimum=2), default=200,
-                   help="realizations per check (default 200)")
+    p.add_argument("--runs", type=_v.flag_int(minimum=2), default=None,
+                   help="realizations per check (default: the problem's, see gpsaccel.check)")
     p.add_argument("--seed", type=_v.flag_seed, default=0,
                    help="seed of the realizations (default 0)")
     p.add_argument("--timeout", type=_v.flag_float(0.0, open_min=True), default=60.0,

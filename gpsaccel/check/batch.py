@@ -41,7 +41,7 @@ from pathlib import Path
 from gpsaccel import _validation as _v
 from gpsaccel._atomic import write_text
 from gpsaccel.check import sandbox as sb
-from gpsaccel.check.whole_filter import submission
+from gpsaccel.check.problems import submission
 from gpsaccel.executors import resolve_executor
 
 #: Seconds a check's process may take beyond the student's time limit (simulating the data,
@@ -90,7 +90,8 @@ def find_submissions(paths: Iterable[str | os.PathLike]) -> tuple[list[Path], li
     return list(dict.fromkeys(found)), notes
 
 
-def _check_one(path: str, n_runs: int, seed: int, timeout: float, **options: object) -> dict:
+def _check_one(path: str, n_runs: int | None, seed: int, timeout: float,
+               **options: object) -> dict:
     report = submission(path, n_runs=n_runs, seed=seed, timeout=timeout, **options)
     out = report.to_dict()
     out["text"] = str(report)
@@ -106,11 +107,12 @@ def checker_error(path: Path | str, message: str) -> dict:
             "text": f"{path.name}: FAILED (checker-error)\n  - {message}"}
 
 
-def check_many(paths: Sequence[str | os.PathLike], n_runs: int = 200, seed: int = 0,
+def check_many(paths: Sequence[str | os.PathLike], n_runs: int | None = None, seed: int = 0,
                timeout: float = 60, executor: object = "processes",
                max_workers: int | None = None, sandbox: str = "auto",
                limits: sb.Limits | None = None, allow_gpsaccel: bool = False,
-               on_result: Callable[[dict], None] | None = None) -> list[dict]:
+               on_result: Callable[[dict], None] | None = None,
+               problem: str = "calibration") -> list[dict]:
     """Check every submission of ``paths`` (see :func:`find_submissions`); one dict per
     submission, in order.
 
@@ -118,16 +120,19 @@ def check_many(paths: Sequence[str | os.PathLike], n_runs: int = 200, seed: int 
     ``None`` (in this process, one after the other) or anything
     :func:`gpsaccel.executors.resolve_executor` accepts.  ``on_result(result)`` is called as each
     check finishes (e.g. to append it to a log).  Every submission sees the same realizations
-    (``seed``), so their results are comparable.  ``n_runs``, ``seed`` and ``timeout`` are checked
-    here, before any submission runs (a bad one would otherwise fail every check alike).  Raises
-    :class:`Interrupted` on Ctrl-C.
+    (``seed``), so their results are comparable.  ``problem`` is "calibration", "coop" or "ship"
+    (:mod:`gpsaccel.check.problems`); ``n_runs`` None is the problem's default.  ``n_runs``,
+    ``seed`` and ``timeout`` are checked here, before any submission runs (a bad one would
+    otherwise fail every check alike).  Raises :class:`Interrupted` on Ctrl-C.
     """
-    n_runs = _v.integer("n_runs", n_runs, minimum=2)
+    n_runs = None if n_runs is None else _v.integer("n_runs", n_runs, minimum=2)
+    problem = _v.choice("problem", problem, ("calibration", "coop", "ship"))
     seed = _v.integer("seed", seed, minimum=0)
     timeout = _v.positive_float("timeout", timeout)
     files, _ = find_submissions(paths)
     backend = sb.resolve_backend(sandbox)  # once, and a clear error before anything runs
-    options = {"sandbox": backend, "limits": limits, "allow_gpsaccel": allow_gpsaccel}
+    options = {"sandbox": backend, "limits": limits, "allow_gpsaccel": allow_gpsaccel,
+               "problem": problem}
     args = (n_runs, seed, timeout)
     if executor in ("processes", "local"):
         return _isolated(files, args, options, max_workers or os.cpu_count() or 1, timeout,

@@ -108,3 +108,25 @@ def test_problem_names_are_validated():
         check.submission(COOP / "correct_ekf_closed_form.py", problem="rocket")
     assert isinstance(problems.get("ship").describe(), str)
     assert np.isfinite(problems.get("coop").Q("ekf")).all()
+
+
+def test_cli_check_problem_ship_and_coop(tmp_path, capsys):
+    import json
+
+    from gpsaccel.cli import main
+
+    for name in ("correct_covariance.py", "mutant_no_input.py"):
+        (tmp_path / name).write_text((SHIP / name).read_text(encoding="utf-8"), encoding="utf-8")
+    out = tmp_path / "ship.json"
+    rc = main(["check", str(tmp_path), "--problem", "ship", "--runs", "2", "--workers", "1",
+               "--json", str(out)])
+    assert rc == 1
+    text = capsys.readouterr().out
+    assert "no-input" in text and "1 of 2 passed" in text and "problem ship" in text
+    data = json.loads(out.read_text(encoding="utf-8"))
+    assert data["settings"]["problem"] == "ship"
+    assert {r["subject"]: r["codes"] for r in data["results"]} == {
+        "correct_covariance.py": [], "mutant_no_input.py": ["no-input"]}
+    rc = main(["check", str(COOP / "correct_ekf_closed_form.py"), "--problem", "coop",
+               "--runs", "2", "--workers", "1"])
+    assert rc == 0
