@@ -50,7 +50,8 @@ class EpochFilter:
     H (2, 3), V (2, 2), x0 (3,), M0 (3, 3): measurement model and prior at t = 0.
     n_gps : number of epochs.
     output : ``"posterior"`` returns (x̂, P); ``"prior"`` returns (x̄, M) (returns-a-priori).
-    skip_first : True skips the update at t = 0 (first-update-skipped).
+    skip_first : True skips the update at t = 0 (first-update-skipped); ``"covariance"`` updates
+        the mean at t = 0 but leaves P₀ = M0 (and so every later gain follows the skipped P).
     """
 
     A: np.ndarray
@@ -62,7 +63,7 @@ class EpochFilter:
     M0: np.ndarray
     n_gps: int
     output: str = "posterior"
-    skip_first: bool = False
+    skip_first: bool | str = False
 
     @cached_property
     def gains(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -110,7 +111,8 @@ def batch_gains(filters: list[EpochFilter]) -> tuple[np.ndarray, np.ndarray, np.
     H = np.stack([f.H for f in filters])
     V = np.stack([f.V for f in filters])
     M0 = np.stack([f.M0 for f in filters])
-    skip = np.array([f.skip_first for f in filters])
+    skip_P = np.array([bool(f.skip_first) for f in filters])       # P₀ = M0
+    skip_x = np.array([f.skip_first is True for f in filters])     # and x̂₀ = x̄₀
     n, p = F.shape[-1], H.shape[-2]
     K = np.zeros((C, n_gps, n, p))
     M = np.empty((C, n_gps, n, n))
@@ -120,9 +122,11 @@ def batch_gains(filters: list[EpochFilter]) -> tuple[np.ndarray, np.ndarray, np.
         Mi = M0 if i == 0 else F @ P[:, i - 1] @ Ft + Qe
         M[:, i] = Mi
         Ki, _ = gain(Mi, H, V)
+        Kp = Ki
         if i == 0:
-            Ki = np.where(skip[:, None, None], 0.0, Ki)
-        Pi = joseph_update(Mi, Ki, H, V)
+            Kp = np.where(skip_P[:, None, None], 0.0, Ki)
+            Ki = np.where(skip_x[:, None, None], 0.0, Ki)
+        Pi = joseph_update(Mi, Kp, H, V)
         K[:, i] = Ki
         P[:, i] = (Pi + np.swapaxes(Pi, -1, -2)) / 2
     return K, M, P
@@ -152,7 +156,7 @@ class Ingredients:
     n_gps: int
     mean_propagated: bool = True
     output: str = "posterior"
-    skip_first: bool = False
+    skip_first: bool | str = False
 
     @classmethod
     def correct(cls, model: CalibrationModel) -> Ingredients:
@@ -250,6 +254,14 @@ def covariance_mistakes(model: CalibrationModel | None = None) -> tuple[Mistake,
             "(x̂₀ = x̄₀, P₀ = M0) and its first update is at the second GPS time. The GPS reports "
             "at t = 0 too; update with z₀ before the first propagation.",
             (("skip_first", True),),
+        ),
+        Mistake(
+            "first-update-skipped", "P not updated at t = 0",
+            "Your P at t = 0 is the prior M0: the covariance update with the GPS fix at t = 0 is "
+            "missing, though your x̂ at t = 0 did use z₀ (the mean was updated, P was not), and "
+            "every later gain follows from that P. Update P at t = 0 too, before the first "
+            "propagation.",
+            (("skip_first", "covariance"),),
         ),
         Mistake(
             "returns-a-priori", "returns (x̄, M)",

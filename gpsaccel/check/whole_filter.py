@@ -46,7 +46,7 @@ from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
 
@@ -75,6 +75,15 @@ TOLERANCE = 1e-6
 
 #: The function a submission defines.
 FUNCTION = "kalman_filter"
+
+#: The nearest catalogued mistake is shown as a hint only within this factor of the tolerance.
+HINT_FACTOR = 10.0
+
+#: Largest distances (σσ in P, σ in x̂) at which a float32 filter counts as "right but low
+#: precision": float32 rounding (2⁻²⁴ ≈ 6e-8 relative) over 6000 steps.  Measured on the fixture
+#: mutant_float32.py (z, matrices and state all float32): 8e-5 σσ in P, 0.035 σ in x̂ (the
+#: estimate of δp carries ~100 m totals through 6000 products).
+LOW_PRECISION = (1e-3, 0.1)
 
 #: Characters of the student's printed output kept in a finding.
 OUTPUT_KEEP = 1500
@@ -269,7 +278,8 @@ def _run_findings(report: Report, box: sb.BoxResult, limits: sb.Limits, n_runs: 
     elif failure == "wrong-shape":
         shapes = problem.get("shapes", {})
         report.add("wrong-shape", _shape_message(tuple(shapes.get("x_hat") or ()),
-                                                 tuple(shapes.get("P") or ()), model))
+                                                 tuple(shapes.get("P") or ()), model,
+                                                 problem.get("call")))
     else:  # a code this version does not know: say what the sandbox said
         report.add("runner", f"The check could not run your filter: {failure} {box.detail}")
     return False
@@ -287,12 +297,16 @@ def _returned_notes(report: Report, ret: dict) -> None:
                        f"array. numpy.matrix is deprecated: use numpy arrays and @.", "note")
 
 
-def _shape_message(xs: tuple, Ps: tuple, model: CalibrationModel) -> str:
+def _shape_message(xs: tuple, Ps: tuple, model: CalibrationModel,
+                   run: int | None = None) -> str:
     n_gps, every, t = model.n_gps, model.gps_every, model.t_gps
     want_x, want_P = (n_gps, 3), (n_gps, 3, 3)
+    on = "" if run is None else f" on run {run}" + (
+        " (the earlier runs had the right shapes: does your file keep results between calls, "
+        "e.g. a module-level list that grows?)" if run else " (the first call)")
     parts = [f"kalman_filter must return x_hat of shape {want_x} and P of shape {want_P} (one "
              f"row per GPS time t = {t[0]:g}, {t[1]:g}, ..., {t[-1]:g} s); it returned x_hat "
-             f"{xs} and P {Ps}."]
+             f"{xs} and P {Ps}{on}."]
     if xs == (3, n_gps):
         parts.append("x_hat looks transposed: one row per GPS time, one column per state.")
     elif xs == (n_gps, 3, 1):
@@ -410,6 +424,97 @@ def _comparison(report: Report, problem: Problem, x: np.ndarray, P: np.ndarray,
     return bool(dP.max() <= tol), bool(dx.max() <= tol)
 
 
+def _float32_exact(a: np.ndarray) -> bool:
+    """Every value of ``a`` is a float32 number (what a float32 computation returns)."""
+    return bool(np.all(a.astype(np.float32).astype(np.float64) == a))
+
+
+def _recognised_output_mistake(report: Report, problem: Problem, x: np.ndarray, P: np.ndarray,
+                               returned: dict, tol: float) -> bool:
+    """Mistakes in what is returned or how calls share state, recognised before the catalogue of
+    filter mistakes (each would otherwise look like a wrong M0, H or V).  True when one was
+    reported.
+
+    In order: ``aliased-output`` (every row the same array, written in place), ``state-between-
+    calls`` (run 0 right, a later run not), ``low-precision`` (float32 arithmetic, within
+    :data:`LOW_PRECISION`), ``p-scaled`` (P = c·P_opt), ``epoch-shift`` (rows shifted by one GPS
+    time), ``last-update-missing`` (the last row is the a priori x̄, M).
+    """
+    ref, sd, t = problem, problem.sd, problem.model.t_gps
+    n = x.shape[1]
+    dP = covariance_distance(P, ref.P_ref[None], sd)                     # (N, n, 3, 3)
+    dx = np.abs(x - ref.x_ref) / sd                          # (N, n, 3)
+    per_run = np.maximum(dP.max(axis=(1, 2, 3)), dx.max(axis=(1, 2)))
+    # every row identical and equal to the last optimal one: one array object stored at every
+    # time (a constant output that is not the last estimate is some other mistake)
+    if n > 2 and np.all(P == P[:, -1:]) and np.all(x == x[:, -1:]) and \
+            dP[:, -1].max() <= tol and dx[:, -1].max() <= tol:
+        report.add("aliased-output", f"Every row of your x_hat and P holds the same values, "
+                   f"those of the last GPS time (t = {t[-1]:g} s): each row is the same array "
+                   f"object, changed in place at every step (e.g. x += K @ r or P[:] = ..., "
+                   f"then appended to a list). Store a copy: x_hat[k] = x (into a preallocated "
+                   f"array) or xs.append(x.copy()).")
+        return True
+    if per_run[0] <= tol and (per_run > tol).any():
+        r = int(np.argmax(per_run > tol))
+        what = ("P" if dP[r].max() > tol else "x̂")
+        report.add("state-between-calls", f"Your filter is right on the first call but not on "
+                   f"later ones: {what} first differs on run {r} (by {per_run[r]:.3g} σ), and "
+                   f"{int((per_run > tol).sum())} of {len(per_run)} runs differ. Something "
+                   f"survives between calls: a module-level list or array that keeps growing, a "
+                   f"global M0 or x0 changed in place (M = M0 then M -= ..., x = x0 then "
+                   f"x += ...). Copy globals before changing them (M = M0.copy()).")
+        report.findings = [f for f in report.findings if f.code != "p-depends-on-data"]
+        report.details["first_wrong_run"] = r
+        return True
+    dtypes = {(returned.get(k) or {}).get("dtype") for k in ("x_hat", "P")}
+    if dP.max() <= LOW_PRECISION[0] and dx.max() <= LOW_PRECISION[1] and (
+            "float32" in dtypes or (_float32_exact(x) and _float32_exact(P))):
+        report.add("low-precision", f"Your filter computes in single precision (float32): its "
+                   f"output differs from the optimal filter by up to {dP.max():.2g} σσ in P and "
+                   f"{dx.max():.2g} σ in x̂, what float32 rounding (about 6e-8 relative) builds "
+                   f"up over {problem.model.n_steps} steps; the tolerance is {tol:g}. This is "
+                   f"not a wrong M0, H or V: use float64 throughout (no .astype(np.float32), z "
+                   f"as given) and check again — at float32 precision a small mistake could "
+                   f"hide.")
+        return True
+    diag_ref = np.diagonal(ref.P_ref, axis1=-2, axis2=-1)
+    c = float(np.median(np.diagonal(P, axis1=-2, axis2=-1) / diag_ref))
+    if abs(c - 1) > 1e-3 and covariance_distance(P, c * ref.P_ref[None], sd).max() <= tol * max(c, 1.0):
+        x_note = ("Your x̂ is right, so only the returned P is scaled." if dx.max() <= tol else
+                  f"Your x̂ differs too (by up to {dx.max():.3g} σ): the scaled P also feeds "
+                  f"your gain.")
+        report.add("p-scaled", f"Your P is the optimal P multiplied by {c:.6g} at every time"
+                   + (" — P + Pᵀ without the /2 when symmetrising" if abs(c - 2) < 1e-6 else "")
+                   + f". {x_note} M0, H and V are not the problem: look at the line that "
+                   f"symmetrises or scales P.")
+        return True
+    for shift, where in ((1, "one GPS time late: row k holds the estimate of time k − 1"),
+                         (-1, "one GPS time early: row k holds the estimate of time k + 1")):
+        a = slice(1, None) if shift == 1 else slice(None, -1)
+        b = slice(None, -1) if shift == 1 else slice(1, None)
+        if (covariance_distance(P[:, a], ref.P_ref[None, b], sd[b]).max() <= tol
+                and (np.abs(x[:, a] - ref.x_ref[:, b]) / sd[b]).max() <= tol):
+            report.add("epoch-shift", f"Your outputs are shifted by one epoch, {where} "
+                       f"(every row but the {'first' if shift == 1 else 'last'} matches the "
+                       f"optimal filter shifted). Store x̂ and P of time t_k in row k, right "
+                       f"after the update with z[k].")
+            return True
+    flt = cat.reference(problem.model)
+    _, M_ref, _ = flt.gains
+    x_bar = replace(flt, output="prior").apply(problem.z)[0]
+    if (covariance_distance(P[:, :-1], ref.P_ref[None, :-1], sd[:-1]).max() <= tol
+            and (np.abs(x[:, :-1] - ref.x_ref[:, :-1]) / sd[:-1]).max() <= tol
+            and covariance_distance(P[:, -1:], M_ref[None, -1:], sd[-1:]).max() <= tol
+            and (np.abs(x[:, -1] - x_bar[:, -1]) / sd[-1]).max() <= tol):
+        report.add("last-update-missing", f"Your filter is right except at the last GPS time "
+                   f"(t = {t[-1]:g} s), where x̂ and P are the a priori x̄ and M: the update "
+                   f"with the last fix z[{n - 1}] is missing (a loop such as range(n - 1), or "
+                   f"the update placed before the propagation).")
+        return True
+    return False
+
+
 def _diagnosis_findings(report: Report, problem: Problem, x: np.ndarray, P: np.ndarray,
                         tol: float) -> None:
     diag = diagnose(P, x, problem, tol)
@@ -424,7 +529,15 @@ def _diagnosis_findings(report: Report, problem: Problem, x: np.ndarray, P: np.n
                              f"filter that makes\n" + "\n".join(f"  {m}" for m in found))
         return
     if diag.covariance is not None:  # P recognised, x̂ not
+        used_z0 = bool(np.max(np.abs(x[:, 0] - problem.model.x0) / problem.sd[0]) > tol)
         for m in diag.covariance:
+            if m.code == "first-update-skipped" and used_z0:
+                report.add(m.code, "Your P at t = 0 is the prior M0: the covariance update with "
+                           "the GPS fix at t = 0 is missing (your x̂ at t = 0 did use z₀, so "
+                           "the mean was updated but not P). Update P at t = 0 too, "
+                           "P₀ = (I − K₀H) M0 (I − K₀H)ᵀ + K₀VK₀ᵀ, before the first "
+                           "propagation.")
+                continue
             report.add(m.code, m.message)
         dx = np.abs(x - cat.build(problem.model, diag.covariance).apply(problem.z)[0]) / problem.sd
         i = np.unravel_index(int(np.argmax(dx)), dx.shape)
@@ -445,13 +558,21 @@ def _diagnosis_findings(report: Report, problem: Problem, x: np.ndarray, P: np.n
              f"P at t = 0 is right (so M0, H, V and the update are), but P differs from "
              f"t = {t[first]:g} s on: the propagation between GPS fixes is wrong (Φ, "
              f"Q = Γ W Γᵀ, or the number of steps).")
-    hint = ""
     d_optimal = float(dP.max())
-    if diag.nearest and diag.nearest_distance < 0.5 * d_optimal:  # only a hint that is close
-        hint = (f" The nearest known mistake is {names(diag.nearest)}, but it still differs by "
-                f"{diag.nearest_distance:.3g} σσ, so that is not it.")
+    if diag.nearest and diag.nearest_distance <= HINT_FACTOR * tol:  # only a hint that is close
+        hint = (f" The nearest known mistake is {names(diag.nearest)}: your P is within "
+                f"{diag.nearest_distance:.3g} σσ of it ({diag.nearest_distance / tol:.2g}× the "
+                f"tolerance), so look there first.")
+    else:
+        hint = " No catalogued mistake matches."
+    worst = covariance_distance(P[:, first:first + 1], problem.P_ref[None, first:first + 1],
+                    problem.sd[first:first + 1])[:, 0]  # (N, 3, 3)
+    r, a, b = np.unravel_index(int(np.argmax(worst)), worst.shape)
+    depart = (f" Your output first departs at t = {t[first]:g} s: P{a + 1}{b + 1} = "
+              f"{P[r, first, a, b]:.6g}, the optimal filter's is "
+              f"{problem.P_ref[first, a, b]:.6g}.")
     report.add("p-mismatch", f"Your P does not match the optimal filter (it differs by up to "
-               f"{d_optimal:.3g} σσ), nor any mistake of the catalogue. {where}{hint} Check "
+               f"{d_optimal:.3g} σσ).{hint} {where}{depart} Check "
                f"your matrices with gpsaccel.check.model_matrices(Phi=..., Gamma=..., H=..., "
                f"V=..., W=..., M0=...).")
     report.details["matched"] = []
@@ -577,9 +698,10 @@ def submission(path: str | os.PathLike, n_runs: int = 200, seed: int = 0, timeou
         if P_ok and x_ok:
             report.add("matches-optimal", f"P and x̂ match the optimal filter to "
                        f"{tol:g} σ on all {n_runs} runs.", "note")
-        else:
+        elif not _recognised_output_mistake(report, problem, x, P, box.returned or {}, tol):
             _diagnosis_findings(report, problem, x, P, tol)
-        _consistency(report, problem, x, P, alpha)
+        if "low-precision" not in report.codes:  # float32's P is not symmetric to 1e-9
+            _consistency(report, problem, x, P, alpha)
     report.sort()
     report.seconds = time.perf_counter() - t0
     return report

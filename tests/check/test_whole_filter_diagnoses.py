@@ -1,0 +1,57 @@
+"""Sharper calibration diagnoses: mistakes in what is returned, recognised before the catalogue.
+
+Each fixture would otherwise be reported as a generic p-mismatch ("M0, H or V is wrong"); each gets
+its own code on two seeds.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from gpsaccel import check
+
+HERE = Path(__file__).parents[1] / "submissions"
+N_RUNS = 8
+
+SHARPER = [
+    ("mutant_float32.py", "low-precision", ["float32", "not a wrong M0"]),
+    ("mutant_p_scaled.py", "p-scaled", ["multiplied by 2", "without the /2", "x̂ is right"]),
+    ("mutant_epoch_shift.py", "epoch-shift", ["one GPS time late"]),
+    ("mutant_last_update_missing.py", "last-update-missing", ["t = 30 s", "z[150]"]),
+    ("mutant_aliased_output.py", "aliased-output", ["same array object", "copy"]),
+    ("mutant_global_m0.py", "state-between-calls", ["first differs on run 1", "M0.copy()"]),
+    ("mutant_state_between_calls.py", "wrong-shape", ["on run 1", "between calls"]),
+    ("mutant_p_update_skipped_at_0.py", "first-update-skipped", ["did use z₀"]),
+]
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+@pytest.mark.parametrize("name, code, words", SHARPER, ids=[n[:-3] for n, _, _ in SHARPER])
+def test_sharper_diagnosis(name, code, words, seed):
+    report = check.submission(HERE / name, n_runs=N_RUNS, seed=seed)
+    assert report.codes == [code], report
+    msg = next(f.message for f in report.findings if f.code == code)
+    for w in words:
+        assert w in msg, (w, msg)
+    assert "M0, H or V" not in msg or code == "low-precision"
+
+
+def test_first_update_skipped_keeps_its_wording_when_z0_was_unused():
+    report = check.submission(HERE / "mutant_first_update_skipped.py", n_runs=N_RUNS)
+    msg = next(f.message for f in report.findings if f.code == "first-update-skipped")
+    assert "does not use the GPS fix at t = 0" in msg and "did use z₀" not in msg
+
+
+def test_nearest_mistake_hint_only_when_close(tmp_path):
+    far = check.submission(HERE / "mutant_diagonal_q.py", n_runs=N_RUNS)
+    msg = next(f.message for f in far.findings if f.code == "p-mismatch")
+    assert "No catalogued mistake matches" in msg and "first departs at t = 3.2 s" in msg
+    src = (HERE / "correct_covariance.py").read_text(encoding="utf-8")
+    near = tmp_path / "near.py"  # V₂₂ = σ (the std-as-variance slip) off by 2e-7 relative
+    near.write_text(src.replace("V = np.diag([1.0, 0.04**2])",
+                                "V = np.diag([1.0, 0.04 * (1 + 2e-7)])"), encoding="utf-8")
+    report = check.submission(near, n_runs=N_RUNS)
+    msg = next(f.message for f in report.findings if f.code == "p-mismatch")
+    assert "nearest known mistake is std-as-variance" in msg and "look there first" in msg
