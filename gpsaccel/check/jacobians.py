@@ -244,10 +244,11 @@ def _matrix_finding(report: Report, code: str, name: str, actual: np.ndarray,
         cause = _element_cause(name, idx, actual[:, idx[0], idx[1]],
                                expected[:, idx[0], idx[1]], [labels[j] for j in states], rtol)
         where = "" if k == s else f" at {labels[k]}"
+        formula, value = formulas.get(idx, "0"), f"{expected[k][idx]:.6g}"
+        want = value if formula.replace("−", "-") == value else f"{formula} = {value}"
         groups.setdefault(cause, []).append(
-            f"{_elem(display, *idx)} = {actual[k][idx]:.6g}, should be "
-            f"{formulas.get(idx, '0')} = {expected[k][idx]:.6g}{where} (wrong at {states.size} "
-            f"of {len(X)} states)")
+            f"{_elem(display, *idx)} = {actual[k][idx]:.6g}, should be {want}{where} (wrong at "
+            f"{states.size} of {len(X)} states)")
     parts = [f"At {labels[s]} (x = {np.round(X[s], 4).tolist()}):"]
     for cause, items in groups.items():
         parts.append("; ".join(items) + (f". Likely cause: {cause}." if cause else "."))
@@ -447,8 +448,13 @@ def dt_model(F: object = None, G: object = None, H: object = None, Omega: object
     if F is None and G is None and H is None and Omega is None and Q is None:
         raise ValueError("pass at least one of F, G, H, Omega, Q")
     if report.passed:
-        report.add("dt-model-right", f"F = I + ΔT·A, G = ΔT·B, H = C at all {len(X)} states "
-                   f"(ΔT = {dt:g} s), to {rtol:g} relative.", "note")
+        where = f"at all {len(X)} states" if len(X) > 1 else "at the given state"
+        forms = {"F": "F = I + ΔT·A", "G": "G = ΔT·B", "H": "H = C", "Omega": "Ω = I",
+                 "Q": "Q not scaled by ΔT"}
+        given = [forms[k] for k, v in (("F", F), ("G", G), ("H", H), ("Omega", Omega), ("Q", Q))
+                 if v is not None]
+        report.add("dt-model-right", f"{', '.join(given)} {where} (ΔT = {dt:g} s), to {rtol:g} "
+                   f"relative.", "note")
     report.sort()
     report.seconds = time.perf_counter() - t0
     return report
