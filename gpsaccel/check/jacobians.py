@@ -439,8 +439,8 @@ def dt_model(F: object = None, G: object = None, H: object = None, Omega: object
             if _close(got, want, rtol):
                 continue
             if _close(got, dt * want, rtol):
-                report.add("dt-linearization", f"Your H = ΔT·C; the measurement is taken at an "
-                           f"instant, so H = C (no ΔT).")
+                report.add("dt-linearization", "Your H = ΔT·C; the measurement is taken at an "
+                           "instant, so H = C (no ΔT).")
             else:
                 _matrix_finding(report, "dt-linearization", "H", got, want, X, labels, rtol,
                                 formulas=FORMULAS["C"], unit_hint="H = C = ∂h/∂x.")

@@ -31,7 +31,7 @@ def multirate_filter(z, u):
     x_hat[0], P_out[0] = x, P
     # the report: at GPS fixes (all nine sensors) use the monorate filter's gain
     Pm, K_mono = M0.copy(), [None]
-    for k in range(1, n):
+    for _ in range(1, n):
         Pm = Phi @ Pm @ Phi.T + Q
         Km = Pm @ H.T @ np.linalg.inv(H @ Pm @ H.T + V)
         I_KH = np.eye(9) - Km @ H
