@@ -207,8 +207,9 @@ class Problem:
                 hint = " Time must be the first axis (P[k] is one covariance)."
             report.add("wrong-shape", f"{what} returned {p.get('name')} of shape {shape}; the "
                        f"contract says {want}.{hint}")
-        else:
-            report.add("runner", f"The check could not run your code: {p}")
+        else:  # a limit of the sandbox (memory-limit, output-limit, uses-checker, ...)
+            report.add(kind, f"Your code was stopped: {got.detail or kind}"
+                       + (f" ({what})" if what else "") + ".")
 
 
 def _indent(text: str, n: int = 6) -> str:
