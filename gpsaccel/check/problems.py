@@ -362,7 +362,10 @@ class CoopProblem(Problem):
                 Argument("R", (5, 5), "measurement-noise covariance"))
         outs = (Output("x_hat", (K1, 6)), Output("P", (K1, 6, 6)))
         self.functions = (
-            Function("ekf", args, outs, "the EKF from x̂_0 = x0, P_0 = P0; row k is x̂, P at t_k"),
+            Function("ekf", args, outs, f"the EKF from x̂_0 = x0 = [10, 0, π/2, −60, 0, −π/2], "
+                                        f"P_0 = P0 = diag(1, 1, 0.025, 1, 1, 0.025); u = "
+                                        f"[2, −π/18, 12, π/25], L = 0.5 m, ΔT = 0.1 s; row k "
+                                        f"is x̂, P at t_k"),
             Function("lkf", args, outs, "the LKF about the nominal from x0 (solve_ivp or closed "
                                         "form); row k is x̂ = x* + δx̂, P at t_k"))
         self._Q = Q or {}
@@ -553,7 +556,10 @@ class ShipProblem(Problem):
              Argument("u", (N - 1, 3), "the known input [F_x (N), F_y (N), τ (N m)] from t_k "
                                        "to t_(k+1)")),
             (Output("x_hat", (N, 9)), Output("P", (N, 9, 9))),
-            "x̂ and P at every step from x0, M0 of ShipModel; row 0 is x0, M0"),)
+            f"x̂ and P at every step k = 0..{N - 1}; row 0 is x̂_0 = x0 = "
+            f"[{', '.join(repr(float(v)) for v in self.model.x0)}] (the plan's start), "
+            f"P_0 = M0 = diag{tuple(float(v) for v in np.diag(self.model.M0))} "
+            f"(ShipModel's Φ, B, Q = ΓWΓᵀ, H = I, V)"),)
 
     def codes(self) -> tuple[str, ...]:
         from gpsaccel.ship.mistakes import CODES
