@@ -24,12 +24,18 @@ What :func:`submission` does
    correct form passes (covariance, information or Joseph update; filterpy or by hand; a filter
    that steps only at GPS times with Φ⁴⁰ and the 40-step process noise): they agree to ~1e-11 σ,
    while the smallest effect of a catalogued mistake (phi-sign on P) is 3e-4 σ.
-4. Diagnoses a failing filter against the catalogue (:mod:`gpsaccel.calibration.mistakes`): P does not
+4. Recognises mistakes in what is returned before anything else
+   (:func:`_recognised_output_mistake`): ``aliased-output``, ``state-between-calls`` (naming the first wrong run),
+   ``low-precision`` (float32), ``p-scaled``, ``epoch-shift``, ``last-update-missing``; each would
+   otherwise read as a wrong M0, H or V.  Then diagnoses a failing filter against the catalogue
+   (:mod:`gpsaccel.calibration.mistakes`): P does not
    depend on the data, so P is matched first against every covariance mistake and every
    combination of up to three that touch different ingredients; then x̂ against the matched
    entry with each combination of the mean mistakes.  A match (both within the tolerance) is
    reported under its code; a right P with a wrong x̂ that matches nothing is a gain or residual
-   mistake; a P that matches nothing is located (t = 0 or the propagation).
+   mistake; a P that matches nothing is located (t = 0 or the propagation, and the first element
+   that departs), with the nearest catalogue entry as a hint only when it is within
+   :data:`HINT_FACTOR` = 10 times the tolerance.
 5. Tests consistency over the runs with the student's own P, to show what a mistake does:
    the ensemble-mean error (z = ē_i √N / √P_ii at every time and state) and the ensemble-average
    NEES (N·ε̄ ~ χ²(3N) at every time), each as a family of two-sided tests with a family-wise
