@@ -23,7 +23,7 @@ declared outputs) the problem checkers use through :mod:`gpsaccel.check.student`
 """
 
 from gpsaccel.calibration.mistakes import codes
-from gpsaccel.check.jacobians import assert_jacobians, dt_model, jacobians
+from gpsaccel.check.jacobians import assert_dt_model, assert_jacobians, dt_model, jacobians
 from gpsaccel.check.matrices import assert_model_matrices, model_matrices
 from gpsaccel.check.problems import assert_submission, submission
 from gpsaccel.check.report import Finding, Report
@@ -35,6 +35,7 @@ __all__ = [
     "Finding",
     "Report",
     "StudentFilterError",
+    "assert_dt_model",
     "assert_jacobians",
     "assert_model_matrices",
     "assert_submission",

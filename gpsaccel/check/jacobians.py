@@ -498,3 +498,11 @@ def _check_noise(report: Report, Omega: object, Q: object, model: CoopModel, rto
                            f"so the filter's Q is Qtrue (or a tuned multiple of it), not scaled "
                            f"by ΔT.")
                 return
+
+
+def assert_dt_model(**kwargs: object) -> Report:
+    """:func:`dt_model` for a grader cell: raise AssertionError with the findings if it fails."""
+    report = dt_model(**kwargs)
+    if not report.passed:
+        raise AssertionError("\n" + str(report))
+    return report

@@ -100,3 +100,14 @@ def test_caller_mistakes_raise():
         jacobians()
     with pytest.raises(ValueError, match="x must be"):
         dt_model(F=np.eye(6), x=np.zeros(5))
+
+
+def test_assert_forms_for_graders():
+    from gpsaccel import check
+
+    assert check.assert_jacobians(A=jacobian_A).passed
+    assert check.assert_dt_model(H=jacobian_C).passed
+    with pytest.raises(AssertionError, match="jacobian-B"):
+        check.assert_jacobians(B=lambda x, u: M.dt * jacobian_B(x, u))
+    with pytest.raises(AssertionError, match="dt-linearization"):
+        check.assert_dt_model(F=jacobian_A)
