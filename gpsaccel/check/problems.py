@@ -263,11 +263,12 @@ def _first_departure(dx: np.ndarray, dP: np.ndarray, tol_x: float, tol_P: float,
     return "; ".join(parts)
 
 
-def _diagnose(report: Report, candidates: list[tuple[object, np.ndarray, np.ndarray]],
-              x: np.ndarray, P: np.ndarray, x_ref: np.ndarray, P_ref: np.ndarray,
-              tol_x: float, tol_P: float, diff=None) -> tuple[object, float] | None:
-    """The candidate (mistake, x̂, P) whose output matches (x, P) within the tolerance, or the
-    nearest one with its distance in units of the tolerance (None if there are none)."""
+def _nearest(candidates: list[tuple[object, np.ndarray, np.ndarray]], x: np.ndarray,
+             P: np.ndarray, x_ref: np.ndarray, P_ref: np.ndarray, tol_x: float, tol_P: float,
+             diff=None) -> tuple[object, float] | None:
+    """The candidate (mistake, x̂, P) nearest to the student's (x, P), and its distance in units
+    of the tolerance (≤ 1: it matches); None if there are no candidates.  Distances are in units
+    of the reference σ, as in the comparison."""
     sd = np.sqrt(np.diagonal(P_ref, axis1=-2, axis2=-1))
     best, best_d = None, np.inf
     for m, xm, Pm in candidates:
@@ -362,10 +363,10 @@ class CoopProblem(Problem):
                 Argument("R", (5, 5), "measurement-noise covariance"))
         outs = (Output("x_hat", (K1, 6)), Output("P", (K1, 6, 6)))
         self.functions = (
-            Function("ekf", args, outs, f"the EKF from x̂_0 = x0 = [10, 0, π/2, −60, 0, −π/2], "
-                                        f"P_0 = P0 = diag(1, 1, 0.025, 1, 1, 0.025); u = "
-                                        f"[2, −π/18, 12, π/25], L = 0.5 m, ΔT = 0.1 s; row k "
-                                        f"is x̂, P at t_k"),
+            Function("ekf", args, outs, "the EKF from x̂_0 = x0 = [10, 0, π/2, −60, 0, −π/2], "
+                                        "P_0 = P0 = diag(1, 1, 0.025, 1, 1, 0.025); u = "
+                                        "[2, −π/18, 12, π/25], L = 0.5 m, ΔT = 0.1 s; row k "
+                                        "is x̂, P at t_k"),
             Function("lkf", args, outs, "the LKF about the nominal from x0 (solve_ivp or closed "
                                         "form); row k is x̂ = x* + δx̂, P at t_k"))
         self._Q = Q or {}
@@ -446,7 +447,7 @@ class CoopProblem(Problem):
                     continue
                 o = self._reference(cases, kind, (m,))
                 cands.append((m, o.x_hat, o.P))
-            found = _diagnose(report, cands, x, P, ref.x_hat, ref.P, tol_x, tol_P,
+            found = _nearest(cands, x, P, ref.x_hat, ref.P, tol_x, tol_P,
                               cm.wrapped_difference)
             if found and found[1] <= 1.0:
                 m = found[0]
@@ -607,7 +608,7 @@ class ShipProblem(Problem):
             for v in variants[1:]:
                 xv, Pv, Ptv = self.run_variant(cases, v)
                 cands.append(((v, Ptv), xv, Pv))
-            found = _diagnose(report, cands, x, P, x_ref, P_ref, tol, tol)
+            found = _nearest(cands, x, P, x_ref, P_ref, tol, tol)
             if found and found[1] <= 1.0:
                 (v, Ptv) = found[0]
                 self._variant_findings(report, v, Ptv, P_ref)

@@ -25,10 +25,10 @@ What :func:`submission` does
    that steps only at GPS times with Φ⁴⁰ and the 40-step process noise): they agree to ~1e-11 σ,
    while the smallest effect of a catalogued mistake (phi-sign on P) is 3e-4 σ.
 4. Recognises mistakes in what is returned before anything else
-   (:func:`_recognised_output_mistake`): ``aliased-output``, ``state-between-calls`` (naming the first wrong run),
-   ``low-precision`` (float32), ``p-scaled``, ``epoch-shift``, ``last-update-missing``; each would
-   otherwise read as a wrong M0, H or V.  Then diagnoses a failing filter against the catalogue
-   (:mod:`gpsaccel.calibration.mistakes`): P does not
+   (:func:`_recognised_output_mistake`): ``aliased-output``, ``state-between-calls`` (naming the
+   first wrong run), ``low-precision`` (float32), ``p-scaled``, ``epoch-shift``,
+   ``last-update-missing``; each would otherwise read as a wrong M0, H or V.  Then diagnoses a
+   failing filter against the catalogue (:mod:`gpsaccel.calibration.mistakes`): P does not
    depend on the data, so P is matched first against every covariance mistake and every
    combination of up to three that touch different ingredients; then x̂ against the matched
    entry with each combination of the mean mistakes.  A match (both within the tolerance) is
