@@ -479,7 +479,7 @@ class CoopProblem(Problem):
         try:
             e = cm.wrapped_difference(cases.x_true[:, 1:], x[:N, 1:])
             nees = consistency.nees(e, P[:N, 1:]).mean(axis=0)
-            x_bar = cm.wrapped_difference(m.step(xs), np.zeros(6))
+            x_bar = m.step(xs)  # the model's prediction from your x̂_k (headings wrapped)
             F = m.F(xs)
             M = F @ Ps @ np.swapaxes(F, -1, -2) + self.Q(kind)
             H = m.C(x_bar)
