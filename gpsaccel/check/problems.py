@@ -439,7 +439,9 @@ class CoopProblem(Problem):
         if dx.max() <= tol_x and dP.max() <= tol_P:
             report.add("matches-reference", f"{fname}: x̂ and P match the reference "
                        f"{kind.upper()} to {tol_x:g} σ / {tol_P:g} σσ on all "
-                       f"{len(results)} logs.", "note")
+                       f"{len(results)} logs" + (" (the headings modulo 2π)"
+                                                  if heading > np.pi + 1e-6 else "") + ".",
+                       "note")
         else:
             cands = []
             for m in cm.catalogue(self.model, kind):
