@@ -107,7 +107,8 @@ def catalogue(model: CoopModel | None = None, kind: str = "ekf") -> tuple[Mistak
                 "Neither your predicted bearings h(x̄) = atan2(Δη, Δξ) − θ nor the residual "
                 "y − h(x̄) are wrapped. " + wrap_hint, (("wrap_residual", "none"),)),
         Mistake("no-state-wrap", "headings not wrapped",
-                "Your heading estimates θg, θa leave [−π, π): the UAV turns through 4π in 100 s. "
+                "Your heading estimates θg, θa leave [−π, π): in 100 s the UGV turns about 11 "
+                "times and the UAV twice. "
                 "The filter's arithmetic does not care (sin, cos and the wrapped residual are "
                 "periodic) but every error, NEES and plot against the truth does: wrap x̂'s "
                 "headings after each update and prediction.", (("wrap_state", False),)),
