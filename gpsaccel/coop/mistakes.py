@@ -11,12 +11,14 @@ ingredients (:class:`Ingredients`) in the same loop, for k = 0..K−1, j = k + 1
 
 and a mistake changes one ingredient: ``no-angle-wrap`` leaves the bearing residual unwrapped,
 ``no-state-wrap`` the headings, ``dt-linearization`` uses F = A or F = ΔT·A, ``jacobian-point``
-evaluates F at x̄_j or H at x̂_k (or both at the nominal), ``process-noise`` drops Q or scales it by
-ΔT, ``std-as-variance`` takes R's standard deviations, ``epoch-shift`` updates with y_k at t_j
-(before the first prediction) or returns every row one step late, ``p-not-symmetric`` uses the
-short form P = (I − KH) M.  :func:`run` runs any set of them on N logs at once (vectorised over
-runs, the same order of operations as :func:`gpsaccel.coop.filters.run_batch`, so with no mistake
-it reproduces the reference EKF and LKF to rounding).
+evaluates F at x̄_j or H at x̂_k (or both at the nominal; or an "LKF" linearizes about its own
+estimate, i.e. is an EKF), ``process-noise`` drops Q or scales it by ΔT, ``std-as-variance``
+takes R's standard deviations, ``epoch-shift`` updates with y_k at t_j (before the first
+prediction) or returns every row one step late, ``p-not-symmetric`` uses the short form
+P = (I − KH) M, ``euler-propagation`` one Euler step for the mean.  :func:`run` runs any set of
+them on N logs at once (vectorised over runs, the same order of operations as
+:func:`gpsaccel.coop.filters.run_batch`, so with no mistake it reproduces the reference EKF and
+LKF to rounding).
 
 The catalogue is system knowledge; the checker that matches a student's output against it is in
 :mod:`gpsaccel.check`.
@@ -62,6 +64,7 @@ class Ingredients:
     joseph : the Joseph update (True) or P = (I − KH) M (False).
     propagation : "exact" (closed form, or any ODE solver at its default tolerances) or "euler"
         (one Euler step x + ΔT·f(x, u) per sample; for the LKF, an Euler nominal).
+    relinearize : an "LKF" that linearizes about its own estimate, not the nominal: an EKF.
     """
 
     wrap_residual: str = "yes"
@@ -74,6 +77,7 @@ class Ingredients:
     shift: str = "none"
     joseph: bool = True
     propagation: str = "exact"
+    relinearize: bool = False
 
 
 @dataclass(frozen=True)
@@ -160,6 +164,12 @@ def catalogue(model: CoopModel | None = None, kind: str = "ekf") -> tuple[Mistak
                 "while the mean follows the estimate; an EKF linearizes about its own estimate: "
                 "F = I + ΔT·A(x̂_k), H = C(x̄_(k+1)).",
                 (("F_point", "nominal"), ("H_point", "nominal")), ("ekf",)),
+        Mistake("jacobian-point", "LKF linearized about the estimate",
+                "Your LKF evaluates F and H at its own estimate x̂ (and propagates x̂ itself): "
+                "that is an EKF, as report 002's \"LKF\" is. The LKF linearizes once, about the "
+                "nominal trajectory x* of the noiseless model: F_k = I + ΔT·A(x*_k), "
+                "H_k = C(x*_k), and filters the perturbation δx = x − x*.",
+                (("relinearize", True),), ("lkf",)),
     ]
     return tuple(m for m in out if kind in m.kinds)
 
@@ -225,6 +235,8 @@ def run(model: CoopModel, y: np.ndarray, Q: np.ndarray, R: np.ndarray, kind: str
     if kind not in KINDS:
         raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
     g = ingredients(mistakes)
+    if kind == "lkf" and g.relinearize:
+        kind = "ekf"
     y = np.asarray(y, dtype=float)
     N, K1 = y.shape[0], y.shape[1]
     skip = np.isnan(y).all(axis=(0, 2))

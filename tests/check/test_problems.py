@@ -27,6 +27,7 @@ COOP_MUTANTS = {
     "mutant_jacobian_point.py": "jacobian-point", "mutant_process_noise.py": "process-noise",
     "mutant_std_as_variance.py": "std-as-variance", "mutant_epoch_shift.py": "epoch-shift",
     "mutant_epoch_shift_output.py": "epoch-shift", "mutant_euler.py": "euler-propagation",
+    "mutant_lkf_relinearized.py": "jacobian-point",
 }
 SHIP_CORRECT = ["correct_covariance.py", "correct_filterpy.py", "correct_sequential.py",
                 "correct_short_form.py"]
