@@ -81,7 +81,8 @@ def _numeric_actions():
     for name, p in sub.choices.items():
         for action in p._actions:
             if isinstance(action.default, int | float) and not isinstance(action.default, bool) \
-                    or action.type in (int, float):
+                    or action.type in (int, float) \
+                    or getattr(action.type, "__module__", None) == _v.__name__:  # default None
                 yield name, action
 
 
