@@ -94,6 +94,9 @@ class Problem:
         """The codes of this problem's catalogue of mistakes."""
         raise NotImplementedError
 
+    def forget(self) -> None:
+        """Drop every cached reference answer (called before a student's code runs)."""
+
     # ---------------------------------------------------------------- to fill in
     def cases(self, n_runs: int, seed: int):
         """The data the functions are called on (cached by the subclass)."""
@@ -109,8 +112,14 @@ class Problem:
 
     # ---------------------------------------------------------------- the check
     def check(self, path: str | os.PathLike, n_runs: int | None = None, seed: int = 0,
-              timeout: float = 60) -> Report:
-        """Check the student's file ``path``; never raises for what the file does."""
+              timeout: float = 60, sandbox: str = "auto", limits: object = None,
+              allow_gpsaccel: bool = False) -> Report:
+        """Check the student's file ``path``; never raises for what the file does.
+
+        ``sandbox``, ``limits`` and ``allow_gpsaccel`` go to the sandbox
+        (:mod:`gpsaccel.check.sandbox`); the reference answers are computed only after the
+        student's box is gone (and no answer of an earlier check is kept meanwhile).
+        """
         t0 = time.perf_counter()
         n_runs = self.default_runs if n_runs is None else _v.integer("n_runs", n_runs, minimum=2)
         seed = _v.integer("seed", seed, minimum=0)
@@ -137,7 +146,9 @@ class Problem:
             mine = self.calls(cases, f)
             spans.append((f, len(calls), len(calls) + len(mine)))
             calls += mine
-        got = call_functions(path, calls, timeout)
+        self.forget()  # no reference answer exists while the student's code runs
+        got = call_functions(path, calls, timeout, sandbox=sandbox, limits=limits,
+                             allow_gpsaccel=allow_gpsaccel)
         report.details["student_seconds"] = round(got.seconds, 3)
         self._process_findings(report, got, calls, timeout)
         if got.failure is None:
@@ -372,6 +383,9 @@ class CoopProblem(Problem):
         self._Q = Q or {}
         self._cache: dict = {}
 
+    def forget(self) -> None:
+        self._cache.clear()
+
     def Q(self, kind: str) -> np.ndarray:
         from gpsaccel.coop.filters import tuned_q
 
@@ -574,6 +588,9 @@ class ShipProblem(Problem):
 
     def calls(self, cases: ShipCases, function: Function) -> list[Call]:
         return [Call(function.name, (z, cases.u), function.outputs) for z in cases.z]
+
+    def forget(self) -> None:
+        _VARIANT_CACHE.clear()
 
     def run_variant(self, cases: ShipCases, variant) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(x̂ (R+1, N, 9), P (R+1, N, 9, 9), P_true) of a catalogue variant on the cases."""

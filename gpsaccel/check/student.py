@@ -102,15 +102,18 @@ def defines(path: str | os.PathLike, function: str) -> bool:
     return False
 
 
-def call_functions(path: str | os.PathLike, calls: Sequence[Call], timeout: float
-                   ) -> StudentCalls:
+def call_functions(path: str | os.PathLike, calls: Sequence[Call], timeout: float,
+                   sandbox: str = "auto", limits: object = None,
+                   allow_gpsaccel: bool = False) -> StudentCalls:
     """Make ``calls`` on the student's file ``path`` in a child process; see the module docstring.
 
-    Never raises for anything the student's code does.
+    ``sandbox`` (backend), ``limits`` (a ``sandbox.Limits``; its time is set to ``timeout``) and
+    ``allow_gpsaccel`` are the sandbox's.  Never raises for anything the student's code does.
     """
-    sandbox = _sandbox()
-    if sandbox is not None:
-        return _in_sandbox(sandbox, Path(path).resolve(), list(calls), timeout)
+    sb = _sandbox()
+    if sb is not None:
+        return _in_sandbox(sb, Path(path).resolve(), list(calls), timeout, sandbox, limits,
+                           allow_gpsaccel)
     return _in_process(Path(path).resolve(), list(calls), timeout)
 
 
@@ -124,7 +127,8 @@ def _sandbox():
     return sandbox if all(hasattr(sandbox, n) for n in needed) else None
 
 
-def _in_sandbox(sb, path: Path, calls: list[Call], timeout: float) -> StudentCalls:
+def _in_sandbox(sb, path: Path, calls: list[Call], timeout: float, backend: str = "auto",
+                limits: object = None, allow_gpsaccel: bool = False) -> StudentCalls:
     """The calls in the sandbox; its result in this module's terms."""
     t0 = time.perf_counter()
     try:
@@ -134,7 +138,9 @@ def _in_sandbox(sb, path: Path, calls: list[Call], timeout: float) -> StudentCal
                             seconds=time.perf_counter() - t0, backend="sandbox")
     box = sb.run(sub, [sb.Call(c.function, tuple(np.asarray(a) for a in c.args),
                                tuple(sb.Output(o.name, tuple(o.shape)) for o in c.outputs))
-                       for c in calls], sb.Limits(time=timeout))
+                       for c in calls],
+                 sb.Limits(**{**vars(limits or sb.Limits()), "time": timeout}),
+                 backend=backend, allow_gpsaccel=allow_gpsaccel)
     problem = dict(box.problem or {}) if box.failure else None
     if problem is not None:
         problem.setdefault("kind", box.failure)
