@@ -8,6 +8,7 @@ printed on stdout (no work was done) and that nothing was written.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import signal
 import subprocess
@@ -249,11 +250,11 @@ def test_check_many_refuses_bad_numbers_before_running_anyone(tmp_path):
             check_many([SUBMISSION], executor=None, **kwargs)
 
 
-def _students_running(folder: Path) -> set[str]:
-    """Names of the files in ``folder`` whose sandboxed runner runs (its working folder, the box,
-    holds the copy of the file)."""
+def _student_pids(folder: Path) -> dict[int, str]:
+    """PID -> file name of every sandboxed runner of a file in ``folder`` (its working folder, the
+    box, holds the copy of the file)."""
     names = {p.name for p in folder.iterdir()}
-    running = set()
+    found = {}
     for proc in Path("/proc").iterdir():
         if not proc.name.isdigit():
             continue
@@ -261,10 +262,15 @@ def _students_running(folder: Path) -> set[str]:
             cmd = (proc / "cmdline").read_bytes().split(b"\0")
             if not any(part.endswith(b"_runner.py") for part in cmd):
                 continue
-            running |= names & set(os.listdir(proc / "cwd"))
+            for name in names & set(os.listdir(proc / "cwd")):
+                found[int(proc.name)] = name
         except OSError:
             continue
-    return running
+    return found
+
+
+def _students_running(folder: Path) -> set[str]:
+    return set(_student_pids(folder).values())
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc")
@@ -296,6 +302,14 @@ def test_ctrl_c_during_a_parallel_check_stops_workers_and_students(tmp_path):
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
+        give_up = time.monotonic() + 5  # the checker kills its students on the way out
+        while _student_pids(subs) and time.monotonic() < give_up:
+            time.sleep(0.1)
+        leftovers = _student_pids(subs)
+        for pid in leftovers:  # a failed run must not leave endless loops on the machine
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+    assert not leftovers, leftovers
     assert proc.returncode == 130, stderr
     lines = [line for line in stderr.strip().splitlines() if not line.startswith("sandbox: ")]
     assert lines == ["gpsaccel check: interrupted"], stderr

@@ -74,7 +74,24 @@ class StandardKalmanFilter(KalmanFilter):
         self.x_post, self.P_post = self.x.copy(), self.P.copy()
 
 
-class FilterpyInformation:
+class _FilterpyAdapter:
+    """The driver's interface (``x``, ``P``, ``predict()``) over a filterpy filter ``self.filter``."""
+
+    filter: object
+
+    @property
+    def x(self) -> np.ndarray:
+        return self.filter.x
+
+    @property
+    def P(self) -> np.ndarray:
+        return self.filter.P
+
+    def predict(self) -> None:
+        self.filter.predict()
+
+
+class FilterpyInformation(_FilterpyAdapter):
     """filterpy's ``InformationFilter`` with the driver's interface (``x``, ``P``, ``K``).
 
     The filter itself carries the mean x and the information matrix P⁻¹ (``P_inv``); ``P`` here is
@@ -93,17 +110,6 @@ class FilterpyInformation:
         self.filter = kf
         self.K = np.zeros((model.dim_x, model.dim_z))
 
-    @property
-    def x(self) -> np.ndarray:
-        return self.filter.x
-
-    @property
-    def P(self) -> np.ndarray:
-        return self.filter.P
-
-    def predict(self) -> None:
-        self.filter.predict()
-
     def update(self, z: np.ndarray, R: np.ndarray | None = None,
                H: np.ndarray | None = None) -> None:
         kf = self.filter
@@ -118,7 +124,7 @@ class FilterpyInformation:
         self.K = kf.K
 
 
-class FilterpySquareRoot:
+class FilterpySquareRoot(_FilterpyAdapter):
     """filterpy's ``SquareRootKalmanFilter`` with the driver's interface (``x``, ``P``, ``K``).
 
     Its process-noise factor is Γ √W (see the module docstring); ``P`` is filterpy's
@@ -136,19 +142,8 @@ class FilterpySquareRoot:
         self.filter = kf
 
     @property
-    def x(self) -> np.ndarray:
-        return self.filter.x
-
-    @property
-    def P(self) -> np.ndarray:
-        return self.filter.P
-
-    @property
     def K(self) -> np.ndarray:
         return self.filter.K
-
-    def predict(self) -> None:
-        self.filter.predict()
 
     def update(self, z: np.ndarray, R: np.ndarray | None = None,
                H: np.ndarray | None = None) -> None:

@@ -201,10 +201,10 @@ class SubmissionError(ValueError):
         self.code = code
 
 
-def _defines(path: Path, function: str) -> bool:
+def defines(path: str | os.PathLike, function: str) -> bool:
     """Whether the file defines ``function`` at top level (read with ast, never executed)."""
     try:
-        tree = ast.parse(path.read_bytes(), filename=str(path))
+        tree = ast.parse(Path(path).read_bytes(), filename=str(path))
     except (SyntaxError, ValueError, OSError):
         return False
     for node in tree.body:
@@ -254,7 +254,7 @@ def load_submission(path: str | os.PathLike, function: str) -> Submission:
                                       f"{MAX_FILES} files or {MAX_BYTES >> 20} MB: hand in your "
                                       f"code and the data it reads, nothing else.")
     py = [f for f in files if f.endswith(".py") and "/" not in f]
-    entries = [f for f in py if _defines(root / f, function)]
+    entries = [f for f in py if defines(root / f, function)]
     if not entries:
         raise SubmissionError("no-function", f"No Python file at the top of the folder "
                               f"{path.name} defines {function}(...) (files: "

@@ -16,7 +16,6 @@ only those the file has.
 
 from __future__ import annotations
 
-import ast
 import os
 import time
 from collections.abc import Sequence
@@ -26,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from gpsaccel.check import sandbox as sb
-from gpsaccel.check.sandbox import Call, Output
+from gpsaccel.check.sandbox import Call, Output, defines
 
 __all__ = ["Call", "Output", "StudentCalls", "call_functions", "defines"]
 
@@ -59,24 +58,6 @@ class StudentCalls:
     seconds: float = 0.0
     backend: str = "sandbox"
     detail: str = ""
-
-
-def defines(path: str | os.PathLike, function: str) -> bool:
-    """Whether the file defines ``function`` at top level (read with ast, never executed)."""
-    try:
-        tree = ast.parse(Path(path).read_bytes(), filename=str(path))
-    except (SyntaxError, ValueError, OSError):
-        return False
-    for node in tree.body:
-        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and node.name == function:
-            return True
-        if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == function
-                                                for t in node.targets):
-            return True
-        if isinstance(node, (ast.Import, ast.ImportFrom)) and any(
-                (a.asname or a.name) == function for a in node.names):
-            return True
-    return False
 
 
 def call_functions(path: str | os.PathLike, calls: Sequence[Call], timeout: float,

@@ -37,6 +37,7 @@ from gpsaccel.coop.model import (
     CoopModel,
     f,
     h,
+    h_unwrapped,
     measurement_residual,
     propagate,
     state_residual,
@@ -191,19 +192,6 @@ def _tr(a: np.ndarray) -> np.ndarray:
     return np.swapaxes(a, -1, -2)
 
 
-def _h_raw(x: np.ndarray) -> np.ndarray:
-    """h(x) without wrapping the bearings."""
-    dxi = x[..., 3] - x[..., 0]
-    deta = x[..., 4] - x[..., 1]
-    y = np.empty(x.shape[:-1] + (N_MEAS,))
-    y[..., 0] = np.arctan2(deta, dxi) - x[..., 2]
-    y[..., 1] = np.hypot(dxi, deta)
-    y[..., 2] = np.arctan2(-deta, -dxi) - x[..., 5]
-    y[..., 3] = x[..., 3]
-    y[..., 4] = x[..., 4]
-    return y
-
-
 def _residual(y: np.ndarray, yhat_wrapped: np.ndarray, yhat_raw: np.ndarray,
               g: Ingredients) -> np.ndarray:
     if g.wrap_residual == "yes":
@@ -269,7 +257,7 @@ def run(model: CoopModel, y: np.ndarray, Q: np.ndarray, R: np.ndarray, kind: str
     if kind == "lkf":
         dx = state_residual(x, xn[0])
         Fs, Hs, yn_w = F_of(model.A(xn)), model.C(xn), h(xn)
-        yn_raw = _h_raw(xn)
+        yn_raw = h_unwrapped(xn)
     for k in range(K1 - 1):
         j = k + 1
         m_row = k if g.shift == "measurement" else j
@@ -286,7 +274,7 @@ def run(model: CoopModel, y: np.ndarray, Q: np.ndarray, R: np.ndarray, kind: str
             if not skip[m_row]:
                 xH = {"prior": x, "posterior": x_prev, "nominal": None}[g.H_point]
                 H = model.C(xn[j]) if xH is None else model.C(xH)
-                r = _residual(y[:, m_row], h(x), _h_raw(x), g)
+                r = _residual(y[:, m_row], h(x), h_unwrapped(x), g)
                 S = H @ P @ _tr(H) + R
                 K = P @ _tr(H) @ np.linalg.inv(S)
                 x = wrap_x(x + np.einsum("nij,nj->ni", K, r))

@@ -146,7 +146,11 @@ def f(x: np.ndarray, u: np.ndarray, L: float = 0.5) -> np.ndarray:
 
 def h(x: np.ndarray) -> np.ndarray:
     """y = h(x) for states x (..., 6) → (..., 5), bearings wrapped to [−π, π)."""
-    x = _state(x)
+    return wrap_measurement(h_unwrapped(_state(x)))
+
+
+def h_unwrapped(x: np.ndarray) -> np.ndarray:
+    """h(x) with the bearings as atan2(...) − heading, not wrapped (in (−3π, 3π))."""
     dxi = x[..., 3] - x[..., 0]
     deta = x[..., 4] - x[..., 1]
     y = np.empty(x.shape[:-1] + (N_MEAS,))
@@ -155,7 +159,7 @@ def h(x: np.ndarray) -> np.ndarray:
     y[..., 2] = np.arctan2(-deta, -dxi) - x[..., 5]
     y[..., 3] = x[..., 3]
     y[..., 4] = x[..., 4]
-    return wrap_measurement(y)
+    return y
 
 
 def jacobian_A(x: np.ndarray, u: np.ndarray) -> np.ndarray:
