@@ -654,7 +654,10 @@ def _python() -> str:
 def _bwrap_command(exe: str, tmp: Path, sub: Submission, limits: Limits, allow: bool,
                    result_fd: int) -> tuple[list[str], list[int]]:
     """The bwrap command line, and the file descriptors it must inherit (one per copied file)."""
-    cmd = [exe, *_bwrap_namespaces(), "--disable-userns", "--cap-drop", "ALL"]
+    # /tmp first: the interpreter's folders may live below it (a venv in /tmp), and a bind made
+    # before the tmpfs would be hidden by it
+    cmd = [exe, *_bwrap_namespaces(), "--disable-userns", "--cap-drop", "ALL",
+           "--size", str(limits.file_size), "--tmpfs", "/tmp"]
     bound: list[str] = []
 
     def ro(path: str) -> None:
@@ -685,7 +688,6 @@ def _bwrap_command(exe: str, tmp: Path, sub: Submission, limits: Limits, allow: 
     elif any(pkg == b or pkg.startswith(b + "/") for b in bound):
         cmd.extend(["--tmpfs", pkg])  # an editable or installed gpsaccel: hidden
     cmd.extend(["--proc", "/proc", "--dev", "/dev",
-                "--size", str(limits.file_size), "--tmpfs", "/tmp",
                 "--size", str(limits.file_size), "--perms", "0755", "--tmpfs", "/box",
                 "--ro-bind", str(tmp / "control"), "/control"])
     fds = []

@@ -9,6 +9,7 @@ starts processes asserts by PID that none is alive when the check returns.
 from __future__ import annotations
 
 import json
+import os
 import struct
 
 import numpy as np
@@ -304,3 +305,20 @@ def test_ctrl_c_during_a_single_check_kills_the_box(tmp_path, backend, hostile, 
             proc.kill()
             proc.wait()
     assert not hostile.alive(watch.seen), f"alive after Ctrl-C: {hostile.alive(watch.seen)}"
+
+
+def test_bwrap_mounts_tmp_before_the_interpreters_folders(tmp_path, monkeypatch):
+    """A venv below /tmp (CI's fresh clone) must stay visible: bwrap applies its mounts in order,
+    so the /tmp tmpfs has to come before every bind, or it hides them."""
+    entry = tmp_path / "f.py"
+    entry.write_text("def kalman_filter(z):\n    return z\n")
+    sub = sb.load_submission(entry, "kalman_filter")
+    monkeypatch.setattr(sb.sys, "prefix", "/tmp/some-venv")
+    (tmp_path / "control").mkdir()
+    cmd, fds = sb._bwrap_command("bwrap", tmp_path, sub, sb.Limits(), False, 9)
+    for fd in fds:
+        os.close(fd)
+    first_tmpfs = next(i for i in range(len(cmd) - 1) if cmd[i:i + 2] == ["--tmpfs", "/tmp"])
+    first_bind = cmd.index("--ro-bind")
+    assert first_tmpfs < first_bind
+    assert cmd.count("/tmp") == 1  # mounted once
