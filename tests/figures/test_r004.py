@@ -2,24 +2,6 @@
 
 from __future__ import annotations
 
-import pytest
-
-from gpsaccel.ship.comparison import compare_ship_filters
-from gpsaccel.ship.model import GPS_ROWS, ShipModel
-
-N_RUNS = 200
-IMU_ROWS = [c for c in range(9) if c not in GPS_ROWS]
-
-
-@pytest.fixture(scope="module")
-def model():
-    return ShipModel()
-
-
-@pytest.fixture(scope="module")
-def comparison():
-    return compare_ship_filters(n_runs=N_RUNS, seed=0)
-
 
 def test_report_004_figures(tmp_path):
     from gpsaccel.figures import write_figures

@@ -7,23 +7,14 @@ import pytest
 
 from gpsaccel.kalman.gain_sequence import apply_gains
 from gpsaccel.kalman.multirate import run_multirate
-from gpsaccel.ship.comparison import compare_ship_filters
-from gpsaccel.ship.model import GPS_ROWS, ShipModel
+from gpsaccel.ship.model import ShipModel
 from gpsaccel.ship.simulation import simulate_ensemble
 from gpsaccel.ship.zeroed_gain import run_zeroed_gain
-
-N_RUNS = 200
-IMU_ROWS = [c for c in range(9) if c not in GPS_ROWS]
 
 
 @pytest.fixture(scope="module")
 def model():
     return ShipModel()
-
-
-@pytest.fixture(scope="module")
-def comparison():
-    return compare_ship_filters(n_runs=N_RUNS, seed=0)
 
 
 def test_gain_sequence_reproduces_the_filters_run_by_run(model):

@@ -8,11 +8,10 @@ import pytest
 from gpsaccel.kalman.consistency import chi2_bounds, nees
 from gpsaccel.kalman.multirate import run_multirate
 from gpsaccel.ship.comparison import compare_ship_filters, compare_wind, quadratic_form
-from gpsaccel.ship.model import GPS_ROWS, ShipModel
+from gpsaccel.ship.model import ShipModel
 from gpsaccel.ship.simulation import simulate_ship
 
 N_RUNS = 200
-IMU_ROWS = [c for c in range(9) if c not in GPS_ROWS]
 
 
 def _bonferroni_nees_ok(nees_bar, n_runs, dof, epochs, alpha=0.01):
@@ -24,11 +23,6 @@ def _bonferroni_nees_ok(nees_bar, n_runs, dof, epochs, alpha=0.01):
 
 
 EPOCHS = np.arange(49, 999, 100)  # k = 50, 150, ..., 950: ten epochs, 10 s apart
-
-
-@pytest.fixture(scope="module")
-def model():
-    return ShipModel()
 
 
 @pytest.fixture(scope="module")

@@ -8,24 +8,12 @@ import pytest
 from gpsaccel.calibration.model import CalibrationModel
 from gpsaccel.kalman.gain_sequence import apply_gains
 from gpsaccel.kalman.multirate import run_multirate
-from gpsaccel.ship.comparison import compare_ship_filters
 from gpsaccel.ship.model import GPS_ROWS, REPORT_VARIANCES, ShipModel
 from gpsaccel.ship.plan import nominal_plan
 from gpsaccel.ship.simulation import simulate_ship
 from gpsaccel.ship.zeroed_gain import run_zeroed_gain
 
-N_RUNS = 200
 IMU_ROWS = [c for c in range(9) if c not in GPS_ROWS]
-
-
-@pytest.fixture(scope="module")
-def model():
-    return ShipModel()
-
-
-@pytest.fixture(scope="module")
-def comparison():
-    return compare_ship_filters(n_runs=N_RUNS, seed=0)
 
 
 def test_matrices_are_the_reports(model):

@@ -5,22 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gpsaccel.ship.comparison import compare_ship_filters
-from gpsaccel.ship.model import GPS_ROWS, ShipModel
 from gpsaccel.ship.plan import driving_input, nominal_plan
-
-N_RUNS = 200
-IMU_ROWS = [c for c in range(9) if c not in GPS_ROWS]
-
-
-@pytest.fixture(scope="module")
-def model():
-    return ShipModel()
-
-
-@pytest.fixture(scope="module")
-def comparison():
-    return compare_ship_filters(n_runs=N_RUNS, seed=0)
 
 
 def test_designed_input_makes_the_plan_an_exact_solution(model):

@@ -3,26 +3,11 @@
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from gpsaccel.kalman.update import joseph_update as joseph
-from gpsaccel.ship.comparison import compare_ship_filters
-from gpsaccel.ship.model import GPS_ROWS, ShipModel
+from gpsaccel.ship.model import GPS_ROWS
 from gpsaccel.ship.simulation import simulate_ship
 from gpsaccel.ship.zeroed_gain import run_zeroed_gain
-
-N_RUNS = 200
-IMU_ROWS = [c for c in range(9) if c not in GPS_ROWS]
-
-
-@pytest.fixture(scope="module")
-def model():
-    return ShipModel()
-
-
-@pytest.fixture(scope="module")
-def comparison():
-    return compare_ship_filters(n_runs=N_RUNS, seed=0)
 
 
 def test_zeroed_gain_applies_the_full_gain_with_gps_columns_zeroed(model):
