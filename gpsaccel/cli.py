@@ -208,6 +208,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
         write_json,
     )
 
+    # the notes and the count only: check_many expands the same raw paths itself, once
     files, notes = find_submissions(args.paths)
     for note in notes:
         print(note, file=sys.stderr)
@@ -234,7 +235,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
     on_result = appender(log_path(args.json)) if args.json is not None else None
     t0 = time.perf_counter()
     try:
-        results = check_many(files, n_runs=args.runs, seed=args.seed, timeout=args.timeout,
+        results = check_many(args.paths, n_runs=args.runs, seed=args.seed, timeout=args.timeout,
                              executor=spec, max_workers=args.workers, sandbox=backend,
                              limits=limits, allow_gpsaccel=args.allow_gpsaccel,
                              on_result=on_result, problem=args.problem)

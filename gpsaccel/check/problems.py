@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from gpsaccel import _validation as _v
+from gpsaccel.check import sandbox as sb
 from gpsaccel.check.report import Report
 from gpsaccel.check.student import Call, Output, StudentCalls, call_functions, defines
 from gpsaccel.kalman import consistency
@@ -128,11 +129,13 @@ class Problem:
         report = Report(path.name)
         report.details.update({"path": str(path), "problem": self.name, "n_runs": n_runs,
                                "seed": seed, "timeout": timeout})
-        if not path.is_file():
-            report.add("not-found", f"{path} is not a file.")
+        try:
+            entry = self._entry(path)
+        except sb.SubmissionError as exc:
+            report.add(exc.code, str(exc))
             report.seconds = time.perf_counter() - t0
             return report
-        present = [f for f in self.functions if defines(path, f.name)]
+        present = [f for f in self.functions if defines(entry, f.name)]
         missing = [f for f in self.functions if f not in present]
         if not present or (self.required == "all" and missing):
             names = " and ".join(f.signature for f in (missing or self.functions))
@@ -158,6 +161,25 @@ class Problem:
         report.sort()
         report.seconds = time.perf_counter() - t0
         return report
+
+    def _entry(self, path: Path) -> Path:
+        """The file of the submission ``path`` (a ``.py`` file, or one student's folder) that
+        defines the contract's functions (the first of them it finds; see
+        :func:`gpsaccel.check.sandbox.load_submission`).  Raises ``SubmissionError``."""
+        error: sb.SubmissionError | None = None
+        for f in self.functions:
+            try:
+                sub = sb.load_submission(path, f.name)
+            except sb.SubmissionError as exc:
+                if exc.code != "no-function":
+                    raise
+                error = error or exc
+            else:
+                return sub.root / sub.entry
+        if path.is_file():
+            return path  # a file defining none: the "no-function" finding below names them all
+        assert error is not None
+        raise error
 
     def _returned_notes(self, report: Report, got: StudentCalls, f: Function) -> None:
         for name, desc in got.returned.get(f.name, {}).items():
