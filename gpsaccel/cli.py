@@ -290,12 +290,7 @@ def _cmd_grade(args: argparse.Namespace) -> int:
     return 0
 
 
-def build_parser() -> argparse.ArgumentParser:
-    from gpsaccel.calibration.simulation import TRUTHS
-
-    parser = _Parser(prog="gpsaccel", description=__doc__.splitlines()[0])
-    sub = parser.add_subparsers(dest="command", required=True)
-
+def _add_run(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("run", help="the main job: one realization, its filter and figures")
     p.add_argument("--seed", type=_v.flag_seed, default=0,
                    help="seed of the realization (default 0)")
@@ -303,6 +298,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="Monte Carlo runs for the ensemble figures (default: the report's)")
     p.add_argument("--out", type=_v.output_dir, default="out", help="folder for figures (out/)")
     p.set_defaults(func=_cmd_run)
+
+
+def _add_compare(sub: argparse._SubParsersAction) -> None:
+    from gpsaccel.calibration.simulation import TRUTHS
 
     p = sub.add_parser("compare", help="filter forms and students' files against the exact "
                                        "answer; --sweep: the conditioning sweeps and their figure")
@@ -321,6 +320,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=_v.output_dir, default="out", help="folder for the sweep figure")
     p.set_defaults(func=_cmd_compare)
 
+
+def _add_figures(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("figures", help="write every figure of a report as PNG + index.html")
     p.add_argument("--report", default="all", help="000, 001, 003, ... or all (default)")
     p.add_argument("--out", type=_v.output_dir, default="out")
@@ -329,6 +330,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=_v.flag_seed, default=0)
     p.set_defaults(func=_cmd_figures)
 
+
+def _add_lessons(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("lessons", help="execute the Jupyter lessons; --html DIR renders them")
     p.add_argument("--html", type=_v.output_dir, default=None, help="folder for the rendered HTML")
     p.add_argument("--runs", type=_v.flag_int(minimum=2), default=None,
@@ -338,6 +341,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="only the lessons whose file name starts with these (e.g. 03 06)")
     p.set_defaults(func=_cmd_lessons)
 
+
+def _add_coop(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("coop", help="cooperative localization (report 002): NEES/NIS table")
     p.add_argument("--runs", type=_v.flag_int(minimum=1), default=50,
                    help="truth runs per set (default 50)")
@@ -347,6 +352,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--alpha", type=_v.flag_probability, default=0.05,
                    help="test level (default 0.05)")
     p.set_defaults(func=_cmd_coop)
+
+
+def _add_montecarlo(sub: argparse._SubParsersAction) -> None:
+    from gpsaccel.calibration.simulation import TRUTHS
 
     p = sub.add_parser("montecarlo", help="the reports' Monte Carlo validation, with verdicts")
     p.add_argument("--runs", type=_v.flag_int(minimum=2), default=10_000,
@@ -368,6 +377,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_montecarlo)
 
+
+def _add_ship(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("ship", help="the ship (report 004): RMSE/NEES of monorate, multirate, "
                                     "zeroed gain; wind states")
     p.add_argument("--runs", type=_v.flag_int(minimum=2), default=200,
@@ -375,6 +386,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=_v.flag_seed, default=0)
     p.set_defaults(func=_cmd_ship)
 
+
+def _add_check(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("check", help="check students' homework files (calibration, coop, ship)")
     p.add_argument("paths", nargs="+", type=Path,
                    help="submission files, or folders whose every top-level .py file or "
@@ -415,6 +428,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-v", "--verbose", action="store_true", help="print every report in full")
     p.set_defaults(func=_cmd_check)
 
+
+def _add_assignment(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("assignment", help="otter assign a homework: student notebook + autograder")
     p.add_argument("name", choices=("calibration", "coop", "ship"))
     p.add_argument("--out", type=_v.output_dir, required=True, help="folder to write (replaced)")
@@ -422,6 +437,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="do not execute the solution against its tests first (faster)")
     p.set_defaults(func=_cmd_assignment)
 
+
+def _add_grade(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("grade", help="grade a folder of homework notebooks with otter run")
     p.add_argument("submissions", type=Path, help="folder of submitted .ipynb files")
     p.add_argument("--assignment", required=True, choices=("calibration", "coop", "ship"))
@@ -435,7 +452,27 @@ def build_parser() -> argparse.ArgumentParser:
                    help="time limit per notebook, s (default 600)")
     p.set_defaults(func=_cmd_grade)
 
-    # Further sub-commands register here (montecarlo, check, lessons, ...).
+
+#: The sub-commands in the order ``gpsaccel --help`` lists them; each function adds one parser.
+SUBCOMMANDS = (
+    _add_run,
+    _add_compare,
+    _add_figures,
+    _add_lessons,
+    _add_coop,
+    _add_montecarlo,
+    _add_ship,
+    _add_check,
+    _add_assignment,
+    _add_grade,
+)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="gpsaccel", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+    for add in SUBCOMMANDS:  # a new sub-command: an _add_NAME function and one line above
+        add(sub)
     return parser
 
 
