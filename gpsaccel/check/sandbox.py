@@ -1148,7 +1148,10 @@ def _supervise(backend: str, cmd: list[str], cwd: str, env: dict, drop_caps: boo
     emptied = False
     left: int | None = None
     extra = 2 if backend == "bwrap" else 0
-    nproc = limits.processes + 1 + extra if c.uid is not None else _nproc(limits)
+    # a box uid runs nothing else: RLIMIT_NPROC counts the box exactly; with a cgroup it is set
+    # a little above pids.max, so that the cgroup refuses the fork first and counts it
+    nproc = _nproc(limits) if c.uid is None else \
+        limits.processes + 1 + extra + (8 if c.cgroup is not None else 0)
     try:
         res_w, out_w = child_fds[:2]
         proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=out_w, stderr=out_w,
