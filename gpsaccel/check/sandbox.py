@@ -650,6 +650,27 @@ def resolve_backend(backend: str = "auto") -> str:
     return backend
 
 
+def basic_is_safe() -> bool:
+    """Whether the basic backend isolates a student here: only as root, where each box runs as a
+    uid of its own (:mod:`gpsaccel.check._boxuser`).  As any other user the student's code runs
+    as that user: it can write what the user can (the environment's site-packages: a ``.pth``
+    that forges the next check), signal the user's processes (kill or stop the batch) and leave
+    processes the box cannot name (docs/sandbox.md)."""
+    return _boxuser.box_uid() is not None
+
+
+def refuse_unsafe_basic(backend: str, allow: bool = False) -> None:
+    """ValueError when ``backend`` is ``"basic"``, it is not safe here (:func:`basic_is_safe`)
+    and ``allow`` (``--allow-unsafe-basic``) was not given: for grading a class."""
+    if backend == "basic" and not allow and not basic_is_safe():
+        raise ValueError("sandbox: 'basic' is not safe for grading here: not run as root, a "
+                         "student's code runs as your user, so it can write into your Python "
+                         "environment (forging later checks), kill or stop the batch and leave "
+                         "processes behind (docs/sandbox.md). Install bubblewrap (apt-get install "
+                         "bubblewrap) for --sandbox bwrap, or run the check as root, or pass "
+                         "--allow-unsafe-basic (allow_unsafe_basic=True) if you accept that")
+
+
 def _bwrap_namespaces() -> list[str]:
     return ["--unshare-user", "--unshare-pid", "--unshare-net", "--unshare-ipc",
             "--unshare-uts", "--unshare-cgroup-try", "--uid", str(BOX_UID),
