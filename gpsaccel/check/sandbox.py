@@ -17,46 +17,53 @@ back over a pipe as frames the parent reads against the shapes and dtypes *it* d
 (:class:`FrameReader`): a result of another shape, a larger one, or bytes that are not a frame
 are refused (``result-refused``), never loaded.  Nothing the student wrote to a file is read.
 
-Backends
+Backends (the threat model, what each isolates and what not: ``docs/sandbox.md``)
 --------
 ``bwrap`` (bubblewrap; ``apt-get install bubblewrap``)
     New user, PID, network, IPC, UTS and cgroup namespaces; inside, uid 65534 with no
     capabilities.  The file system is the interpreter's folders (``/usr``, the Python prefix, the
     site-packages) read-only, the checker's own package hidden under an empty tmpfs, ``/proc`` of
-    the box's PID namespace only (the checker's memory and environment are not in it), and two
+    the box's PID namespace only (the checker's memory and environment are not in it), and three
     small writable tmpfs: the working directory ``/box`` (holding a copy of the submission's own
-    files, nothing else) and ``/tmp``, each of at most ``Limits.file_size`` bytes.  No network.
+    files, nothing else), ``/tmp`` and ``/dev/shm``, each of at most ``Limits.file_size`` bytes;
+    the root, ``/dev`` and the folders made for the binds are remounted read-only.  No network.
     ``--die-with-parent``: when the checker goes, the box goes; when the box's first process is
     killed, the kernel kills every process of its PID namespace.
 ``basic`` (any Linux; the isolation that needs no tool)
     A fresh session; resource limits set before exec (address space, CPU time, file size,
     processes, open files, no core files); an environment of ``PATH``, ``HOME`` (the box) and
     ``LANG`` only; a private temporary working directory holding a copy of the submission only;
-    the checker made non-dumpable while the student runs (so ``/proc/<checker>/mem``,
-    ``environ``, ``maps`` are closed to a process without ``CAP_SYS_PTRACE``).  Run as root it
-    also empties the child's capability bounding set before exec, so the student's root has no
-    capability (no ``CAP_SYS_PTRACE`` to read the checker's memory, no ``CAP_SYS_RESOURCE`` to
-    lift its limits, no ``CAP_KILL`` on other users).  It cannot hide files: the student reads
-    what the checker's user can read, and (as root, or as the same user) can write what that
-    user can write; a student can kill the checker process (a batch survives that, see
-    :mod:`gpsaccel.check.batch`).  Root's processes are not counted by ``RLIMIT_NPROC``; the
-    process limit is then enforced by counting the box's processes every 250 ms (under both
-    backends: a bwrap box started by root runs as root outside its user namespace).
+    the checker made non-dumpable while the student runs.  It cannot hide files: the student
+    reads what other users may read.  Not run as root it is not safe for grading (the student is
+    the checker's user: :func:`refuse_unsafe_basic`).
 ``auto`` is ``bwrap`` when a trial box starts on this machine, else ``basic``.
+
+As root, under both backends, the student runs as a uid of its own that owns nothing and that
+nothing else runs as, with no capability and no new privileges (:mod:`gpsaccel.check._boxuser`;
+bwrap itself runs as that uid): it cannot write into the package or the environment (a ``.pth``),
+nor signal the checker, and everything the uid runs is killed at the end, wherever it is in the
+process tree.  Where the machine allows it, a cgroup per box (:mod:`gpsaccel.check._cgroup`:
+cgroup v2, else v1) limits the memory (processes, tmpfs files and memfds together), the processes
+and the CPU of the whole box; else the per-process rlimits are the limits
+(:attr:`BoxResult.limit_backend` says which).
 
 Every run ends with a checked kill: the checker is a child subreaper while the box runs (a
 ``setsid`` daemon is re-parented to it, not to init), every process of the box (the descendants of
-its first process and the orphans adopted meanwhile) is killed with SIGKILL until a scan of
-``/proc`` finds none alive, and they are reaped.  Only then does :func:`run` return, so a caller
-that computes the reference answer afterwards never holds it while a student process lives.
+its first process, the orphans adopted meanwhile, its cgroup's and its uid's) is killed with
+SIGKILL until a scan finds none alive, and they are reaped; what the student left running is
+counted first, while the runner waits after its last frame (:attr:`BoxResult.killed`).  Then the
+cgroup and the box folder are removed (a folder or cgroup left by a killed checker is removed by
+the next box: :func:`sweep_stale_boxes`).  Only then does :func:`run` return, so a caller that
+computes the reference answer afterwards never holds it while a student process lives.
 
 Limits (:class:`Limits`) and what exceeding them gives (:attr:`BoxResult.failure`): ``timeout``
-(wall-clock), ``memory-limit`` (address space; a ``MemoryError`` or a process that died of it),
-``output-limit`` (printed bytes; the box is stopped at the limit), ``file-limit`` (one file, or a
-box tmpfs, full), ``process-limit``, ``uses-checker`` (an import of gpsaccel was attempted),
-``result-refused``, ``crashed`` (the process ended without saying ``done``), and the runner's
-own: ``import-error``, ``no-function``, ``exception``, ``return-value``, ``not-numeric``,
-``wrong-shape``.
+(wall-clock), ``memory-limit`` (address space, or the box's cgroup; a ``MemoryError`` or a process
+killed at it), ``output-limit`` (printed bytes; the box is stopped at the limit), ``file-limit``
+(one file, or a box tmpfs, full), ``process-limit``, ``uses-checker`` (an import of gpsaccel was
+attempted), ``result-refused`` (see :class:`FrameReader`), ``link-refused`` (see
+:func:`load_submission`), ``crashed`` (the process ended without saying ``done``), and the
+runner's own: ``import-error``, ``no-function``, ``exception``, ``return-value``,
+``not-numeric``, ``wrong-shape``.
 """
 
 from __future__ import annotations
@@ -127,7 +134,9 @@ COUNT_EVERY = 0.25
 class Limits:
     """What one box may use.
 
-    memory : address space per process, bytes (RLIMIT_AS; default 1 GiB).
+    memory : bytes (default 1 GiB): the whole box's memory where a cgroup applies (every
+        process, tmpfs file and memfd together), and the address space of each process
+        (RLIMIT_AS) everywhere.
     time : wall-clock limit of the whole box (import and every call), s.
     file_size : largest file the student may write, bytes (RLIMIT_FSIZE); under bwrap also the
         size of each writable tmpfs (``/box``, ``/tmp``).
