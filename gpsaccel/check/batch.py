@@ -33,9 +33,9 @@ import multiprocessing.connection as mpc
 import os
 import secrets
 import signal
-import unicodedata
 import threading
 import time
+import unicodedata
 from collections import deque
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path

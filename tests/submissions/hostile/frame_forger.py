@@ -1,5 +1,6 @@
-"""Hostile (issue 20): frames the parent's code would choke on: a header nested 30,000 deep (60 kB, within the header limit), then
-(if it is still read) a problem frame whose fields have the wrong types."""
+"""Hostile (issue 20): frames the parent's code would choke on: a header nested 30,000 deep
+(60 kB, within the header limit), then (if it is still read) a problem frame whose fields have
+the wrong types."""
 import json
 import os
 import struct
