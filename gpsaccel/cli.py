@@ -204,6 +204,8 @@ def _cmd_check(args: argparse.Namespace) -> int:
         check_many,
         find_submissions,
         log_path,
+        printable,
+        secret_seed,
         table,
         write_json,
     )
@@ -225,7 +227,11 @@ def _cmd_check(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise ValueError(str(exc).replace("limits.", "--")) from None
     backend = sandbox.resolve_backend(args.sandbox)
-    settings = {"problem": args.problem, "runs": args.runs, "seed": args.seed,
+    sandbox.refuse_unsafe_basic(backend, args.allow_unsafe_basic)
+    # a class is graded on secret data unless a seed is given; the seed is in the JSON
+    seed = secret_seed() if args.seed is None else args.seed
+    settings = {"problem": args.problem, "runs": args.runs, "seed": seed,
+                "seed_drawn": args.seed is None,
                 "timeout": args.timeout,
                 "sandbox": backend, "allow_gpsaccel": args.allow_gpsaccel,
                 "limits": {k: v for k, v in vars(limits).items()}}
@@ -235,10 +241,11 @@ def _cmd_check(args: argparse.Namespace) -> int:
     on_result = appender(log_path(args.json)) if args.json is not None else None
     t0 = time.perf_counter()
     try:
-        results = check_many(args.paths, n_runs=args.runs, seed=args.seed, timeout=args.timeout,
+        results = check_many(args.paths, n_runs=args.runs, seed=seed, timeout=args.timeout,
                              executor=spec, max_workers=args.workers, sandbox=backend,
                              limits=limits, allow_gpsaccel=args.allow_gpsaccel,
-                             on_result=on_result, problem=args.problem)
+                             on_result=on_result, problem=args.problem,
+                             allow_unsafe_basic=args.allow_unsafe_basic)
     except Interrupted as exc:
         done = [r for r in exc.results if r is not None]
         if args.json is not None:  # first: the terminal may be gone
@@ -254,11 +261,11 @@ def _cmd_check(args: argparse.Namespace) -> int:
         path = write_json(results, args.json, **settings)
     if args.verbose:
         for r in results:
-            print(r["text"], end="\n\n")
+            print(printable(r["text"], keep_newlines=True), end="\n\n")
     print(table(results))
     runs = results[0]["details"].get("n_runs", args.runs) if results else args.runs
     print(f"{len(results)} submissions, problem {args.problem}, {runs} runs each (seed "
-          f"{args.seed}), sandbox {backend}, {seconds:.1f} s")
+          f"{seed}{', drawn' if args.seed is None else ''}), sandbox {backend}, {seconds:.1f} s")
     if args.json is not None:
         print(f"wrote {path}")
     return 0 if all(r["passed"] for r in results) else 1
@@ -400,8 +407,9 @@ def _add_check(sub: argparse._SubParsersAction) -> None:
                    help="write every finding and number to FILE (e.g. results.json)")
     p.add_argument("--runs", type=_v.flag_int(minimum=2), default=None,
                    help="realizations per check (default: the problem's, see gpsaccel.check)")
-    p.add_argument("--seed", type=_v.flag_seed, default=0,
-                   help="seed of the realizations (default 0)")
+    p.add_argument("--seed", type=_v.flag_seed, default=None,
+                   help="seed of the realizations (default: drawn with secrets, so no student "
+                        "can precompute the answers; recorded in --json to reproduce a verdict)")
     p.add_argument("--timeout", type=_v.flag_float(0.0, open_min=True), default=60.0,
                    help="time limit per submission, s (default 60)")
     p.add_argument("--workers", type=_v.flag_int(minimum=1), default=None,
@@ -425,6 +433,10 @@ def _add_check(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--allow-gpsaccel", action="store_true",
                    help="let submissions import gpsaccel (by default an import is the finding "
                         "uses-checker)")
+    p.add_argument("--allow-unsafe-basic", action="store_true",
+                   help="accept --sandbox basic (or auto without bubblewrap) when not run as "
+                        "root, where it cannot keep a student's code from your files and "
+                        "processes (docs/sandbox.md)")
     p.add_argument("-v", "--verbose", action="store_true", help="print every report in full")
     p.set_defaults(func=_cmd_check)
 

@@ -2,7 +2,7 @@
 
 Usage (by :mod:`gpsaccel.check.sandbox`, not by hand)::
 
-    python -I -S -B _runner.py CONTROL_DIR SUBMISSION_DIR RESULT_FD
+    python -I -S -B _runner.py CONTROL_DIR SUBMISSION_DIR RESULT_FD [GO_FD]
 
 It is started as a script in isolated mode (``-I``: no environment variables, no user site, its
 own folder not on ``sys.path``) without the ``site`` module (``-S``: no ``.pth`` file runs, so an
@@ -53,8 +53,24 @@ TRACEBACK_LINES = 12
 _FD = -1
 
 
+#: Longest text field sent (the parent refuses longer ones: sandbox.MAX_TEXT).
+MAX_TEXT = 4000
+
+
+def _cut(value: object) -> object:
+    """Strings (at any depth) cut to MAX_TEXT characters: a student's names and messages may be
+    of any length."""
+    if isinstance(value, str):
+        return value if len(value) <= MAX_TEXT else value[:MAX_TEXT - 1] + "…"
+    if isinstance(value, dict):
+        return {_cut(k): _cut(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_cut(v) for v in value]
+    return value
+
+
 def _send(header: dict, payload: bytes = b"") -> None:
-    data = json.dumps(header).encode()
+    data = json.dumps(_cut(header)).encode()
     blob = struct.pack(">I", len(data)) + data + payload
     view = memoryview(blob)
     while view:
@@ -86,10 +102,13 @@ def _audit_hook(names: list[str], dirs: list[str]):  # noqa: ANN202
     a blocked package or an open of a file under a blocked folder, even after the student's code
     took the import blocker off ``sys.meta_path``.  It uses only objects bound here, so patching
     modules (json, os, this runner) does not silence it."""
-    names_t, dirs_t = tuple(names), tuple(d.rstrip("/") + "/" for d in dirs)
+    names_t = tuple(names)
+    dirs_t = tuple(dict.fromkeys(os.path.realpath(d).rstrip("/") + "/" for d in dirs))
     data = json.dumps({"t": "uses-checker", "module": "gpsaccel"}).encode()
     frame = struct.pack(">I", len(data)) + data
-    write, fd, abspath, fspath = os.write, _FD, os.path.abspath, os.fspath
+    # resolved real paths: '//path/to/gpsaccel', 'a/../gpsaccel' or a symlink to it is the
+    # package as much as its own name
+    write, fd, realpath, fspath = os.write, _FD, os.path.realpath, os.fspath
     sent = []
 
     def blocked(path: object) -> bool:
@@ -99,7 +118,12 @@ def _audit_hook(names: list[str], dirs: list[str]):  # noqa: ANN202
             return False
         if isinstance(p, bytes):
             p = p.decode(errors="replace")
-        return isinstance(p, str) and (abspath(p) + "/").startswith(dirs_t)
+        if not isinstance(p, str):
+            return False
+        try:
+            return (realpath(p) + "/").startswith(dirs_t)
+        except (OSError, ValueError):
+            return True  # a path that cannot be resolved is not let through
 
     def hook(event: str, args: tuple) -> None:
         hit = False
@@ -274,13 +298,29 @@ def _not_dumpable() -> None:
             pass
 
 
+def _wait(go: int | None) -> None:
+    """After the last frame: wait until the parent has counted the box's processes (it closes
+    its end of ``go``), so what a student left running is seen while the runner still lives
+    (under bwrap the PID namespace, and every process in it, ends with the runner)."""
+    if go is None:
+        return
+    try:
+        os.read(go, 1)
+    except OSError:
+        pass
+
+
 def main(argv: list[str]) -> int:
     global _FD
     _not_dumpable()
     control, root, fd = Path(argv[0]), Path(argv[1]).resolve(), int(argv[2])
+    go = int(argv[3]) if len(argv) > 3 else None
     _FD = fd
     os.set_inheritable(fd, False)  # a subprocess of the student's does not get the channel
+    if go is not None:
+        os.set_inheritable(go, False)
     run(control, root)
+    _wait(go)
     return 0
 
 

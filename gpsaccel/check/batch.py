@@ -31,9 +31,11 @@ import json
 import multiprocessing as mp
 import multiprocessing.connection as mpc
 import os
+import secrets
 import signal
 import threading
 import time
+import unicodedata
 from collections import deque
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
@@ -64,7 +66,9 @@ def find_submissions(paths: Iterable[str | os.PathLike]) -> tuple[list[Path], li
     skipped).
 
     Left out of a folder: hidden entries, ``__pycache__``, ``__init__.py`` and files that are not
-    ``.py``.  A misnamed filter stays in (it must show up as ``no-kalman-filter``, not vanish).
+    ``.py``.  A misnamed filter stays in (it must show up as ``no-kalman-filter``, not vanish),
+    and so does a symbolic link, whatever it points to (its check refuses it: ``link-refused``;
+    ``mallory.py -> alice.py`` is not a second passing submission).
     """
     found: list[Path] = []
     notes: list[str] = []
@@ -77,7 +81,9 @@ def find_submissions(paths: Iterable[str | os.PathLike]) -> tuple[list[Path], li
         for e in entries:
             if e.name.startswith(".") or e.name == "__pycache__":
                 continue
-            if e.is_dir():
+            if e.is_symlink():  # never followed: the check refuses it with a finding
+                found.append(e)
+            elif e.is_dir():
                 found.append(e)
             elif e.name == "__init__.py":
                 notes.append(f"{e}: skipped (a package's __init__.py)")
@@ -107,12 +113,20 @@ def checker_error(path: Path | str, message: str) -> dict:
             "text": f"{path.name}: FAILED (checker-error)\n  - {message}"}
 
 
-def check_many(paths: Sequence[str | os.PathLike], n_runs: int | None = None, seed: int = 0,
+def secret_seed() -> int:
+    """A seed no student can predict (63 bits from :mod:`secrets`): the default of a class's
+    check, so answers precomputed at home for a public seed pass nothing.  It is recorded in the
+    results (``settings.seed``, ``details.seed``), so any verdict can be reproduced."""
+    return secrets.randbits(63)
+
+
+def check_many(paths: Sequence[str | os.PathLike], n_runs: int | None = None,
+               seed: int | None = None,
                timeout: float = 60, executor: object = "processes",
                max_workers: int | None = None, sandbox: str = "auto",
                limits: sb.Limits | None = None, allow_gpsaccel: bool = False,
                on_result: Callable[[dict], None] | None = None,
-               problem: str = "calibration") -> list[dict]:
+               problem: str = "calibration", allow_unsafe_basic: bool = False) -> list[dict]:
     """Check every submission of ``paths`` (see :func:`find_submissions`); one dict per
     submission, in order.
 
@@ -123,14 +137,19 @@ def check_many(paths: Sequence[str | os.PathLike], n_runs: int | None = None, se
     (``seed``), so their results are comparable.  ``problem`` is "calibration", "coop" or "ship"
     (:mod:`gpsaccel.check.problems`); ``n_runs`` None is the problem's default.  ``n_runs``,
     ``seed`` and ``timeout`` are checked here, before any submission runs (a bad one would
-    otherwise fail every check alike).  Raises :class:`Interrupted` on Ctrl-C.
+    otherwise fail every check alike).  ``seed`` None (the default) is :func:`secret_seed`: a
+    class is graded on data no student could know in advance; pass a seed to reproduce a run.
+    The basic sandbox is refused unless it is safe here (:func:`gpsaccel.check.sandbox.
+    refuse_unsafe_basic`: the checker runs as root) or ``allow_unsafe_basic``.  Raises
+    :class:`Interrupted` on Ctrl-C.
     """
     n_runs = None if n_runs is None else _v.integer("n_runs", n_runs, minimum=2)
     problem = _v.choice("problem", problem, ("calibration", "coop", "ship"))
-    seed = _v.integer("seed", seed, minimum=0)
+    seed = secret_seed() if seed is None else _v.integer("seed", seed, minimum=0)
     timeout = _v.positive_float("timeout", timeout)
     files, _ = find_submissions(paths)
     backend = sb.resolve_backend(sandbox)  # once, and a clear error before anything runs
+    sb.refuse_unsafe_basic(backend, allow_unsafe_basic)
     options = {"sandbox": backend, "limits": limits, "allow_gpsaccel": allow_gpsaccel,
                "problem": problem}
     args = (n_runs, seed, timeout)
@@ -289,6 +308,7 @@ def _isolated(files: list[Path], args: tuple, options: dict, workers: int, timeo
                 conn.close()
                 del running[i]
                 sweep(before | {p.pid for p, _, _ in running.values()})
+                sb.sweep_stale_boxes()  # the box folder of a worker that was killed
                 finish(i, result)
     except KeyboardInterrupt:
         for proc, _, _ in running.values():
@@ -304,6 +324,7 @@ def _isolated(files: list[Path], args: tuple, options: dict, workers: int, timeo
             proc.kill()
             proc.join()
         sweep(before)
+        sb.sweep_stale_boxes()
         sb.set_subreaper(bool(was_subreaper))
         if previous is not None:
             signal.signal(signal.SIGINT, previous)
@@ -311,16 +332,43 @@ def _isolated(files: list[Path], args: tuple, options: dict, workers: int, timeo
 
 
 # ------------------------------------------------------------------------------- output
+#: Longest submission name shown in the table (the JSON keeps it whole).
+NAME_WIDTH = 80
+
+
+def printable(text: str, keep_newlines: bool = False) -> str:
+    """``text`` as it may reach a terminal: every control, format or separator character
+    (C0/C1 controls, ESC and so every escape sequence, bidirectional overrides, U+2028/U+2029,
+    unassigned code points) shown as ``\\x..``/``\\u....``; newlines kept only when asked."""
+    out = []
+    for c in text:
+        if keep_newlines and c == "\n":
+            out.append(c)
+        elif unicodedata.category(c)[0] == "C" or unicodedata.category(c) in ("Zl", "Zp"):
+            out.append(f"\\x{ord(c):02x}" if ord(c) < 256 else f"\\u{ord(c):04x}"
+                       if ord(c) < 0x10000 else f"\\U{ord(c):08x}")
+        else:
+            out.append(c)
+    return "".join(out)
+
+
+def _shown_name(r: dict) -> str:
+    name = printable(str(r["details"].get("path", r["subject"])))
+    return name if len(name) <= NAME_WIDTH else name[:NAME_WIDTH - 1] + "…"
+
+
 def table(results: Sequence[dict]) -> str:
-    """The instructor's table: submission, passed, codes, seconds."""
-    name_w = max([len(r["details"].get("path", r["subject"])) for r in results] + [10])
+    """The instructor's table: submission, passed, codes, seconds (names made printable:
+    :func:`printable`)."""
+    names = [_shown_name(r) for r in results]
+    name_w = max([len(n) for n in names] + [10])
     head = f"{'submission':<{name_w}}  {'passed':<6}  {'seconds':>7}  codes"
     lines = [head, "-" * max(len(head), 40)]
-    for r in results:
-        lines.append(f"{r['details'].get('path', r['subject']):<{name_w}}  "
-                     f"{'yes' if r['passed'] else 'NO':<6}  {r['seconds']:7.1f}  "
-                     f"{', '.join(r['codes']) or '-'}")
-    n_pass = sum(r["passed"] for r in results)
+    for name, r in zip(names, results, strict=True):
+        lines.append(f"{name:<{name_w}}  "
+                     f"{'yes' if r['passed'] is True else 'NO':<6}  {r['seconds']:7.1f}  "
+                     f"{printable(', '.join(r['codes'])) or '-'}")
+    n_pass = sum(r["passed"] is True for r in results)
     lines.append(f"{n_pass} of {len(results)} passed")
     return "\n".join(lines)
 
@@ -349,7 +397,8 @@ def appender(path: str | os.PathLike) -> Callable[[dict], None]:
 
     def append(result: dict) -> None:
         with open(path, "a", encoding="utf-8") as f:
-            f.write(json.dumps(result, ensure_ascii=False) + "\n")
+            # ASCII: no raw U+2028/U+2029, U+0085 or other separator a line reader splits on
+            f.write(json.dumps(result, ensure_ascii=True) + "\n")
             f.flush()
             os.fsync(f.fileno())
 

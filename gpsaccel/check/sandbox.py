@@ -17,46 +17,53 @@ back over a pipe as frames the parent reads against the shapes and dtypes *it* d
 (:class:`FrameReader`): a result of another shape, a larger one, or bytes that are not a frame
 are refused (``result-refused``), never loaded.  Nothing the student wrote to a file is read.
 
-Backends
+Backends (the threat model, what each isolates and what not: ``docs/sandbox.md``)
 --------
 ``bwrap`` (bubblewrap; ``apt-get install bubblewrap``)
     New user, PID, network, IPC, UTS and cgroup namespaces; inside, uid 65534 with no
     capabilities.  The file system is the interpreter's folders (``/usr``, the Python prefix, the
     site-packages) read-only, the checker's own package hidden under an empty tmpfs, ``/proc`` of
-    the box's PID namespace only (the checker's memory and environment are not in it), and two
+    the box's PID namespace only (the checker's memory and environment are not in it), and three
     small writable tmpfs: the working directory ``/box`` (holding a copy of the submission's own
-    files, nothing else) and ``/tmp``, each of at most ``Limits.file_size`` bytes.  No network.
+    files, nothing else), ``/tmp`` and ``/dev/shm``, each of at most ``Limits.file_size`` bytes;
+    the root, ``/dev`` and the folders made for the binds are remounted read-only.  No network.
     ``--die-with-parent``: when the checker goes, the box goes; when the box's first process is
     killed, the kernel kills every process of its PID namespace.
 ``basic`` (any Linux; the isolation that needs no tool)
     A fresh session; resource limits set before exec (address space, CPU time, file size,
     processes, open files, no core files); an environment of ``PATH``, ``HOME`` (the box) and
     ``LANG`` only; a private temporary working directory holding a copy of the submission only;
-    the checker made non-dumpable while the student runs (so ``/proc/<checker>/mem``,
-    ``environ``, ``maps`` are closed to a process without ``CAP_SYS_PTRACE``).  Run as root it
-    also empties the child's capability bounding set before exec, so the student's root has no
-    capability (no ``CAP_SYS_PTRACE`` to read the checker's memory, no ``CAP_SYS_RESOURCE`` to
-    lift its limits, no ``CAP_KILL`` on other users).  It cannot hide files: the student reads
-    what the checker's user can read, and (as root, or as the same user) can write what that
-    user can write; a student can kill the checker process (a batch survives that, see
-    :mod:`gpsaccel.check.batch`).  Root's processes are not counted by ``RLIMIT_NPROC``; the
-    process limit is then enforced by counting the box's processes every 250 ms (under both
-    backends: a bwrap box started by root runs as root outside its user namespace).
+    the checker made non-dumpable while the student runs.  It cannot hide files: the student
+    reads what other users may read.  Not run as root it is not safe for grading (the student is
+    the checker's user: :func:`refuse_unsafe_basic`).
 ``auto`` is ``bwrap`` when a trial box starts on this machine, else ``basic``.
+
+As root, under both backends, the student runs as a uid of its own that owns nothing and that
+nothing else runs as, with no capability and no new privileges (:mod:`gpsaccel.check._boxuser`;
+bwrap itself runs as that uid): it cannot write into the package or the environment (a ``.pth``),
+nor signal the checker, and everything the uid runs is killed at the end, wherever it is in the
+process tree.  Where the machine allows it, a cgroup per box (:mod:`gpsaccel.check._cgroup`:
+cgroup v2, else v1) limits the memory (processes, tmpfs files and memfds together), the processes
+and the CPU of the whole box; else the per-process rlimits are the limits
+(:attr:`BoxResult.limit_backend` says which).
 
 Every run ends with a checked kill: the checker is a child subreaper while the box runs (a
 ``setsid`` daemon is re-parented to it, not to init), every process of the box (the descendants of
-its first process and the orphans adopted meanwhile) is killed with SIGKILL until a scan of
-``/proc`` finds none alive, and they are reaped.  Only then does :func:`run` return, so a caller
-that computes the reference answer afterwards never holds it while a student process lives.
+its first process, the orphans adopted meanwhile, its cgroup's and its uid's) is killed with
+SIGKILL until a scan finds none alive, and they are reaped; what the student left running is
+counted first, while the runner waits after its last frame (:attr:`BoxResult.killed`).  Then the
+cgroup and the box folder are removed (a folder or cgroup left by a killed checker is removed by
+the next box: :func:`sweep_stale_boxes`).  Only then does :func:`run` return, so a caller that
+computes the reference answer afterwards never holds it while a student process lives.
 
 Limits (:class:`Limits`) and what exceeding them gives (:attr:`BoxResult.failure`): ``timeout``
-(wall-clock), ``memory-limit`` (address space; a ``MemoryError`` or a process that died of it),
-``output-limit`` (printed bytes; the box is stopped at the limit), ``file-limit`` (one file, or a
-box tmpfs, full), ``process-limit``, ``uses-checker`` (an import of gpsaccel was attempted),
-``result-refused``, ``crashed`` (the process ended without saying ``done``), and the runner's
-own: ``import-error``, ``no-function``, ``exception``, ``return-value``, ``not-numeric``,
-``wrong-shape``.
+(wall-clock), ``memory-limit`` (address space, or the box's cgroup; a ``MemoryError`` or a process
+killed at it), ``output-limit`` (printed bytes; the box is stopped at the limit), ``file-limit``
+(one file, or a box tmpfs, full), ``process-limit``, ``uses-checker`` (an import of gpsaccel was
+attempted), ``result-refused`` (see :class:`FrameReader`), ``link-refused`` (see
+:func:`load_submission`), ``crashed`` (the process ended without saying ``done``), and the
+runner's own: ``import-error``, ``no-function``, ``exception``, ``return-value``,
+``not-numeric``, ``wrong-shape``.
 """
 
 from __future__ import annotations
@@ -71,6 +78,7 @@ import selectors
 import shutil
 import signal
 import site
+import stat
 import struct
 import subprocess
 import sys
@@ -81,6 +89,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from gpsaccel.check import _boxuser, _cgroup
 
 #: The script that runs the student's code in the box.
 RUNNER = Path(__file__).with_name("_runner.py")
@@ -94,9 +104,21 @@ BACKENDS = ("auto", "bwrap", "basic")
 #: Largest submission copied into a box: files and bytes (a folder of data files may be large).
 MAX_FILES = 200
 MAX_BYTES = 32 << 20
+#: Entries (files and folders, hidden ones too) a submission's folder may hold, and its depth.
+MAX_ENTRIES = 2000
+MAX_DEPTH = 16
 
-#: Longest frame header (JSON) the parent accepts from the runner.
+#: Longest frame header (JSON) the parent accepts from the runner, and longest text field in it
+#: (the runner keeps a traceback's last lines, each cut to a line's worth).
 MAX_HEADER = 1 << 16
+MAX_TEXT = 8000
+#: Bytes of the result channel beyond the declared outputs: per call (a result header), and for
+#: the other frames (imported, uses-checker, problem, done: each at most MAX_HEADER).
+HEADER_ALLOWANCE = 1024
+CHANNEL_ALLOWANCE = 4 * MAX_HEADER
+#: Largest finite magnitude a float result may hold: a filter's estimates and covariances are
+#: far below it, and the checker squares and sums them (1e100² · 10⁶ terms is still finite).
+MAX_VALUE = 1e100
 
 #: uid/gid of the student inside a bwrap box.
 BOX_UID = 65534
@@ -112,7 +134,9 @@ COUNT_EVERY = 0.25
 class Limits:
     """What one box may use.
 
-    memory : address space per process, bytes (RLIMIT_AS; default 1 GiB).
+    memory : bytes (default 1 GiB): the whole box's memory where a cgroup applies (every
+        process, tmpfs file and memfd together), and the address space of each process
+        (RLIMIT_AS) everywhere.
     time : wall-clock limit of the whole box (import and every call), s.
     file_size : largest file the student may write, bytes (RLIMIT_FSIZE); under bwrap also the
         size of each writable tmpfs (``/box``, ``/tmp``).
@@ -223,47 +247,114 @@ def load_submission(path: str | os.PathLike, function: str) -> Submission:
     """The submission at ``path``: a ``.py`` file alone, or a folder (one student's) holding
     one ``.py`` file that defines ``function`` plus its helper modules and data files.
 
-    Hidden entries and ``__pycache__`` are left out; symbolic links are not followed out of the
-    folder.  Raises :class:`SubmissionError` (``not-found``, ``no-function``, ``ambiguous-entry``,
-    ``file-limit``) with a message for the student.
+    Hidden entries and ``__pycache__`` are left out.  Refused with a finding, never followed:
+    a symbolic link (the submission itself, or anything in its folder: ``mallory.py ->
+    alice.py`` would pass as a copy, a link to the instructor's folder would hand its files to
+    the box) and a hard link (a regular file with more than one name: it may be a file of
+    someone else's, the instructor's 0600 solution, that the checker would copy readable into
+    the box; whoever owns it, a submission unpacked from an archive or a repository never holds
+    one).  A folder deeper than :data:`MAX_DEPTH` or with more than :data:`MAX_ENTRIES` entries
+    is refused before it is walked further.  Raises :class:`SubmissionError` (``not-found``,
+    ``link-refused``, ``no-function``, ``ambiguous-entry``, ``file-limit``) with a message for
+    the student.
     """
     path = Path(path)
-    if path.is_file():
+    if os.path.islink(path):
+        raise SubmissionError("link-refused", f"{_shown(path.name)} is a symbolic link (to "
+                              f"{_shown(os.readlink(path))}); hand in your own file, not a "
+                              f"link to one.")
+    try:
+        st = os.stat(path)
+    except (OSError, ValueError):
+        raise SubmissionError("not-found", f"{_shown(str(path))} is neither a file nor a "
+                              f"folder.") from None
+    if stat.S_ISREG(st.st_mode):
         if path.suffix != ".py":
-            raise SubmissionError("not-found", f"{path.name} is not a Python file (.py).")
-        if path.stat().st_size > MAX_BYTES:
-            raise SubmissionError("file-limit", f"{path.name} is larger than "
-                                  f"{MAX_BYTES >> 20} MB.")
+            raise SubmissionError("not-found", f"{_shown(path.name)} is not a Python file "
+                                  f"(.py).")
+        _check_file(path, st, path.name)
         return Submission(path.resolve().parent, path.name, (path.name,))
-    if not path.is_dir():
-        raise SubmissionError("not-found", f"{path} is neither a file nor a folder.")
+    if not stat.S_ISDIR(st.st_mode):
+        raise SubmissionError("not-found", f"{_shown(str(path))} is neither a file nor a "
+                              f"folder.")
     root = path.resolve()
-    files: list[str] = []
-    size = 0
-    for dirpath, dirnames, filenames in os.walk(root):
-        dirnames[:] = sorted(d for d in dirnames if not d.startswith(".") and d != "__pycache__"
-                             and not os.path.islink(os.path.join(dirpath, d)))
-        for f in sorted(filenames):
-            full = Path(dirpath, f)
-            if f.startswith(".") or full.is_symlink() or not full.is_file():
-                continue
-            files.append(full.relative_to(root).as_posix())
-            size += full.stat().st_size
-            if len(files) > MAX_FILES or size > MAX_BYTES:
-                raise SubmissionError("file-limit", f"The folder {path.name} holds more than "
-                                      f"{MAX_FILES} files or {MAX_BYTES >> 20} MB: hand in your "
-                                      f"code and the data it reads, nothing else.")
+    files = _walk(root, path.name)
     py = [f for f in files if f.endswith(".py") and "/" not in f]
     entries = [f for f in py if defines(root / f, function)]
     if not entries:
         raise SubmissionError("no-function", f"No Python file at the top of the folder "
-                              f"{path.name} defines {function}(...) (files: "
-                              f"{', '.join(py) or 'none'}). Define it in one of them.")
+                              f"{_shown(path.name)} defines {function}(...) (files: "
+                              f"{_shown(', '.join(py)) or 'none'}). Define it in one of them.")
     if len(entries) > 1:
-        raise SubmissionError("ambiguous-entry", f"Several files of the folder {path.name} "
-                              f"define {function}: {', '.join(entries)}. Keep it in one file and "
-                              f"import it from there.")
+        raise SubmissionError("ambiguous-entry", f"Several files of the folder "
+                              f"{_shown(path.name)} define {function}: "
+                              f"{_shown(', '.join(entries))}. Keep it in one file and import "
+                              f"it from there.")
     return Submission(root, entries[0], tuple(files))
+
+
+def _shown(text: str, limit: int = 200) -> str:
+    """A name as it may appear in a message: printable, one line, at most ``limit`` chars."""
+    out = "".join(c if c.isprintable() else f"\\x{ord(c):02x}" if ord(c) < 256
+                  else f"\\u{ord(c):04x}" for c in text[:limit])
+    return out + ("…" if len(text) > limit else "")
+
+
+def _check_file(full: Path, st: os.stat_result, rel: str) -> None:
+    """A regular file may be copied into the box: one name only, within the size limit."""
+    if st.st_nlink > 1:
+        raise SubmissionError("link-refused", f"{_shown(rel)} is a hard link ({st.st_nlink} "
+                              f"names for one file); hand in a copy of your own file.")
+    if st.st_size > MAX_BYTES:
+        raise SubmissionError("file-limit", f"{_shown(rel)} is larger than "
+                              f"{MAX_BYTES >> 20} MB.")
+
+
+def _walk(root: Path, name: str) -> list[str]:
+    """The files of a student's folder (relative paths), breadth first, without following
+    anything; :class:`SubmissionError` at a link, below :data:`MAX_DEPTH` or beyond the
+    limits of entries, files and bytes."""
+    files: list[str] = []
+    size = entries = 0
+    queue: list[tuple[str, int]] = [("", 0)]
+    too_many = SubmissionError("file-limit", f"The folder {_shown(name)} holds more than "
+                               f"{MAX_FILES} files, {MAX_ENTRIES} entries or "
+                               f"{MAX_BYTES >> 20} MB: hand in your code and the data it reads, "
+                               f"nothing else.")
+    while queue:
+        rel_dir, depth = queue.pop(0)
+        try:
+            with os.scandir(root / rel_dir if rel_dir else root) as it:
+                listing = sorted(it, key=lambda e: e.name)
+        except OSError as exc:
+            raise SubmissionError("not-found", f"The folder {_shown(name)}/{_shown(rel_dir)} "
+                                  f"cannot be read ({exc.strerror}).") from None
+        entries += len(listing)
+        if entries > MAX_ENTRIES:
+            raise too_many
+        for e in listing:
+            rel = f"{rel_dir}/{e.name}" if rel_dir else e.name
+            if e.name.startswith(".") or e.name == "__pycache__":
+                continue
+            if e.is_symlink():
+                raise SubmissionError("link-refused", f"{_shown(name)}/{_shown(rel)} is a "
+                                      f"symbolic link; a submission holds its own files, not "
+                                      f"links. Replace it with a copy.")
+            st = e.stat(follow_symlinks=False)
+            if stat.S_ISDIR(st.st_mode):
+                if depth + 1 >= MAX_DEPTH:
+                    raise SubmissionError("file-limit", f"The folder {_shown(name)} is nested "
+                                          f"more than {MAX_DEPTH} levels deep "
+                                          f"({_shown(rel, 80)}); keep your code in a few "
+                                          f"folders.")
+                queue.append((rel, depth + 1))
+            elif stat.S_ISREG(st.st_mode):
+                _check_file(Path(e.path), st, f"{name}/{rel}")
+                files.append(rel)
+                size += st.st_size
+                if len(files) > MAX_FILES or size > MAX_BYTES:
+                    raise too_many
+    return files
 
 
 # ------------------------------------------------------------------------------ the result
@@ -284,6 +375,12 @@ class BoxResult:
     seconds : wall-clock time of the box; import_seconds, run_seconds as the runner measured.
     killed : processes the student's code had started and left alive (besides the runner),
         killed at the end.
+    limit_backend : what enforced the box's memory and process limits: ``"cgroup2"`` or
+        ``"cgroup1"`` (one cgroup for the whole box: every process, tmpfs file and memfd counted
+        together) or ``"rlimit"`` (per process only; see :mod:`gpsaccel.check._cgroup`).
+    box_user : the uid the student ran as when the checker is root (a uid of its own, see
+        :mod:`gpsaccel.check._boxuser`), else None (the checker's own user).
+    memory_peak : the box's peak memory (bytes) when a cgroup measured it.
     """
 
     backend: str
@@ -300,17 +397,86 @@ class BoxResult:
     import_seconds: float | None = None
     run_seconds: float | None = None
     killed: int = 0
+    limit_backend: str = "rlimit"
+    box_user: int | None = None
+    memory_peak: int | None = None
 
 
 class Refused(Exception):
     """The runner's channel carried something other than the declared frames."""
 
 
+def _is_int(v: object) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool) and -(1 << 31) < v < 1 << 31
+
+
+def _is_seconds(v: object) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v < 1e9
+
+
+def _is_text(v: object) -> bool:
+    return isinstance(v, str) and len(v) <= MAX_TEXT
+
+
+def _is_shape(v: object) -> bool:
+    return isinstance(v, list) and len(v) <= 32 and all(_is_int(n) and n >= 0 for n in v)
+
+
+def _is_described(v: object) -> bool:
+    """What the runner's ``_describe`` makes: {"type": str, "shape": list | None, "dtype": str}."""
+    return (isinstance(v, dict) and _is_text(v.get("type"))
+            and set(v) <= {"type", "shape", "dtype"}
+            and (v.get("shape") is None or _is_shape(v["shape"]))
+            and ("dtype" not in v or _is_text(v["dtype"])))
+
+
+def _optional(check):  # noqa: ANN001, ANN202
+    return lambda v: v is None or check(v)
+
+
+#: Every field a frame may carry and the test its value must pass (what the runner sends; the
+#: parent's code reads these and nothing else, so a value of another type never reaches it).
+FRAME_FIELDS: dict[str, dict[str, object]] = {
+    "uses-checker": {"module": _is_text},
+    "imported": {"seconds": _is_seconds},
+    "result": {"call": _is_int,
+               "returned": lambda v: isinstance(v, dict) and len(v) <= 64 and all(
+                   _is_text(k) and _is_described(d) for k, d in v.items())},
+    "problem": {"kind": lambda v: v in ("import-error", "no-function", "exception",
+                                        "return-value", "not-numeric", "wrong-shape"),
+                "exception": _is_text, "limit": _optional(_is_text),
+                "traceback": _is_text, "call": lambda v: _is_int(v) and v >= 0,
+                "function": _is_text, "name": _is_text, "error": _is_text,
+                "callables": lambda v: isinstance(v, list) and len(v) <= 64 and all(
+                    map(_is_text, v)),
+                "found": _optional(_is_described), "returned": _is_described,
+                "length": _optional(_is_int), "expected": _is_int, "got": _is_shape,
+                "shapes": lambda v: isinstance(v, dict) and len(v) <= 64 and all(
+                    _is_text(k) and (s is None or _is_shape(s)) for k, s in v.items())},
+    "done": {"import_seconds": _is_seconds, "run_seconds": _is_seconds},
+}
+#: How many frames of each kind a box may send ("result": one per call, counted apart).
+FRAME_COUNTS = {"uses-checker": 2, "imported": 1, "problem": 1, "done": 1}
+#: Fields a problem frame must have.
+PROBLEM_NEEDS = ("kind",)
+
+
+def _reject_constant(name: str) -> float:
+    raise ValueError(f"{name} is not a number the runner sends")
+
+
 class FrameReader:
     """Parse the runner's frames against the declared outputs; raise :class:`Refused` otherwise.
 
-    The parent holds at most one frame header (≤ :data:`MAX_HEADER` bytes) plus one declared
-    result in memory; sizes come from ``calls``, never from the bytes read.
+    Bounded by what was declared, never by the bytes read: the channel may carry at most
+    :attr:`budget` bytes (the declared outputs' bytes plus :data:`HEADER_ALLOWANCE` per call and
+    :data:`CHANNEL_ALLOWANCE` for the rest), a header at most :data:`MAX_HEADER` bytes, each kind
+    of frame at most :data:`FRAME_COUNTS` times; every header field must pass its test in
+    :data:`FRAME_FIELDS` (type, size, range, nesting); a float beyond :data:`MAX_VALUE` in
+    magnitude (finite, but its square or a sum of them overflows the checker's arithmetic) or an
+    integer beyond 2^53 in a result is refused.  NaN and ±inf pass: they mean "not computed"
+    and the checker reports them.  The parent holds at most one header plus one declared result
+    of undecoded bytes at a time.
     """
 
     def __init__(self, calls: Sequence[Call]) -> None:
@@ -320,11 +486,19 @@ class FrameReader:
         self.events: list[dict] = []
         self.done = False
         self.problem: dict | None = None
+        self.received = 0
+        self.counts: dict[str, int] = {}
+        self.budget = (sum(o.nbytes for c in calls for o in c.outputs)
+                       + HEADER_ALLOWANCE * len(calls) + CHANNEL_ALLOWANCE)
 
     def feed(self, data: bytes) -> None:
         if self.done or self.problem is not None:
             if data:
                 raise Refused("bytes after the last frame")
+        self.received += len(data)
+        if self.received > self.budget:
+            raise Refused(f"more than {self.budget:,} bytes (the declared outputs and their "
+                          f"headers need at most that)")
         self.buf += data
         while len(self.buf) >= 4:
             (n,) = struct.unpack(">I", self.buf[:4])
@@ -332,36 +506,26 @@ class FrameReader:
                 raise Refused(f"a frame header of {n} bytes (at most {MAX_HEADER})")
             if len(self.buf) < 4 + n:
                 return
-            try:
-                header = json.loads(bytes(self.buf[4:4 + n]))
-            except (UnicodeDecodeError, ValueError) as exc:
-                raise Refused(f"a frame header that is not JSON ({exc})") from None
-            if not isinstance(header, dict):
-                raise Refused("a frame header that is not a JSON object")
-            kind = header.get("t")
+            header = self._header(bytes(self.buf[4:4 + n]))
+            kind = header["t"]
             size = 0
             if kind == "result":
                 i = len(self.results)
                 if header.get("call") != i or i >= len(self.calls):
-                    raise Refused(f"a result for call {header.get('call')!r} where call {i} "
-                                  f"was expected ({len(self.calls)} declared)")
+                    raise Refused(f"a result for call {_shown(repr(header.get('call')), 40)} "
+                                  f"where call {i} was expected ({len(self.calls)} declared)")
                 size = sum(o.nbytes for o in self.calls[i].outputs)
-            elif kind not in ("uses-checker", "imported", "problem", "done"):
-                raise Refused(f"a frame of unknown kind {kind!r}")
             if len(self.buf) < 4 + n + size:
                 return
             payload = bytes(self.buf[4 + n:4 + n + size])
             del self.buf[:4 + n + size]
-            self.events.append(header)
             if kind == "result":
-                out, at = {}, 0
-                for o in self.calls[len(self.results)].outputs:
-                    out[o.name] = np.frombuffer(payload, dtype=o.dtype, count=o.nbytes
-                                                // np.dtype(o.dtype).itemsize,
-                                                offset=at).reshape(o.shape).copy()
-                    at += o.nbytes
-                self.results.append(out)
-            elif kind == "problem":
+                self.results.append(self._arrays(payload, self.calls[len(self.results)]))
+                if len(self.results) == 1:
+                    self.events.append(header)  # what the first call returned, for notes
+            else:
+                self.events.append(header)
+            if kind == "problem":
                 self.problem = header
             elif kind == "done":
                 if len(self.results) != len(self.calls):
@@ -370,6 +534,55 @@ class FrameReader:
                 self.done = True
             if (self.done or self.problem is not None) and self.buf:
                 raise Refused("bytes after the last frame")
+
+    def _header(self, raw: bytes) -> dict:
+        """The header, checked field by field against :data:`FRAME_FIELDS`."""
+        try:
+            header = json.loads(raw, parse_constant=_reject_constant)
+        except RecursionError:
+            raise Refused("a frame header nested too deep") from None
+        except (UnicodeDecodeError, ValueError) as exc:
+            raise Refused(f"a frame header that is not JSON ({_shown(str(exc), 80)})") from None
+        if not isinstance(header, dict):
+            raise Refused("a frame header that is not a JSON object")
+        kind = header.get("t")
+        fields = FRAME_FIELDS.get(kind) if isinstance(kind, str) else None
+        if fields is None:
+            raise Refused(f"a frame of unknown kind {_shown(repr(kind), 40)}")
+        if kind != "result":
+            self.counts[kind] = self.counts.get(kind, 0) + 1
+            if self.counts[kind] > FRAME_COUNTS[kind]:
+                raise Refused(f"more than {FRAME_COUNTS[kind]} {kind!r} frame(s)")
+        for key, value in header.items():
+            if key == "t":
+                continue
+            test = fields.get(key)
+            if test is None:
+                raise Refused(f"a {kind!r} frame with an unknown field {_shown(repr(key), 40)}")
+            if not test(value):
+                raise Refused(f"a {kind!r} frame whose field {key!r} is not what the runner "
+                              f"sends")
+        if kind == "problem" and not all(k in header for k in PROBLEM_NEEDS):
+            raise Refused("a 'problem' frame without its kind")
+        return header
+
+    @staticmethod
+    def _arrays(payload: bytes, call: Call) -> dict[str, np.ndarray]:
+        out, at = {}, 0
+        for o in call.outputs:
+            a = np.frombuffer(payload, dtype=o.dtype, count=o.nbytes // np.dtype(o.dtype).itemsize,
+                              offset=at).reshape(o.shape).copy()
+            at += o.nbytes
+            if a.dtype.kind == "f":
+                big = np.isfinite(a) & (np.abs(a) > MAX_VALUE)
+            else:
+                big = (a > 1 << 53) | (a < -(1 << 53)) if a.dtype.kind in "iu" else None
+            if big is not None and big.any():
+                raise Refused(f"{_shown(o.name, 40)} holding a value of magnitude "
+                              f"{float(np.abs(a[big]).max()):.3g} (at most "
+                              f"{MAX_VALUE if a.dtype.kind == 'f' else 2.0**53:g})")
+            out[o.name] = a
+        return out
 
 
 # ------------------------------------------------------------------------- the machinery
@@ -446,6 +659,27 @@ def resolve_backend(backend: str = "auto") -> str:
     return backend
 
 
+def basic_is_safe() -> bool:
+    """Whether the basic backend isolates a student here: only as root, where each box runs as a
+    uid of its own (:mod:`gpsaccel.check._boxuser`).  As any other user the student's code runs
+    as that user: it can write what the user can (the environment's site-packages: a ``.pth``
+    that forges the next check), signal the user's processes (kill or stop the batch) and leave
+    processes the box cannot name (docs/sandbox.md)."""
+    return _boxuser.box_uid() is not None
+
+
+def refuse_unsafe_basic(backend: str, allow: bool = False) -> None:
+    """ValueError when ``backend`` is ``"basic"``, it is not safe here (:func:`basic_is_safe`)
+    and ``allow`` (``--allow-unsafe-basic``) was not given: for grading a class."""
+    if backend == "basic" and not allow and not basic_is_safe():
+        raise ValueError("sandbox: 'basic' is not safe for grading here: not run as root, a "
+                         "student's code runs as your user, so it can write into your Python "
+                         "environment (forging later checks), kill or stop the batch and leave "
+                         "processes behind (docs/sandbox.md). Install bubblewrap (apt-get install "
+                         "bubblewrap) for --sandbox bwrap, or run the check as root, or pass "
+                         "--allow-unsafe-basic (allow_unsafe_basic=True) if you accept that")
+
+
 def _bwrap_namespaces() -> list[str]:
     return ["--unshare-user", "--unshare-pid", "--unshare-net", "--unshare-ipc",
             "--unshare-uts", "--unshare-cgroup-try", "--uid", str(BOX_UID),
@@ -492,9 +726,54 @@ def _nproc(limits: Limits) -> int:
     return _user_tasks() + limits.processes
 
 
-def _preexec(limits: Limits, nproc: int, drop_caps: bool, cap_last: int) -> None:
-    """In the child, before exec: limits, no core files, no new privileges (runs after fork;
-    everything it calls was looked up before the fork)."""
+@dataclass
+class _Confinement:
+    """What confines one box beyond its rlimits: the uid it runs as (root only), its cgroup, the
+    mounts that reveal the interpreter to that uid."""
+
+    uid: int | None = None
+    cgroup: _cgroup.BoxCgroup | None = None
+    reveal: list[tuple[str, list[str]]] = field(default_factory=list)
+
+    @property
+    def limit_backend(self) -> str:
+        return self.cgroup.kind if self.cgroup is not None else "rlimit"
+
+    def pids(self) -> set[int]:
+        """Every process of the box this confinement can name (its cgroup, its uid)."""
+        out = self.cgroup.pids() if self.cgroup is not None else set()
+        if self.uid is not None:
+            out |= _boxuser.uid_pids(self.uid)
+        return out
+
+
+def _confine(limits: Limits, backend: str, needed: list[str]) -> _Confinement:
+    """A cgroup and (as root) a uid of its own for a new box; whatever an earlier box of the same
+    uid left running is killed first."""
+    c = _Confinement()
+    extra = 2 if backend == "bwrap" else 0  # bwrap's own two processes
+    if sys.platform.startswith("linux"):
+        c.cgroup = _cgroup.create(limits.memory, limits.processes + 1 + extra)
+        c.uid = _boxuser.box_uid()
+    if c.uid is not None:
+        _boxuser.kill_uid(c.uid)
+        c.reveal = _boxuser.reveal(needed)
+    return c
+
+
+def _preexec(limits: Limits, nproc: int, drop_caps: bool, cap_last: int,
+             confinement: _Confinement | None = None) -> None:
+    """In the child, before exec: join the box's cgroup, limits, no core files; as root also the
+    mounts revealing the interpreter, an empty capability bounding set, the box's uid, no new
+    privileges (runs after fork; everything it calls was looked up before the fork)."""
+    c = confinement or _Confinement()
+    if c.cgroup is not None:
+        for f in c.cgroup.procs_files:
+            fd = os.open(f, os.O_WRONLY)
+            try:
+                os.write(fd, b"0")
+            finally:
+                os.close(fd)
     cpu = int(limits.time) + 2
     for res, value in ((resource.RLIMIT_AS, limits.memory), (resource.RLIMIT_CPU, cpu),
                        (resource.RLIMIT_FSIZE, limits.file_size),
@@ -502,10 +781,17 @@ def _preexec(limits: Limits, nproc: int, drop_caps: bool, cap_last: int) -> None
                        (resource.RLIMIT_NOFILE, limits.open_files),
                        (resource.RLIMIT_CORE, 0)):
         resource.setrlimit(res, (value, value))
-    _prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
+    if c.reveal:
+        _boxuser.apply_reveal(_libc(), c.reveal)
     if drop_caps:  # root: after exec the permitted set is the bounding set, so empty it
         for cap in range(cap_last + 1):
             _prctl(PR_CAPBSET_DROP, cap)
+    if c.uid is not None:
+        os.setgroups([])
+        os.setresgid(c.uid, c.uid, c.uid)
+        os.setresuid(c.uid, c.uid, c.uid)
+    _prctl(PR_SET_PDEATHSIG, signal.SIGKILL)  # after the uid: a change of uid clears it
+    if drop_caps:
         _prctl(PR_SET_NO_NEW_PRIVS, 1)
 
 
@@ -559,12 +845,16 @@ def box_processes(first: int, adopted_from: set[int] | None) -> list[int]:
     return [p for p in out if table.get(p, (0, "Z", ""))[1] not in ("Z", "X")]
 
 
-def _kill_box(proc: subprocess.Popen, before: set[int]) -> int:
-    """SIGKILL every process of the box until none is alive; reap them.  Returns how many
-    processes (bwrap's own not counted) were alive when the kill began."""
+def _kill_box(proc: subprocess.Popen, before: set[int],
+              confinement: _Confinement | None = None) -> int:
+    """SIGKILL every process of the box (its process tree, its cgroup, its uid) until none is
+    alive; reap them.  Returns how many processes (bwrap's own not counted) were alive when the
+    kill began."""
     found: int | None = None
     for _ in range(200):
-        alive = box_processes(proc.pid, before)
+        alive = set(box_processes(proc.pid, before))
+        if confinement is not None:
+            alive |= confinement.pids()
         if found is None:
             table = _proc_table()
             found = sum(table.get(p, (0, "", ""))[2] != "bwrap" for p in alive)
@@ -652,7 +942,7 @@ def _python() -> str:
 
 
 def _bwrap_command(exe: str, tmp: Path, sub: Submission, limits: Limits, allow: bool,
-                   result_fd: int) -> tuple[list[str], list[int]]:
+                   result_fd: int, go_fd: int | None = None) -> tuple[list[str], list[int]]:
     """The bwrap command line, and the file descriptors it must inherit (one per copied file)."""
     # /tmp first: the interpreter's folders may live below it (a venv in /tmp), and a bind made
     # before the tmpfs would be hidden by it
@@ -687,7 +977,10 @@ def _bwrap_command(exe: str, tmp: Path, sub: Submission, limits: Limits, allow: 
         ro(pkg)
     elif any(pkg == b or pkg.startswith(b + "/") for b in bound):
         cmd.extend(["--tmpfs", pkg])  # an editable or installed gpsaccel: hidden
+    # every writable mount has a size: /box, /tmp, /dev/shm; the root, /dev and the folders
+    # made for the binds (/root, /etc, ...) are remounted read-only at the end
     cmd.extend(["--proc", "/proc", "--dev", "/dev",
+                "--size", str(limits.file_size), "--tmpfs", "/dev/shm",
                 "--size", str(limits.file_size), "--perms", "0755", "--tmpfs", "/box",
                 "--ro-bind", str(tmp / "control"), "/control"])
     fds = []
@@ -699,65 +992,177 @@ def _bwrap_command(exe: str, tmp: Path, sub: Submission, limits: Limits, allow: 
             if d not in made:
                 made.add(d)
                 cmd.extend(["--dir", d])
-        fd = os.open(sub.root / rel, os.O_RDONLY)
+        fd = _open_checked(sub, rel)
         fds.append(fd)
         cmd.extend(["--perms", "0644", "--file", str(fd), "/box/" + rel])
+    cmd.extend(["--remount-ro", "/dev", "--remount-ro", "/"])
     cmd.extend(["--chdir", "/box", "--", exe_py, "-I", "-S", "-B", "/control/_runner.py",
-                "/control", "/box", str(result_fd)])
+                "/control", "/box", str(result_fd)] + ([] if go_fd is None else [str(go_fd)]))
     return cmd, fds
 
 
-def _copy_submission(sub: Submission, box: Path) -> None:
+def _open_checked(sub: Submission, rel: str) -> int:
+    """A file of the submission, opened for the box: still a regular file with one name, not
+    reached through a link (it may have changed since :func:`load_submission` looked)."""
+    path = sub.root / rel
+    if os.path.realpath(path) != str(path):
+        raise SubmissionError("link-refused", f"{_shown(rel)} is reached through a link.")
+    fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+    st = os.fstat(fd)
+    if not stat.S_ISREG(st.st_mode) or st.st_nlink > 1:
+        os.close(fd)
+        raise SubmissionError("link-refused", f"{_shown(rel)} is not a regular file of its own "
+                              f"(a hard link, or replaced since it was read).")
+    return fd
+
+
+def _copy_submission(sub: Submission, box: Path, uid: int | None = None) -> None:
     for rel in sub.files:
         dest = box / rel
         dest.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(sub.root / rel, dest)
+        fd = _open_checked(sub, rel)
+        with open(fd, "rb") as src, open(dest, "wb") as out:
+            shutil.copyfileobj(src, out)
+    if uid is not None:  # the box's user owns its working folder, nothing else
+        for d, dirs, files in os.walk(box):
+            for name in (d, *(os.path.join(d, f) for f in dirs + files)):
+                os.chown(name, uid, uid, follow_symlinks=False)
+
+
+#: Where box folders are made: a ``gpsaccel-box-<pid>-*`` folder whose process is dead (a worker
+#: killed mid-check) is removed by the next box or by :func:`sweep_stale_boxes`.
+BOX_PREFIX = "gpsaccel-box-"
+
+
+def sweep_stale_boxes(parent: str | None = None) -> int:
+    """Remove the box folders (and box cgroups) whose supervising process is dead; how many."""
+    parent = parent or tempfile.gettempdir()
+    n = 0
+    try:
+        entries = list(os.scandir(parent))
+    except OSError:
+        return 0
+    for e in entries:
+        if not e.name.startswith(BOX_PREFIX):
+            continue
+        owner = e.name[len(BOX_PREFIX):].split("-", 1)[0]
+        if owner.isdigit() and not _cgroup._alive(int(owner)):
+            _remove_tree(e.path)
+            n += 1
+    return n
+
+
+def _remove_tree(path: str) -> None:
+    """rmtree that also removes what a student made unreadable (chmod 000 folders)."""
+    def retry(func, p, _exc):  # noqa: ANN001
+        try:
+            os.chmod(os.path.dirname(p), 0o700)
+            os.chmod(p, 0o700)
+        except OSError:
+            pass
+        try:
+            func(p)
+        except OSError:
+            pass
+
+    shutil.rmtree(path, onerror=retry)
 
 
 # ----------------------------------------------------------------------------------- run
 def run(sub: Submission, calls: Sequence[Call], limits: Limits = Limits(),
         backend: str = "auto", allow_gpsaccel: bool = False) -> BoxResult:
     """Run ``calls`` on the submission in a new box; return only once every process it started
-    is dead.  Never raises for anything the submission does (ValueError for bad arguments)."""
+    is dead, its cgroup removed and its folder deleted.  Never raises for anything the
+    submission does (ValueError for bad arguments)."""
     backend = resolve_backend(backend)
     calls = list(calls)
     t0 = time.perf_counter()
-    with tempfile.TemporaryDirectory(prefix="gpsaccel-box-") as tmp_name:
-        tmp = Path(tmp_name)
-        sys_path = _site_dirs()
-        if allow_gpsaccel:
-            sys_path.insert(0, str(PACKAGE_DIR.parent))
+    sweep_stale_boxes()
+    tmp = Path(tempfile.mkdtemp(prefix=f"{BOX_PREFIX}{os.getpid()}-"))
+    sys_path = _site_dirs()
+    if allow_gpsaccel:
+        sys_path.insert(0, str(PACKAGE_DIR.parent))
+    needed = [sys.base_prefix, sys.prefix, sys.exec_prefix, *sys_path, str(tmp),
+              os.path.dirname(_python()), os.path.dirname(os.path.realpath(_python()))]
+    confinement = None
+    owned: list[int] = []
+    try:
         _write_control(tmp / "control", sub, calls, sys_path, allow_gpsaccel)
+        confinement = _confine(limits, backend, needed)
+        if confinement.uid is not None:
+            tmp.chmod(0o711)  # the box's user enters it, lists nothing
         res_r, res_w = os.pipe()
         out_r, out_w = os.pipe()
-        owned = [res_r, res_w, out_r, out_w]  # closed once, here or when handed to the child
+        go_r, go_w = os.pipe()
+        owned += [res_r, res_w, out_r, out_w, go_r, go_w]  # closed once, here or in _supervise
         fds: list[int] = []
         try:
             if backend == "bwrap":
-                cmd, fds = _bwrap_command(bwrap_path(), tmp, sub, limits, allow_gpsaccel, res_w)
+                cmd, fds = _bwrap_command(bwrap_path(), tmp, sub, limits, allow_gpsaccel, res_w,
+                                          go_r)
                 owned += fds
-                cwd, env, drop = str(tmp), _environment("/box"), False
+                cwd, env = str(tmp), _environment("/box")
+                # root without a box user: bwrap's user namespace is the box (no capability
+                # outside it); with one, bwrap runs as that user and needs none either
+                drop = confinement.uid is not None
             else:
                 box = tmp / "box"
                 box.mkdir()
-                _copy_submission(sub, box)
+                _copy_submission(sub, box, confinement.uid)
                 cmd = [_python(), "-I", "-S", "-B", str(tmp / "control" / "_runner.py"),
-                       str(tmp / "control"), str(box), str(res_w)]
+                       str(tmp / "control"), str(box), str(res_w), str(go_r)]
                 cwd, env, drop = str(box), _environment(str(box)), os.geteuid() == 0
-            return _supervise(backend, cmd, cwd, env, drop, limits, calls, res_r, out_r,
-                              [res_w, out_w, *fds], owned, t0)
-        finally:
-            for fd in owned:
-                try:
-                    os.close(fd)
-                except OSError:
-                    pass
+        except SubmissionError as exc:  # a file changed into a link since it was loaded
+            return BoxResult(backend, failure=exc.code, detail=str(exc),
+                             seconds=time.perf_counter() - t0)
+        return _supervise(backend, cmd, cwd, env, drop, limits, calls, res_r, out_r,
+                          [res_w, out_w, go_r, *fds], owned, t0, confinement, go_w)
+    finally:
+        for fd in owned:
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+        if confinement is not None:
+            if confinement.uid is not None:
+                _boxuser.kill_uid(confinement.uid)
+                _boxuser.remove_files(confinement.uid)
+            if confinement.cgroup is not None:
+                confinement.cgroup.remove()
+        _remove_tree(str(tmp))
+
+
+def _runner_pid(pids: set[int], table: dict[int, tuple[int, str, str]]) -> int | None:
+    """The runner among a box's processes: the first started that is not bwrap's own."""
+    best = None
+    for pid in pids:
+        if table.get(pid, (0, "", "bwrap"))[2] == "bwrap":
+            continue
+        try:
+            with open(f"/proc/{pid}/stat", "rb") as f:
+                start = int(f.read().rsplit(b")", 1)[1].split()[19])
+        except (OSError, ValueError, IndexError):
+            continue
+        if best is None or start < best[0]:
+            best = (start, pid)
+    return None if best is None else best[1]
+
+
+def _left_behind(proc: subprocess.Popen, before: set[int], c: _Confinement) -> int:
+    """Processes of the box besides bwrap's and the runner, while the runner waits to exit."""
+    pids = set(box_processes(proc.pid, before)) | c.pids()
+    table = _proc_table()
+    runner = proc.pid if table.get(proc.pid, (0, "", ""))[2] != "bwrap" else \
+        _runner_pid(pids, table)
+    return sum(1 for p in pids if p != runner and table.get(p, (0, "", "bwrap"))[2] != "bwrap")
 
 
 def _supervise(backend: str, cmd: list[str], cwd: str, env: dict, drop_caps: bool,
                limits: Limits, calls: list[Call], res_r: int, out_r: int,
-               child_fds: list[int], owned: list[int], t0: float) -> BoxResult:
-    result = BoxResult(backend)
+               child_fds: list[int], owned: list[int], t0: float,
+               confinement: _Confinement | None = None, go_w: int | None = None) -> BoxResult:
+    c = confinement or _Confinement()
+    result = BoxResult(backend, limit_backend=c.limit_backend, box_user=c.uid)
     reader = FrameReader(calls)
     tail = bytearray()
     keep = 1 << 16
@@ -771,13 +1176,19 @@ def _supervise(backend: str, cmd: list[str], cwd: str, env: dict, drop_caps: boo
     proc = None
     sel = None
     emptied = False
+    left: int | None = None
+    extra = 2 if backend == "bwrap" else 0
+    # a box uid runs nothing else: RLIMIT_NPROC counts the box exactly; with a cgroup it is set
+    # a little above pids.max, so that the cgroup refuses the fork first and counts it
+    nproc = _nproc(limits) if c.uid is None else \
+        limits.processes + 1 + extra + (8 if c.cgroup is not None else 0)
     try:
         res_w, out_w = child_fds[:2]
         proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=out_w, stderr=out_w,
                                 cwd=cwd, env=env, pass_fds=(res_w, *child_fds[2:]), close_fds=True,
                                 start_new_session=True,
-                                preexec_fn=functools.partial(_preexec, limits, _nproc(limits),
-                                                             drop_caps, _cap_last()))
+                                preexec_fn=functools.partial(_preexec, limits, nproc, drop_caps,
+                                                             _cap_last(), c))
         for fd in child_fds:  # the parent keeps only the reading ends
             os.close(fd)
             owned.remove(fd)
@@ -787,7 +1198,10 @@ def _supervise(backend: str, cmd: list[str], cwd: str, env: dict, drop_caps: boo
         sel.register(out_r, selectors.EVENT_READ, "out")
         open_pipes = 2
         exited_at = None
-        count = os.getuid() == 0 or not sys.platform.startswith("linux")
+        # a count of the box's processes is needed only where nothing else binds them: root's
+        # processes are not counted by RLIMIT_NPROC, and there is neither a cgroup nor a box uid
+        count = (os.getuid() == 0 or not sys.platform.startswith("linux")) and \
+            c.cgroup is None and c.uid is None
         next_count = time.monotonic() + COUNT_EVERY
         while True:
             now = time.monotonic()
@@ -806,7 +1220,7 @@ def _supervise(backend: str, cmd: list[str], cwd: str, env: dict, drop_caps: boo
                     del tail[:-keep]
                     if result.output_bytes > limits.output:
                         hit = "output-limit"
-                else:
+                elif not hit:
                     try:
                         reader.feed(data)
                     except Refused as exc:
@@ -814,6 +1228,12 @@ def _supervise(backend: str, cmd: list[str], cwd: str, env: dict, drop_caps: boo
                         hit = "result-refused"
             if hit:
                 break
+            if left is None and (reader.done or reader.problem is not None) and go_w is not None:
+                # the runner said its last word and waits: what else runs, the student left
+                left = _left_behind(proc, before, c)
+                os.close(go_w)
+                owned.remove(go_w)
+                go_w = None
             now = time.monotonic()
             if proc.poll() is not None:
                 # the runner is gone: its pipes close unless a child of the student's holds them
@@ -824,16 +1244,19 @@ def _supervise(backend: str, cmd: list[str], cwd: str, env: dict, drop_caps: boo
                 next_count = now + COUNT_EVERY
                 n = len(box_processes(proc.pid, before))
                 # under bwrap two bwrap processes stand above the student's
-                if n - (2 if backend == "bwrap" else 0) > limits.processes:
+                if n - extra > limits.processes:
                     hit = "process-limit"
                     break
         # the runner is still alive when the box's first process is (basic) or when anything
         # is (bwrap: the PID namespace ends with the runner); what else lived, the student left
         runner_alive = proc.poll() is None
-        found = _kill_box(proc, before)
+        found = _kill_box(proc, before, c)
         emptied = True
-        result.killed = max(0, found - (1 if (runner_alive if backend == "basic" else found)
-                                        else 0))
+        if left is not None:
+            result.killed = left
+        else:
+            result.killed = max(0, found - (1 if (runner_alive if backend == "basic" else found)
+                                            else 0))
         # every writer is dead: what is left in the pipes is all there will be
         for fd, what in ((res_r, "res"), (out_r, "out")):
             os.set_blocking(fd, False)
@@ -854,10 +1277,18 @@ def _supervise(backend: str, cmd: list[str], cwd: str, env: dict, drop_caps: boo
                     except Refused as exc:
                         refused = str(exc)
                         hit = hit or "result-refused"
+                else:
+                    break  # refused already: the rest is not read
         result.returncode = proc.returncode
+        if c.cgroup is not None:
+            result.memory_peak = c.cgroup.memory_peak()
+            if not hit and c.cgroup.memory_killed():
+                hit = "memory-limit"
+            elif not hit and c.cgroup.fork_refused():
+                hit = "process-limit"
     finally:
         if proc is not None and not emptied:  # Ctrl-C or an error of ours: the box goes too
-            _kill_box(proc, before)
+            _kill_box(proc, before, c)
         if sel is not None:
             sel.close()
         set_subreaper(bool(was_subreaper))
@@ -888,6 +1319,9 @@ def _failure(result: BoxResult, hit: str | None, refused: str | None, reader: Fr
         return hit, f"more than {limits.output} bytes printed"
     if hit == "process-limit":
         return hit, f"more than {limits.processes} processes at once"
+    if hit == "memory-limit":
+        return hit, (f"the box's processes together used more than {limits.memory:,} bytes "
+                     f"(memory, tmpfs files and memfds, counted by its {result.limit_backend})")
     if result.uses_checker and not reader.done:
         return "uses-checker", "an import of the checker's package was attempted"
     problem = reader.problem

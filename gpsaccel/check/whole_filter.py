@@ -201,6 +201,7 @@ def _run_findings(report: Report, box: sb.BoxResult, limits: sb.Limits, n_runs: 
                   model: CalibrationModel, allow_gpsaccel: bool = False) -> bool:
     """Findings about the box itself; True when there are results to examine."""
     report.details["sandbox"] = box.backend
+    report.details["sandbox_limits"] = box.limit_backend  # cgroup2, cgroup1 or rlimit
     failure, problem = box.failure, box.problem or {}
     done = len(box.results)
     if box.output_bytes > OUTPUT_WARN and failure != "output-limit":

@@ -17,6 +17,7 @@ import time
 
 import pytest
 
+from gpsaccel.check import sandbox as sb
 from gpsaccel.check.batch import check_many, find_submissions, log_path, write_json
 
 
@@ -72,10 +73,11 @@ def test_a_class_with_hostile_files_keeps_every_honest_verdict(tmp_path, backend
     assert by_name["mutant_m0_order.py"]["codes"] == ["m0-order"]
     assert by_name["copier.py"]["codes"] == ["import-error"]
     assert not by_name["daemon.py"]["passed"]
-    # basic: the killer can reach its parent, the check's process, which dies: checker-error for
-    # that file only.  bwrap: its parent is the PID namespace's init, which ignores the signal.
+    # basic as root: the killer runs as a uid of its own and cannot signal its parent; as
+    # another user it can, the check's process dies: checker-error for that file only.  bwrap:
+    # its parent is the PID namespace's init, which ignores the signal.
     assert by_name["parent_killer.py"]["codes"] == (
-        ["checker-error"] if backend == "basic" else ["exception"])
+        ["checker-error"] if backend == "basic" and not sb.basic_is_safe() else ["exception"])
     lines = log_path(out).read_text(encoding="utf-8").splitlines()
     assert sorted(json.loads(line)["subject"] for line in lines) == sorted(by_name)
     assert "3 of 7 passed" in stdout
@@ -124,10 +126,16 @@ def _interrupt(proc, out, watch, hostile):
     assert not hostile.alive(watch.seen), f"alive after Ctrl-C: {hostile.alive(watch.seen)}"
 
 
-def test_check_many_reports_a_dead_check_and_goes_on(tmp_path, hostile, watch):
+def test_check_many_reports_a_dead_check_and_goes_on(tmp_path, hostile, watch, monkeypatch):
+    """The unsafe basic box (the checker's own user, forced): the killer kills its check's
+    process; the batch records it and goes on."""
+    monkeypatch.setattr(sb._boxuser, "box_uid", lambda: None)  # as a user other than root
     seen = []
     paths = [hostile.DIR / "parent_killer.py", hostile.SUBMISSIONS / "correct_gps_rate.py"]
-    results = check_many(paths, n_runs=3, sandbox="basic", max_workers=1, on_result=seen.append)
+    with pytest.raises(ValueError, match="--allow-unsafe-basic"):
+        check_many(paths, n_runs=3, sandbox="basic", max_workers=1)
+    results = check_many(paths, n_runs=3, sandbox="basic", max_workers=1, on_result=seen.append,
+                         allow_unsafe_basic=True)
     assert [r["codes"] for r in results] == [["checker-error"], []]
     assert "died (signal SIGKILL)" in results[0]["findings"][0]["message"]
     assert [r["subject"] for r in seen] == ["parent_killer.py", "correct_gps_rate.py"]

@@ -1,0 +1,173 @@
+"""The box's own user: as root, a student runs as a uid that owns nothing and that nothing else runs as.
+
+Used by :mod:`gpsaccel.check.sandbox` (both backends, when the checker runs as root); not an
+interface of its own.
+
+* :func:`box_uid`: ``UID_BASE + pid`` of the supervising process, a uid with no passwd entry.  The
+  supervisor's pid is unique among live processes, so two boxes running at once never share a
+  uid; whatever still runs as the uid when a box starts is what an earlier box of a dead
+  supervisor with the same pid left, and is killed.  The uid owns no file of the package, the
+  environment or the instructor's, so the student cannot write a ``.pth`` into site-packages,
+  edit the package or a results file, nor signal (kill, SIGSTOP) any process but its own.
+* :func:`kill_uid`: everything the uid runs, wherever it is in the process tree (a daemon, a
+  process a terminal multiplexer server started), is killed until a scan of ``/proc`` finds
+  none; :func:`remove_files` removes what the uid left in the shared temporary folders.
+* :func:`reveal`: the interpreter may live where that uid cannot reach it (``/root/.pyenv``, a
+  venv in a 0700 home).  In the box's first process, before it drops root, a private mount
+  namespace replaces each unreachable ancestor by a small read-only tmpfs holding read-only bind
+  mounts of exactly the folders the box needs (the rest of ``/root`` is then not in reach
+  either).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import pwd
+import shutil
+import signal
+import stat
+import time
+from pathlib import Path
+
+#: First uid of the boxes' range (2^31 - 2^27: above every distribution's allocation ranges,
+#: below the 32-bit overflow uids); the range is 2^22 wide, the largest ``pid_max``.
+UID_BASE = 2_013_265_920
+UID_SPAN = 1 << 22
+
+#: Shared writable folders where a box user could leave files (cleaned after each box).
+SHARED_TMP = ("/tmp", "/var/tmp", "/dev/shm")
+
+CLONE_NEWNS = 0x00020000
+MS_RDONLY, MS_NOSUID, MS_NODEV, MS_REMOUNT, MS_BIND = 1, 2, 4, 32, 4096
+MS_REC, MS_PRIVATE = 16384, 1 << 18
+
+
+def box_uid() -> int | None:
+    """The uid a box started by this process runs as, or None (not root, or the uid is taken)."""
+    if os.geteuid() != 0 or not os.path.isdir("/proc/self"):
+        return None
+    uid = UID_BASE + os.getpid() % UID_SPAN
+    try:
+        pwd.getpwuid(uid)
+    except KeyError:
+        return uid
+    return None  # pragma: no cover - an account in the boxes' range
+
+
+def uid_pids(uid: int) -> set[int]:
+    """Live processes any of whose uids (real, effective, saved, file system) is ``uid``."""
+    out = set()
+    for entry in os.scandir("/proc"):
+        if not entry.name.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry.name}/status", "rb") as f:
+                status = f.read()
+        except OSError:
+            continue
+        uids = state = None
+        for line in status.splitlines():
+            if line.startswith(b"Uid:"):
+                uids = line.split()[1:]
+            elif line.startswith(b"State:"):
+                state = line.split()[1:2]
+        if uids and str(uid).encode() in uids and state not in ([b"Z"], [b"X"]):
+            out.add(int(entry.name))
+    return out
+
+
+def kill_uid(uid: int, rounds: int = 200) -> int:
+    """SIGKILL every process of ``uid`` until none is left; how many there were at first."""
+    first = None
+    for _ in range(rounds):
+        pids = uid_pids(uid)
+        if first is None:
+            first = len(pids)
+        if not pids:
+            return first
+        for pid in pids:
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except (ProcessLookupError, PermissionError):
+                pass
+        time.sleep(0.005)
+    raise RuntimeError(f"the sandbox could not kill the processes of uid {uid}")  # pragma: no cover
+
+
+def remove_files(uid: int) -> list[str]:
+    """Remove the entries of the shared temporary folders owned by ``uid``; their paths."""
+    gone = []
+    for d in SHARED_TMP:
+        try:
+            entries = list(os.scandir(d))
+        except OSError:
+            continue
+        for e in entries:
+            try:
+                st = e.stat(follow_symlinks=False)
+            except OSError:
+                continue
+            if st.st_uid != uid:
+                continue
+            try:
+                if stat.S_ISDIR(st.st_mode):
+                    shutil.rmtree(e.path, ignore_errors=True)
+                else:
+                    os.unlink(e.path)
+                gone.append(e.path)
+            except OSError:
+                pass
+    return gone
+
+
+def _others_can_enter(path: str) -> bool:
+    try:
+        st = os.stat(path)
+    except OSError:
+        return True  # not there: nothing to reveal
+    return bool(st.st_mode & stat.S_IXOTH)
+
+
+def reveal(paths: list[str]) -> list[tuple[str, list[str]]]:
+    """For the folders ``paths`` the box needs: (unreachable ancestor, the needed folders below
+    it) for every ancestor another user cannot enter; empty when all are reachable."""
+    plan: dict[str, list[str]] = {}
+    real = sorted({os.path.realpath(p) for p in paths if os.path.isdir(p)})
+    for p in real:
+        parts = Path(p).parts
+        for k in range(2, len(parts) + 1):
+            a = str(Path(*parts[:k - 1]))
+            if not _others_can_enter(a):
+                top = next((t for t in plan if a == t or a.startswith(t + "/")), a)
+                plan.setdefault(top, [])
+                if not any(p == q or p.startswith(q + "/") for q in plan[top]):
+                    plan[top] = [q for q in plan[top] if not q.startswith(p + "/")] + [p]
+                break
+    return sorted(plan.items())
+
+
+def apply_reveal(libc: ctypes.CDLL, plan: list[tuple[str, list[str]]]) -> None:
+    """In the box's first process, as root, before exec: the mounts of :func:`reveal`'s plan in a
+    private mount namespace.  Raises OSError when a step fails (the box then does not start)."""
+
+    def check(rc: int, what: str) -> None:
+        if rc != 0:
+            err = ctypes.get_errno()
+            raise OSError(err, f"{what}: {os.strerror(err)}")
+
+    check(libc.unshare(CLONE_NEWNS), "unshare(CLONE_NEWNS)")
+    check(libc.mount(None, b"/", None, MS_REC | MS_PRIVATE, None), "mount --make-rprivate /")
+    for top, needed in plan:
+        fds = [os.open(p, os.O_PATH | os.O_DIRECTORY) for p in needed]
+        check(libc.mount(b"tmpfs", top.encode(), b"tmpfs", MS_NOSUID | MS_NODEV,
+                         b"mode=0755,size=1m"), f"tmpfs on {top}")
+        for p, fd in zip(needed, fds, strict=True):
+            os.makedirs(p, mode=0o755, exist_ok=True)
+            check(libc.mount(f"/proc/self/fd/{fd}".encode(), p.encode(), None, MS_BIND | MS_REC,
+                             None), f"bind {p}")
+            check(libc.mount(None, p.encode(), None, MS_REMOUNT | MS_BIND | MS_RDONLY, None),
+                  f"read-only {p}")
+            os.close(fd)
+        check(libc.mount(None, top.encode(), None, MS_REMOUNT | MS_RDONLY | MS_NOSUID | MS_NODEV,
+                         None), f"read-only {top}")

@@ -1,0 +1,226 @@
+"""The attacks of issue 20 on the sandbox, each a bounded hostile submission under every backend:
+it ends in a finding and the right verdict, nothing it started is alive afterwards, and no file
+outside its box changed.
+
+Bounds (a broken sandbox costs seconds, never the shared machine): at most 720 MB of memory, 150
+sleeping children, every background process ends by itself within 20 s; ``kill_all.py`` sends
+kill(-1) only as a box's own uid or inside a PID namespace.  The box limits here are smaller than
+a check's (``LIMITS``).
+"""
+
+from __future__ import annotations
+
+import glob
+import os
+import shutil
+import signal
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from gpsaccel import check
+from gpsaccel.check import _boxuser, _cgroup
+from gpsaccel.check import sandbox as sb
+
+LIMITS = sb.Limits(memory=512 << 20, file_size=16 << 20, output=1 << 20, time=20, processes=16)
+
+#: Whole-box limits need a cgroup (root here, or a delegated cgroup2); a box user needs root.
+CGROUP = _cgroup.available()
+needs_cgroup = pytest.mark.skipif(CGROUP is None, reason="no writable cgroup: the per-process "
+                                                         "rlimits are the fallback here")
+needs_root = pytest.mark.skipif(os.geteuid() != 0, reason="a box user needs root")
+
+
+def _forged_files() -> list[str]:
+    """Files the hostile submissions try to leave outside their box."""
+    found = []
+    for d in sb._site_dirs() + sb._blocked_dirs():
+        found += glob.glob(os.path.join(d, "gpsacc_hostile_forged*"))
+    for d in _boxuser.SHARED_TMP:
+        found += glob.glob(os.path.join(d, "gpsacc-hostile-file"))
+    return found
+
+
+@pytest.fixture
+def outside():
+    """Asserts that nothing was written outside the box; removes it if it was (a failed test
+    must not leave a .pth in the environment)."""
+    before = set(_forged_files())
+    assert not before, f"left by an earlier run: {before}"
+    yield
+    after = _forged_files()
+    for f in after:
+        os.unlink(f)
+    assert not after, f"written outside the box: {after}"
+
+
+def _check(hostile, name, backend, **kw):
+    return check.submission(hostile.DIR / name, n_runs=2, timeout=LIMITS.time, sandbox=backend,
+                            limits=kw.pop("limits", LIMITS), **kw)
+
+
+def _message(report, code):
+    return next(f.message for f in report.findings if f.code == code)
+
+
+# ------------------------------------------------------------------- a forged, lasting pass
+def test_a_pth_into_site_packages_or_the_package_is_refused(backend, hostile, watch, outside):
+    """The .pth writes fail (a box user owns nothing; bwrap binds site-packages read-only); the
+    write into the package is also an attempt to use it."""
+    if backend == "basic" and os.geteuid() != 0:
+        pytest.skip("basic as the environment's owner cannot be made safe (docs/sandbox.md)")
+    report = _check(hostile, "pth_writer.py", backend)
+    assert report.codes == ["uses-checker"], report
+    assert not hostile.alive(watch.seen)
+
+
+def test_the_double_slash_alias_of_the_package_is_the_package(backend, hostile, watch,
+                                                              outside):
+    report = _check(hostile, "double_slash.py", backend)
+    assert report.codes == ["uses-checker"], report
+    assert not hostile.alive(watch.seen)
+
+
+@needs_root
+def test_a_process_started_through_a_tmux_server_dies_with_the_box(backend, hostile, watch,
+                                                                   tmp_path):
+    """The instructor runs a tmux server (as root); the box cannot reach its socket, and the
+    server the student starts for itself runs as the box's uid: killed, and reported."""
+    if shutil.which("tmux") is None:
+        pytest.skip("tmux is not installed")
+    server = subprocess.run(["tmux", "-L", "gpsacc-hostile", "new-session", "-d", "sleep 60"],
+                            env={"PATH": "/usr/bin:/bin", "TMUX_TMPDIR": "/tmp"}, timeout=10)
+    assert server.returncode == 0
+    try:
+        before = _windows()
+        report = _check(hostile, "tmux_escape.py", backend)
+        assert not report.passed, report
+        assert "left-processes" in [f.code for f in report.findings], report
+        assert _windows() == before  # nothing was started in the instructor's server
+        assert watch.seen and not hostile.alive(watch.seen)
+    finally:
+        subprocess.run(["tmux", "-L", "gpsacc-hostile", "kill-server"],
+                       env={"PATH": "/usr/bin:/bin", "TMUX_TMPDIR": "/tmp"}, timeout=10)
+
+
+def _windows() -> str:
+    return subprocess.run(["tmux", "-L", "gpsacc-hostile", "list-windows", "-a"],
+                          env={"PATH": "/usr/bin:/bin", "TMUX_TMPDIR": "/tmp"},
+                          capture_output=True, text=True, timeout=10).stdout
+
+
+@needs_root
+def test_kill_all_and_sigstop_of_the_parent_reach_only_the_box(backend, hostile, watch):
+    report = _check(hostile, "kill_all.py", backend)
+    # the runner survives its own kill(-1); its parent is out of its reach (another uid under
+    # basic, the PID namespace's init under bwrap)
+    assert report.codes == ["exception"], report
+    assert "SIGSTOP of the parent refused" in _message(report, "exception") or backend == "bwrap"
+    assert not hostile.alive(watch.seen)
+
+
+# --------------------------------------------------------------------- whole-box limits
+@needs_cgroup
+def test_a_fork_burst_stops_at_the_process_limit(backend, hostile, watch):
+    report = _check(hostile, "fork_burst.py", backend)
+    assert report.codes == ["process-limit"], report
+    # the runner and at most LIMITS.processes children (pids.max binds at fork time)
+    assert len(watch.seen) <= LIMITS.processes + 1, len(watch.seen)
+    assert not hostile.alive(watch.seen)
+
+
+@needs_cgroup
+@pytest.mark.parametrize("name", ["memory_children.py", "memfd_hog.py"])
+def test_memory_is_counted_for_the_whole_box(name, backend, hostile, watch):
+    report = _check(hostile, name, backend)
+    assert report.codes == ["memory-limit"], report
+    assert not hostile.alive(watch.seen)
+
+
+def test_every_writable_mount_is_bounded(backend, hostile, watch, outside):
+    if backend == "basic" and os.geteuid() != 0:
+        pytest.skip("basic as the checker's own user writes where that user may (docs/sandbox.md)")
+    report = _check(hostile, "writes_everywhere.py", backend)
+    assert report.codes == ["exception"], report
+    assert report.details["sandbox_limits"] == (CGROUP or "rlimit")
+    line = [x for x in _message(report, "exception").splitlines() if "Error: writes: " in x][-1]
+    got = dict(item.split("=", 1) for item in line.split("writes: ", 1)[1].split(", "))
+    # bwrap: read-only mounts; basic as root: the box user owns none of them (and /root, where
+    # this machine's interpreter lives, is a read-only tmpfs revealing it)
+    refused = {"Read-only file system"} if backend == "bwrap" else \
+        {"Permission denied", "Read-only file system"}
+    for d in ("/", "/root", "/etc", "/dev"):
+        assert got.get(d) in refused, (d, got)
+    if backend == "bwrap":  # the writable ones are the box's sized tmpfs
+        for d in ("/dev/shm", "/tmp", "/box"):
+            assert got.get(d) == "written", (d, got)
+    assert not hostile.alive(watch.seen)
+
+
+@needs_cgroup
+def test_the_report_says_which_limits_applied(tmp_path, backend):
+    f = tmp_path / "s.py"
+    f.write_text("def f(z):\n    return z\n")
+    box = sb.run(sb.load_submission(f, "f"), [sb.Call("f", (np.zeros(2),),
+                                                       (sb.Output("a", (2,)),))], LIMITS, backend)
+    assert box.failure is None and box.limit_backend == CGROUP
+    assert box.memory_peak is not None and 0 < box.memory_peak < LIMITS.memory
+    assert (box.box_user is not None) == (os.geteuid() == 0)
+    # the cgroup is gone with the box
+    for d in _cgroup._v1_bases().values() if CGROUP == "cgroup1" else [_cgroup._v2_base()]:
+        assert not [p for p in os.listdir(d) if p.startswith(f"{_cgroup.PREFIX}{os.getpid()}-")]
+
+
+# ------------------------------------------------------------------- the result channel
+@pytest.mark.parametrize("name, words", [
+    ("frame_flood.py", "more than 1 'imported' frame"),
+    ("frame_forger.py", "nested too deep"),
+    ("huge_values.py", "magnitude 1.7e+308"),
+])
+def test_a_student_made_channel_error_is_result_refused(name, words, backend, hostile):
+    report = _check(hostile, name, backend)
+    assert report.codes == ["result-refused"], report
+    assert words in _message(report, "result-refused")
+
+
+def test_student_filter_reports_instead_of_raising_something_else(backend, hostile):
+    from gpsaccel.check.student_filter import StudentFilterError, student_filter
+
+    f = student_filter(hostile.DIR / "frame_forger.py", timeout=20, repeat=1, sandbox=backend)
+    with pytest.raises(StudentFilterError, match="refused"):
+        f(np.zeros((151, 2)))
+
+
+# ------------------------------------------------------------------------ leave nothing
+def test_a_box_folder_of_a_killed_supervisor_is_removed(tmp_path, hostile):
+    """A worker SIGKILLed mid-check leaves its box folder (a copy of the submission): the next
+    box removes it."""
+    code = ("import numpy as np\nfrom gpsaccel.check import sandbox as sb\n"
+            f"sub = sb.load_submission({str(hostile.DIR / 'fork_lingers.py')!r}, "
+            f"'kalman_filter')\n"
+            "sb.run(sub, [sb.Call('kalman_filter', (np.zeros((3, 2)),), "
+            "(sb.Output('x', (3, 3)),))], sb.Limits(time=30), 'basic')\n")
+    proc = subprocess.Popen([sys.executable, "-c", code], env=hostile.env())
+    try:
+        pattern = os.path.join(sb.tempfile.gettempdir(), f"{sb.BOX_PREFIX}{proc.pid}-*")
+        for _ in range(600):
+            if glob.glob(pattern + "/control/plan.json"):
+                break
+            sb.time.sleep(0.05)
+        assert glob.glob(pattern), "the box never started"
+    finally:
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+    sb.sweep_stale_boxes()
+    assert not glob.glob(pattern)
+    # its students outlived it (the runner's children, re-parented to init); under root they
+    # run as the box's uid, which the next box of that uid kills
+    for pid in hostile.marked_pids():
+        os.kill(pid, signal.SIGKILL)
+    if CGROUP is not None:  # its cgroup is removed by the next box made
+        _cgroup.create(1 << 30, 8).remove()
+        bases = (_cgroup._v1_bases().values() if CGROUP == "cgroup1" else [_cgroup._v2_base()])
+        for d in bases:
+            assert not [p for p in os.listdir(d) if p.startswith(f"{_cgroup.PREFIX}{proc.pid}-")]
