@@ -11,7 +11,9 @@ a linear recursion of the same shape::
 
 For the optimal filter ``A = F = Φⁿ`` with n = gps_every = 40 and ``Q_e = Σ_{j<n} Φʲ ΓWΓᵀ Φʲᵀ``
 (exactly what 40 one-step predictions do).  A mistake changes one ingredient of this recursion
-(:class:`Ingredients`): ``phi-sign`` flips the sign of Φ₁₃, ``process-noise-interval`` builds Φ and
+(:class:`Ingredients`; the recursion itself, :class:`~gpsaccel.kalman.epochs.EpochFilter` and
+:func:`~gpsaccel.kalman.epochs.batch_gains`, is the system-free one of
+:mod:`gpsaccel.kalman.epochs`): ``phi-sign`` flips the sign of Φ₁₃, ``process-noise-interval`` builds Φ and
 Γ with the GPS interval and steps once, ``m0-order`` swaps M0's first two diagonal elements,
 ``mean-not-propagated`` sets ``A = I``, and so on (:func:`covariance_mistakes`,
 :func:`mean_mistakes`).
@@ -30,106 +32,19 @@ std-as-variance), see :func:`combinations`.
 
 from __future__ import annotations
 
-import itertools
-from collections.abc import Iterator
-from dataclasses import dataclass, replace
-from functools import cached_property
+from dataclasses import dataclass
 
 import numpy as np
 
 from gpsaccel.calibration.model import CalibrationModel, gamma, phi
-from gpsaccel.kalman.update import epoch_transition, gain, joseph_update
-
-
-@dataclass(frozen=True, eq=False)
-class EpochFilter:
-    """A linear filter written at the GPS epochs (see the module docstring for the recursion).
-
-    A : (3, 3) mean transition from one epoch to the next (x̄_i = A x̂_{i−1}).
-    F, Qe : (3, 3) covariance transition and process noise between epochs (M_i = F P Fᵀ + Qe).
-    H (2, 3), V (2, 2), x0 (3,), M0 (3, 3): measurement model and prior at t = 0.
-    n_gps : number of epochs.
-    output : ``"posterior"`` returns (x̂, P); ``"prior"`` returns (x̄, M) (returns-a-priori).
-    skip_first : True skips the update at t = 0 (first-update-skipped); ``"covariance"`` updates
-        the mean at t = 0 but leaves P₀ = M0 (and so every later gain follows the skipped P).
-    """
-
-    A: np.ndarray
-    F: np.ndarray
-    Qe: np.ndarray
-    H: np.ndarray
-    V: np.ndarray
-    x0: np.ndarray
-    M0: np.ndarray
-    n_gps: int
-    output: str = "posterior"
-    skip_first: bool | str = False
-
-    @cached_property
-    def gains(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(K, M, P): gains (n_gps, 3, 2), a priori and a posteriori covariances (n_gps, 3, 3)."""
-        K, M, P = batch_gains([self])
-        return K[0], M[0], P[0]
-
-    @property
-    def P_out(self) -> np.ndarray:
-        """The covariance this filter returns: P, or M with ``output="prior"``."""
-        _, M, P = self.gains
-        return M if self.output == "prior" else P
-
-    def apply(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Run on z (n_runs, n_gps, 2) → (x (n_runs, n_gps, 3), P (n_gps, 3, 3)), as returned.
-
-        With ``output="posterior"`` these are x̂ and P; with ``"prior"`` x̄ and M.
-        """
-        z = np.asarray(z, dtype=float)
-        K, M, P = self.gains
-        n_runs, n = z.shape[0], self.A.shape[0]
-        x_bar = np.empty((n_runs, self.n_gps, n))
-        x_hat = np.empty_like(x_bar)
-        xb = np.broadcast_to(np.asarray(self.x0, dtype=float), (n_runs, n))
-        for i in range(self.n_gps):
-            if i:
-                xb = x_hat[:, i - 1] @ self.A.T
-            x_bar[:, i] = xb
-            r = z[:, i] - xb @ self.H.T
-            x_hat[:, i] = xb + r @ K[i].T
-        if self.output == "prior":
-            return x_bar, M
-        return x_hat, P
-
-
-def batch_gains(filters: list[EpochFilter]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Gains and covariances of many filters at once: K (C, n_gps, 3, 2), M and P (C, n_gps, 3, 3).
-
-    All filters must share n_gps and the state/measurement sizes.  The Joseph update keeps P
-    symmetric and positive definite even for badly scaled mistakes.
-    """
-    C, n_gps = len(filters), filters[0].n_gps
-    F = np.stack([f.F for f in filters])
-    Qe = np.stack([f.Qe for f in filters])
-    H = np.stack([f.H for f in filters])
-    V = np.stack([f.V for f in filters])
-    M0 = np.stack([f.M0 for f in filters])
-    skip_P = np.array([bool(f.skip_first) for f in filters])       # P₀ = M0
-    skip_x = np.array([f.skip_first is True for f in filters])     # and x̂₀ = x̄₀
-    n, p = F.shape[-1], H.shape[-2]
-    K = np.zeros((C, n_gps, n, p))
-    M = np.empty((C, n_gps, n, n))
-    P = np.empty((C, n_gps, n, n))
-    Ft = np.swapaxes(F, -1, -2)
-    for i in range(n_gps):
-        Mi = M0 if i == 0 else F @ P[:, i - 1] @ Ft + Qe
-        M[:, i] = Mi
-        Ki, _ = gain(Mi, H, V)
-        Kp = Ki
-        if i == 0:
-            Kp = np.where(skip_P[:, None, None], 0.0, Ki)
-            Ki = np.where(skip_x[:, None, None], 0.0, Ki)
-        Pi = joseph_update(Mi, Kp, H, V)
-        K[:, i] = Ki
-        P[:, i] = (Pi + np.swapaxes(Pi, -1, -2)) / 2
-    return K, M, P
+from gpsaccel.kalman.epochs import (  # noqa: F401 - the recursion and the entry type, re-exported
+    EpochFilter,
+    Mistake,
+    batch_gains,
+    combinations,
+    with_changes,
+)
+from gpsaccel.kalman.update import epoch_transition
 
 
 @dataclass(frozen=True, eq=False)
@@ -172,40 +87,7 @@ class Ingredients:
 
     def with_changes(self, changes: tuple[tuple, ...]) -> Ingredients:
         """Apply ``(field, value)`` or ``(field, (row, col), value)`` changes (see :class:`Mistake`)."""
-        kw: dict[str, object] = {}
-        for change in changes:
-            if len(change) == 2:
-                kw[change[0]] = change[1]
-            else:
-                name, idx, value = change
-                arr = np.array(kw.get(name, getattr(self, name)), dtype=float)
-                arr[idx] = value
-                kw[name] = arr
-        return replace(self, **kw)
-
-
-@dataclass(frozen=True)
-class Mistake:
-    """One entry of the catalogue.
-
-    code : the stable code students and instructors see (``"phi-sign"``).
-    variant : which form of the mistake (``"V[2,2] = 0.04"``); a code can have several.
-    message : what is wrong, what it should be and the likely cause, for the student.
-    changes : the ingredients it changes, ``(field, value)`` or ``(field, (row, col), value)``.
-    """
-
-    code: str
-    variant: str
-    message: str
-    changes: tuple[tuple, ...]
-
-    @property
-    def touches(self) -> frozenset:
-        """The ingredients (and elements) it changes; mistakes that share one do not combine."""
-        return frozenset(c[0] if len(c) == 2 else (c[0], c[1]) for c in self.changes)
-
-    def __str__(self) -> str:
-        return f"{self.code} ({self.variant})"
+        return with_changes(self, changes)
 
 
 _SUB = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
@@ -343,14 +225,6 @@ def mean_mistakes(model: CalibrationModel | None = None) -> tuple[Mistake, ...]:
     )
 
 
-def combinations(mistakes: tuple[Mistake, ...], size: int) -> Iterator[tuple[Mistake, ...]]:
-    """All ``size``-tuples of ``mistakes`` that touch disjoint ingredients (so they can co-occur)."""
-    for combo in itertools.combinations(mistakes, size):
-        touched = [m.touches for m in combo]
-        if all(a.isdisjoint(b) for a, b in itertools.combinations(touched, 2)):
-            yield combo
-
-
 def build(model: CalibrationModel, mistakes: tuple[Mistake, ...] = ()) -> EpochFilter:
     """The epoch filter that makes ``mistakes`` (none: the optimal filter)."""
     g = Ingredients.correct(model)
@@ -383,3 +257,29 @@ def mutant(code: str, model: CalibrationModel | None = None, variant: str | None
             return build(model, (m,))
     raise ValueError(f"code must be one of {', '.join(codes(model))} (with a known variant); "
                      f"got {code!r}" + ("" if variant is None else f", variant {variant!r}"))
+
+
+@dataclass(frozen=True, eq=False)
+class CalibrationCatalogue:
+    """This catalogue in the interface every linear diagnosis reads
+    (:class:`gpsaccel.kalman.epochs.Catalogue`), on ``model``'s numbers."""
+
+    model: CalibrationModel
+
+    def covariance_mistakes(self) -> tuple[Mistake, ...]:
+        return covariance_mistakes(self.model)
+
+    def mean_mistakes(self) -> tuple[Mistake, ...]:
+        return mean_mistakes(self.model)
+
+    def build(self, mistakes: tuple[Mistake, ...] = ()) -> EpochFilter:
+        return build(self.model, mistakes)
+
+    def reference(self) -> EpochFilter:
+        return reference(self.model)
+
+    def catalogue(self) -> tuple[Mistake, ...]:
+        return catalogue(self.model)
+
+    def codes(self) -> tuple[str, ...]:
+        return codes(self.model)

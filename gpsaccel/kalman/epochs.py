@@ -1,0 +1,464 @@
+r"""A linear filter at its measurement epochs, the mistakes a student makes writing one, and any linear
+model's catalogue of them.
+
+Every filter a student writes for a linear problem whose measurements arrive every ``every``-th
+propagation step — right or wrong — is, at the measurement epochs, a recursion of one shape::
+
+    x̄_0 = x0,                      M_0 = M0
+    x̄_i = A x̂_{i−1},               M_i = F P_{i−1} Fᵀ + Q_e          (i ≥ 1)
+    K_i = M_i Hᵀ (H M_i Hᵀ + V)⁻¹
+    P_i = (I − K_i H) M_i (I − K_i H)ᵀ + K_i V K_iᵀ                   (Joseph form)
+    x̂_i = x̄_i + K_i (z_i − H x̄_i)
+
+The optimal filter has ``A = F = Φⁿ`` (n = every) and ``Q_e = Σ_{j<n} Φʲ ΓWΓᵀ Φʲᵀ``
+(:func:`gpsaccel.kalman.update.epoch_transition`, exactly what n one-step predictions do).  A
+mistake (:class:`Mistake`) changes one ingredient of it; the gains and covariances do not depend
+on the data, so :func:`batch_gains` computes them once for many candidate filters at once and
+:meth:`EpochFilter.apply` runs the mean for every realization at once.
+
+:class:`LinearModel` is any such model (Φ, Γ, W, H, V, M0, x0 and the schedule ``every``,
+``n_epochs``); :func:`linear_catalogue` is the catalogue of mistakes every linear filter can make,
+written for that model's numbers (the calibration system keeps its own physical wording on the
+same machinery).  Nothing here knows a system.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field, replace
+from functools import cached_property
+from typing import Protocol
+
+import numpy as np
+
+from gpsaccel import _validation as _v
+from gpsaccel.kalman.update import epoch_transition, gain, joseph_update
+
+
+# ------------------------------------------------------------------------------ the epoch filter
+@dataclass(frozen=True, eq=False)
+class EpochFilter:
+    """A linear filter written at the measurement epochs (module docstring for the recursion).
+
+    A : (n, n) mean transition from one epoch to the next (x̄_i = A x̂_{i−1}).
+    F, Qe : (n, n) covariance transition and process noise between epochs (M_i = F P Fᵀ + Qe).
+    H (p, n), V (p, p), x0 (n,), M0 (n, n): measurement model and prior at the first epoch.
+    n_gps : number of epochs.
+    output : ``"posterior"`` returns (x̂, P); ``"prior"`` returns (x̄, M) (returns-a-priori).
+    skip_first, skip_last : True skips the update at the first (last) epoch; ``"covariance"``
+        updates the mean there but leaves P = M (so every later gain follows the skipped P).
+    """
+
+    A: np.ndarray
+    F: np.ndarray
+    Qe: np.ndarray
+    H: np.ndarray
+    V: np.ndarray
+    x0: np.ndarray
+    M0: np.ndarray
+    n_gps: int
+    output: str = "posterior"
+    skip_first: bool | str = False
+    skip_last: bool | str = False
+
+    @cached_property
+    def gains(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(K, M, P): gains (n_gps, n, p), a priori and a posteriori covariances (n_gps, n, n)."""
+        K, M, P = batch_gains([self])
+        return K[0], M[0], P[0]
+
+    @property
+    def P_out(self) -> np.ndarray:
+        """The covariance this filter returns: P, or M with ``output="prior"``."""
+        _, M, P = self.gains
+        return M if self.output == "prior" else P
+
+    def apply(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Run on z (n_runs, n_gps, p) → (x (n_runs, n_gps, n), P (n_gps, n, n)), as returned.
+
+        With ``output="posterior"`` these are x̂ and P; with ``"prior"`` x̄ and M.
+        """
+        z = np.asarray(z, dtype=float)
+        K, M, P = self.gains
+        n_runs, n = z.shape[0], self.A.shape[0]
+        x_bar = np.empty((n_runs, self.n_gps, n))
+        x_hat = np.empty_like(x_bar)
+        xb = np.broadcast_to(np.asarray(self.x0, dtype=float), (n_runs, n))
+        for i in range(self.n_gps):
+            if i:
+                xb = x_hat[:, i - 1] @ self.A.T
+            x_bar[:, i] = xb
+            r = z[:, i] - xb @ self.H.T                       # r_i = z_i − H x̄_i
+            x_hat[:, i] = xb + r @ K[i].T                     # x̂_i = x̄_i + K_i r_i
+        if self.output == "prior":
+            return x_bar, M
+        return x_hat, P
+
+
+def batch_gains(filters: Sequence[EpochFilter]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Gains and covariances of many filters at once: K (C, n_gps, n, p), M and P (C, n_gps, n, n).
+
+    All filters must share n_gps and the state/measurement sizes.  The Joseph update
+    (:func:`gpsaccel.kalman.update.joseph_update`) keeps P symmetric and positive definite even
+    for badly scaled mistakes.
+    """
+    C, n_gps = len(filters), filters[0].n_gps
+    F = np.stack([f.F for f in filters])
+    Qe = np.stack([f.Qe for f in filters])
+    H = np.stack([f.H for f in filters])
+    V = np.stack([f.V for f in filters])
+    M0 = np.stack([f.M0 for f in filters])
+    skip = {(i, kind): np.array([_skips(f, i, n_gps, kind) for f in filters])
+            for i in {0, n_gps - 1} for kind in ("P", "x")}
+    n, p = F.shape[-1], H.shape[-2]
+    K = np.zeros((C, n_gps, n, p))
+    M = np.empty((C, n_gps, n, n))
+    P = np.empty((C, n_gps, n, n))
+    Ft = np.swapaxes(F, -1, -2)
+    for i in range(n_gps):
+        Mi = M0 if i == 0 else F @ P[:, i - 1] @ Ft + Qe      # M_i = F P_{i−1} Fᵀ + Q_e
+        M[:, i] = Mi
+        Ki, _ = gain(Mi, H, V)                                 # K_i = M Hᵀ (H M Hᵀ + V)⁻¹
+        Kp = Ki
+        if (i, "P") in skip:
+            Kp = np.where(skip[i, "P"][:, None, None], 0.0, Ki)   # P_i = M_i
+            Ki = np.where(skip[i, "x"][:, None, None], 0.0, Ki)   # and x̂_i = x̄_i
+        Pi = joseph_update(Mi, Kp, H, V)
+        K[:, i] = Ki
+        P[:, i] = (Pi + np.swapaxes(Pi, -1, -2)) / 2
+    return K, M, P
+
+
+def _skips(f: EpochFilter, i: int, n_gps: int, kind: str) -> bool:
+    """Whether filter ``f`` skips the covariance ("P") or the mean ("x") update at epoch i."""
+    how = (f.skip_first if i == 0 else False) or (f.skip_last if i == n_gps - 1 else False)
+    return bool(how) if kind == "P" else how is True
+
+
+# ------------------------------------------------------------------------------ the mistakes
+@dataclass(frozen=True)
+class Mistake:
+    """One entry of a catalogue.
+
+    code : the stable code students and instructors see (``"phi-sign"``).
+    variant : which form of the mistake (``"V[2,2] = 0.04"``); a code can have several.
+    message : what is wrong, what it should be and the likely cause, for the student.
+    changes : the ingredients it changes, ``(field, value)`` or ``(field, (row, col), value)``.
+    """
+
+    code: str
+    variant: str
+    message: str
+    changes: tuple[tuple, ...]
+
+    @property
+    def touches(self) -> frozenset:
+        """The ingredients (and elements) it changes; mistakes that share one do not combine."""
+        return frozenset(c[0] if len(c) == 2 else (c[0], c[1]) for c in self.changes)
+
+    def __str__(self) -> str:
+        return f"{self.code} ({self.variant})"
+
+
+def combinations(mistakes: Sequence[Mistake], size: int) -> Iterator[tuple[Mistake, ...]]:
+    """All ``size``-tuples of ``mistakes`` that touch disjoint ingredients (so they can co-occur)."""
+    for combo in itertools.combinations(mistakes, size):
+        touched = [m.touches for m in combo]
+        if all(a.isdisjoint(b) for a, b in itertools.combinations(touched, 2)):
+            yield combo
+
+
+def with_changes(ingredients, changes: tuple[tuple, ...]):
+    """A copy of the dataclass ``ingredients`` with ``(field, value)`` or ``(field, (row, col),
+    value)`` changes applied (see :class:`Mistake`)."""
+    kw: dict[str, object] = {}
+    for change in changes:
+        if len(change) == 2:
+            kw[change[0]] = change[1]
+        else:
+            name, idx, value = change
+            arr = np.array(kw.get(name, getattr(ingredients, name)), dtype=float)
+            arr[idx] = value
+            kw[name] = arr
+    return replace(ingredients, **kw)
+
+
+class Catalogue(Protocol):
+    """What the diagnosis of a linear filter needs from a system's catalogue of mistakes."""
+
+    def covariance_mistakes(self) -> tuple[Mistake, ...]:
+        """Mistakes that change P (and, through the gains, x̂)."""
+        ...
+
+    def mean_mistakes(self) -> tuple[Mistake, ...]:
+        """Mistakes that change only x̂."""
+        ...
+
+    def build(self, mistakes: tuple[Mistake, ...] = ()) -> EpochFilter:
+        """The epoch filter that makes ``mistakes`` (none: the optimal filter)."""
+        ...
+
+
+# ------------------------------------------------------------------------------ any linear model
+def _matrix(name: str, value: object, rows: int | None = None, cols: int | None = None
+            ) -> np.ndarray:
+    arr = np.atleast_2d(_v.finite_array(name, value))
+    if arr.ndim != 2 or (rows is not None and arr.shape[0] != rows) or \
+            (cols is not None and arr.shape[1] != cols):
+        want = f"({'n' if rows is None else rows}, {'m' if cols is None else cols})"
+        raise ValueError(f"{name} must be a matrix of shape {want}, got {arr.shape}")
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class LinearModel:
+    """A linear-Gaussian system and its measurement schedule, in course notation.
+
+    x_{j+1} = Φ x_j + Γ w_j, w_j ~ N(0, W) at every propagation step j (of ``dt`` s);
+    z_i = H x_{i·every} + v_i, v_i ~ N(0, V) at the epochs i = 0 .. n_epochs − 1;
+    x_0 ~ N(x0, M0).  ``states`` and ``measurements`` name the components (for messages).
+    """
+
+    Phi: np.ndarray
+    Gamma: np.ndarray
+    W: np.ndarray
+    H: np.ndarray
+    V: np.ndarray
+    M0: np.ndarray
+    x0: np.ndarray
+    every: int
+    n_epochs: int
+    dt: float = 1.0
+    states: tuple[str, ...] = ()
+    measurements: tuple[str, ...] = ()
+    rtol: float = field(default=1e-10, repr=False)
+
+    def __post_init__(self) -> None:
+        Phi = _matrix("Phi", self.Phi)
+        n = Phi.shape[0]
+        if Phi.shape != (n, n):
+            raise ValueError(f"Phi must be square, got shape {Phi.shape}")
+        Gamma = _matrix("Gamma", self.Gamma, rows=n)
+        W = _v.spd_matrix("W", self.W, Gamma.shape[1])
+        H = _matrix("H", self.H, cols=n)
+        V = _v.spd_matrix("V", self.V, H.shape[0])
+        M0 = _v.spd_matrix("M0", self.M0, n)
+        x0 = _v.finite_array("x0", self.x0, (n,))
+        every = _v.integer("every", self.every, minimum=1)
+        n_epochs = _v.integer("n_epochs", self.n_epochs, minimum=2)
+        dt = _v.positive_float("dt", self.dt)
+        states = tuple(self.states) or tuple(f"x{i + 1}" for i in range(n))
+        meas = tuple(self.measurements) or tuple(f"z{i + 1}" for i in range(H.shape[0]))
+        if len(states) != n or len(meas) != H.shape[0]:
+            raise ValueError(f"states must name the {n} states and measurements the "
+                             f"{H.shape[0]} measurements, got {states} and {meas}")
+        for name, value in (("Phi", Phi), ("Gamma", Gamma), ("W", W), ("H", H), ("V", V),
+                            ("M0", M0), ("x0", x0), ("every", every), ("n_epochs", n_epochs),
+                            ("dt", dt), ("states", states), ("measurements", meas)):
+            object.__setattr__(self, name, value)
+
+    @property
+    def n(self) -> int:
+        return int(self.Phi.shape[0])
+
+    @property
+    def t(self) -> np.ndarray:
+        """The epoch times, s (epoch i at step i·every)."""
+        return np.arange(self.n_epochs) * self.every * self.dt
+
+    @property
+    def n_steps(self) -> int:
+        """Propagation steps from the first epoch to the last."""
+        return (self.n_epochs - 1) * self.every
+
+    def simulate(self, rng: np.random.Generator, n_runs: int) -> tuple[np.ndarray, np.ndarray]:
+        """``n_runs`` realizations: z (n_runs, n_epochs, p) and the true x (n_runs, n_epochs, n)
+        at the epochs, drawn from ``rng`` (a ``numpy.random.Generator``)."""
+        n_runs = _v.integer("n_runs", n_runs, minimum=1)
+        n, m, p = self.n, self.Gamma.shape[1], self.H.shape[0]
+        x = self.x0 + rng.standard_normal((n_runs, n)) @ np.linalg.cholesky(self.M0).T
+        w = rng.standard_normal((self.n_steps, n_runs, m)) @ np.linalg.cholesky(self.W).T
+        v = rng.standard_normal((n_runs, self.n_epochs, p)) @ np.linalg.cholesky(self.V).T
+        xs = np.empty((n_runs, self.n_epochs, n))
+        xs[:, 0] = x
+        for j in range(self.n_steps):
+            x = x @ self.Phi.T + w[j] @ self.Gamma.T          # x_{j+1} = Φ x_j + Γ w_j
+            if (j + 1) % self.every == 0:
+                xs[:, (j + 1) // self.every] = x
+        return xs @ self.H.T + v, xs
+
+
+@dataclass(frozen=True, eq=False)
+class LinearIngredients:
+    """What a student chooses writing a filter for a :class:`LinearModel`.
+
+    Phi, Gamma, W : one-step Φ and the process noise Q = Γ W Γᵀ; steps : predictions between
+    updates; H, V, M0, x0 : as in the model; mean_propagated : False is x̄_i = x̂_{i−1};
+    output, skip_first, skip_last : see :class:`EpochFilter`.
+    """
+
+    Phi: np.ndarray
+    Gamma: np.ndarray
+    W: np.ndarray
+    steps: int
+    H: np.ndarray
+    V: np.ndarray
+    M0: np.ndarray
+    x0: np.ndarray
+    n_epochs: int
+    mean_propagated: bool = True
+    output: str = "posterior"
+    skip_first: bool | str = False
+    skip_last: bool | str = False
+
+    @classmethod
+    def correct(cls, model: LinearModel) -> LinearIngredients:
+        return cls(model.Phi, model.Gamma, model.W, model.every, model.H, model.V, model.M0,
+                   model.x0, model.n_epochs)
+
+    def epoch_filter(self) -> EpochFilter:
+        Q = self.Gamma @ self.W @ self.Gamma.T                 # Q = Γ W Γᵀ
+        F, Qe = epoch_transition(self.Phi, Q, self.steps)
+        A = F if self.mean_propagated else np.eye(F.shape[0])
+        return EpochFilter(A, F, Qe, self.H, self.V, self.x0, self.M0, self.n_epochs,
+                           self.output, self.skip_first, self.skip_last)
+
+
+#: The generic catalogue's wording: code -> message template (fields named in each).
+LINEAR_MESSAGES: dict[str, str] = {
+    "phi-transposed": "Your filter propagates with Φᵀ instead of Φ (x̄ = Φ x̂, M = Φ P Φᵀ + Q): "
+                      "a transition matrix written by rows where columns belong, or "
+                      "x @ Phi with x a row where Phi @ x is meant.",
+    "q-without-gamma": "Your process noise is {used} instead of Q = Γ W Γᵀ: the noise enters "
+                       "the state through Γ, so W (a {m}×{m} covariance of the input noise) is "
+                       "not the state's process noise.",
+    "std-as-variance": "{elem} = {value:.4g} in your filter; it should be {right:.4g}: {label}. "
+                       "A covariance holds variances σ² (here σ = {sigma:.4g}, σ² = {right:.4g}).",
+    "m0-order": "M0 has {a} and {b} swapped: the state is [{states}], so M0's diagonal is "
+                "[{right}]; your filter starts with [{used}].",
+    "returns-a-priori": "Your filter returns the a priori estimate and covariance (x̄, M: "
+                        "before the update) at each epoch; the contract asks for the a "
+                        "posteriori ones (x̂, P: after the update with z at that epoch). Likely "
+                        "cause: the values are stored before the update.",
+    "first-update-skipped": "Your filter does not use the measurement at t = 0: its first "
+                            "estimate is the prior (x̂₀ = x̄₀, P₀ = M0). Update with z₀ before "
+                            "the first propagation.",
+    "first-update-skipped.covariance": "Your P at t = 0 is the prior M0: the covariance update "
+                                       "with z₀ is missing, though your x̂ at t = 0 used z₀; "
+                                       "every later gain follows from that P.",
+    "last-update-missing": "Your filter is right except at the last epoch (t = {t_last:g} s), "
+                           "where x̂ and P are the a priori x̄ and M: the update with the last "
+                           "measurement is missing (a loop such as range(n - 1)).",
+    "covariance-update-skipped": "Your P at the last epoch (t = {t_last:g} s) is the a priori "
+                                 "M: the covariance update with the last measurement is "
+                                 "missing, though your x̂ there used it (the propagation is "
+                                 "right: every earlier P matches).",
+    "missing-propagation": "Your filter propagates {steps} step(s) between updates; there are "
+                           "{every} (propagation every {dt:g} s, a measurement every "
+                           "{interval:g} s).",
+    "mean-not-propagated": "Your covariance is propagated between measurements but your "
+                           "estimate is not: the residual uses x̂ₖ₋₁ where it should use "
+                           "x̄ₖ = Φ^{every} x̂ₖ₋₁.",
+}
+
+
+@dataclass(frozen=True, eq=False)
+class LinearCatalogue:
+    """The mistakes every linear filter can make, on ``model``'s numbers (:class:`Catalogue`).
+
+    ``messages`` overrides :data:`LINEAR_MESSAGES` entry by entry (an instructor's wording).
+    """
+
+    model: LinearModel
+    messages: dict[str, str] = field(default_factory=dict)
+
+    def _text(self, key: str, **fields: object) -> str:
+        return {**LINEAR_MESSAGES, **self.messages}[key].format(**fields)
+
+    def build(self, mistakes: tuple[Mistake, ...] = ()) -> EpochFilter:
+        g = LinearIngredients.correct(self.model)
+        for m in mistakes:
+            g = with_changes(g, m.changes)
+        return g.epoch_filter()
+
+    def reference(self) -> EpochFilter:
+        return self.build()
+
+    def covariance_mistakes(self) -> tuple[Mistake, ...]:
+        m = self.model
+        n, k = m.n, m.Gamma.shape[1]
+        out: list[Mistake] = []
+        if not np.allclose(m.Phi, m.Phi.T):
+            out.append(Mistake("phi-transposed", "Φᵀ", self._text("phi-transposed"),
+                               (("Phi", m.Phi.T),)))
+        W_state = (float(m.W[0, 0]) * np.eye(n) if k == 1 else m.W if k == n else None)
+        if W_state is not None and not np.allclose(m.Gamma @ m.W @ m.Gamma.T, W_state):
+            used = "W·I" if k == 1 else "W"
+            out.append(Mistake("q-without-gamma", f"Q = {used}",
+                               self._text("q-without-gamma", used=f"Q = {used}", m=k),
+                               (("Gamma", np.eye(n)), ("W", W_state))))
+        out += self._std_as_variance()
+        out += self._permuted_m0()
+        for key, changes, variant in (
+                ("returns-a-priori", (("output", "prior"),), "returns (x̄, M)"),
+                ("first-update-skipped", (("skip_first", True),), "no update at t = 0"),
+                ("first-update-skipped.covariance", (("skip_first", "covariance"),),
+                 "P not updated at t = 0"),
+                ("last-update-missing", (("skip_last", True),), "no update at the last epoch"),
+                ("covariance-update-skipped", (("skip_last", "covariance"),),
+                 "P not updated at the last epoch")):
+            out.append(Mistake(key.split(".")[0], variant,
+                               self._text(key, t_last=float(m.t[-1])), changes))
+        for steps in sorted({m.every - 1, m.every + 1, 1} - {0, m.every}):
+            out.append(Mistake("missing-propagation", f"{steps} step(s) between updates",
+                               self._text("missing-propagation", steps=steps, every=m.every,
+                                          dt=m.dt, interval=m.every * m.dt),
+                               (("steps", steps),)))
+        return tuple(out)
+
+    def _std_as_variance(self) -> list[Mistake]:
+        out: list[Mistake] = []
+        sva = "a standard deviation used where a variance belongs"
+        avs = "a variance squared again, as if it were a standard deviation"
+        for name in ("V", "W", "M0"):
+            mat = getattr(self.model, name)
+            for i in range(mat.shape[0]):
+                right = float(mat[i, i])
+                for value, label in ((np.sqrt(right), sva), (right**2, avs)):
+                    if np.isclose(value, right, rtol=1e-6):
+                        continue  # σ = σ² (a variance of 1): this slip cannot be seen
+                    elem = f"{name}[{i},{i}]"
+                    out.append(Mistake("std-as-variance", f"{elem} = {value:.4g}",
+                                       self._text("std-as-variance", elem=elem,
+                                                  value=float(value), right=right, label=label,
+                                                  sigma=float(np.sqrt(right))),
+                                       ((name, (i, i), float(value)),)))
+        return out
+
+    def _permuted_m0(self) -> list[Mistake]:
+        m, out = self.model, []
+        d = np.diag(m.M0)
+        for a, b in itertools.combinations(range(m.n), 2):
+            if np.isclose(d[a], d[b]) or b != a + 1:
+                continue  # neighbours only: a swapped pair of adjacent states
+            used = d.copy()
+            used[[a, b]] = d[[b, a]]
+            out.append(Mistake("m0-order", f"M0 with {m.states[a]}, {m.states[b]} swapped",
+                               self._text("m0-order", a=m.states[a], b=m.states[b],
+                                          states=", ".join(m.states),
+                                          right=", ".join(f"{v:g}" for v in d),
+                                          used=", ".join(f"{v:g}" for v in used)),
+                               (("M0", (a, a), float(d[b])), ("M0", (b, b), float(d[a])))))
+        return out
+
+    def mean_mistakes(self) -> tuple[Mistake, ...]:
+        return (Mistake("mean-not-propagated", "x̄ₖ = x̂ₖ₋₁",
+                        self._text("mean-not-propagated", every=self.model.every),
+                        (("mean_propagated", False),)),)
+
+    def catalogue(self) -> tuple[Mistake, ...]:
+        return self.covariance_mistakes() + self.mean_mistakes()
+
+    def codes(self) -> tuple[str, ...]:
+        return tuple(dict.fromkeys(m.code for m in self.catalogue()))
