@@ -9,6 +9,9 @@ Every check returns a :class:`Report` of :class:`Finding` s with stable codes::
     print(check.submission("my_filter.py"))              # kalman_filter(z) (calibration)
     print(check.submission("coop.py", problem="coop"))   # ekf(y, Q, R) and/or lkf(y, Q, R)
     print(check.submission("ship.py", problem="ship"))   # multirate_filter(z, u)
+    print(check.submission("bob/", problem="tracker"))   # a folder; any registered problem
+    check.Problem.linear("mine", Phi=..., Gamma=..., W=..., H=..., V=..., M0=..., x0=...,
+                         every=5, n_epochs=41)           # a problem for any linear model
 
 The problems (contract, simulated data, reference, tolerance, catalogue of mistakes) are described
 in :mod:`gpsaccel.check.problems`.  Every ``assert_*`` form raises ``AssertionError`` with the
@@ -24,15 +27,17 @@ declared outputs) the problem checkers use through :mod:`gpsaccel.check.student`
 
 from gpsaccel.calibration.mistakes import codes
 from gpsaccel.check.jacobians import assert_dt_model, assert_jacobians, dt_model, jacobians
+from gpsaccel.check.linear import TOLERANCE, LinearProblem
 from gpsaccel.check.matrices import assert_model_matrices, model_matrices
-from gpsaccel.check.problems import assert_submission, submission
+from gpsaccel.check.problems import Problem, assert_submission, submission
 from gpsaccel.check.report import Finding, Report
 from gpsaccel.check.student_filter import StudentFilterError, student_filter
-from gpsaccel.check.whole_filter import TOLERANCE
 
 __all__ = [
     "TOLERANCE",
     "Finding",
+    "LinearProblem",
+    "Problem",
     "Report",
     "StudentFilterError",
     "assert_dt_model",

@@ -15,9 +15,12 @@ A :class:`Problem` says
 compare with the reference and diagnose.  The result is the one :class:`~gpsaccel.check.report.
 Report` type of the package.
 
-The problems (:data:`PROBLEMS`):
+The problems (registered in :mod:`gpsaccel.registry`):
 
-``calibration``  report 000: ``kalman_filter(z) -> (x_hat, P)`` (:mod:`gpsaccel.check.whole_filter`).
+``calibration``  report 000: ``kalman_filter(z) -> (x_hat, P)`` (:mod:`gpsaccel.check.whole_filter`,
+                 on the linear pipeline of :mod:`gpsaccel.check.linear`).
+``tracker``      a constant-velocity tracker (:mod:`gpsaccel.check.tracker`), defined with
+                 :meth:`Problem.linear` as an instructor would.
 ``coop``         report 002: ``ekf(y, Q, R)`` and/or ``lkf(y, Q, R) -> (x_hat, P)``
                  (:class:`CoopProblem`).
 ``ship``         report 004: ``multirate_filter(z, u) -> (x_hat, P)`` (:class:`ShipProblem`).
@@ -35,12 +38,10 @@ import numpy as np
 
 from gpsaccel import _validation as _v
 from gpsaccel.check import sandbox as sb
+from gpsaccel.check.findings import MESSAGES, box_findings
 from gpsaccel.check.report import Report
-from gpsaccel.check.student import Call, Output, StudentCalls, call_functions, defines
+from gpsaccel.check.sandbox import Call, Output, defines
 from gpsaccel.kalman import consistency
-
-#: Characters of printed output beyond which a check warns.
-OUTPUT_WARN = 20_000
 
 
 @dataclass(frozen=True)
@@ -68,7 +69,15 @@ class Function:
 
 
 class Problem:
-    """A homework problem (module docstring); subclasses fill in the parts."""
+    """A homework problem (module docstring); subclasses fill in the parts.
+
+    The hooks: :meth:`cases` (the data, from a seed), :meth:`calls` (the sandbox calls of one
+    contract function on them), :meth:`evaluate` (compare, diagnose, add statistics),
+    :meth:`forget` (drop every cached answer before the student runs), :meth:`labels` (a name per
+    call, for messages); the wording: :attr:`messages` (code -> template, over
+    :data:`gpsaccel.check.findings.MESSAGES`), :attr:`renames` (a box failure reported under
+    another code) and :meth:`message_fields`.
+    """
 
     name: str = ""
     title: str = ""
@@ -77,6 +86,19 @@ class Problem:
     #: What the tolerance is and why (shown in reports and the README).
     tolerance: str = ""
     default_runs: int = 4
+    #: code -> message template overriding :data:`gpsaccel.check.findings.MESSAGES`.
+    messages: dict[str, str] = {}
+    #: a box failure -> the code this problem reports it under.
+    renames: dict[str, str] = {}
+
+    @staticmethod
+    def linear(name: str, **model: object) -> Problem:
+        """A problem for any linear model (Φ, Γ, W, H, V, M0, x0 and the schedule ``every``,
+        ``n_epochs``, ``dt``), checked against the generic catalogue of linear-filter mistakes:
+        see :func:`gpsaccel.check.linear.linear` for the arguments."""
+        from gpsaccel.check.linear import linear
+
+        return linear(name, **model)  # type: ignore[arg-type]
 
     # ---------------------------------------------------------------- the contract
     def describe(self) -> str:
@@ -106,16 +128,26 @@ class Problem:
     def calls(self, cases, function: Function) -> list[Call]:
         raise NotImplementedError
 
+    def labels(self, cases) -> list[str]:
+        """A name for each case ("run 0", "the course log"), in the order of :meth:`calls`."""
+        return list(getattr(cases, "labels", ()))
+
+    def message_fields(self, cases) -> dict[str, object]:
+        """Fields of this problem's message templates (e.g. ``work``, ``rows``, ``every``)."""
+        return {}
+
     def evaluate(self, report: Report, cases, function: Function,
-                 results: list[dict[str, np.ndarray]]) -> None:
-        """Compare with the reference, diagnose, add the informational statistics."""
+                 results: list[dict[str, np.ndarray]], returned: dict) -> None:
+        """Compare with the reference, diagnose, add the informational statistics.
+        ``returned`` describes what the first call returned (type, dtype, shape per output)."""
         raise NotImplementedError
 
     # ---------------------------------------------------------------- the check
     def check(self, path: str | os.PathLike, n_runs: int | None = None, seed: int = 0,
-              timeout: float = 60, sandbox: str = "auto", limits: object = None,
+              timeout: float = 60, sandbox: str = "auto", limits: sb.Limits | None = None,
               allow_gpsaccel: bool = False) -> Report:
-        """Check the student's file ``path``; never raises for what the file does.
+        """Check the student's submission ``path`` (a ``.py`` file or one student's folder);
+        never raises for what the file does.
 
         ``sandbox``, ``limits`` and ``allow_gpsaccel`` go to the sandbox
         (:mod:`gpsaccel.check.sandbox`); the reference answers are computed only after the
@@ -125,20 +157,30 @@ class Problem:
         n_runs = self.default_runs if n_runs is None else _v.integer("n_runs", n_runs, minimum=2)
         seed = _v.integer("seed", seed, minimum=0)
         timeout = _v.positive_float("timeout", timeout)
+        if limits is not None and not isinstance(limits, sb.Limits):
+            raise ValueError(f"limits must be a gpsaccel.check.sandbox.Limits, got {limits!r}")
+        limits = sb.Limits(**{**vars(limits or sb.Limits()), "time": timeout})
+        backend = sb.resolve_backend(sandbox)
         path = Path(path)
         report = Report(path.name)
         report.details.update({"path": str(path), "problem": self.name, "n_runs": n_runs,
-                               "seed": seed, "timeout": timeout})
+                               "seed": seed, "timeout": timeout, "sandbox": backend})
         try:
-            entry = self._entry(path)
+            sub = self._submission(path)
         except sb.SubmissionError as exc:
-            report.add(exc.code, str(exc))
+            report.add(self.renames.get(exc.code, exc.code), str(exc))
             report.seconds = time.perf_counter() - t0
             return report
+        if sub.files != (sub.entry,):
+            report.details["files"] = list(sub.files)
+            report.details["entry"] = sub.entry
+        entry = sub.root / sub.entry
         present = [f for f in self.functions if defines(entry, f.name)]
         missing = [f for f in self.functions if f not in present]
-        if not present or (self.required == "all" and missing):
-            names = " and ".join(f.signature for f in (missing or self.functions))
+        if not present:  # the runner says what the file does define (read by importing it)
+            present = [self.functions[0]]
+        elif self.required == "all" and missing:
+            names = " and ".join(f.signature for f in missing)
             report.add("no-function", f"Your file does not define {names} at top level "
                        f"(read without running it). " + self.describe().split("\n", 1)[1])
             report.seconds = time.perf_counter() - t0
@@ -149,108 +191,66 @@ class Problem:
             mine = self.calls(cases, f)
             spans.append((f, len(calls), len(calls) + len(mine)))
             calls += mine
+        labels = self.labels(cases) * len(present)
         self.forget()  # no reference answer exists while the student's code runs
-        got = call_functions(path, calls, timeout, sandbox=sandbox, limits=limits,
-                             allow_gpsaccel=allow_gpsaccel)
-        report.details["student_seconds"] = round(got.seconds, 3)
-        self._process_findings(report, got, calls, timeout)
-        if got.failure is None:
+        box = sb.run(sub, calls, limits, backend, allow_gpsaccel)
+        box = self._accept_columns(report, sub, box, calls, limits, backend, allow_gpsaccel)
+        report.details["student_seconds"] = round(box.seconds, 3)
+        fields = {"signature": " or ".join(f.signature for f in self.functions),
+                  **self.message_fields(cases)}
+        if box_findings(report, box, calls, limits, self.messages, labels, self.renames,
+                        **fields):
             for f, a, b in spans:
-                self._returned_notes(report, got, f)
-                self.evaluate(report, cases, f, got.results[a:b])
+                self.evaluate(report, cases, f, box.results[a:b], box.returned or {})
         report.sort()
         report.seconds = time.perf_counter() - t0
         return report
 
-    def _entry(self, path: Path) -> Path:
-        """The file of the submission ``path`` (a ``.py`` file, or one student's folder) that
-        defines the contract's functions (the first of them it finds; see
-        :func:`gpsaccel.check.sandbox.load_submission`).  Raises ``SubmissionError``."""
+    def _submission(self, path: Path) -> sb.Submission:
+        """The submission at ``path``: its entry is the file defining the contract's functions
+        (the first of them found; :func:`gpsaccel.check.sandbox.load_submission`)."""
         error: sb.SubmissionError | None = None
         for f in self.functions:
             try:
-                sub = sb.load_submission(path, f.name)
+                return sb.load_submission(path, f.name)
             except sb.SubmissionError as exc:
                 if exc.code != "no-function":
                     raise
                 error = error or exc
-            else:
-                return sub.root / sub.entry
-        if path.is_file():
-            return path  # a file defining none: the "no-function" finding below names them all
+        if path.is_file():  # a file defining none: the runner names what it does define
+            return sb.Submission(path.resolve().parent, path.name, (path.name,))
         assert error is not None
         raise error
 
-    def _returned_notes(self, report: Report, got: StudentCalls, f: Function) -> None:
-        for name, desc in got.returned.get(f.name, {}).items():
-            typ = desc.get("type", "")
-            if typ in ("builtins.list", "builtins.tuple"):
-                report.add("returns-list", f"{f.name}: {name} is a Python {typ.split('.')[-1]}; "
-                           f"it was converted with np.array. Return numpy arrays.", "note")
-
-    def _process_findings(self, report: Report, got: StudentCalls, calls: list[Call],
-                          timeout: float) -> None:
-        if got.output_chars > OUTPUT_WARN:
-            report.add("prints-a-lot", f"Your code printed {got.output_chars:,} characters during "
-                       f"the check; remove debug prints. The last lines were:\n"
-                       + _indent_tail(got.output, 6), "warning")
-        p = got.problem or {}
-        call = calls[p["call"]] if "call" in p and p["call"] < len(calls) else None
-        what = f"{call.function}(...) on call {p['call'] + 1} of {len(calls)}" if call else ""
-        kind = got.failure
-        if kind is None:
-            return
-        if kind == "timeout":
-            report.add("timeout", f"Your code did not finish within {timeout:g} s: it completed "
-                       f"{p.get('calls_done', 0)} of {len(calls)} calls. "
-                       + ("It never returned once: look for a loop that never ends or input()."
-                          if not p.get("calls_done") else "It is too slow."))
-        elif kind == "crashed":
-            report.add("crashed", f"The Python process running your file ended without a result "
-                       f"(exit code {p.get('returncode')}). Its last output:\n"
-                       + _indent_tail(got.output, 8))
-        elif kind == "import-error":
-            report.add("import-error", "Your file raises an error when it is imported; the "
-                       "traceback ends with:\n" + _indent(p.get("traceback", "")))
-        elif kind == "no-function":
-            report.add("no-function", f"{p.get('function')} is not a function of your module "
-                       f"once it is imported. Functions it defines: "
-                       f"{', '.join(p.get('callables', [])) or 'none'}.")
-        elif kind == "exception":
-            report.add("exception", f"{what} raised an exception; the traceback ends with:\n"
-                       + _indent(p.get("traceback", "")))
-        elif kind == "return-value":
-            ret = p.get("returned", {})
-            report.add("return-value", f"{what} must return a pair (x_hat, P); it returned a "
-                       f"{ret.get('type')}" + (f" with {p['length']} items"
-                                               if p.get("length") is not None else "")
-                       + ". End it with: return x_hat, P.")
-        elif kind == "not-numeric":
-            report.add("not-numeric", f"{p.get('name')} returned by {what} is not an array of "
-                       f"numbers: {p.get('error', '').rstrip('.')}.")
-        elif kind == "wrong-shape":
-            shape, want = tuple(p.get("shape", ())), tuple(p.get("expected", ()))
-            hint = ""
-            if len(shape) == len(want) and shape == tuple(reversed(want[-2:])) + ():
-                hint = " It looks transposed."
-            elif shape and want and shape[0] in (want[0] - 1, want[0] + 1):
-                hint = (f" It has {shape[0]} rows: one row per time step t_0..t_K, row 0 the "
-                        f"initial estimate ({want[0]} rows).")
-            elif len(shape) == 3 and len(want) == 3 and shape[1:] == want[:1] + want[1:2]:
-                hint = " Time must be the first axis (P[k] is one covariance)."
-            report.add("wrong-shape", f"{what} returned {p.get('name')} of shape {shape}; the "
-                       f"contract says {want}.{hint}")
-        else:  # a limit of the sandbox (memory-limit, output-limit, uses-checker, ...)
-            report.add(kind, f"Your code was stopped: {got.detail or kind}"
-                       + (f" ({what})" if what else "") + ".")
-
-
-def _indent(text: str, n: int = 6) -> str:
-    return "\n".join(" " * n + line for line in text.splitlines())
-
-
-def _indent_tail(text: str, lines: int) -> str:
-    return _indent("\n".join(text.rstrip().splitlines()[-lines:]) or "(nothing)")
+    def _accept_columns(self, report: Report, sub: sb.Submission, box: sb.BoxResult,
+                        calls: list[Call], limits: sb.Limits, backend: str,
+                        allow_gpsaccel: bool) -> sb.BoxResult:
+        """A filterpy filter keeps x as a column: an output of shape ``declared + (1,)`` is
+        filterpy's own and is accepted (the box is run again declaring that shape, the axis is
+        dropped) with a note.  Any other box comes back as it is."""
+        p = box.problem or {}
+        shapes = p.get("shapes") or {}
+        if box.failure != "wrong-shape" or not isinstance(p.get("call"), int):
+            return box
+        outs = calls[p["call"]].outputs
+        column = {o.name for o in outs if tuple(shapes.get(o.name) or ()) == tuple(o.shape) + (1,)}
+        if not column or any(tuple(shapes.get(o.name) or ()) != tuple(o.shape)
+                             for o in outs if o.name not in column):
+            return box
+        wide = [Call(c.function, c.args, tuple(
+            Output(o.name, tuple(o.shape) + (1,), o.dtype) if o.name in column else o
+            for o in c.outputs)) for c in calls]
+        self.forget()
+        again = sb.run(sub, wide, limits, backend, allow_gpsaccel)
+        if again.failure is not None:
+            return box
+        again.results = [{k: (v[..., 0] if k in column else v) for k, v in r.items()}
+                         for r in again.results]
+        for name in sorted(column):
+            o = next(o for o in outs if o.name == name)
+            report.add("filterpy-column", MESSAGES["filterpy-column"].format(
+                name=name, shape=tuple(o.shape) + (1,), wanted=tuple(o.shape)), "note")
+        return again
 
 
 def _nan_finding(report: Report, fname: str, name: str, arr: np.ndarray, t: np.ndarray,
@@ -312,35 +312,6 @@ def _nearest(candidates: list[tuple[object, np.ndarray, np.ndarray]], x: np.ndar
         if ratio < best_d:
             best, best_d = m, ratio
     return None if best is None else (best, best_d)
-
-
-# ============================================================================ calibration
-class CalibrationProblem(Problem):
-    """Report 000's filter; checked by :func:`gpsaccel.check.whole_filter.submission`."""
-
-    name = "calibration"
-    title = "Report 000: GPS/accelerometer calibration filter (3 states, 200 Hz + 5 Hz GPS)"
-    functions = (Function("kalman_filter", (Argument("z", (151, 2), "GPS − integrated "
-                                                      "accelerometer [δp (m), δv (m/s)] at t = 0, "
-                                                      "0.2, ..., 30 s"),),
-                          (Output("x_hat", (151, 3)), Output("P", (151, 3, 3))),
-                          "the a posteriori [δp, δv, b] and P at every GPS time"),)
-    tolerance = "1e-6 σ in x̂ and P (see gpsaccel.check.whole_filter)"
-    default_runs = None
-
-    def codes(self) -> tuple[str, ...]:
-        from gpsaccel.calibration.mistakes import codes
-
-        return codes()
-
-    def check(self, path, n_runs=None, seed=0, timeout=60, **options) -> Report:
-        from gpsaccel.check.whole_filter import submission
-
-        if n_runs is not None:
-            options["n_runs"] = n_runs
-        report = submission(path, seed=seed, timeout=timeout, **options)
-        report.details["problem"] = self.name
-        return report
 
 
 # ============================================================================ coop
@@ -439,7 +410,7 @@ class CoopProblem(Problem):
         return self._cache[key][0]
 
     def evaluate(self, report: Report, cases: CoopCases, function: Function,
-                 results: list[dict[str, np.ndarray]]) -> None:
+                 results: list[dict[str, np.ndarray]], returned: dict) -> None:
         from gpsaccel.coop import mistakes as cm
         from gpsaccel.coop.model import STATES
 
@@ -619,7 +590,7 @@ class ShipProblem(Problem):
         return _ship_variant(cases, variant)
 
     def evaluate(self, report: Report, cases: ShipCases, function: Function,
-                 results: list[dict[str, np.ndarray]]) -> None:
+                 results: list[dict[str, np.ndarray]], returned: dict) -> None:
         from gpsaccel.ship import mistakes as sm
         from gpsaccel.ship.model import STATES
 
@@ -762,26 +733,24 @@ def _mono(model) -> np.ndarray:
 
 
 # ============================================================================ the registry
-PROBLEMS: dict[str, Problem] = {}
-
-
 def get(problem: str | Problem) -> Problem:
-    """The problem named ``problem`` ("calibration", "coop", "ship"), or ``problem`` itself."""
+    """The registered problem named ``problem`` (:mod:`gpsaccel.registry`: "calibration",
+    "coop", "ship", "tracker", and any an instructor added), or ``problem`` itself."""
     if isinstance(problem, Problem):
         return problem
-    name = _v.choice("problem", problem, ("calibration", "coop", "ship"))
-    if name not in PROBLEMS:
-        PROBLEMS[name] = {"calibration": CalibrationProblem, "coop": CoopProblem,
-                          "ship": ShipProblem}[name]()
-    return PROBLEMS[name]
+    from gpsaccel import registry
+
+    if not isinstance(problem, str):
+        raise ValueError(f"problem must be a problem name or a Problem, got {problem!r}")
+    return registry.problem(problem)  # type: ignore[return-value]
 
 
 def submission(path: str | os.PathLike, *, problem: str | Problem = "calibration",
                **options: object) -> Report:
-    """Check the student's file ``path`` for ``problem``; the options are those of
-    :meth:`Problem.check` (n_runs, seed, timeout; the calibration problem takes every option of
-    :func:`gpsaccel.check.whole_filter.submission`)."""
-    return get(problem).check(path, **options)
+    """Check the student's submission ``path`` (a ``.py`` file or one student's folder) for
+    ``problem``; the options are those of :meth:`Problem.check` (n_runs, seed, timeout, sandbox,
+    limits, allow_gpsaccel)."""
+    return get(problem).check(path, **options)  # type: ignore[arg-type]
 
 
 def assert_submission(path: str | os.PathLike, *, problem: str | Problem = "calibration",
@@ -791,3 +760,15 @@ def assert_submission(path: str | os.PathLike, *, problem: str | Problem = "cali
     if not report.passed:
         raise AssertionError("\n" + str(report))
     return report
+
+
+def _register() -> None:
+    from gpsaccel import registry
+
+    registry.add_problem("coop", CoopProblem, system="coop", title=CoopProblem.title,
+                         replace=True)
+    registry.add_problem("ship", ShipProblem, system="ship", title=ShipProblem.title,
+                         replace=True)
+
+
+_register()

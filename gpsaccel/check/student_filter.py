@@ -8,7 +8,7 @@
     print(compare("joseph", "square-root", filters={"alice": check.student_filter("alice.py")}))
 
 Each call runs the file in a sandbox (:mod:`gpsaccel.check.sandbox`, as
-:func:`gpsaccel.check.whole_filter.run_student` does for a check: a box of its own with limits,
+:meth:`gpsaccel.check.problems.Problem.check` does for a check: a box of its own with limits,
 nothing of the student's imported into this process) on ``repeat`` copies of ``z`` and hands back
 the first run's (x_hat, P).  The time per run is measured in the child around the student's calls
 only, and set as the callable's ``seconds`` (``compare`` reports it instead of the box's start-up).
@@ -28,10 +28,10 @@ from pathlib import Path
 import numpy as np
 
 from gpsaccel import _validation as _v
-from gpsaccel.calibration.model import CalibrationModel
 from gpsaccel.check import sandbox as sb
+from gpsaccel.check.findings import box_findings
 from gpsaccel.check.report import Report
-from gpsaccel.check.whole_filter import FUNCTION, _run_findings, run_student
+from gpsaccel.check.whole_filter import FUNCTION, calls
 
 
 class StudentFilterError(RuntimeError):
@@ -71,13 +71,14 @@ class StudentFilter:
         except sb.SubmissionError as exc:
             raise StudentFilterError(str(exc)) from None
         limits = sb.Limits(time=self.timeout)
-        box, x, P = run_student(sub, np.repeat(z[None], self.repeat, axis=0), limits,
-                                self.sandbox)
+        many = calls(np.repeat(z[None], self.repeat, axis=0))
+        box = sb.run(sub, many, limits, self.sandbox)
         report = Report(self.path.name)
-        if not _run_findings(report, box, limits, self.repeat, CalibrationModel()):
+        if not box_findings(report, box, many, limits, labels=[f"run {r}" for r in
+                                                                  range(self.repeat)]):
             raise StudentFilterError("\n".join(f.message for f in report.findings
                                                 if f.severity == "error") or "no result")
-        x, P = x[0], P[0]  # the declared shapes, (n, 3) and (n, 3, 3)
+        x, P = box.results[0]["x_hat"], box.results[0]["P"]  # the declared shapes
         # the child's own clock, not trusted beyond the wall clock of the whole box (start-up
         # and import included); a hostile file can still under-report it, so it is indicative
         done = self.repeat  # no problem reported: every run came back

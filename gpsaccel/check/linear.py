@@ -1,0 +1,613 @@
+r"""The checker of a linear filter, for any linear model: compare with the one optimal answer, then
+diagnose against a catalogue of mistakes.
+
+A student's ``kalman_filter(z) -> (x_hat, P)`` is run (in the sandbox, by :meth:`Problem.check`)
+on realizations simulated from a seed; with every student process gone the optimal filter runs on
+the same z, and the two are compared in units of the optimal σ = √diag P_ref::
+
+    d_P = max |P_ij − P_ref,ij| / (σ_i σ_j)     d_x = max |x̂_i − x̂_ref,i| / σ_i
+
+It passes when both are within ``tol`` (1e-6) on every run.  A failing filter is diagnosed in
+this order (each would otherwise read as a wrong V or M0):
+
+1. mistakes in what is returned (:meth:`LinearProblem.output_mistake`): ``aliased-output``,
+   ``state-between-calls``, ``low-precision`` (float32), ``p-scaled``, ``epoch-shift``, and a
+   skipped update at the first row that departs — x̂ = x̄ and P = M there (``update-skipped``,
+   ``last-update-missing`` at the last epoch), P = M only (``covariance-update-skipped``) or
+   x̂ = x̄ only (``mean-update-skipped``);
+2. the catalogue (:class:`gpsaccel.kalman.epochs.Catalogue`): P does not depend on the data, so P
+   is matched first against every covariance mistake and every combination of up to three that
+   touch different ingredients, then x̂ against the matched entry with the mean mistakes;
+3. otherwise the first departure is located (t = 0: the update; later: the propagation), with
+   the nearest catalogue entry as a hint when it is within :data:`HINT_FACTOR` × tol.
+
+Then consistency over the runs with the student's own P (mean error and average NEES, each a
+Bonferroni family at ``alpha``) is reported as information: it never decides ``passed``.
+
+:class:`LinearProblem` holds this for any :class:`~gpsaccel.kalman.epochs.LinearModel`
+(``check.Problem.linear(...)``, the generic catalogue); the calibration problem
+(:mod:`gpsaccel.check.whole_filter`) is the same class with report 000's simulation, catalogue
+and wording.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from functools import lru_cache
+
+import numpy as np
+
+from gpsaccel import _validation as _v
+from gpsaccel.check.problems import Argument, Function, Problem
+from gpsaccel.check.report import Report
+from gpsaccel.check.sandbox import Call, Output
+from gpsaccel.kalman.consistency import (
+    chi2_bounds,
+    covariance_distance,
+    format_verdicts,
+    nees,
+    sigma_distance,
+    verdict_from_z,
+    z_ensemble_normalized_squared,
+    z_sample_mean,
+)
+from gpsaccel.kalman.epochs import (
+    Catalogue,
+    EpochFilter,
+    LinearCatalogue,
+    LinearModel,
+    Mistake,
+    batch_gains,
+    combinations,
+)
+
+#: Largest distance (units of the optimal σ) at which P and x̂ count as equal; also the distance
+#: within which a catalogue entry counts as matching.
+TOLERANCE = 1e-6
+
+#: The nearest catalogued mistake is shown as a hint only within this factor of the tolerance.
+HINT_FACTOR = 10.0
+
+#: Largest distances (σσ in P, σ in x̂) at which a float32 filter counts as "right but low
+#: precision" (measured on report 000's 6000 steps: 8e-5 σσ in P, 0.035 σ in x̂).
+LOW_PRECISION = (1e-3, 0.1)
+
+#: code -> template of the diagnosis's findings (a problem overrides entries in ``messages``).
+FINDINGS: dict[str, str] = {
+    "matches-optimal": "P and x̂ match the optimal filter to {tol:g} σ on all {n_runs} runs.",
+    "nan-output": "{name} contains {what} in {bad_runs} of {n_runs} runs; in run {run} first at "
+                  "t = {t:g} s (row {row}). Likely causes: an array made with np.empty and never "
+                  "filled at that row, a division by zero, or the inverse of a singular matrix.",
+    "p-depends-on-data": "Your P changes from run to run (by up to {spread:.3g} σσ). In a linear "
+                         "Kalman filter P depends only on Φ, Q, H, V and M0, never on the "
+                         "measurements: compute P without z.",
+    "aliased-output": "Every row of your x_hat and P holds the same values, those of the last "
+                      "time (t = {t_last:g} s): each row is the same array object, changed in "
+                      "place at every step (e.g. x += K @ r or P[:] = ..., then appended to a "
+                      "list). Store a copy: x_hat[k] = x (into a preallocated array) or "
+                      "xs.append(x.copy()).",
+    "state-between-calls": "Your filter is right on the first call but not on later ones: "
+                           "{what} first differs on run {run} (by {by:.3g} σ), and {n_bad} of "
+                           "{n_runs} runs differ. Something survives between calls: a "
+                           "module-level list or array that keeps growing, a global M0 or x0 "
+                           "changed in place (M = M0 then M -= ...). Copy globals before "
+                           "changing them (M = M0.copy()).",
+    "low-precision": "Your filter computes in single precision (float32): its output differs "
+                     "from the optimal filter by up to {dP:.2g} σσ in P and {dx:.2g} σ in x̂, "
+                     "what float32 rounding (about 6e-8 relative) builds up over {n_steps} "
+                     "steps; the tolerance is {tol:g}. This is not a wrong M0, H or V: use "
+                     "float64 throughout (no .astype(np.float32), z as given) and check again — "
+                     "at float32 precision a small mistake could hide.",
+    "p-scaled": "Your P is the optimal P multiplied by {c:.6g} at every time{sym}. {x_note} M0, "
+                "H and V are not the problem: look at the line that symmetrises or scales P.",
+    "epoch-shift": "Your outputs are shifted by one epoch, {where} (every row but the {end} "
+                   "matches the optimal filter shifted). Store x̂ and P of time t_k in row k, "
+                   "right after the update with z[k].",
+    "epoch-shift.late": "one time late: row k holds the estimate of time k − 1",
+    "epoch-shift.early": "one time early: row k holds the estimate of time k + 1",
+    "last-update-missing": "Your filter is right except at the last time (t = {t:g} s), where "
+                           "x̂ and P are the a priori x̄ and M: the update with the last "
+                           "measurement z[{row}] is missing (a loop such as range(n - 1), or the "
+                           "update placed before the propagation).",
+    "update-skipped": "Your filter is right up to t = {t_prev:g} s, but at t = {t:g} s (row "
+                      "{row}) x̂ and P are the a priori x̄ and M: the update with z[{row}] is "
+                      "missing there, and every later row follows from it. Look at the "
+                      "condition that decides when to update.",
+    "covariance-update-skipped": "At t = {t:g} s (row {row}) your P is the a priori M: the "
+                                 "covariance update with z[{row}] is missing, though your x̂ "
+                                 "there used it; every earlier row matches, so the propagation "
+                                 "is right. Update P with the same gain: P = (I − K H) M "
+                                 "(I − K H)ᵀ + K V Kᵀ.",
+    "mean-update-skipped": "At t = {t:g} s (row {row}) your x̂ is the a priori x̄ while your P "
+                           "was updated: the mean update x̂ = x̄ + K (z − H x̄) with z[{row}] is "
+                           "missing there; every earlier row matches.",
+    "gain-or-residual": "{lead} your x̂ differs from what that filter gives on the same z by up "
+                        "to {dx:.3g} σ ({where}). The mistake is in how x̂ is formed: check "
+                        "K = M Hᵀ (H M Hᵀ + V)⁻¹, x̄ = Φ x̂ at every {step}, the residual "
+                        "r = z − H x̄ and x̂ = x̄ + K r, with z at the matching time.",
+    "p-mismatch": "Your P does not match the optimal filter (it differs by up to {d:.3g} σσ)."
+                  "{hint} {where}{depart} {matrices}",
+    "p-mismatch.first": "P at t = 0 already differs: the first update uses only M0, H and V, so "
+                        "one of them is wrong (or the update formula).",
+    "p-mismatch.later": "P at t = 0 is right (so M0, H, V and the update are), but P differs "
+                        "from t = {t:g} s on: the propagation between measurements is wrong "
+                        "(Φ, Q = Γ W Γᵀ, or the number of steps).",
+    "p-mismatch.matrices": "Check your Φ, Γ, W, H, V and M0 against the problem's.",
+    "hint.near": " The nearest known mistake is {names}: your P is within {d:.3g} σσ of it "
+                 "({ratio:.2g}× the tolerance), so look there first.",
+    "hint.none": " No catalogued mistake matches.",
+}
+
+
+@dataclass(frozen=True, eq=False)
+class Cases:
+    """The realizations a check runs on (no answer in it): z (n_runs, n_epochs, p) and the true
+    states x_true (n_runs, n_epochs, n)."""
+
+    seed: int
+    z: np.ndarray
+    x_true: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class Answer:
+    """The optimal filter on the cases: x_ref (n_runs, n_epochs, n), P_ref (n_epochs, n, n),
+    sd = √diag P_ref."""
+
+    x_ref: np.ndarray
+    P_ref: np.ndarray
+    sd: np.ndarray
+
+
+def answer(flt: EpochFilter, z: np.ndarray) -> Answer:
+    """The filter ``flt`` (the optimal one) run on z."""
+    x_ref, P_ref = flt.apply(z)
+    return Answer(x_ref, P_ref, np.sqrt(np.diagonal(P_ref, axis1=1, axis2=2)))
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """The catalogue entries that reproduce the student's (x̂, P), or the nearest P entry."""
+
+    covariance: tuple[Mistake, ...] | None
+    mean: tuple[Mistake, ...] | None
+    nearest: tuple[Mistake, ...] | None
+    nearest_distance: float
+
+
+def candidates(catalogue: Catalogue, max_combined: int
+               ) -> tuple[list[tuple[Mistake, ...]], np.ndarray]:
+    """Every covariance entry and combination of up to ``max_combined`` (the first is the optimal
+    filter, ``()``) and the covariance each returns, (C, n_epochs, n, n)."""
+    cov = catalogue.covariance_mistakes()
+    combos: list[tuple[Mistake, ...]] = [()]
+    for k in range(1, max_combined + 1):
+        combos += list(combinations(cov, k))
+    filters = [catalogue.build(c) for c in combos]
+    _, M, P = batch_gains(filters)
+    prior = np.array([f.output == "prior" for f in filters])
+    return combos, np.where(prior[:, None, None, None], M, P)
+
+
+def diagnose(P_student: np.ndarray, x_student: np.ndarray, z: np.ndarray, sd: np.ndarray,
+             catalogue: Catalogue, combos: list[tuple[Mistake, ...]], P_out: np.ndarray,
+             tol: float = TOLERANCE) -> Diagnosis:
+    """Match (x̂, P) of the student (all runs) against the catalogue; see the module docstring."""
+    # run 0's P against every candidate ranks them; a candidate within the tolerance must then
+    # also match every other run's P (a P that varies with the data matches nothing)
+    d = covariance_distance(P_student[0][None], P_out, sd).reshape(len(combos), -1).max(axis=1)
+    for c in np.flatnonzero(d <= tol):
+        d[c] = covariance_distance(P_student, P_out[c][None], sd).max()
+    order = np.argsort(d, kind="stable")
+    means = catalogue.mean_mistakes()
+    mean_combos = [()] + [(m,) for m in means] + list(combinations(means, 2))
+    matching = [int(c) for c in order if d[c] <= tol]
+    for c in matching:
+        for mc in mean_combos:
+            x, _ = catalogue.build(combos[c] + mc).apply(z)
+            if np.max(np.abs(x_student - x) / sd) <= tol:
+                return Diagnosis(combos[c], mc, None, float(d[c]))
+    if matching:
+        return Diagnosis(combos[matching[0]], None, None, float(d[matching[0]]))
+    best = int(order[0])
+    return Diagnosis(None, None, combos[best], float(d[best]))
+
+
+def _float32_exact(a: np.ndarray) -> bool:
+    """Every value of ``a`` is a float32 number (what a float32 computation returns)."""
+    return bool(np.all(a.astype(np.float32).astype(np.float64) == a))
+
+
+class LinearProblem(Problem):
+    """``kalman_filter(z) -> (x_hat, P)`` for a linear model, checked as the module docstring says.
+
+    Subclasses (or :meth:`Problem.linear`) give :meth:`catalogue`, :meth:`simulate`, the epoch
+    times :attr:`t`, the state names :attr:`states`, :attr:`every` and :attr:`n_steps`.
+    """
+
+    function_name = "kalman_filter"
+    default_runs = 10
+    tolerance = "1e-6 σ in x̂ and P (units of the optimal σ)"
+    #: what one propagation step is called in messages
+    step = "propagation step"
+    t: np.ndarray
+    states: tuple[str, ...]
+    every: int = 1
+    n_steps: int = 0
+
+    def __init__(self, alpha: float = 0.01, tol: float = TOLERANCE) -> None:
+        self.alpha = _v.probability("alpha", alpha)
+        self.tol = _v.positive_float("tol", tol)
+        self._candidates: dict[int, tuple[list[tuple[Mistake, ...]], np.ndarray]] = {}
+
+    # ------------------------------------------------------------------------- the hooks
+    def catalogue(self) -> Catalogue:
+        raise NotImplementedError
+
+    def simulate(self, n_runs: int, seed: int) -> Cases:
+        raise NotImplementedError
+
+    def answer(self, cases: Cases) -> Answer:
+        """The optimal answer on the cases (computed only once no student process is alive)."""
+        return answer(self.catalogue().build(), cases.z)
+
+    def candidates(self, max_combined: int = 3) -> tuple[list[tuple[Mistake, ...]], np.ndarray]:
+        if max_combined not in self._candidates:
+            self._candidates[max_combined] = candidates(self.catalogue(), max_combined)
+        return self._candidates[max_combined]
+
+    def forget(self) -> None:
+        self._candidates.clear()
+
+    def codes(self) -> tuple[str, ...]:
+        cat = self.catalogue()
+        return tuple(dict.fromkeys(m.code for m in cat.covariance_mistakes()
+                                   + cat.mean_mistakes()))
+
+    def text(self, key: str, **fields: object) -> str:
+        return {**FINDINGS, **self.messages}[key].format(**fields)
+
+    # -------------------------------------------------------------------- the contract
+    def contract(self, n_meas: int, meaning: str = "") -> tuple[Function, ...]:
+        """The one function ``kalman_filter(z) -> (x_hat, P)`` for this problem's sizes."""
+        k, n = len(self.t), len(self.states)
+        return (Function(self.function_name, (Argument("z", (k, n_meas), meaning or
+                                                        "the measurements, row i at t_i"),),
+                         (Output("x_hat", (k, n)), Output("P", (k, n, n))),
+                         "the a posteriori x̂ and P at every measurement time"),)
+
+    def cases(self, n_runs: int, seed: int) -> Cases:
+        return self.simulate(n_runs, seed)
+
+    def calls(self, cases: Cases, function: Function) -> list[Call]:
+        return [Call(function.name, (cases.z[r],), function.outputs)
+                for r in range(cases.z.shape[0])]
+
+    def labels(self, cases: Cases) -> list[str]:
+        return [f"run {r}" for r in range(cases.z.shape[0])]
+
+    def message_fields(self, cases: Cases) -> dict[str, object]:
+        t = self.t
+        return {"every": self.every,
+                "rows": f"one row per measurement time t = {t[0]:g}, {t[1]:g}, ..., {t[-1]:g} s",
+                "work": f"{self.n_steps} {self.step}s per run should take well under a second"}
+
+    # ---------------------------------------------------------------------- the verdict
+    def evaluate(self, report: Report, cases: Cases, function: Function,
+                 results: list[dict[str, np.ndarray]], returned: dict) -> None:
+        x = np.stack([r["x_hat"] for r in results])
+        P = np.stack([r["P"] for r in results])
+        if not self._finite(report, x, P):
+            return
+        ans = self.answer(cases)  # the box is empty: now the answer may exist
+        P_ok, x_ok = self._comparison(report, ans, x, P)
+        if P_ok and x_ok:
+            report.add("matches-optimal", self.text("matches-optimal", tol=self.tol,
+                                                    n_runs=x.shape[0]), "note")
+        elif not self.output_mistake(report, cases, ans, x, P, returned):
+            self._diagnosis(report, cases, ans, x, P)
+        if "low-precision" not in report.codes:  # float32's P is not symmetric to 1e-9
+            self._consistency(report, cases, ans, x, P)
+
+    def _where(self, idx: tuple[int, ...], kind: str) -> str:
+        if kind == "x":
+            r, i, s = idx
+            return f"run {r}, t = {self.t[i]:g} s, {self.states[s]}"
+        i, a, b = idx[-3:]
+        return f"t = {self.t[i]:g} s, element P{a + 1}{b + 1}"
+
+    def _finite(self, report: Report, x: np.ndarray, P: np.ndarray) -> bool:
+        """NaN/inf in what came back; True when everything is finite."""
+        for name, arr in (("x_hat", x), ("P", P)):
+            bad = ~np.isfinite(arr)
+            if bad.any():
+                runs = np.flatnonzero(bad.reshape(bad.shape[0], -1).any(axis=1))
+                first = np.argwhere(bad[runs[0]])[0]
+                report.add("nan-output", self.text(
+                    "nan-output", name=name, what="NaN" if np.isnan(arr).any() else "inf",
+                    bad_runs=runs.size, n_runs=arr.shape[0], run=runs[0], t=self.t[first[0]],
+                    row=first[0]))
+                return False
+        return True
+
+    def _comparison(self, report: Report, ans: Answer, x: np.ndarray, P: np.ndarray
+                    ) -> tuple[bool, bool]:
+        tol = self.tol
+        dx, dP = sigma_distance(x, P, ans.x_ref, ans.P_ref, ans.sd)
+        iP = np.unravel_index(int(np.argmax(dP)), dP.shape)
+        ix = np.unravel_index(int(np.argmax(dx)), dx.shape)
+        spread = covariance_distance(P, P[:1], ans.sd).max()
+        report.details.update({
+            "max_dP_sigma": float(dP.max()), "max_dP_where": self._where(iP, "P"),
+            "max_dx_sigma": float(dx.max()), "max_dx_where": self._where(ix, "x"),
+            "P_spread_over_runs_sigma": float(spread), "tolerance_sigma": tol,
+        })
+        report.tables.append(
+            f"against the optimal filter on {x.shape[0]} runs (units of the optimal σ, "
+            f"tolerance {tol:g}):\n"
+            f"  max |ΔP|/(σσ) = {dP.max():.3g}  at {self._where(iP, 'P')}\n"
+            f"  max |Δx̂|/σ   = {dx.max():.3g}  at {self._where(ix, 'x')}")
+        if spread > tol:
+            report.add("p-depends-on-data", self.text("p-depends-on-data", spread=spread),
+                       "warning")
+        return bool(dP.max() <= tol), bool(dx.max() <= tol)
+
+    # --------------------------------------------------------- mistakes in what is returned
+    def output_mistake(self, report: Report, cases: Cases, ans: Answer, x: np.ndarray,
+                       P: np.ndarray, returned: dict) -> bool:
+        """Mistakes in what is returned or how calls share state, recognised before the
+        catalogue (module docstring, step 1); True when one was reported."""
+        tol, sd, t = self.tol, ans.sd, self.t
+        dP = covariance_distance(P, ans.P_ref[None], sd)                   # (N, k, n, n)
+        dx = np.abs(x - ans.x_ref) / sd                                     # (N, k, n)
+        for check in (self._aliased, self._between_calls, self._low_precision, self._scaled,
+                      self._shifted, self._skipped_update):
+            found = check(cases, ans, x, P, dx, dP, returned)
+            if found is not None:
+                code, fields = found
+                report.add(code, self.text(code, tol=tol, t_last=t[-1], **fields))
+                if code == "state-between-calls":
+                    report.findings = [f for f in report.findings
+                                       if f.code != "p-depends-on-data"]
+                    report.details["first_wrong_run"] = fields["run"]
+                return True
+        return False
+
+    def _aliased(self, cases, ans, x, P, dx, dP, returned):
+        # every row identical and equal to the last optimal one: one array object stored at
+        # every time (a constant output that is not the last estimate is some other mistake)
+        if x.shape[1] > 2 and np.all(P == P[:, -1:]) and np.all(x == x[:, -1:]) and \
+                dP[:, -1].max() <= self.tol and dx[:, -1].max() <= self.tol:
+            return "aliased-output", {}
+        return None
+
+    def _between_calls(self, cases, ans, x, P, dx, dP, returned):
+        per_run = np.maximum(dP.max(axis=(1, 2, 3)), dx.max(axis=(1, 2)))
+        if per_run[0] <= self.tol and (per_run > self.tol).any():
+            r = int(np.argmax(per_run > self.tol))
+            return "state-between-calls", {
+                "what": "P" if dP[r].max() > self.tol else "x̂", "run": r, "by": per_run[r],
+                "n_bad": int((per_run > self.tol).sum()), "n_runs": len(per_run)}
+        return None
+
+    def _low_precision(self, cases, ans, x, P, dx, dP, returned):
+        dtypes = {(returned.get(k) or {}).get("dtype") for k in ("x_hat", "P")}
+        if dP.max() <= LOW_PRECISION[0] and dx.max() <= LOW_PRECISION[1] and (
+                "float32" in dtypes or (_float32_exact(x) and _float32_exact(P))):
+            return "low-precision", {"dP": dP.max(), "dx": dx.max(), "n_steps": self.n_steps}
+        return None
+
+    def _scaled(self, cases, ans, x, P, dx, dP, returned):
+        diag_ref = np.diagonal(ans.P_ref, axis1=-2, axis2=-1)
+        c = float(np.median(np.diagonal(P, axis1=-2, axis2=-1) / diag_ref))
+        if abs(c - 1) > 1e-3 and covariance_distance(P, c * ans.P_ref[None], ans.sd).max() \
+                <= self.tol * max(c, 1.0):
+            x_note = ("Your x̂ is right, so only the returned P is scaled." if dx.max() <= self.tol
+                      else f"Your x̂ differs too (by up to {dx.max():.3g} σ): the scaled P also "
+                           f"feeds your gain.")
+            sym = " — P + Pᵀ without the /2 when symmetrising" if abs(c - 2) < 1e-6 else ""
+            return "p-scaled", {"c": c, "x_note": x_note, "sym": sym}
+        return None
+
+    def _shifted(self, cases, ans, x, P, dx, dP, returned):
+        for shift, late in ((1, "late"), (-1, "early")):
+            where = self.text(f"epoch-shift.{late}")
+            a = slice(1, None) if shift == 1 else slice(None, -1)
+            b = slice(None, -1) if shift == 1 else slice(1, None)
+            if (covariance_distance(P[:, a], ans.P_ref[None, b], ans.sd[b]).max() <= self.tol
+                    and (np.abs(x[:, a] - ans.x_ref[:, b]) / ans.sd[b]).max() <= self.tol):
+                return "epoch-shift", {"where": where, "end": "first" if shift == 1 else "last"}
+        return None
+
+    def _skipped_update(self, cases, ans, x, P, dx, dP, returned):
+        """The first row that departs holds the a priori x̄ and/or M of the optimal filter."""
+        tol = self.tol
+        bad = (dP.max(axis=(0, 2, 3)) > tol) | (dx.max(axis=(0, 2)) > tol)
+        k = int(np.argmax(bad))
+        if k == 0:
+            return None  # the first epoch: the catalogue's first-update-skipped
+        flt = self.catalogue().build()
+        _, M_ref, _ = flt.gains
+        x_bar = replace(flt, output="prior").apply(cases.z)[0]
+        sd = ans.sd[k:k + 1]
+        P_prior = covariance_distance(P[:, k:k + 1], M_ref[None, k:k + 1], sd).max() <= tol
+        x_prior = (np.abs(x[:, k] - x_bar[:, k]) / ans.sd[k]).max() <= tol
+        P_post = dP[:, k].max() <= tol
+        x_post = dx[:, k].max() <= tol
+        last = k == len(self.t) - 1
+        fields = {"t": self.t[k], "row": k, "t_prev": self.t[k - 1]}
+        if P_prior and x_prior:
+            return ("last-update-missing" if last else "update-skipped"), fields
+        if P_prior and x_post:
+            return "covariance-update-skipped", fields
+        if x_prior and P_post:
+            return "mean-update-skipped", fields
+        return None
+
+    # -------------------------------------------------------------------- the catalogue
+    def _diagnosis(self, report: Report, cases: Cases, ans: Answer, x: np.ndarray,
+                   P: np.ndarray) -> None:
+        tol, t = self.tol, self.t
+        combos, P_out = self.candidates()
+        diag = diagnose(P, x, cases.z, ans.sd, self.catalogue(), combos, P_out, tol)
+        names = lambda ms: ", ".join(str(m) for m in ms)  # noqa: E731
+        if diag.covariance is not None and diag.mean is not None:
+            found = diag.covariance + diag.mean
+            report.details["matched"] = [{"code": m.code, "variant": m.variant} for m in found]
+            for m in found:
+                report.add(m.code, m.message)
+            report.tables.append(f"catalogue: on every run your (x̂, P) match, to {tol:g} σ, "
+                                 f"the filter that makes\n" + "\n".join(f"  {m}" for m in found))
+            return
+        if diag.covariance is not None:  # P recognised, x̂ not
+            for m in diag.covariance:
+                report.add(m.code, m.message)
+            xm = self.catalogue().build(diag.covariance).apply(cases.z)[0]
+            dx = np.abs(x - xm) / ans.sd
+            i = np.unravel_index(int(np.argmax(dx)), dx.shape)
+            lead = ("Your P is the optimal one, so your model (Φ, Q, H, V, M0) is right, but"
+                    if not diag.covariance else f"Your P matches {names(diag.covariance)}, and")
+            report.add("gain-or-residual", self.text("gain-or-residual", lead=lead, dx=dx.max(),
+                                                     where=self._where(i, "x"), step=self.step))
+            report.details["matched"] = [{"code": m.code, "variant": m.variant}
+                                         for m in diag.covariance]
+            return
+        dP = covariance_distance(P, ans.P_ref[None], ans.sd).max(axis=(0, 2, 3))
+        first = int(np.argmax(dP > tol))
+        where = self.text("p-mismatch.first" if first == 0 else "p-mismatch.later", t=t[first])
+        near = diag.nearest and diag.nearest_distance <= HINT_FACTOR * tol
+        hint = self.text("hint.near" if near else "hint.none", names=names(diag.nearest or ()),
+                         d=diag.nearest_distance, ratio=diag.nearest_distance / tol)
+        worst = covariance_distance(P[:, first:first + 1], ans.P_ref[None, first:first + 1],
+                                    ans.sd[first:first + 1])[:, 0]
+        r, a, b = np.unravel_index(int(np.argmax(worst)), worst.shape)
+        depart = (f" Your output first departs at t = {t[first]:g} s: P{a + 1}{b + 1} = "
+                  f"{P[r, first, a, b]:.6g}, the optimal filter's is "
+                  f"{ans.P_ref[first, a, b]:.6g}.")
+        report.add("p-mismatch", self.text("p-mismatch", d=float(dP.max()), hint=hint,
+                                           where=where, depart=depart,
+                                           matrices=self.text("p-mismatch.matrices")))
+        report.details["matched"] = []
+
+    # ------------------------------------------------------------------ the information
+    def _consistency(self, report: Report, cases: Cases, ans: Answer, x: np.ndarray,
+                     P: np.ndarray) -> None:
+        t, alpha, states = self.t, self.alpha, self.states
+        N, n = x.shape[0], x.shape[-1]
+        e = cases.x_true - x                               # (N, k, n)
+        sym = np.abs(P - np.swapaxes(P, -1, -2)).max(axis=(-1, -2)) <= 1e-9 * np.abs(P).max(
+            axis=(-1, -2))
+        eig_min = np.linalg.eigvalsh((P + np.swapaxes(P, -1, -2)) / 2).min(axis=-1)
+        bad = ~sym | (eig_min <= 0)
+        if bad.any():
+            times = np.flatnonzero(bad.any(axis=0))
+            report.add("p-not-positive-definite", f"Your P is not a covariance at {times.size} "
+                       f"times (first t = {t[times[0]]:g} s): it is not symmetric positive "
+                       f"definite, so NEES cannot be formed. A Joseph update, or symmetrising "
+                       f"P = (P + Pᵀ)/2, keeps it one.", "warning")
+            return
+        var = np.diagonal(P, axis1=-2, axis2=-1)
+        z_mean = z_sample_mean(e.mean(axis=0), var.mean(axis=0), N)
+        v_mean = verdict_from_z("mean error ē/σ", z_mean,
+                                lambda idx: f"t = {t[idx[0]]:g} s, {states[idx[1]]}", alpha)
+        eps = nees(e, (P + np.swapaxes(P, -1, -2)) / 2).mean(axis=0)
+        z_nees = z_ensemble_normalized_squared(eps, n, N)
+        v_nees = verdict_from_z("NEES (average)", z_nees, lambda idx: f"t = {t[idx[0]]:g} s",
+                                alpha)
+        lo, hi = chi2_bounds(n, N, 0.05)
+        inside = float(np.mean((eps >= lo) & (eps <= hi)))
+        rms = np.sqrt(np.mean(e**2, axis=0))
+        rms_ref = np.sqrt(np.mean((cases.x_true - ans.x_ref) ** 2, axis=0))
+        ratio = rms.mean(axis=0) / rms_ref.mean(axis=0)
+        report.details["consistency"] = {
+            "alpha": alpha, "n_runs": N,
+            "mean_error_max_abs_z": v_mean.max_abs_z, "mean_error_bound": v_mean.threshold,
+            "nees_max_abs_z": v_nees.max_abs_z, "nees_bound": v_nees.threshold,
+            "nees_fraction_inside_95": inside,
+            "nees_average_first_last": [float(eps[0]), float(eps[-1])],
+            "rms_ratio_to_optimal": [float(r) for r in ratio],
+        }
+        report.tables.append(
+            f"consistency over {N} runs, with your P (family-wise false-alarm rate {alpha:g} "
+            f"each):\n" + format_verdicts([v_mean, v_nees])
+            + f"\nNEES inside its 95% bounds [{lo:.3f}, {hi:.3f}] at {100 * inside:.0f}% of the "
+              f"{t.size} times (expected ≈ 95%)."
+            + "\nRMS error over time relative to the optimal filter: "
+            + ", ".join(f"{s} {r:.3g}" for s, r in zip(states, ratio, strict=True)))
+        i_mean = np.unravel_index(int(np.nanargmax(np.abs(z_mean))), z_mean.shape)
+        i_nees = int(np.nanargmax(np.abs(z_nees)))
+        for v, what in (
+                (v_mean, f"Your errors do not average to zero: at {v_mean.where} the mean error "
+                         f"over {N} runs is {e.mean(axis=0)[i_mean]:.3g}, {v_mean.max_abs_z:.3g} "
+                         f"times its standard error √(P/N)"),
+                (v_nees, f"Your P does not describe your actual errors: at {v_nees.where} the "
+                         f"average NEES over {N} runs is {eps[i_nees]:.4g}, outside its 95% "
+                         f"bounds [{lo:.3f}, {hi:.3f}] (|z| = {v_nees.max_abs_z:.3g})")):
+            if not v.passed:
+                report.add("inconsistent", f"{what}; the test fails beyond |z| = "
+                           f"{v.threshold:.3g} (family-wise false-alarm rate {alpha:g} over "
+                           f"{v.n_tests} tests). This is what the mistake does to the "
+                           f"estimates.", "warning")
+        if v_mean.passed and v_nees.passed:
+            report.add("consistent", f"Over {N} runs your errors average to zero and match your "
+                       f"P (mean-error and NEES tests at family-wise α = {alpha:g}).", "note")
+
+
+# ================================================================== any model, by an instructor
+class ModelProblem(LinearProblem):
+    """A :class:`LinearProblem` for a :class:`~gpsaccel.kalman.epochs.LinearModel` with the
+    generic catalogue (:class:`~gpsaccel.kalman.epochs.LinearCatalogue`); see
+    :meth:`Problem.linear`."""
+
+    def __init__(self, name: str, model: LinearModel, title: str = "",
+                 messages: dict[str, str] | None = None, z_meaning: str = "",
+                 default_runs: int = 10, alpha: float = 0.01, tol: float = TOLERANCE) -> None:
+        super().__init__(alpha=alpha, tol=tol)
+        if not isinstance(model, LinearModel):
+            raise ValueError(f"model must be a gpsaccel.kalman.epochs.LinearModel, got "
+                             f"{type(model).__name__}")
+        if not isinstance(name, str) or not name.replace("-", "").isalnum():
+            raise ValueError(f"name must be letters, digits and dashes, got {name!r}")
+        self.name = name
+        self.model = model
+        self.title = title or f"{name}: a linear filter ({model.n} states)"
+        self.messages = dict(messages or {})
+        self.t, self.states = model.t, model.states
+        self.every, self.n_steps = model.every, model.n_steps
+        self.default_runs = _v.integer("default_runs", default_runs, minimum=2)
+        self.functions = self.contract(model.H.shape[0], z_meaning)
+        self._catalogue = LinearCatalogue(model, self.messages)
+        self._simulated = lru_cache(maxsize=4)(self._simulate)
+
+    def catalogue(self) -> LinearCatalogue:
+        return self._catalogue
+
+    def _simulate(self, n_runs: int, seed: int) -> Cases:
+        z, x = self.model.simulate(np.random.default_rng(seed), n_runs)
+        return Cases(seed, z, x)
+
+    def simulate(self, n_runs: int, seed: int) -> Cases:
+        return self._simulated(n_runs, seed)
+
+
+def linear(name: str, *, Phi: object, Gamma: object, W: object, H: object, V: object,
+           M0: object, x0: object, every: int, n_epochs: int, dt: float = 1.0,
+           states: tuple[str, ...] = (), measurements: tuple[str, ...] = (), title: str = "",
+           messages: dict[str, str] | None = None, register: bool = True,
+           **options: object) -> ModelProblem:
+    """A homework problem for any linear model: ``kalman_filter(z) -> (x_hat, P)`` on the model
+    x_{j+1} = Φ x_j + Γ w_j (w ~ N(0, W)), z_i = H x_{i·every} + v_i (v ~ N(0, V)),
+    x_0 ~ N(x0, M0), with measurements at the epochs i = 0 .. n_epochs − 1 (every ``every``
+    propagation steps of ``dt`` s).  It is checked as :mod:`gpsaccel.check.linear` says, against
+    the generic catalogue of linear-filter mistakes (``messages`` rewords any entry, code ->
+    template).  ``register`` makes ``check.submission(path, problem=name)`` and ``gpsaccel check
+    --problem name`` find it.  ``options``: ``z_meaning``, ``default_runs``, ``alpha``, ``tol``.
+    """
+    model = LinearModel(Phi, Gamma, W, H, V, M0, x0, every, n_epochs, dt, states, measurements)
+    problem = ModelProblem(name, model, title, messages, **options)  # type: ignore[arg-type]
+    if register:
+        from gpsaccel import registry
+
+        registry.add_problem(problem.name, lambda: problem, system=problem.name,
+                             title=problem.title, replace=True)
+    return problem
