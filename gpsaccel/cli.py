@@ -395,14 +395,18 @@ def _add_ship(sub: argparse._SubParsersAction) -> None:
 
 
 def _add_check(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("check", help="check students' homework files (calibration, coop, ship)")
+    from gpsaccel import registry
+
+    p = sub.add_parser("check", help="check students' homework files (" +
+                       ", ".join(registry.problems()) + ")")
     p.add_argument("paths", nargs="+", type=Path,
                    help="submission files, or folders whose every top-level .py file or "
                         "sub-folder is one submission")
-    p.add_argument("--problem", choices=("calibration", "coop", "ship"), default="calibration",
+    p.add_argument("--problem", choices=registry.problems(), default="calibration",
                    help="calibration: kalman_filter(z) (report 000, default); coop: ekf(y, Q, R) "
                         "and/or lkf(y, Q, R) (report 002); ship: multirate_filter(z, u) "
-                        "(report 004)")
+                        "(report 004); tracker: kalman_filter(z) (a constant-velocity tracker); "
+                        "every problem of gpsaccel.registry")
     p.add_argument("--json", type=_v.output_file, default=None, metavar="FILE",
                    help="write every finding and number to FILE (e.g. results.json)")
     p.add_argument("--runs", type=_v.flag_int(minimum=2), default=None,

@@ -115,10 +115,6 @@ class ComparisonRow:
     def max_dx_sigma(self) -> float:
         return np.nan if self.errors is None else self.errors.dx_sigma
 
-    @property
-    def max_dP_rel(self) -> float:
-        return np.nan if self.errors is None else self.errors.dP_rel
-
 
 @dataclass(frozen=True)
 class Comparison:

@@ -62,9 +62,6 @@ DEFAULT_OMEGA = 0.1
 #: The error state [δp, δv, b]: names and units, in order (every table and figure uses these).
 STATE_NAMES = ("δp", "δv", "b")
 STATE_UNITS = ("m", "m/s", "m/s²")
-#: The measurement [GPS − accelerometer position, velocity]: names and units.
-MEASUREMENT_NAMES = ("δp", "δv")
-MEASUREMENT_UNITS = ("m", "m/s")
 
 
 def phi(dt: float, sign13: float = -1.0) -> np.ndarray:

@@ -22,7 +22,7 @@ mistakes live with their systems (:mod:`gpsaccel.calibration.mistakes`,
 ``kalman_filter(z)`` callable (run in its own box) for :func:`gpsaccel.calibration.compare.compare`.
 Students' code runs only inside a sandbox (:mod:`gpsaccel.check.sandbox`: bubblewrap namespaces or
 a portable basic box, with limits), whose generic interface (named functions, numpy inputs,
-declared outputs) the problem checkers use through :mod:`gpsaccel.check.student`.
+declared outputs) every problem uses through :meth:`Problem.check`.
 """
 
 from gpsaccel.calibration.mistakes import codes

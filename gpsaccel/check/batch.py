@@ -41,6 +41,7 @@ from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 
 from gpsaccel import _validation as _v
+from gpsaccel import registry
 from gpsaccel._atomic import write_text
 from gpsaccel.check import sandbox as sb
 from gpsaccel.check.problems import submission
@@ -134,8 +135,9 @@ def check_many(paths: Sequence[str | os.PathLike], n_runs: int | None = None,
     ``None`` (in this process, one after the other) or anything
     :func:`gpsaccel.executors.resolve_executor` accepts.  ``on_result(result)`` is called as each
     check finishes (e.g. to append it to a log).  Every submission sees the same realizations
-    (``seed``), so their results are comparable.  ``problem`` is "calibration", "coop" or "ship"
-    (:mod:`gpsaccel.check.problems`); ``n_runs`` None is the problem's default.  ``n_runs``,
+    (``seed``), so their results are comparable.  ``problem`` is a name of
+    :func:`gpsaccel.registry.problems` ("calibration", "coop", "ship", "tracker", ...); ``n_runs``
+    None is the problem's default.  ``n_runs``,
     ``seed`` and ``timeout`` are checked here, before any submission runs (a bad one would
     otherwise fail every check alike).  ``seed`` None (the default) is :func:`secret_seed`: a
     class is graded on data no student could know in advance; pass a seed to reproduce a run.
@@ -144,7 +146,7 @@ def check_many(paths: Sequence[str | os.PathLike], n_runs: int | None = None,
     :class:`Interrupted` on Ctrl-C.
     """
     n_runs = None if n_runs is None else _v.integer("n_runs", n_runs, minimum=2)
-    problem = _v.choice("problem", problem, ("calibration", "coop", "ship"))
+    problem = _v.choice("problem", problem, registry.problems())
     seed = secret_seed() if seed is None else _v.integer("seed", seed, minimum=0)
     timeout = _v.positive_float("timeout", timeout)
     files, _ = find_submissions(paths)

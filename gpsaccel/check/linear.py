@@ -36,6 +36,7 @@ from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from gpsaccel import _validation as _v
 from gpsaccel.check.problems import Argument, Function, Problem
@@ -202,15 +203,14 @@ def diagnose(P_student: np.ndarray, x_student: np.ndarray, z: np.ndarray, sd: np
     means = catalogue.mean_mistakes()
     mean_combos = [()] + [(m,) for m in means] + list(combinations(means, 2))
     matching = [int(c) for c in order if d[c] <= tol]
-    for c in matching:
+    for ci in matching:
         for mc in mean_combos:
-            x, _ = catalogue.build(combos[c] + mc).apply(z)
+            x, _ = catalogue.build(combos[ci] + mc).apply(z)
             if np.max(np.abs(x_student - x) / sd) <= tol:
-                return Diagnosis(combos[c], mc, None, float(d[c]))
+                return Diagnosis(combos[ci], mc, None, float(d[ci]))
     if matching:
         return Diagnosis(combos[matching[0]], None, None, float(d[matching[0]]))
-    best = int(order[0])
-    return Diagnosis(None, None, combos[best], float(d[best]))
+    return Diagnosis(None, None, combos[int(order[0])], float(d[int(order[0])]))
 
 
 def _float32_exact(a: np.ndarray) -> bool:
@@ -309,7 +309,7 @@ class LinearProblem(Problem):
         if "low-precision" not in report.codes:  # float32's P is not symmetric to 1e-9
             self._consistency(report, cases, ans, x, P)
 
-    def _where(self, idx: tuple[int, ...], kind: str) -> str:
+    def _where(self, idx: tuple, kind: str) -> str:
         if kind == "x":
             r, i, s = idx
             return f"run {r}, t = {self.t[i]:g} s, {self.states[s]}"
@@ -590,8 +590,8 @@ class ModelProblem(LinearProblem):
         return self._simulated(n_runs, seed)
 
 
-def linear(name: str, *, Phi: object, Gamma: object, W: object, H: object, V: object,
-           M0: object, x0: object, every: int, n_epochs: int, dt: float = 1.0,
+def linear(name: str, *, Phi: ArrayLike, Gamma: ArrayLike, W: ArrayLike, H: ArrayLike,
+           V: ArrayLike, M0: ArrayLike, x0: ArrayLike, every: int, n_epochs: int, dt: float = 1.0,
            states: tuple[str, ...] = (), measurements: tuple[str, ...] = (), title: str = "",
            messages: dict[str, str] | None = None, register: bool = True,
            **options: object) -> ModelProblem:
@@ -603,7 +603,8 @@ def linear(name: str, *, Phi: object, Gamma: object, W: object, H: object, V: ob
     template).  ``register`` makes ``check.submission(path, problem=name)`` and ``gpsaccel check
     --problem name`` find it.  ``options``: ``z_meaning``, ``default_runs``, ``alpha``, ``tol``.
     """
-    model = LinearModel(Phi, Gamma, W, H, V, M0, x0, every, n_epochs, dt, states, measurements)
+    model = LinearModel(Phi, Gamma, W, H, V, M0, x0,  # type: ignore[arg-type]  # checked there
+                        every, n_epochs, dt, states, measurements)
     problem = ModelProblem(name, model, title, messages, **options)  # type: ignore[arg-type]
     if register:
         from gpsaccel import registry

@@ -9,10 +9,12 @@ A :class:`Problem` says
   computing it from every catalogued mistake (:meth:`Problem.evaluate`, :attr:`Problem.tolerance`);
 * the **catalogue** of known mistakes, from the system's package (:meth:`Problem.codes`).
 
-:meth:`Problem.check` is the same for every problem: read which functions the file defines
-(without running it), simulate, call the student's functions in a child process
-(:func:`gpsaccel.check.student.call_functions`), turn whatever went wrong into findings, then
-compare with the reference and diagnose.  The result is the one :class:`~gpsaccel.check.report.
+:meth:`Problem.check` is the same for every problem: load the submission (a file or one
+student's folder, :func:`gpsaccel.check.sandbox.load_submission`), read which functions it defines
+(without running it), simulate, call the student's functions in the sandbox
+(:func:`gpsaccel.check.sandbox.run`), turn whatever went wrong into findings with the one
+:func:`gpsaccel.check.findings.box_findings` (each problem's wording as data), then compare with
+the reference and diagnose.  The result is the one :class:`~gpsaccel.check.report.
 Report` type of the package.
 
 The problems (registered in :mod:`gpsaccel.registry`):
@@ -646,23 +648,8 @@ class ShipProblem(Problem):
         cost = (f"its true error σ exceeds the optimal by up to {100 * ex.max():.3g} % "
                 f"({STATES[worst[2]][0]} at t = {self.model.t[worst[1] + 1]:g} s), "
                 f"{100 * ex.mean():.2g} % on average")
-        msgs = {
-            "zeroed-gain": f"Your update computes the full gain M Hᵀ (H M Hᵀ + V)⁻¹ as if every "
-                           f"sensor had reported and zeroes the columns of the missing ones (the "
-                           f"report's filter). That gain is near-optimal but not optimal: {cost}. "
-                           f"Use only the rows that arrived: K = M H_aᵀ (H_a M H_aᵀ + V_aa)⁻¹.",
-            "report-covariance": "Your P is the report's (I − K H) M, which is the covariance "
-                                 "of the optimal gain only; with any other gain it is not the "
-                                 "covariance of your error (and not symmetric). Use the Joseph "
-                                 "form (I − K H) M (I − K H)ᵀ + K V Kᵀ.",
-            "monorate-gain": f"At the GPS fixes your filter applies the gain of the monorate "
-                             f"filter (all sensors every step), as the report's loop does, "
-                             f"instead of its own gain from its own M: {cost}.",
-            "no-input": "Your prediction leaves out the known input: x̄_(k+1) = Φ x̂_k + B u_k "
-                        "(u[k] drives the step from t_k to t_(k+1)).",
-        }
         for code in v.codes:
-            report.add(code, msgs[code])
+            report.add(code, sm.MESSAGES[code].format(cost=cost))
 
     def _consistency(self, report: Report, cases: ShipCases, x: np.ndarray,
                      P: np.ndarray) -> None:

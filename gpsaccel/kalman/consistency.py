@@ -16,6 +16,7 @@ two-sided (1 − α) acceptance interval of the course:
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -143,7 +144,8 @@ class Verdict:
         return bool(self.max_abs_z <= self.threshold)
 
 
-def verdict_from_z(name: str, z: np.ndarray, labels: callable, alpha: float = 0.01) -> Verdict:
+def verdict_from_z(name: str, z: np.ndarray, labels: Callable[[tuple], str],
+                   alpha: float = 0.01) -> Verdict:
     """Build a :class:`Verdict` from an array of z-scores.
 
     ``labels(index_tuple) -> str`` turns the location of the largest |z| into text.  NaN z-scores

@@ -65,6 +65,7 @@ class InformationFilter:
         w, U = np.linalg.eigh((np.asarray(Q, dtype=float) + np.asarray(Q, dtype=float).T) / 2)
         keep = w > max(w.max(initial=0.0), 0.0) * 1e-15 * w.size
         self._G = U[:, keep] * np.sqrt(w[keep])  # Q = G Gᵀ (only Q's nonzero directions)
+        self._Phi_inv: np.ndarray | None
         try:
             self._Phi_inv = np.linalg.inv(Phi)
         except np.linalg.LinAlgError:

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -204,7 +204,7 @@ def optimal_update(kf, i: int, z: np.ndarray, rows: np.ndarray, H: np.ndarray,
 def run_multirate(model: LinearGaussianModel, z: np.ndarray, method: str = "filterpy",
                   schedule: Schedule | None = None, u: np.ndarray | None = None,
                   update: UpdateHook = optimal_update,
-                  kf: object | None = None, check: bool = True) -> MultirateResult:
+                  kf: Any = None, check: bool = True) -> MultirateResult:
     """Filter measurements ``z`` (n_epochs, p) taken on ``schedule`` (default ``model.schedule()``).
 
     At every fast step the filter predicts with Φ and Q (and ``B u_k`` when a known input ``u``,

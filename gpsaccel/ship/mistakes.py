@@ -39,6 +39,24 @@ from gpsaccel.ship.plan import driving_input
 
 CODES = ("zeroed-gain", "report-covariance", "monorate-gain", "no-input")
 
+#: code -> what the checker tells the student (``{cost}``: the σ excess of the variant's true
+#: covariance over the optimal, said in words by the checker).
+MESSAGES: dict[str, str] = {
+    "zeroed-gain": "Your update computes the full gain M Hᵀ (H M Hᵀ + V)⁻¹ as if every sensor had "
+                   "reported and zeroes the columns of the missing ones (the report's filter). "
+                   "That gain is near-optimal but not optimal: {cost}. Use only the rows that "
+                   "arrived: K = M H_aᵀ (H_a M H_aᵀ + V_aa)⁻¹.",
+    "report-covariance": "Your P is the report's (I − K H) M, which is the covariance of the "
+                         "optimal gain only; with any other gain it is not the covariance of "
+                         "your error (and not symmetric). Use the Joseph form (I − K H) M "
+                         "(I − K H)ᵀ + K V Kᵀ.",
+    "monorate-gain": "At the GPS fixes your filter applies the gain of the monorate filter (all "
+                     "sensors every step), as the report's loop does, instead of its own gain "
+                     "from its own M: {cost}.",
+    "no-input": "Your prediction leaves out the known input: x̄_(k+1) = Φ x̂_k + B u_k (u[k] "
+                "drives the step from t_k to t_(k+1)).",
+}
+
 
 @dataclass(frozen=True)
 class Variant:
