@@ -30,7 +30,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from gpsaccel.figures import write_figures
     from gpsaccel.figures._shared import single_run
 
-    model, run, res = single_run("000", args.seed)
+    single = single_run("000", args.seed)  # computed once: printed here, drawn below
+    model, run, res = single
     names = zip(STATE_NAMES, STATE_UNITS, strict=True)
     print(f"gpsaccel run: one realization (seed {args.seed}, truth error-model), "
           f"{model.n_steps} accelerometer steps, {model.n_gps} GPS fixes")
@@ -43,22 +44,24 @@ def _cmd_run(args: argparse.Namespace) -> int:
     with np.printoptions(precision=4, suppress=False):
         print(f"P at t = {res.t_gps[-1]:g} s:")
         print(res.P[-1])
-    _run_ensemble(args.runs, args.seed)  # prints the verdict table; cached for figure 7
-    paths = write_figures(["000"], args.out, runs=args.runs, seed=args.seed)
+    mc = _run_ensemble(args.runs, args.seed)  # prints the verdict table
+    paths = write_figures(["000"], args.out, runs=args.runs, seed=args.seed,
+                          results={"000": {"single": single, "mc": mc}})
     print(f"wrote {len(paths)} figures and index.html to {args.out}/")
     return 0
 
 
 def _run_ensemble(runs: int | None, seed: int):
-    """Report 000's Monte Carlo (10,000 runs unless ``runs``), cached for its figures; prints the
-    verdict table."""
+    """Report 000's Monte Carlo (its DEFAULT_RUNS, 10,000, unless ``runs``), the ensemble its
+    figures draw; prints the verdict table and returns it."""
     import time
 
-    from gpsaccel.figures._shared import ensemble
+    from gpsaccel.figures import r000
+    from gpsaccel.figures._shared import report_ensemble
 
-    runs = 10_000 if runs is None else runs
+    runs = r000.DEFAULT_RUNS if runs is None else runs
     t0 = time.perf_counter()
-    mc = ensemble(runs, seed, "error-model")
+    mc = report_ensemble("000", runs, seed)
     print(f"\nMonte Carlo (report 000's experiment): {mc.n_runs:,} runs, truth error-model, "
           f"seed {seed}, {time.perf_counter() - t0:.2f} s")
     print(mc.consistency())

@@ -64,10 +64,12 @@ def report_module(report: str):
 
 
 def write_figures(reports: list[str], out: Path | str, runs: int | None = None, seed: int = 0,
-                  dpi: int = 110) -> list[Path]:
+                  dpi: int = 110, results: dict[str, dict] | None = None) -> list[Path]:
     """Draw ``reports`` into ``out`` as PNG plus ``index.html``; returns the PNG paths.
 
     ``runs`` overrides each report's Monte Carlo size (``DEFAULT_RUNS``) when given.
+    ``results[report]``: what the caller has computed already, passed to that report's
+    ``figures`` as keywords (``gpsaccel run`` passes report 000's single run and ensemble).
     """
     import matplotlib.pyplot as plt
 
@@ -77,7 +79,7 @@ def write_figures(reports: list[str], out: Path | str, runs: int | None = None, 
     for report in reports:
         module = report_module(report)
         n = module.DEFAULT_RUNS if runs is None else runs
-        for fig in module.figures(n, seed):
+        for fig in module.figures(n, seed, **(results or {}).get(report, {})):
             path = out / fig.filename
             savefig(fig.figure, path, dpi=dpi)  # whole or not at all
             plt.close(fig.figure)

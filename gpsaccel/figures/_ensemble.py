@@ -40,10 +40,12 @@ def _captions(mc: MonteCarloResult) -> dict[str, str]:
 
 
 def ensemble_set(report: str, runs: int, seed: int,
-                 wanted: list[tuple[str, str]]) -> Iterator[ReportFigure]:
+                 wanted: list[tuple[str, str]], mc: MonteCarloResult | None = None
+                 ) -> Iterator[ReportFigure]:
     """``report``'s Monte Carlo figures: ``wanted`` = [(number, kind), ...] with kinds
-    ensemble-mean-error[-sigma], pave-minus-p[-lines|-normalised], orthogonality."""
-    mc = report_ensemble(report, runs, seed)
+    ensemble-mean-error[-sigma], pave-minus-p[-lines|-normalised], orthogonality.  ``mc``: the
+    ensemble, when the caller has computed it (else :func:`report_ensemble`)."""
+    mc = report_ensemble(report, runs, seed) if mc is None else mc
     captions = _captions(mc)
     draw = {
         "ensemble-mean-error": lambda: plots.ensemble_mean_error(mc),

@@ -14,6 +14,7 @@ from collections.abc import Iterator
 import numpy as np
 
 from gpsaccel import plots
+from gpsaccel.calibration.montecarlo import MonteCarloResult
 from gpsaccel.figures import ReportFigure
 from gpsaccel.figures._shared import single_run
 
@@ -21,8 +22,11 @@ TITLE = "GPS-aided accelerometer calibration (MAE 271A, 10,000-run Monte Carlo)"
 DEFAULT_RUNS = 10_000
 
 
-def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
-    model, run, res = single_run("000", seed)
+def figures(runs: int, seed: int, single: tuple | None = None,
+            mc: MonteCarloResult | None = None) -> Iterator[ReportFigure]:
+    """Report 000's figures; ``single`` (:func:`single_run`'s (model, run, result)) and ``mc``
+    (the ensemble) when the caller has computed them (``gpsaccel run``), else computed here."""
+    model, run, res = single_run("000", seed) if single is None else single
     e = run.x_gps - res.x_hat
     sd = res.sigma
     names = [("01", "position-error", "Position error p − p̂ with ±1σ", "m"),
@@ -54,4 +58,4 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
     from gpsaccel.figures._ensemble import ensemble_set
 
     yield from ensemble_set("000", runs, seed, [("07", "pave-minus-p-lines"),
-                                                ("07b", "pave-minus-p-normalised")])
+                                                ("07b", "pave-minus-p-normalised")], mc)
