@@ -53,3 +53,16 @@ def test_a_class_folder_checks_the_same_through_the_cli(tmp_path, problem, capsy
     assert [r["subject"] for r in results] == ["alice.py", "bob"], capsys.readouterr()
     assert [r["codes"] for r in results] == [[], []]
     assert code == 0
+
+
+def test_a_filterpy_column_state_is_accepted_with_a_note(tmp_path):
+    """kf.x is a (3, 1) column: a student storing kf.x returns x̂ of shape (151, 3, 1)."""
+    src = CORRECT["calibration"].parent / "correct_filterpy.py"
+    path = tmp_path / "columns.py"
+    path.write_text(src.read_text().replace("x_hat.append(kf.x[:, 0].copy())",
+                                            "x_hat.append(kf.x.copy())"))
+    report = check.submission(path, n_runs=2, sandbox="basic")
+    assert report.passed, report
+    note = next(f for f in report.findings if f.code == "filterpy-column")
+    assert note.severity == "note" and "(151, 3, 1)" in note.message
+    assert report.details["max_dx_sigma"] < 1e-9
