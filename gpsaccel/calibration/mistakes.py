@@ -39,12 +39,12 @@ import numpy as np
 from gpsaccel.calibration.model import CalibrationModel, gamma, phi
 from gpsaccel.kalman.epochs import (  # noqa: F401 - the recursion and the entry type, re-exported
     EpochFilter,
+    LinearIngredients,
     Mistake,
     batch_gains,
     combinations,
     with_changes,
 )
-from gpsaccel.kalman.update import epoch_transition
 
 
 @dataclass(frozen=True, eq=False)
@@ -79,11 +79,12 @@ class Ingredients:
                    model.V, model.M0, model.x0, model.n_gps)
 
     def epoch_filter(self) -> EpochFilter:
-        G = gamma(self.gamma_dt)
-        F, Qe = epoch_transition(phi(self.phi_dt, self.sign13), G @ G.T * self.W, self.steps)
-        A = F if self.mean_propagated else np.eye(F.shape[0])
-        return EpochFilter(A, F, Qe, self.H, self.V, self.x0, self.M0, self.n_gps,
-                           self.output, self.skip_first)
+        """The generic ingredients (:class:`gpsaccel.kalman.epochs.LinearIngredients`) of
+        Φ(phi_dt) with its Φ₁₃ sign, Γ(gamma_dt) and W: the one epoch recursion of the core."""
+        return LinearIngredients(phi(self.phi_dt, self.sign13), gamma(self.gamma_dt),
+                                 np.array([[self.W]]), self.steps, self.H, self.V, self.M0,
+                                 self.x0, self.n_gps, self.mean_propagated, self.output,
+                                 self.skip_first).epoch_filter()
 
     def with_changes(self, changes: tuple[tuple, ...]) -> Ingredients:
         """Apply ``(field, value)`` or ``(field, (row, col), value)`` changes (see :class:`Mistake`)."""
