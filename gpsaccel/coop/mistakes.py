@@ -44,6 +44,7 @@ from gpsaccel.coop.model import (
     wrap_angle,
     wrap_state,
 )
+from gpsaccel.kalman import epochs
 
 KINDS = ("ekf", "lkf")
 
@@ -82,14 +83,10 @@ class Ingredients:
 
 
 @dataclass(frozen=True)
-class Mistake:
-    """One entry of the catalogue: its code, which form (variant), the message for the student,
-    the filters it applies to, and the ingredients it changes."""
+class Mistake(epochs.Mistake):
+    """One entry of the catalogue, the core's entry (code, variant, message, the ingredients it
+    changes: :class:`gpsaccel.kalman.epochs.Mistake`) and the filters it applies to."""
 
-    code: str
-    variant: str
-    message: str
-    changes: tuple[tuple[str, object], ...]
     kinds: tuple[str, ...] = KINDS
     informational: bool = False
 

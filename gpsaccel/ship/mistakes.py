@@ -34,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gpsaccel.kalman.epochs import Mistake
 from gpsaccel.ship.model import ShipModel
 from gpsaccel.ship.plan import driving_input
 
@@ -70,6 +71,14 @@ class Variant:
 
     def __str__(self) -> str:
         return " + ".join(self.codes) or "optimal"
+
+
+def catalogue() -> tuple[Mistake, ...]:
+    """The catalogue as entries of the core's one type (code, variant, message template with
+    ``{cost}``, the :class:`Variant` switch it sets): what every system's catalogue gives."""
+    switch = dict(zip(CODES, ("zeroed", "report_covariance", "monorate_gain", "no_input"),
+                      strict=True))
+    return tuple(Mistake(code, code, MESSAGES[code], ((switch[code], True),)) for code in CODES)
 
 
 def variants() -> tuple[Variant, ...]:

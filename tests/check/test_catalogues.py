@@ -1,0 +1,57 @@
+"""One catalogue interface for every system: each entry is the core's Mistake (code, variant,
+message); the codes are the checker's canonical ones, the same the problems report."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from gpsaccel import registry
+from gpsaccel.calibration import mistakes as cal
+from gpsaccel.check import problems
+from gpsaccel.check.tracker import TRACKER
+from gpsaccel.coop import mistakes as coop
+from gpsaccel.kalman.epochs import Mistake
+from gpsaccel.ship import mistakes as ship
+
+CATALOGUES = {
+    "calibration": cal.catalogue(),
+    "coop-ekf": coop.catalogue(kind="ekf"),
+    "coop-lkf": coop.catalogue(kind="lkf"),
+    "ship": ship.catalogue(),
+    "tracker": TRACKER.catalogue().catalogue(),
+}
+
+
+@pytest.mark.parametrize("name", sorted(CATALOGUES))
+def test_every_entry_is_one_type_with_a_stable_code_and_a_message(name):
+    for m in CATALOGUES[name]:
+        assert isinstance(m, Mistake), (name, m)
+        assert re.fullmatch(r"[a-z0-9]+(-[a-z0-9]+)*", m.code), m.code
+        assert m.variant and len(m.message) > 60, m
+
+
+def test_the_canonical_codes_are_the_checker_s():
+    """Decided in issue 22: these names, not the homework's earlier ones."""
+    codes = {m.code for c in CATALOGUES.values() for m in c}
+    assert {"no-angle-wrap", "euler-propagation", "jacobian-point", "report-covariance"} <= codes
+    assert not {"innovation-not-wrapped", "euler-prediction", "jacobian-at-previous",
+                "zeroed-gain-short-form"} & codes
+
+
+@pytest.mark.parametrize("name, catalogue", [("calibration", "calibration"), ("ship", "ship"),
+                                             ("tracker", "tracker")])
+def test_a_problem_reports_the_codes_of_its_system_s_catalogue(name, catalogue):
+    assert set(problems.get(name).codes()) == {m.code for m in CATALOGUES[catalogue]}
+
+
+def test_coop_reports_both_filters_codes():
+    both = {m.code for m in CATALOGUES["coop-ekf"] + CATALOGUES["coop-lkf"]}
+    assert set(problems.get("coop").codes()) == both
+
+
+def test_every_registered_problem_names_its_system():
+    for name in registry.problems():
+        assert registry.entry(name).system, name
+    assert set(registry.systems()) >= {"calibration", "coop", "ship", "tracker"}
