@@ -30,7 +30,8 @@ lab: $(STAMP)
 # modules that type-check clean with mypy (issue 22); add a module here once it does
 MYPY_CLEAN := gpsaccel/registry.py gpsaccel/kalman gpsaccel/check/findings.py \
 	gpsaccel/check/linear.py gpsaccel/check/whole_filter.py gpsaccel/check/tracker.py \
-	gpsaccel/check/report.py gpsaccel/check/student_filter.py
+	gpsaccel/check/report.py gpsaccel/check/student_filter.py gpsaccel/check/problems.py \
+	gpsaccel/calibration/mistakes.py
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

@@ -67,6 +67,8 @@ def main(seeds: int = 100, n_runs: int = 10) -> None:
         for mistake, codes in GENERIC.items():
             if verdict(mistake, n_runs, seed).codes != codes:
                 misnamed[mistake] = misnamed.get(mistake, 0) + 1
+        print(f"seed {seed}: failed {failed}, warned {warned}, misnamed "
+              f"{sum(misnamed.values())}", file=sys.stderr, flush=True)
     print(f"tracker, {seeds} seeds x {n_runs} runs, {len(GENERIC)} generic mistakes "
           f"({time.perf_counter() - t0:.0f} s)")
     print(f"  correct filter failed:            {failed} of {seeds}")

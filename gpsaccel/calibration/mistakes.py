@@ -179,8 +179,8 @@ def covariance_mistakes(model: CalibrationModel | None = None) -> tuple[Mistake,
     sva = "a standard deviation used where a variance belongs"
     avs = "a variance squared again, as if it were a standard deviation"
     entries: list[tuple[str, tuple[int, int] | None, float, float, str]] = []
-    for idx, right in (((0, 0), V11), ((1, 1), V22)):
-        entries += [("V", idx, np.sqrt(right), right, sva), ("V", idx, right**2, right, avs)]
+    for vi, right in (((0, 0), V11), ((1, 1), V22)):
+        entries += [("V", vi, np.sqrt(right), right, sva), ("V", vi, right**2, right, avs)]
     entries += [("W", None, np.sqrt(W), W, sva), ("W", None, W**2, W, avs)]
     for k, right in enumerate((m_p, m_v, m_b)):
         entries += [("M0", (k, k), np.sqrt(right), right, sva),

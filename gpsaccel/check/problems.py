@@ -32,9 +32,11 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -188,7 +190,8 @@ class Problem:
             report.seconds = time.perf_counter() - t0
             return report
         cases = self.cases(n_runs, seed)
-        calls, spans = [], []
+        calls: list[Call] = []
+        spans: list[tuple[Function, int, int]] = []
         for f in present:
             mine = self.calls(cases, f)
             spans.append((f, len(calls), len(calls) + len(mine)))
@@ -298,9 +301,9 @@ def _first_departure(dx: np.ndarray, dP: np.ndarray, tol_x: float, tol_P: float,
     return "; ".join(parts)
 
 
-def _nearest(candidates: list[tuple[object, np.ndarray, np.ndarray]], x: np.ndarray,
+def _nearest(candidates: Sequence[tuple[Any, np.ndarray, np.ndarray]], x: np.ndarray,
              P: np.ndarray, x_ref: np.ndarray, P_ref: np.ndarray, tol_x: float, tol_P: float,
-             diff=None) -> tuple[object, float] | None:
+             diff=None) -> tuple[Any, float] | None:
     """The candidate (mistake, x̂, P) nearest to the student's (x, P), and its distance in units
     of the tolerance (≤ 1: it matches); None if there are no candidates.  Distances are in units
     of the reference σ, as in the comparison."""
@@ -321,7 +324,7 @@ def _nearest(candidates: list[tuple[object, np.ndarray, np.ndarray]], x: np.ndar
 class CoopCases:
     """The coop checker's data: truth runs (x (R, K+1, 6), y) and the course log as run R."""
 
-    model: object
+    model: Any
     seed: int
     x_true: np.ndarray
     y: np.ndarray
@@ -532,7 +535,7 @@ class ShipCases:
     """The ship checker's data: z (R+1, N, 9) in the multirate layout (the last run with sensor
     dropouts), the input u (N−1, 3) and the true states x (R+1, N, 9)."""
 
-    model: object
+    model: Any
     seed: int
     z: np.ndarray
     u: np.ndarray
