@@ -13,7 +13,6 @@ from __future__ import annotations
 import json
 import logging
 import re
-import shutil
 import sys
 from pathlib import Path
 
@@ -39,6 +38,7 @@ extensions = [
 exclude_patterns = ["_build", "**/.ipynb_checkpoints", "benchmarks/README.md"]
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist", "html_image"]
 myst_heading_anchors = 3
+myst_update_mathjax = False  # its settings are MathJax 3's; ours is MathJax 2 (below)
 nb_execution_mode = "off"  # the lessons render with the outputs stored in them
 nb_merge_streams = True
 nb_code_prompt_show = "Show the solution's {type}"
@@ -58,7 +58,9 @@ mathjax2_config = {"tex2jax": {"inlineMath": [["\\(", "\\)"]], "displayMath": [[
                    "HTML-CSS": {"availableFonts": ["TeX"], "imageFont": None}}
 
 autosummary_generate = True
-autodoc_default_options = {"members": True, "show-inheritance": False}
+# each object on the page of the module that defines it (gpsaccel.check re-exports its modules'
+# functions under the modules' own names: documented twice otherwise)
+autodoc_default_options = {"members": True, "show-inheritance": False, "ignore-module-all": True}
 autodoc_typehints = "none"
 numpydoc_show_class_members = False
 numpydoc_xref_param_type = False
@@ -93,18 +95,24 @@ def _collapse(nb: dict) -> dict:
     return nb
 
 
+def _write(path: Path, text: str) -> None:
+    """Write only what changed, so that an incremental build re-reads only that."""
+    if not path.is_file() or path.read_text(encoding="utf-8") != text:
+        path.write_text(text, encoding="utf-8")
+
+
 def _write_lessons() -> None:
     """docs/_lessons/: the lessons to render and their index page."""
-    if LESSONS_OUT.exists():
-        shutil.rmtree(LESSONS_OUT)
-    LESSONS_OUT.mkdir()
+    LESSONS_OUT.mkdir(exist_ok=True)
     names = []
     for src in _lesson_sources():
         nb = _collapse(json.loads(src.read_text(encoding="utf-8")))
-        (LESSONS_OUT / src.name).write_text(json.dumps(nb, indent=1), encoding="utf-8")
+        _write(LESSONS_OUT / src.name, json.dumps(nb, indent=1))
         names.append(src.stem)
+    for stale in set(LESSONS_OUT.glob("*.ipynb")) - {LESSONS_OUT / f"{n}.ipynb" for n in names}:
+        stale.unlink()
     toc = "\n".join(names)
-    (LESSONS_OUT / "index.md").write_text(f"""# The lessons
+    _write(LESSONS_OUT / "index.md", f"""# The lessons
 
 The course's Jupyter lessons, in reading order, rendered with the outputs and figures stored in
 them; every solution is collapsed after its exercise (click to reveal). To run and change them:
@@ -115,7 +123,7 @@ them; every solution is collapsed after its exercise (click to reveal). To run a
 
 {toc}
 ```
-""", encoding="utf-8")
+""")
 
 
 _write_lessons()
@@ -138,7 +146,7 @@ def _write_benchmarks() -> None:
         text = table.read_text(encoding="utf-8")
         header, _, body = text.partition("\n")
         parts.append(f"## {table.stem}\n\n{header}\n\n```text\n{body.rstrip()}\n```\n")
-    (folder / "index.md").write_text("\n".join(parts), encoding="utf-8")
+    _write(folder / "index.md", "\n".join(parts))
 
 
 _write_benchmarks()

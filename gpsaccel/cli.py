@@ -212,7 +212,8 @@ def _cmd_coop(args: argparse.Namespace) -> int:
     """Report 002: NEES/NIS of the LKF, EKF and UKF over Monte Carlo sets, and the course log."""
     from gpsaccel.coop.montecarlo import summary
 
-    print(summary(n_runs=args.runs, n_sets=args.sets, seed=args.seed, alpha=args.alpha))
+    print(summary(n_runs=args.runs, n_sets=args.sets, seed=args.seed, alpha=args.alpha,
+                  progress=not args.no_progress))
     return 0
 
 
@@ -272,14 +273,25 @@ def _cmd_check(args: argparse.Namespace) -> int:
     print(f"sandbox: {backend}" + (" (bubblewrap not available: apt-get install bubblewrap)"
                                    if backend != "bwrap" and args.sandbox == "auto" else ""),
           file=sys.stderr)
-    on_result = appender(log_path(args.json)) if args.json is not None else None
+    log = appender(log_path(args.json)) if args.json is not None else None
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=len(files), desc="check", unit="submission", leave=False,
+               disable=None)  # on stderr, when it is a terminal
+
+    def on_result(result: dict) -> None:
+        bar.update()
+        if log is not None:
+            log(result)
+
     t0 = time.perf_counter()
     try:
-        results = check_many(args.paths, n_runs=args.runs, seed=seed, timeout=args.timeout,
-                             executor=spec, max_workers=args.workers, sandbox=backend,
-                             limits=limits, allow_gpsaccel=args.allow_gpsaccel,
-                             on_result=on_result, problem=args.problem,
-                             allow_unsafe_basic=args.allow_unsafe_basic)
+        with bar:
+            results = check_many(args.paths, n_runs=args.runs, seed=seed, timeout=args.timeout,
+                                 executor=spec, max_workers=args.workers, sandbox=backend,
+                                 limits=limits, allow_gpsaccel=args.allow_gpsaccel,
+                                 on_result=on_result, problem=args.problem,
+                                 allow_unsafe_basic=args.allow_unsafe_basic)
     except Interrupted as exc:
         done = [r for r in exc.results if r is not None]
         if args.json is not None:  # first: the terminal may be gone
@@ -407,6 +419,7 @@ def _add_coop(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=_v.flag_seed, default=0)
     p.add_argument("--alpha", type=_v.flag_probability, default=0.05,
                    help="test level (default 0.05)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar (stderr)")
     p.set_defaults(func=_cmd_coop)
 
 

@@ -86,6 +86,7 @@ def test_every_imported_module_is_declared():
     assert {"pyyaml", "psutil"} <= _declared("grading")
 
 
+@pytest.mark.slow
 def test_the_main_job_needs_only_the_core(tmp_path):
     """``gpsaccel run`` (``make run``) imports nothing beyond the core dependencies: every optional
     distribution is made unimportable for it."""
