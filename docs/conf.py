@@ -53,9 +53,10 @@ html_sidebars: dict[str, list[str]] = {}
 
 # MathJax 2 from _static/mathjax (copied there when the build ends), not from a CDN
 mathjax_path = _mathjax.url()
-mathjax2_config = {"tex2jax": {"inlineMath": [["\\(", "\\)"]], "displayMath": [["\\[", "\\]"]],
-                               "processEscapes": True},
-                   "HTML-CSS": {"availableFonts": ["TeX"], "imageFont": None}}
+# Sphinx writes math as \(…\) and \[…\]: no dollar delimiters on the pages
+mathjax2_config = {**_mathjax.HUB_CONFIG,
+                   "tex2jax": {"inlineMath": [["\\(", "\\)"]], "displayMath": [["\\[", "\\]"]],
+                               "processEscapes": True}}
 
 autosummary_generate = True
 # each object on the page of the module that defines it (gpsaccel.check re-exports its modules'

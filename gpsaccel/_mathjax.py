@@ -15,6 +15,15 @@ from pathlib import Path
 #: (no JavaScript from a notebook's markdown); both files are in the package.
 CONFIG = "TeX-AMS-MML_HTMLorMML-full,Safe"
 
+#: MathJax's settings for the copy: the package ships only the STIX-Web fonts (not MathJax's
+#: default TeX ones), so HTML-CSS is told to use them rather than fall back to the system's fonts.
+HUB_CONFIG: dict = {
+    "tex2jax": {"inlineMath": [["$", "$"], ["\\(", "\\)"]],
+                "displayMath": [["$$", "$$"], ["\\[", "\\]"]], "processEscapes": True},
+    "HTML-CSS": {"availableFonts": [], "preferredFont": None, "webFont": "STIX-Web",
+                 "imageFont": None},
+}
+
 #: The folder name the copy gets, next to the pages.
 FOLDER = "mathjax"
 
@@ -43,6 +52,14 @@ def copy_to(folder: Path | str) -> str:
         shutil.copytree(src, target, dirs_exist_ok=True,
                         ignore=shutil.ignore_patterns("*.py", "__pycache__"))
     return url()
+
+
+def config_script() -> str:
+    """The ``<script type="text/x-mathjax-config">`` that applies :data:`HUB_CONFIG`."""
+    import json
+
+    return (f'<script type="text/x-mathjax-config">MathJax.Hub.Config({json.dumps(HUB_CONFIG)});'
+            "</script>")
 
 
 def url(prefix: str = "") -> str:

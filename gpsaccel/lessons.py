@@ -182,7 +182,8 @@ def render_html(paths: list[Path], out: Path | str, runs: int | None = None,
                 if anchors:
                     cell.source = anchors + "\n\n" + cell.source
         nb.metadata["title"] = _title(nbformat.read(path, as_version=4)) or Path(path).stem
-        body, _ = exporter.from_notebook_node(nb)
+        body, _ = exporter.from_notebook_node(
+            nb, resources={"gpsaccel_mathjax_config": _mathjax.config_script()})
         target = out / (Path(path).stem + ".html")
         write_text(target, body)  # whole or not at all
         written.append(target)
