@@ -41,8 +41,8 @@ myst_heading_anchors = 3
 myst_update_mathjax = False  # its settings are MathJax 3's; ours is MathJax 2 (below)
 nb_execution_mode = "off"  # the lessons render with the outputs stored in them
 nb_merge_streams = True
-nb_code_prompt_show = "Show the solution's {type}"
-nb_code_prompt_hide = "Hide the solution's {type}"
+nb_code_prompt_show = "Show {type}"  # a solution, or a self-check cell
+nb_code_prompt_hide = "Hide {type}"
 
 html_theme = "pydata_sphinx_theme"
 html_title = f"gpsaccel {version}"
@@ -155,15 +155,86 @@ _write_benchmarks()
 
 # ------------------------------------------------------------------------------- the docstrings
 
-#: The docstrings write absolute values as |x| (course notation), which reStructuredText reads as a
-#: substitution: escaped here, outside ``literals``, before numpydoc parses them.
+#: The docstrings are numpydoc with two habits of their own, made valid reStructuredText here
+#: before numpydoc parses them (the source stays as it is):
+#:
+#: - absolute values written |x| (course notation), which reST reads as a substitution: escaped,
+#:   outside ``literals`` (and ``*args``-style stars likewise);
+#: - "name : what it is" lines (with indented continuation lines) outside a numpydoc section,
+#:   for a result's fields: made a definition list; other indented lines after a paragraph get the
+#:   blank line reST wants around a block quote; a section title numpydoc does not know
+#:   ("Attributes (n = …)") becomes a bold paragraph.
 _LITERAL = re.compile(r"(``.*?``)")
+_FIELD = re.compile(r"^(\S[^:]{0,60}?) : (.+)$")
+_SECTIONS = {"Parameters", "Returns", "Yields", "Receives", "Raises", "Warns", "Warnings",
+             "Other Parameters", "Attributes", "Methods", "See Also", "Notes", "References",
+             "Examples"}
 
 
-def _escape_bars(app, what, name, obj, options, lines) -> None:
-    for i, line in enumerate(lines):
-        parts = _LITERAL.split(line)
-        lines[i] = "".join(p if p.startswith("``") else p.replace("|", r"\|") for p in parts)
+def _indent(line: str) -> int:
+    return len(line) - len(line.lstrip())
+
+
+_STARS = re.compile(r"(?<=[(\s,])(\*\*?)(?=[A-Za-z_]\w*[,)])")  # f(*args, **kwargs)
+
+
+def _escape_bars(line: str) -> str:
+    return "".join(p if p.startswith("``") else
+                   _STARS.sub(lambda m: "\\*" * len(m.group(1)), p.replace("|", r"\|"))
+                   for p in _LITERAL.split(line))
+
+
+def _clean_docstring(app, what, name, obj, options, lines) -> None:
+    out: list[str] = []
+    literal_at = None  # indentation of the line that opened a literal block (::)
+    in_section = False
+    i = 0
+    while i < len(lines):
+        line = lines[i]
+        nxt = lines[i + 1] if i + 1 < len(lines) else ""
+        if literal_at is not None and line.strip() and _indent(line) <= literal_at:
+            literal_at = None
+        if literal_at is not None or in_section:
+            out.append(_escape_bars(line) if literal_at is None else line)
+            i += 1
+            continue
+        if line.strip() and set(nxt.strip()) == {"-"} and not line.startswith(" "):
+            if line.strip() in _SECTIONS:
+                in_section = True  # numpydoc's own from here on
+                out.append(line)
+                continue_at = i + 1
+                out.append("-" * len(line.strip()))
+                i = continue_at + 1
+                continue
+            out += ["", f"**{_escape_bars(line.strip())}**", ""]  # a title numpydoc ignores
+            i += 2
+            continue
+        previous = out[-1] if out else ""
+        field = _FIELD.match(line)
+        if field and _indent(line) == 0:
+            if previous.strip() and not _FIELD_TERM.get("open"):
+                out.append("")
+            out += [_escape_bars(field.group(1)), "    " + _escape_bars(field.group(2))]
+            _FIELD_TERM["open"] = True
+            i += 1
+            continue
+        if _FIELD_TERM.get("open") and line.strip() and _indent(line) == 0:
+            out.append("")  # the definition list ends
+            _FIELD_TERM["open"] = False
+        elif _FIELD_TERM.get("open") and not line.strip():
+            _FIELD_TERM["open"] = False
+        elif (line.strip() and previous.strip() and _indent(line) != _indent(previous)
+              and not previous.rstrip().endswith("::") and not _FIELD_TERM.get("open")):
+            out.append("")  # a block quote starts or ends: reST wants a blank line
+        if line.rstrip().endswith("::"):
+            literal_at = _indent(line)
+        out.append(_escape_bars(line))
+        i += 1
+    _FIELD_TERM["open"] = False
+    lines[:] = out
+
+
+_FIELD_TERM: dict[str, bool] = {}
 
 
 #: Docstring problems are collected in _build/docstring-warnings.txt and counted at the end,
@@ -198,7 +269,7 @@ def _copy_mathjax(app, exception) -> None:
 
 
 def setup(app):
-    app.connect("autodoc-process-docstring", _escape_bars, priority=400)  # before numpydoc
+    app.connect("autodoc-process-docstring", _clean_docstring, priority=400)  # before numpydoc
     if not STRICT_DOCSTRINGS:
         for handler in logging.getLogger("sphinx").handlers:
             handler.filters.insert(0, _DocstringFilter())  # before -W counts it
