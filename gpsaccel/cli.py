@@ -195,8 +195,11 @@ def _copy_lessons(folder: Path, only=None, html=None) -> int:
 
 
 def _cmd_lab(args: argparse.Namespace) -> int:
-    """Open the lessons in JupyterLab: DIR's copy, made first when DIR holds no notebook."""
-    import subprocess
+    """Open the lessons in JupyterLab: DIR's copy, made first when DIR holds no notebook.
+
+    JupyterLab replaces this process (exec), so Ctrl-C and its shutdown question reach it alone.
+    """
+    import os
 
     from gpsaccel.lessons import copy_lessons, lab_command
 
@@ -204,8 +207,10 @@ def _cmd_lab(args: argparse.Namespace) -> int:
     if not any(args.folder.glob("*.ipynb")):
         copied, _ = copy_lessons(args.folder)
         print(f"copied {len(copied)} notebooks into {args.folder}/", file=sys.stderr)
-    print(" ".join(cmd), file=sys.stderr)
-    return subprocess.call(cmd)
+    print(" ".join(cmd), file=sys.stderr, flush=True)
+    sys.stdout.flush()
+    os.execv(cmd[0], cmd)
+    return 0  # only where execv is replaced (the tests)
 
 
 def _cmd_coop(args: argparse.Namespace) -> int:

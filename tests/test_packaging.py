@@ -165,7 +165,7 @@ def test_lessons_copy_copies_once_and_keeps_a_students_edits(tmp_path, capsys):
 def test_lab_copies_the_lessons_then_starts_jupyterlab_as_this_python(tmp_path, monkeypatch):
     pytest.importorskip("jupyterlab")
     calls = []
-    monkeypatch.setattr(subprocess, "call", lambda cmd: calls.append(cmd) or 0)
+    monkeypatch.setattr(os, "execv", lambda path, cmd: calls.append(cmd))
     assert main(["lab", str(tmp_path / "course"), "--no-browser", "--port", "8899"]) == 0
     (cmd,) = calls
     assert cmd[:3] == [sys.executable, "-m", "jupyterlab"]
