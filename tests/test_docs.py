@@ -8,7 +8,6 @@ test builds one into a temporary folder.
 
 from __future__ import annotations
 
-import json
 import os
 import re
 import shutil
