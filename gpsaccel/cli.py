@@ -549,7 +549,7 @@ SUBCOMMANDS = (
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from gpsaccel import __version__
+    from gpsaccel._version import __version__
 
     parser = _Parser(prog="gpsaccel", description=__doc__.splitlines()[0])
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")

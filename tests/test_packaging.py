@@ -114,9 +114,13 @@ sys.exit(main(["run", "--runs", "20", "--out", {str(tmp_path / "out")!r}]))
 
 
 def test_one_version():
-    """Written once, in gpsaccel/__init__.py; the metadata reads it from there."""
+    """Written once, in gpsaccel/_version.py; the metadata and gpsaccel.__version__ read it."""
     assert "version" not in PROJECT and "version" in PROJECT["dynamic"]
-    assert PYPROJECT["tool"]["setuptools"]["dynamic"]["version"] == {"attr": "gpsaccel.__version__"}
+    attr = PYPROJECT["tool"]["setuptools"]["dynamic"]["version"]
+    assert attr == {"attr": "gpsaccel._version.__version__"}
+    written = [p for p in (ROOT / "gpsaccel").rglob("*.py")
+               if re.search(r"^__version__\s*=", p.read_text(encoding="utf-8"), re.M)]
+    assert written == [ROOT / "gpsaccel" / "_version.py"]
     assert md.version("gpsaccel") == gpsaccel.__version__
 
 
