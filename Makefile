@@ -1,26 +1,51 @@
-# Two entry points (see README): `make run` and `make test`. Each creates .venv when missing.
-# `make lab` opens the lessons in JupyterLab with the project's kernel.
+# Two entry points (see README): `make run` and `make test`. Each creates .venv when missing and
+# installs what it needs: `run` the core (numpy, scipy, filterpy, matplotlib), `test` the extras
+# the suite exercises. uv installs when it is on PATH, pip otherwise (USE_PIP=1 forces pip); both
+# show their progress. `make lab` opens the lessons in JupyterLab with the project's kernel.
 PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
-STAMP  := $(VENV)/.installed
+# parallel test workers (pytest-xdist); JOBS=0 runs serially
+JOBS   ?= 2
+UV     := $(if $(USE_PIP),,$(shell command -v uv 2>/dev/null))
+# the full install (every extra), which the targets below without a stamp of their own use
+STAMP  := $(VENV)/.installed-dev
 
-.PHONY: run test lab lint bench lessons-html clean
+ifneq ($(UV),)
+MKVENV  = $(UV) venv --python $(PYTHON) $(VENV)
+INSTALL = VIRTUAL_ENV=$(VENV) $(UV) pip install --python $(BIN)/python
+else
+MKVENV  = $(PYTHON) -m venv $(VENV) && $(BIN)/python -m pip install --upgrade pip
+INSTALL = $(BIN)/python -m pip install --progress-bar on
+endif
+
+.PRECIOUS: $(VENV)/.installed-%
+
+.PHONY: run test test-fast lab lint bench docs lessons-html wheel clean
 
 $(BIN)/python:
-	$(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(MKVENV)
 
-$(STAMP): pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e ".[dev]"
-	$(BIN)/python -m ipykernel install --sys-prefix --name python3 >/dev/null
-	touch $(STAMP)
+# $(VENV)/.installed-EXTRA: gpsaccel (editable) with that extra; .installed-core: no extra
+$(VENV)/.installed-%: pyproject.toml | $(BIN)/python
+	@echo "make: installing gpsaccel$(if $(filter core,$*),,[$*]) into $(VENV) with $(if $(UV),uv,pip)"
+	$(INSTALL) -e ".$(if $(filter core,$*),,[$*])"
+	@if $(BIN)/python -c "import ipykernel" 2>/dev/null; then \
+	    $(BIN)/python -m ipykernel install --sys-prefix --name python3 >/dev/null; fi
+	touch $@
 
-run: $(STAMP)
+run: $(VENV)/.installed-core
 	MPLBACKEND=Agg $(BIN)/gpsaccel run
 
-test: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python -m pytest -q
+test: $(VENV)/.installed-test
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q $(if $(filter-out 0,$(JOBS)),-n $(JOBS))
+
+# the core's tests without the slow ones (notebooks, wheels, sandboxes, big Monte Carlo): < 1 min
+FAST_TESTS ?= tests/kalman tests/calibration tests/ship tests/coop tests/test_validation.py \
+              tests/test_executors.py tests/test_layout.py tests/test_parameter_hygiene.py \
+              tests/test_packaging.py
+test-fast: $(VENV)/.installed-test
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q -m "not slow" $(if $(filter-out 0,$(JOBS)),-n $(JOBS)) $(FAST_TESTS)
 
 # LAB_FLAGS: e.g. --no-browser, --port 8890, or --allow-root inside a container run as root.
 LAB_FLAGS ?=
@@ -33,15 +58,25 @@ MYPY_CLEAN := gpsaccel/registry.py gpsaccel/kalman gpsaccel/check/findings.py \
 	gpsaccel/check/report.py gpsaccel/check/student_filter.py gpsaccel/check/problems.py \
 	gpsaccel/calibration/mistakes.py
 
-lint: $(STAMP)
+lint: $(VENV)/.installed-dev
 	$(BIN)/ruff check .
 	$(BIN)/mypy $(MYPY_CLEAN)
 
-bench: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python benchmarks/run.py
+# every benchmark; their tables are written into docs/benchmarks/ for the documentation
+bench: $(VENV)/.installed-test
+	MPLBACKEND=Agg $(BIN)/python benchmarks/run.py --markdown docs/benchmarks
 
-lessons-html: $(STAMP)
+# the documentation site, warnings as errors, in docs/_build/html (math typeset offline)
+docs: $(VENV)/.installed-docs
+	MPLBACKEND=Agg $(BIN)/python -m sphinx -W --keep-going -b html -q docs docs/_build/html
+	@echo "make: docs in docs/_build/html/index.html"
+
+lessons-html: $(VENV)/.installed-lessons
 	MPLBACKEND=Agg $(BIN)/gpsaccel lessons --html out/lessons
 
+# the wheel and the sdist, in dist/
+wheel: | $(BIN)/python
+	$(if $(UV),$(UV) build -o dist .,$(BIN)/python -m pip wheel --no-deps -w dist .)
+
 clean:
-	rm -rf out build *.egg-info .pytest_cache
+	rm -rf out build dist docs/_build docs/_lessons *.egg-info .pytest_cache

@@ -2,7 +2,10 @@
 
 Each script prints its own table; this runner adds a header per script and its wall time, and
 exits non-zero if any script failed.  Arguments after ``--only`` restrict to scripts whose file
-name contains one of them (``python benchmarks/run.py --only montecarlo``).
+name contains one of them (``python benchmarks/run.py --only montecarlo``).  ``--markdown DIR``
+(``make bench`` gives ``docs/benchmarks``) also writes each script's output to ``DIR/NAME.txt``
+under a line saying when, where and at what load it was measured; the documentation's benchmark
+page is made of these files, so no table there is typed by hand.
 """
 
 from __future__ import annotations
@@ -13,8 +16,25 @@ import time
 from pathlib import Path
 
 
+def _header(script: Path, seconds: float) -> str:
+    import datetime
+    import os
+    import platform
+
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    return (f"`python benchmarks/{script.name}`, {datetime.date.today().isoformat()}, Python "
+            f"{platform.python_version()}, {os.cpu_count()} CPUs, load average {load:.1f} at the "
+            f"end, {seconds:.0f} s wall")
+
+
 def main(argv: list[str]) -> int:
     here = Path(__file__).resolve().parent
+    markdown = None
+    if "--markdown" in argv:
+        i = argv.index("--markdown")
+        markdown = Path(argv[i + 1])
+        argv = argv[:i] + argv[i + 2:]
+        markdown.mkdir(parents=True, exist_ok=True)
     only = argv[argv.index("--only") + 1:] if "--only" in argv else []
     scripts = sorted(p for p in here.glob("*.py") if p.name != Path(__file__).name
                      and not p.name.startswith("_"))
@@ -24,8 +44,16 @@ def main(argv: list[str]) -> int:
     for script in scripts:
         print(f"=== {script.name} " + "=" * max(0, 70 - len(script.name)), flush=True)
         t0 = time.perf_counter()
-        rc = subprocess.call([sys.executable, str(script)], cwd=here.parent)
-        print(f"--- {script.name}: exit {rc}, {time.perf_counter() - t0:.1f} s wall\n", flush=True)
+        proc = subprocess.run([sys.executable, str(script)], cwd=here.parent, text=True,
+                              stdout=subprocess.PIPE if markdown else None)
+        rc = proc.returncode
+        seconds = time.perf_counter() - t0
+        if markdown is not None:
+            print(proc.stdout, end="", flush=True)
+            if rc == 0:
+                (markdown / f"{script.stem}.txt").write_text(
+                    _header(script, seconds) + "\n" + proc.stdout, encoding="utf-8")
+        print(f"--- {script.name}: exit {rc}, {seconds:.1f} s wall\n", flush=True)
         if rc != 0:
             failed.append(script.name)
     if failed:

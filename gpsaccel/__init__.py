@@ -10,6 +10,7 @@ The calibration core (reports 000, 001, 003)::
     print(mc.consistency())                         # each statistic against its sampling error
 """
 
+from gpsaccel._version import __version__ as __version__  # the one place it is written
 from gpsaccel.calibration.model import CalibrationModel
 from gpsaccel.calibration.montecarlo import MonteCarloResult, monte_carlo
 from gpsaccel.calibration.simulation import Realization, simulate
@@ -32,7 +33,6 @@ __all__ = [
     "run_multirate",
     "simulate",
 ]
-__version__ = "0.1.0"
 
 #: Sub-packages reachable as attributes after a bare ``import gpsaccel`` (a lesson's
 #: ``gpsaccel.check.model_matrices(...)`` typed as given), imported on first use.

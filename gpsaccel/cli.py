@@ -152,16 +152,22 @@ def _cmd_figures(args: argparse.Namespace) -> int:
 
 
 def _cmd_lessons(args: argparse.Namespace) -> int:
-    """Execute the lessons top to bottom; with --html also render them (figures embedded)."""
+    """Execute the lessons top to bottom; with --html also render them (figures embedded); with
+    --copy DIR only copy them (and their solutions) where a student edits them."""
     import time
 
     from gpsaccel.lessons import execute, lessons_dir, render_html
 
+    if args.copy is not None:
+        return _copy_lessons(args.copy, only=args.only, html=args.html)
     paths = sorted(lessons_dir().glob("*.ipynb"))
+    if not paths:
+        raise ValueError(f"no lesson found in {lessons_dir()}")
     if args.only:
         paths = [p for p in paths if any(p.name.startswith(o) for o in args.only)]
     if not paths:
-        raise ValueError(f"--only: no lesson in {lessons_dir()} starts with {args.only}")
+        raise ValueError(f"--only: no lesson in {lessons_dir()} starts with "
+                         f"{' or '.join(args.only)}")
     total = 0.0
     for path in paths:
         t0 = time.perf_counter()
@@ -177,11 +183,45 @@ def _cmd_lessons(args: argparse.Namespace) -> int:
     return 0
 
 
+def _copy_lessons(folder: Path, only=None, html=None) -> int:
+    """``lessons --copy DIR``: the lessons and solutions/ into DIR; a file already there is kept."""
+    from gpsaccel.lessons import copy_lessons
+
+    if only or html is not None:
+        raise ValueError("--copy copies every lesson and executes none: give it without "
+                         "--only and --html")
+    copied, kept = copy_lessons(folder)
+    print(f"copied {len(copied)} notebooks into {folder}/"
+          + (f"; kept {len(kept)} already there (your edits are never overwritten)" if kept else ""))
+    print(f"open them with: gpsaccel lab {folder}")
+    return 0
+
+
+def _cmd_lab(args: argparse.Namespace) -> int:
+    """Open the lessons in JupyterLab: DIR's copy, made first when DIR holds no notebook.
+
+    JupyterLab replaces this process (exec), so Ctrl-C and its shutdown question reach it alone.
+    """
+    import os
+
+    from gpsaccel.lessons import copy_lessons, lab_command
+
+    cmd = lab_command(args.folder, port=args.port, browser=not args.no_browser)
+    if not any(args.folder.glob("*.ipynb")):
+        copied, _ = copy_lessons(args.folder)
+        print(f"copied {len(copied)} notebooks into {args.folder}/", file=sys.stderr)
+    print(" ".join(cmd), file=sys.stderr, flush=True)
+    sys.stdout.flush()
+    os.execv(cmd[0], cmd)
+    return 0  # only where execv is replaced (the tests)
+
+
 def _cmd_coop(args: argparse.Namespace) -> int:
     """Report 002: NEES/NIS of the LKF, EKF and UKF over Monte Carlo sets, and the course log."""
     from gpsaccel.coop.montecarlo import summary
 
-    print(summary(n_runs=args.runs, n_sets=args.sets, seed=args.seed, alpha=args.alpha))
+    print(summary(n_runs=args.runs, n_sets=args.sets, seed=args.seed, alpha=args.alpha,
+                  progress=not args.no_progress))
     return 0
 
 
@@ -241,14 +281,25 @@ def _cmd_check(args: argparse.Namespace) -> int:
     print(f"sandbox: {backend}" + (" (bubblewrap not available: apt-get install bubblewrap)"
                                    if backend != "bwrap" and args.sandbox == "auto" else ""),
           file=sys.stderr)
-    on_result = appender(log_path(args.json)) if args.json is not None else None
+    log = appender(log_path(args.json)) if args.json is not None else None
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=len(files), desc="check", unit="submission", leave=False,
+               disable=None)  # on stderr, when it is a terminal
+
+    def on_result(result: dict) -> None:
+        bar.update()
+        if log is not None:
+            log(result)
+
     t0 = time.perf_counter()
     try:
-        results = check_many(args.paths, n_runs=args.runs, seed=seed, timeout=args.timeout,
-                             executor=spec, max_workers=args.workers, sandbox=backend,
-                             limits=limits, allow_gpsaccel=args.allow_gpsaccel,
-                             on_result=on_result, problem=args.problem,
-                             allow_unsafe_basic=args.allow_unsafe_basic)
+        with bar:
+            results = check_many(args.paths, n_runs=args.runs, seed=seed, timeout=args.timeout,
+                                 executor=spec, max_workers=args.workers, sandbox=backend,
+                                 limits=limits, allow_gpsaccel=args.allow_gpsaccel,
+                                 on_result=on_result, problem=args.problem,
+                                 allow_unsafe_basic=args.allow_unsafe_basic)
     except Interrupted as exc:
         done = [r for r in exc.results if r is not None]
         if args.json is not None:  # first: the terminal may be gone
@@ -349,7 +400,22 @@ def _add_lessons(sub: argparse._SubParsersAction) -> None:
                         "lesson's full size)")
     p.add_argument("--only", nargs="*", default=None, metavar="NN",
                    help="only the lessons whose file name starts with these (e.g. 03 06)")
+    p.add_argument("--copy", type=_v.output_dir, default=None, metavar="DIR",
+                   help="copy the lessons and their solutions/ into DIR to edit (existing files "
+                        "are kept) and execute nothing")
     p.set_defaults(func=_cmd_lessons)
+
+
+
+def _add_lab(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("lab", help="open the lessons in JupyterLab (a copy in DIR, made first "
+                                   "when DIR holds none)")
+    p.add_argument("folder", nargs="?", type=_v.output_dir, default="gpsaccel-lessons",
+                   metavar="DIR", help="folder of your copy (default gpsaccel-lessons)")
+    p.add_argument("--port", type=_v.flag_int(minimum=1, maximum=65535), default=None,
+                   help="port of the server (default: JupyterLab's, 8888)")
+    p.add_argument("--no-browser", action="store_true", help="print the address, open no browser")
+    p.set_defaults(func=_cmd_lab)
 
 
 def _add_coop(sub: argparse._SubParsersAction) -> None:
@@ -361,6 +427,7 @@ def _add_coop(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=_v.flag_seed, default=0)
     p.add_argument("--alpha", type=_v.flag_probability, default=0.05,
                    help="test level (default 0.05)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar (stderr)")
     p.set_defaults(func=_cmd_coop)
 
 
@@ -478,6 +545,7 @@ SUBCOMMANDS = (
     _add_compare,
     _add_figures,
     _add_lessons,
+    _add_lab,
     _add_coop,
     _add_montecarlo,
     _add_ship,
@@ -488,7 +556,10 @@ SUBCOMMANDS = (
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from gpsaccel._version import __version__
+
     parser = _Parser(prog="gpsaccel", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     for add in SUBCOMMANDS:  # a new sub-command: an _add_NAME function and one line above
         add(sub)
@@ -508,6 +579,11 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
+#: The extra that installs what a sub-command imports beyond the core (pyproject.toml).
+_EXTRAS = {"lessons": "lessons", "lab": "lab", "assignment": "grading", "grade": "grading",
+           "montecarlo": "dask", "check": "dask"}
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Parse, run, and turn the expected failures into one line on stderr.
 
@@ -524,6 +600,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     try:
         return int(args.func(args) or 0)
+    except ModuleNotFoundError as exc:  # an optional part not installed: name the extra
+        extra = _EXTRAS.get(args.command, "test")
+        print(f"gpsaccel {args.command}: error: {exc.msg}: the module {exc.name} is not "
+              f"installed (pip install 'gpsaccel[{extra}]')", file=sys.stderr)
+        return 2
     except ValueError as exc:  # bad input: one clear line, not a traceback
         print(f"gpsaccel {args.command}: error: {exc}", file=sys.stderr)
         return 2

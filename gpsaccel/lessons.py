@@ -12,6 +12,7 @@ import os
 import re
 import tempfile
 from contextlib import contextmanager
+from importlib import resources
 from pathlib import Path
 
 from gpsaccel._atomic import write_text
@@ -35,8 +36,66 @@ def lesson_runs(default: int) -> int:
 
 
 def lessons_dir() -> Path:
-    """The ``lessons/`` folder of a source checkout."""
-    return Path(__file__).resolve().parent.parent / "lessons"
+    """The student versions of the lessons, as installed with the package.
+
+    Read with :mod:`importlib.resources`: ``gpsaccel/_lessons`` is a link to the repository's
+    top-level ``lessons/`` (where a student who clones finds them), so an editable install reads
+    the checkout and a wheel or an sdist its own copy.  The solutions are in ``solutions/`` below it
+    (:func:`solutions_dir`).
+    """
+    folder = Path(str(resources.files("gpsaccel") / "_lessons"))
+    if not folder.is_dir():
+        raise FileNotFoundError(f"the lessons are not installed with gpsaccel (no folder {folder})")
+    return folder
+
+
+def solutions_dir() -> Path:
+    """The lessons with their solutions filled in (``lessons/solutions/`` of the checkout)."""
+    return lessons_dir() / "solutions"
+
+
+def copy_lessons(target: Path | str, solutions: bool = True) -> tuple[list[Path], list[Path]]:
+    """Copy the lessons (and ``solutions/``) into ``target`` for a student to edit.
+
+    A file already in ``target`` is never overwritten (it may hold the student's work): returns
+    ``(copied, kept)``, the paths written and the paths left as they were.
+    """
+    import shutil
+
+    target = Path(target)
+    sources = sorted(lessons_dir().glob("*.ipynb"))
+    if not sources:
+        raise FileNotFoundError(f"no lesson found in {lessons_dir()}")
+    if solutions:
+        sources += sorted(solutions_dir().glob("*.ipynb"))
+    copied, kept = [], []
+    for src in sources:
+        dest = target / src.relative_to(lessons_dir())
+        if dest.exists():
+            kept.append(dest)
+            continue
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(src, dest)
+        copied.append(dest)
+    return copied, kept
+
+
+def lab_command(folder: Path | str, port: int | None = None, browser: bool = True) -> list[str]:
+    """The command that opens JupyterLab on ``folder`` with this Python (so its kernel has
+    gpsaccel); ``--allow-root`` when run as root (Jupyter refuses root otherwise)."""
+    import importlib.util
+    import sys
+
+    if importlib.util.find_spec("jupyterlab") is None:
+        raise ModuleNotFoundError("gpsaccel lab needs JupyterLab", name="jupyterlab")
+    cmd = [sys.executable, "-m", "jupyterlab", f"--notebook-dir={folder}"]
+    if port is not None:
+        cmd.append(f"--port={port}")
+    if not browser:
+        cmd.append("--no-browser")
+    if hasattr(os, "geteuid") and os.geteuid() == 0:
+        cmd.append("--allow-root")
+    return cmd
 
 
 def execute(path: Path | str, timeout: int = 600, runs: int | None = None):
@@ -98,6 +157,7 @@ def render_html(paths: list[Path], out: Path | str, runs: int | None = None,
                 index: bool = True) -> list[Path]:
     """Execute ``paths`` and write each as HTML (figures embedded) into ``out``.
 
+    Math is typeset by the MathJax copied into ``out/mathjax`` (no network needed).
     Solutions and self-checks are collapsed (``<details>``) as they are in JupyterLab; every
     markdown cell that walks through a report's figure gets an anchor ``r{report}-fig{number}``.
     With ``index``, ``out/index.html`` links every lesson rendered so far (in ``out``) and every
@@ -106,10 +166,13 @@ def render_html(paths: list[Path], out: Path | str, runs: int | None = None,
     import nbformat
     from nbconvert import HTMLExporter
 
+    from gpsaccel import _mathjax
+
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     exporter = HTMLExporter(extra_template_basedirs=[str(Path(__file__).parent / "templates")],
-                            template_name="gpsaccel-lesson")
+                            template_name="gpsaccel-lesson",
+                            mathjax_url=_mathjax.copy_to(out))  # math typeset offline
     written = []
     for path in paths:
         nb = execute(path, runs=runs)
@@ -119,7 +182,8 @@ def render_html(paths: list[Path], out: Path | str, runs: int | None = None,
                 if anchors:
                     cell.source = anchors + "\n\n" + cell.source
         nb.metadata["title"] = _title(nbformat.read(path, as_version=4)) or Path(path).stem
-        body, _ = exporter.from_notebook_node(nb)
+        body, _ = exporter.from_notebook_node(
+            nb, resources={"gpsaccel_mathjax_config": _mathjax.config_script()})
         target = out / (Path(path).stem + ".html")
         write_text(target, body)  # whole or not at all
         written.append(target)

@@ -209,22 +209,36 @@ def format_sets(runs_by_label: dict[str, list[ConsistencyRun]]) -> str:
 
 
 def summary(model: CoopModel | None = None, n_runs: int = 50, n_sets: int = 5, seed: int = 0,
-            alpha: float = 0.05) -> str:
+            alpha: float = 0.05, progress: bool = False) -> str:
     """The issue's table: per filter the Q, NEES/NIS fractions over sets, NIS on the log, runtime.
 
     LKF, EKF and UKF with their tuned Q, and the EKF and UKF with Q = Qtrue, all on the same
     ``n_sets`` truth sets of ``n_runs`` runs; the runtime is one 100-second run of the filterpy
-    implementation (wall clock, this machine).
+    implementation (wall clock, this machine).  ``progress``: a tqdm bar on stderr (when it is a
+    terminal), one step per truth set simulated and per (filter, set) tested.
     """
+    from tqdm.auto import tqdm
+
     from gpsaccel.coop.filters import run_filter
 
     model = CoopModel() if model is None else model
-    truths = [truth_runs(model, n_runs, s) for s in set_seeds(seed, n_sets)]
     cases = [("LKF (tuned Q)", "lkf", None), ("EKF (tuned Q)", "ekf", None),
              ("UKF (tuned Q)", "ukf", None), ("EKF (Q = Qtrue)", "ekf", model.Qtrue),
              ("UKF (Q = Qtrue)", "ukf", model.Qtrue)]
-    sets = {label: [consistency_test(model, m, Q, alpha=alpha, truth=tr) for tr in truths]
-            for label, m, Q in cases}
+    bar = tqdm(total=n_sets * (1 + len(cases)), desc="coop", unit="set", leave=False,
+               disable=None if progress else True)
+    with bar:
+        truths = []
+        for s in set_seeds(seed, n_sets):
+            truths.append(truth_runs(model, n_runs, s))
+            bar.update()
+        sets = {}
+        for label, m, Q in cases:
+            bar.set_postfix_str(label)
+            sets[label] = []
+            for tr in truths:
+                sets[label].append(consistency_test(model, m, Q, alpha=alpha, truth=tr))
+                bar.update()
     y = model.log()
     lines = [f"NEES/NIS over {n_sets} sets of {n_runs} truth runs (seed {seed}), alpha = {alpha:g}",
              format_sets(sets), "",

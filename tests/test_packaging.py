@@ -1,0 +1,237 @@
+"""What ``pip install gpsaccel`` gives: declared dependencies, one version, the metadata, the
+lessons as package data, ``--version``, ``python -m gpsaccel``, ``lessons --copy``, ``lab``; and a
+built wheel installed in a fresh environment outside the repository (slow)."""
+
+from __future__ import annotations
+
+import ast
+import importlib.metadata as md
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+
+import gpsaccel
+from gpsaccel import lessons
+from gpsaccel.cli import main
+
+ROOT = Path(__file__).resolve().parent.parent
+PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+PROJECT = PYPROJECT["project"]
+
+
+def _name(requirement: str) -> str:
+    """The normalized distribution name of a requirement (``"PyYAML>=6"`` -> ``"pyyaml"``)."""
+    return re.sub(r"[-_.]+", "-", re.match(r"[A-Za-z0-9_.-]+", requirement).group()).lower()
+
+
+def _declared(extra: str | None = None, seen: frozenset = frozenset()) -> set[str]:
+    """Distributions the core (``extra=None``) or an extra pulls in, extras of gpsaccel expanded."""
+    reqs = PROJECT["dependencies"] if extra is None else PROJECT["optional-dependencies"][extra]
+    names = set()
+    for req in reqs:
+        if _name(req) == "gpsaccel":
+            for sub in re.search(r"\[(.*)\]", req).group(1).split(","):
+                if sub.strip() not in seen:
+                    names |= _declared(sub.strip(), seen | {sub.strip()})
+        else:
+            names.add(_name(req))
+    return names
+
+
+def _imports(source: str) -> set[str]:
+    """Top-level module names a piece of Python imports (absolute imports only)."""
+    found = set()
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            found |= {a.name.split(".")[0] for a in node.names}
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            found.add(node.module.split(".")[0])
+    return found
+
+
+def _third_party_imports() -> dict[str, set[str]]:
+    """Every third-party module imported by the package's code and the lessons' code cells, with
+    the files that import it."""
+    where: dict[str, set[str]] = {}
+    sources = [(p, p.read_text(encoding="utf-8")) for p in (ROOT / "gpsaccel").rglob("*.py")]
+    for nb in sorted(lessons.lessons_dir().rglob("*.ipynb")):
+        cells = json.loads(nb.read_text(encoding="utf-8"))["cells"]
+        code = "\n".join("".join(c["source"]) for c in cells if c["cell_type"] == "code")
+        code = "\n".join(line for line in code.splitlines() if not line.lstrip().startswith(("%", "!")))
+        sources.append((nb, code))
+    for path, source in sources:
+        for module in _imports(source) - set(sys.stdlib_module_names) - {"gpsaccel"}:
+            where.setdefault(module, set()).add(str(path.relative_to(ROOT)))
+    return where
+
+
+def test_every_imported_module_is_declared():
+    """PyYAML and psutil were imported and never declared: every import's distribution must be a
+    dependency of the core or of an extra."""
+    declared = _declared() | {n for e in PROJECT["optional-dependencies"] for n in _declared(e)}
+    providers = md.packages_distributions()
+    undeclared = {}
+    for module, files in _third_party_imports().items():
+        dists = {_name(d) for d in providers.get(module, [])}
+        if not dists & declared:
+            undeclared[module] = (sorted(dists) or ["not installed"], sorted(files)[:3])
+    assert not undeclared, f"imported but not declared in pyproject.toml: {undeclared}"
+    assert {"pyyaml", "psutil"} <= _declared("grading")
+
+
+@pytest.mark.slow
+def test_the_main_job_needs_only_the_core(tmp_path):
+    """``gpsaccel run`` (``make run``) imports nothing beyond the core dependencies: every optional
+    distribution is made unimportable for it."""
+    optional = {n for e in PROJECT["optional-dependencies"] for n in _declared(e)} - _declared()
+    providers = md.packages_distributions()
+    blocked = sorted(m for m, ds in providers.items()
+                     if {_name(d) for d in ds} & optional and not {_name(d) for d in ds} & _declared()
+                     and m.isidentifier())
+    assert "yaml" in blocked and "nbformat" in blocked
+    script = f"""
+import sys
+BLOCKED = set({blocked!r})
+class Block:
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] in BLOCKED:
+            raise ModuleNotFoundError(f"blocked optional module {{name}}", name=name)
+sys.meta_path.insert(0, Block())
+from gpsaccel.cli import main
+sys.exit(main(["run", "--runs", "20", "--out", {str(tmp_path / "out")!r}]))
+"""
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          env=dict(os.environ, MPLBACKEND="Agg"), timeout=240)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "final estimates" in proc.stdout and (tmp_path / "out" / "index.html").is_file()
+
+
+def test_one_version():
+    """Written once, in gpsaccel/_version.py; the metadata and gpsaccel.__version__ read it."""
+    assert "version" not in PROJECT and "version" in PROJECT["dynamic"]
+    attr = PYPROJECT["tool"]["setuptools"]["dynamic"]["version"]
+    assert attr == {"attr": "gpsaccel._version.__version__"}
+    written = [p for p in (ROOT / "gpsaccel").rglob("*.py")
+               if re.search(r"^__version__\s*=", p.read_text(encoding="utf-8"), re.M)]
+    assert written == [ROOT / "gpsaccel" / "_version.py"]
+    assert md.version("gpsaccel") == gpsaccel.__version__
+
+
+def test_version_flag_and_python_dash_m(capsys):
+    assert main(["--version"]) == 0
+    assert capsys.readouterr().out.strip() == f"gpsaccel {gpsaccel.__version__}"
+    proc = subprocess.run([sys.executable, "-m", "gpsaccel", "--version"], capture_output=True,
+                          text=True, timeout=60)
+    assert proc.returncode == 0 and proc.stdout.strip() == f"gpsaccel {gpsaccel.__version__}"
+
+
+def test_metadata_declares_the_tested_pythons_and_the_license():
+    meta = md.metadata("gpsaccel")
+    tested = re.findall(r"^for v in (.*); do$", (ROOT / ".ci" / "run").read_text(), re.M)[0].split()
+    declared = {c.rsplit(":: ", 1)[1] for c in meta.get_all("Classifier")
+                if re.fullmatch(r"Programming Language :: Python :: 3\.\d+", c)}
+    assert declared == set(tested)
+    assert meta["License-Expression"] == "MIT" and (ROOT / "LICENSE").read_text().startswith("MIT")
+    assert meta["Author"] or meta["Author-email"]
+
+
+def test_the_lessons_are_package_data_that_follow_the_checkout():
+    """An editable install reads the top-level lessons/ (a student who clones edits those)."""
+    assert lessons.lessons_dir().resolve() == (ROOT / "lessons").resolve()
+    names = sorted(p.name for p in lessons.lessons_dir().glob("*.ipynb"))
+    assert names == sorted(p.name for p in (ROOT / "lessons").glob("*.ipynb")) and len(names) >= 12
+
+
+def test_lessons_copy_copies_once_and_keeps_a_students_edits(tmp_path, capsys):
+    target = tmp_path / "mine"
+    assert main(["lessons", "--copy", str(target)]) == 0
+    expected = sorted(p.relative_to(lessons.lessons_dir()).as_posix()
+                      for p in [*lessons.lessons_dir().glob("*.ipynb"),
+                                *lessons.solutions_dir().glob("*.ipynb")])
+    got = sorted(p.relative_to(target).as_posix() for p in target.rglob("*.ipynb"))
+    assert got == expected
+    first = target / expected[0]
+    first.write_text("my work", encoding="utf-8")
+    assert main(["lessons", "--copy", str(target)]) == 0
+    out = capsys.readouterr().out
+    assert f"kept {len(expected)} already there" in out and first.read_text() == "my work"
+    assert main(["lessons", "--copy", str(target), "--only", "02"]) == 2
+    assert "--copy" in capsys.readouterr().err
+
+
+def test_lab_copies_the_lessons_then_starts_jupyterlab_as_this_python(tmp_path, monkeypatch):
+    pytest.importorskip("jupyterlab")
+    calls = []
+    monkeypatch.setattr(os, "execv", lambda path, cmd: calls.append(cmd))
+    assert main(["lab", str(tmp_path / "course"), "--no-browser", "--port", "8899"]) == 0
+    (cmd,) = calls
+    assert cmd[:3] == [sys.executable, "-m", "jupyterlab"]
+    assert f"--notebook-dir={tmp_path / 'course'}" in cmd and "--port=8899" in cmd
+    assert ("--allow-root" in cmd) == (os.geteuid() == 0)
+    assert (tmp_path / "course" / "01-truth-and-sensors.ipynb").is_file()
+
+
+def test_a_missing_extra_is_named(monkeypatch, tmp_path, capsys):
+    def absent(*args, **kwargs):
+        raise ModuleNotFoundError("gpsaccel lab needs JupyterLab", name="jupyterlab")
+
+    monkeypatch.setattr(lessons, "lab_command", absent)
+    assert main(["lab", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "jupyterlab is not installed" in err and "gpsaccel[lab]" in err
+
+
+# ----------------------------------------------------------------------------- the built wheel
+
+def _uv() -> str | None:
+    return shutil.which("uv")
+
+
+#: What a user does from the installed wheel, in a folder outside the repository: (name, argv,
+#: what the output must hold).  The homework's steps (``assignment``, ``grade``) go here too.
+WHEEL_STEPS: list[tuple[str, list[str], str]] = [
+    ("version", ["--version"], f"gpsaccel {gpsaccel.__version__}"),
+    ("copy the lessons", ["lessons", "--copy", "course"], "notebooks into course"),
+    ("check a homework file", ["check", str(ROOT / "tests/submissions/correct_joseph.py"),
+                               "--runs", "2", "--sandbox", "basic"], "1 submissions"),
+]
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(_uv() is None, reason="needs uv to build and install quickly")
+def test_the_wheel_in_a_fresh_environment_outside_the_repository(tmp_path):
+    """Build the wheel (from the sdist, as uv does), install it with the core dependencies only
+    into a new venv under /tmp, and use it from there."""
+    dist = tmp_path / "dist"
+    subprocess.run([_uv(), "build", "-q", "-o", str(dist), str(ROOT)], check=True, timeout=240)
+    (wheel,) = dist.glob("gpsaccel-*.whl")
+    venv = tmp_path / "venv"
+    subprocess.run([_uv(), "venv", "-q", "-p", sys.executable, str(venv)], check=True, timeout=120)
+    subprocess.run([_uv(), "pip", "install", "-q", "--python", str(venv / "bin" / "python"),
+                    str(wheel)], check=True, timeout=240)
+    work = tmp_path / "student"
+    work.mkdir()
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    env["MPLBACKEND"] = "Agg"
+    where = subprocess.run([str(venv / "bin" / "python"), "-c",
+                            "import gpsaccel, gpsaccel.lessons as l; print(gpsaccel.__file__); "
+                            "print(l.lessons_dir())"], cwd=work, env=env, capture_output=True,
+                           text=True, check=True).stdout.split()
+    assert all(Path(p).is_relative_to(venv) for p in where), where  # not the checkout
+    for name, argv, expected in WHEEL_STEPS:
+        proc = subprocess.run([str(venv / "bin" / "gpsaccel"), *argv], cwd=work, env=env,
+                              capture_output=True, text=True, timeout=240)
+        assert proc.returncode == 0 and expected in proc.stdout, (name, proc.stdout, proc.stderr)
+    shipped = sorted(p.relative_to(work / "course").as_posix()
+                     for p in (work / "course").rglob("*.ipynb"))
+    repo = sorted(p.relative_to(ROOT / "lessons").as_posix()
+                  for p in [*(ROOT / "lessons").glob("*.ipynb"),
+                            *(ROOT / "lessons").glob("solutions/*.ipynb")])
+    assert shipped == repo and not any(p.startswith("masters/") for p in shipped)
