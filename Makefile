@@ -40,9 +40,9 @@ run: $(VENV)/.installed-core
 test: $(VENV)/.installed-test
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q $(if $(filter-out 0,$(JOBS)),-n $(JOBS))
 
-# the core's tests without the slow ones (notebooks, wheels, sandboxes, big Monte Carlo): < 1 min
-FAST_TESTS ?= tests/kalman tests/calibration tests/ship tests/coop tests/test_validation.py \
-              tests/test_executors.py tests/test_layout.py tests/test_parameter_hygiene.py \
+# the core's tests (the Kalman core, the calibration system, the package's shape) without the
+# slow ones (notebooks, wheels, browsers, big Monte Carlo): under a minute on two idle cores
+FAST_TESTS ?= tests/kalman tests/calibration tests/test_validation.py tests/test_layout.py \
               tests/test_packaging.py
 test-fast: $(VENV)/.installed-test
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q -m "not slow" $(if $(filter-out 0,$(JOBS)),-n $(JOBS)) $(FAST_TESTS)
