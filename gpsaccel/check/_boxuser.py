@@ -3,10 +3,11 @@
 Used by :mod:`gpsaccel.check.sandbox` (both backends, when the checker runs as root); not an
 interface of its own.
 
-* :func:`box_uid`: ``UID_BASE + pid`` of the supervising process, a uid with no passwd entry.  The
-  supervisor's pid is unique among live processes, so two boxes running at once never share a
-  uid; whatever still runs as the uid when a box starts is what an earlier box of a dead
-  supervisor with the same pid left, and is killed.  The uid owns no file of the package, the
+* :func:`acquire`: a uid with no passwd entry, ``UID_BASE + SLOTS * pid + k`` for the
+  supervising process's pid and the first slot ``k`` no other box of that process holds (a lock
+  file).  The pid is unique among live processes and the slot among its boxes, so two boxes
+  running at once never share a uid; whatever still runs as the uid when a box starts is what an
+  earlier box of a dead supervisor with the same pid left, and is killed.  The uid owns no file of the package, the
   environment or the instructor's, so the student cannot write a ``.pth`` into site-packages,
   edit the package or a results file, nor signal (kill, SIGSTOP) any process but its own.
 * :func:`kill_uid`: everything the uid runs, wherever it is in the process tree (a daemon, a
@@ -22,18 +23,22 @@ interface of its own.
 from __future__ import annotations
 
 import ctypes
+import fcntl
 import os
 import pwd
 import shutil
 import signal
 import stat
+import tempfile
 import time
 from pathlib import Path
 
 #: First uid of the boxes' range (2^31 - 2^27: above every distribution's allocation ranges,
-#: below the 32-bit overflow uids); the range is 2^22 wide, the largest ``pid_max``.
+#: below the 32-bit overflow uids): SLOTS uids for each pid (threads of one process may run
+#: boxes at once), for pids below 2^22 (the largest ``pid_max``); the range ends below 2^32 - 1.
 UID_BASE = 2_013_265_920
 UID_SPAN = 1 << 22
+SLOTS = 512
 
 #: Shared writable folders where a box user could leave files (cleaned after each box).
 SHARED_TMP = ("/tmp", "/var/tmp", "/dev/shm")
@@ -44,15 +49,49 @@ MS_REC, MS_PRIVATE = 16384, 1 << 18
 
 
 def box_uid() -> int | None:
-    """The uid a box started by this process runs as, or None (not root, or the uid is taken)."""
+    """The first uid of this process's slots, or None (not root, no /proc, or an account in the
+    range): then a box runs as the checker's own user."""
     if os.geteuid() != 0 or not os.path.isdir("/proc/self"):
         return None
-    uid = UID_BASE + os.getpid() % UID_SPAN
+    uid = UID_BASE + (os.getpid() % UID_SPAN) * SLOTS
+    for u in (uid, uid + SLOTS - 1):
+        try:
+            pwd.getpwuid(u)
+        except KeyError:
+            continue
+        return None  # pragma: no cover - an account in the boxes' range
+    return uid
+
+
+def acquire() -> tuple[int, int] | None:
+    """(uid, lock) for a new box: the first of this process's slots no other box holds, locked
+    (``flock`` on a file of a root-only folder) until :func:`release`; None when there is no box
+    uid here."""
+    base = box_uid()
+    if base is None:
+        return None
+    folder = os.path.join(tempfile.gettempdir(), "gpsaccel-uids")
     try:
-        pwd.getpwuid(uid)
-    except KeyError:
-        return uid
-    return None  # pragma: no cover - an account in the boxes' range
+        os.mkdir(folder, 0o700)
+    except FileExistsError:
+        pass
+    st = os.lstat(folder)
+    if not stat.S_ISDIR(st.st_mode) or st.st_uid != 0 or st.st_mode & 0o077:
+        return None  # not a folder only root controls: no lock to trust
+    for k in range(SLOTS):
+        fd = os.open(os.path.join(folder, str(base + k)),
+                     os.O_CREAT | os.O_RDWR | os.O_NOFOLLOW | os.O_CLOEXEC, 0o600)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            os.close(fd)
+            continue
+        return base + k, fd
+    return None  # pragma: no cover - 512 boxes at once in one process
+
+
+def release(lock: int) -> None:
+    os.close(lock)
 
 
 def uid_pids(uid: int) -> set[int]:

@@ -734,6 +734,7 @@ class _Confinement:
     uid: int | None = None
     cgroup: _cgroup.BoxCgroup | None = None
     reveal: list[tuple[str, list[str]]] = field(default_factory=list)
+    lock: int | None = None  # held while the uid is this box's
 
     @property
     def limit_backend(self) -> str:
@@ -754,7 +755,9 @@ def _confine(limits: Limits, backend: str, needed: list[str]) -> _Confinement:
     extra = 2 if backend == "bwrap" else 0  # bwrap's own two processes
     if sys.platform.startswith("linux"):
         c.cgroup = _cgroup.create(limits.memory, limits.processes + 1 + extra)
-        c.uid = _boxuser.box_uid()
+        got = _boxuser.acquire()
+        if got is not None:
+            c.uid, c.lock = got
     if c.uid is not None:
         _boxuser.kill_uid(c.uid)
         c.reveal = _boxuser.reveal(needed)
@@ -1129,6 +1132,8 @@ def run(sub: Submission, calls: Sequence[Call], limits: Limits = Limits(),
                 _boxuser.remove_files(confinement.uid)
             if confinement.cgroup is not None:
                 confinement.cgroup.remove()
+            if confinement.lock is not None:
+                _boxuser.release(confinement.lock)
         _remove_tree(str(tmp))
 
 

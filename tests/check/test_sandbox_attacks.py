@@ -224,3 +224,19 @@ def test_a_box_folder_of_a_killed_supervisor_is_removed(tmp_path, hostile):
         bases = (_cgroup._v1_bases().values() if CGROUP == "cgroup1" else [_cgroup._v2_base()])
         for d in bases:
             assert not [p for p in os.listdir(d) if p.startswith(f"{_cgroup.PREFIX}{proc.pid}-")]
+
+
+@needs_root
+def test_boxes_at_once_in_one_process_get_uids_of_their_own():
+    """Threads of one process (check_many(executor="threads")) run boxes at once: each box
+    locks a slot of its own, so no box's end kills another's processes."""
+    a, b = _boxuser.acquire(), _boxuser.acquire()
+    try:
+        assert a[0] != b[0] and a[0] >= _boxuser.UID_BASE
+        assert a[0] - _boxuser.UID_BASE < (1 << 32) - 1 - _boxuser.UID_BASE
+    finally:
+        _boxuser.release(a[1])
+    c = _boxuser.acquire()
+    _boxuser.release(b[1])
+    _boxuser.release(c[1])
+    assert c[0] == a[0]  # a released slot is taken again
