@@ -41,6 +41,7 @@ def _load(root: str):  # noqa: ANN202 - a module
     spec = importlib.util.spec_from_file_location(
         "sandbox_before", Path(root) / "gpsaccel" / "check" / "sandbox.py")
     module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up there
     spec.loader.exec_module(module)
     return module
 
