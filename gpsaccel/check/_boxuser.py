@@ -7,9 +7,10 @@ interface of its own.
   supervising process's pid and the first slot ``k`` no other box of that process holds (a lock
   file).  The pid is unique among live processes and the slot among its boxes, so two boxes
   running at once never share a uid; whatever still runs as the uid when a box starts is what an
-  earlier box of a dead supervisor with the same pid left, and is killed.  The uid owns no file of the package, the
-  environment or the instructor's, so the student cannot write a ``.pth`` into site-packages,
-  edit the package or a results file, nor signal (kill, SIGSTOP) any process but its own.
+  earlier box of a dead supervisor with the same pid left, and is killed.  The uid owns no file
+  of the package, the environment or the instructor's, so the student cannot write a ``.pth``
+  into site-packages, edit the package or a results file, nor signal (kill, SIGSTOP) any process
+  but its own.
 * :func:`kill_uid`: everything the uid runs, wherever it is in the process tree (a daemon, a
   process a terminal multiplexer server started), is killed until a scan of ``/proc`` finds
   none; :func:`remove_files` removes what the uid left in the shared temporary folders.
