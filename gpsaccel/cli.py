@@ -326,28 +326,50 @@ def _cmd_check(args: argparse.Namespace) -> int:
 
 
 def _cmd_assignment(args: argparse.Namespace) -> int:
-    """``otter assign`` a homework: the student notebook and the autograder zip."""
+    """``otter assign`` a homework: the student notebook and the autograder zip; with
+    ``--roster``, one notebook per student carrying that student's variant."""
     from gpsaccel.assignments import generate
+    from gpsaccel.assignments.generate import copy_student_side, master_notebook, personalize
+    from gpsaccel.assignments.grading import read_secret
 
+    try:
+        master_notebook(args.name)
+    except FileNotFoundError:  # a wheel: the student side only
+        print(f"hand out / work on: {copy_student_side(args.name, args.out)} (no master here: "
+              f"the masters and grading are in gpsaccel's source repository)")
+        return 0
     g = generate(args.name, args.out, run_tests=not args.no_run_tests)
-    print(f"hand out:  {g.student}\ngrade with: {g.autograder}\nsolution:  {g.solution}")
+    print(f"hand out:  {g.student}\ngrade with: gpsaccel grade SUBMISSIONS --assignment "
+          f"{args.name} (Gradescope: {g.autograder})\nsolution:  {g.solution}")
+    if args.roster is not None:
+        secret = read_secret(args.secret_file)
+        if secret is None:
+            raise ValueError("roster: per-student variants need the instructor's secret "
+                             "(--secret-file or $GPSACCEL_GRADING_SECRET)")
+        ids = [s.strip() for s in args.roster.read_text(encoding="utf-8").splitlines()
+               if s.strip()]
+        folder = personalize(args.name, g.student, ids, secret, g.out / "students")
+        print(f"per student: {folder}/<id>/{args.name}.ipynb ({len(ids)} students)")
     return 0
 
 
 def _cmd_grade(args: argparse.Namespace) -> int:
-    """Grade a folder of notebooks with ``otter run``; grades.csv and feedback/ in --out."""
+    """Grade a class in the sandbox; grades.csv, feedback/, summary.csv/png in --out."""
     from gpsaccel.assignments import grade
+    from gpsaccel.assignments.grading import default_out, read_secret
 
-    out = args.out if args.out is not None else args.submissions / "grades"
-    grades = grade(args.submissions, args.assignment, out=out, autograder=args.autograder,
-                   jobs=args.jobs, timeout=args.timeout)
+    out = args.out if args.out is not None else default_out(args.submissions)
+    grades = grade(args.submissions, args.assignment, out=out, jobs=args.jobs,
+                   timeout=args.timeout, seed=args.seed, secret=read_secret(args.secret_file),
+                   student=args.student, dask=args.dask, sandbox=args.sandbox)
     if not grades:
-        raise ValueError(f"submissions: no .ipynb file in {args.submissions}")
-    width = max(len(g.submission) for g in grades)
+        raise ValueError(f"submissions: no student's folder or notebook in {args.submissions}")
+    width = max(len(g.student) for g in grades)
     for g in grades:
-        print(f"{g.submission:<{width}}  {g.total:>5g} / {g.max_total:g}  {g.status:<8} "
+        print(f"{g.student:<{width}}  {g.total:>5g} / {g.max_total:g}  {g.status:<13} "
               f"{g.seconds:5.1f} s")
-    print(f"wrote {out / 'grades.csv'} and {out / 'feedback'}/")
+    print(f"wrote {out / 'grades.csv'}, {out / 'feedback'}/, {out / 'summary.csv'}, "
+          f"{out / 'summary.png'} (seed in {out / 'grading.json'})")
     return 0
 
 
@@ -521,21 +543,34 @@ def _add_assignment(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", type=_v.output_dir, required=True, help="folder to write (replaced)")
     p.add_argument("--no-run-tests", action="store_true",
                    help="do not execute the solution against its tests first (faster)")
+    p.add_argument("--roster", type=Path, default=None,
+                   help="file of student ids (one a line): one notebook each, with its variant")
+    p.add_argument("--secret-file", type=Path, default=None,
+                   help="the instructor's secret (default $GPSACCEL_GRADING_SECRET)")
     p.set_defaults(func=_cmd_assignment)
 
 
 def _add_grade(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("grade", help="grade a folder of homework notebooks with otter run")
-    p.add_argument("submissions", type=Path, help="folder of submitted .ipynb files")
+    p = sub.add_parser("grade", help="grade a class of homework notebooks in the sandbox")
+    p.add_argument("submissions", type=Path,
+                   help="LMS export: a folder per student (or one .ipynb per student)")
     p.add_argument("--assignment", required=True, choices=("calibration", "coop", "ship"))
-    p.add_argument("--autograder", type=Path, default=None,
-                   help="the zip of `gpsaccel assignment` (default: generated from the master)")
     p.add_argument("--out", type=_v.output_dir, default=None,
-                   help="folder for grades.csv and feedback/ (default SUBMISSIONS/grades)")
+                   help="folder for grades.csv, feedback/, summary (default SUBMISSIONS-grades)")
     p.add_argument("--jobs", type=_v.flag_int(minimum=1), default=None,
                    help="notebooks graded at once (default: CPUs, at most 4)")
-    p.add_argument("--timeout", type=_v.flag_float(0.0, open_min=True), default=600.0,
-                   help="time limit per notebook, s (default 600)")
+    p.add_argument("--timeout", type=_v.flag_float(0.0, open_min=True), default=120.0,
+                   help="time limit of one notebook's box, s (default 120)")
+    p.add_argument("--seed", type=_v.flag_seed, default=None,
+                   help="seed of the fresh data (default: random; recorded in grading.json)")
+    p.add_argument("--secret-file", type=Path, default=None,
+                   help="the instructor's secret for per-student variants (default "
+                        "$GPSACCEL_GRADING_SECRET; none: no variants)")
+    p.add_argument("--student", default=None, help="regrade this student only")
+    p.add_argument("--dask", default=None,
+                   help="grade on Dask: 'dask-local' or a scheduler address tcp://host:port")
+    p.add_argument("--sandbox", choices=("auto", "bwrap", "basic"), default="auto",
+                   help="isolation of each notebook (default auto: bwrap where it works)")
     p.set_defaults(func=_cmd_grade)
 
 

@@ -1,23 +1,24 @@
-"""Ready-to-hand-out homework, graded with otter-grader (``pip install gpsaccel[assignments]``).
+"""Ready-to-hand-out homework: authored with otter-grader, graded in the checker's sandbox.
 
 Three homeworks on the course reports, each a master notebook in otter's assign format under
-``assignments/NAME/`` (solutions and hidden tests only there):
+``assignments/NAME/`` of the source repository (solutions and otter's tests only there):
 
-* ``calibration``: Φ, Γ, H, V, W, M0 (:func:`gpsaccel.check.model_matrices`), a
-  ``kalman_filter(z)`` (:func:`gpsaccel.check.submission`), a Monte Carlo NEES
+* ``calibration``: Φ, Γ, H, V, W, M0 for the student's accelerometer rate, a ``kalman_filter(z)``
+  in its own file (:func:`gpsaccel.check.submission`), the ensemble NEES and its bounds
   (:mod:`~gpsaccel.assignments.calibration`);
-* ``coop``: the Jacobians A, B, C and the DT linearization by finite differences of the coop model,
-  an EKF on the course log (:mod:`~gpsaccel.assignments.coop`);
-* ``ship``: the multirate update with the rows that arrived, against the report's zeroed gain
-  (:mod:`~gpsaccel.assignments.ship`).
+* ``coop``: the Jacobians A, B, C (:func:`gpsaccel.check.jacobians`), the DT linearization
+  (:func:`gpsaccel.check.dt_model`), an EKF on the course log (:mod:`~gpsaccel.assignments.coop`);
+* ``ship``: the multirate update with the rows that arrived, what the report's zeroed gain costs
+  on the student's voyage (:mod:`~gpsaccel.assignments.ship`).
 
-:func:`generate` (``gpsaccel assignment NAME --out DIR``) runs ``otter assign``;
-:func:`grade` (``gpsaccel grade DIR --assignment NAME``) grades a folder of notebooks with
-``otter run``, one isolated job per notebook, in parallel, and writes ``grades.csv`` and feedback.
+:func:`generate` (``gpsaccel assignment NAME --out DIR``) runs ``otter assign`` (the student
+notebook and otter's autograder zip for students' ``grader.check`` and Gradescope);
+:func:`grade` (``gpsaccel grade DIR --assignment NAME``) grades a class: every notebook only in
+the sandbox, every score computed outside it (:mod:`~gpsaccel.assignments.grading`).
 """
 
 from gpsaccel.assignments.generate import ASSIGNMENTS, Generated, generate, master_notebook, questions
-from gpsaccel.assignments.grading import Grade, grade, grade_one
+from gpsaccel.assignments.grading import Grade, grade, grade_notebook
 
-__all__ = ["ASSIGNMENTS", "Generated", "Grade", "generate", "grade", "grade_one",
+__all__ = ["ASSIGNMENTS", "Generated", "Grade", "generate", "grade", "grade_notebook",
            "master_notebook", "questions"]

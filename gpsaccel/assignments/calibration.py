@@ -135,3 +135,22 @@ def check_nees_answer(nees_30: object, nees_bounds: object, N: int, x_true: np.n
     if not report.passed:
         raise AssertionError("\n" + str(report))
     return report
+
+
+def rate_model(rate_hz: int):
+    """Report 000's problem with the accelerometer at ``rate_hz`` (the GPS stays at 5 Hz)."""
+    from gpsaccel.calibration.model import CalibrationModel
+
+    return CalibrationModel(dt=1.0 / rate_hz, gps_every=rate_hz // 5)
+
+
+def nees_data(rng: np.random.Generator, n_runs: int, n_times: int = 4
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Fresh (x_true, x_hat, P) for question 3: random covariances P (SPD, correlated) and errors
+    e ~ N(0, P), so the ensemble is consistent; nothing here comes from a filter."""
+    L = rng.standard_normal((n_runs, n_times, 3, 3)) * rng.uniform(0.1, 3.0, (1, 1, 3, 1))
+    P = L @ np.swapaxes(L, -1, -2) + 0.05 * np.eye(3)
+    e = np.einsum("rtij,rtj->rti", np.linalg.cholesky(P), rng.standard_normal((n_runs, n_times,
+                                                                              3)))
+    x_true = rng.standard_normal((n_runs, n_times, 3)) * 10
+    return x_true, x_true - e, P

@@ -1,39 +1,34 @@
-r"""The coop homework's checks: Jacobians and DT linearization by finite differences, an EKF.
+r"""The coop homework's checks: the Jacobians, the DT linearization, an EKF.
 
 Report 002's cooperative localization (:mod:`gpsaccel.coop.model`): ẋ = f(x, u), y = h(x).
 
-Jacobians (question 1).  The student's ``jacobian_A(x, u)``, ``jacobian_B(x, u)``,
-``jacobian_C(x)`` are compared with central differences of the package's f and h at the nominal
-point and at random points (seeded)::
+Jacobians (question 1): the student's ``jacobian_A(x, u)``, ``jacobian_B(x, u)``,
+``jacobian_C(x)`` are checked by the checker's :func:`gpsaccel.check.jacobians` (analytic
+Jacobians, element by element, at the nominal trajectory, random states, headings and bearings at
+±π, vehicles 1 cm apart; codes ``jacobian-A``, ``jacobian-B``, ``jacobian-C``).
 
-    ∂f/∂xⱼ ≈ [f(x + εeⱼ) − f(x − εeⱼ)] / 2ε,     ε = 1e-6 · max(1, |xⱼ|)
-
-(bearing differences wrapped to [−π, π)); truncation error O(ε²), rounding O(1e-16/ε) ≈ 1e-10,
-so an element counts as right within 1e-6 + 1e-6·|value|.
-
-DT linearization (question 2), the course's Euler form: F = I + ΔT·A, G = ΔT·B, H = C, with A, B, C
-from the finite differences above.
+DT linearization (question 2), the course's Euler form F = I + ΔT·A, G = ΔT·B, H = C, checked by
+:func:`gpsaccel.check.dt_model`; a matrix built right from the student's *own* (wrong) Jacobian
+passes (the Jacobian's mistake is question 1's), an exact zero-order-hold G is named.
 
 EKF (question 3).  The student's ``ekf(y, x0, P0, Q, R) -> (x_hat, P)`` against the package's EKF
 (:func:`gpsaccel.coop.filters.run_ekf`): predict with the exact step φ_ΔT (``model.step``) and
 M = F P Fᵀ + Q with F = I + ΔT·A(x̂), update with the rows of y that are not NaN, H = C(x̄), the
 bearing residuals wrapped.  Distances are in units of the reference σ = √diag P_ref; both must be
-within 1e-6.  A failing filter is matched against the typical mistakes (:data:`EKF_MISTAKES`),
-each a variant of a small reference EKF written here (:func:`reference_ekf`).
+within 1e-6.  A failing filter is matched against the typical mistakes (:data:`EKF_MISTAKES`,
+under the checker's codes), each a variant of a small reference EKF written here
+(:func:`reference_ekf`).
 """
 
 from __future__ import annotations
 
-import math
 from functools import lru_cache
 
 import numpy as np
 
-from gpsaccel.assignments._answers import array, assert_report, call, compare
+from gpsaccel.assignments._answers import array, assert_report, call
 from gpsaccel.check.report import Report
 from gpsaccel.coop.model import (
-    MEASUREMENTS,
-    STATES,
     CoopModel,
     measurement_residual,
     state_residual,
@@ -42,160 +37,141 @@ from gpsaccel.coop.model import (
 
 __all__ = ["assert_report", "dt_linearization", "ekf", "jacobians", "reference_ekf"]
 
-#: Relative and absolute tolerance of a Jacobian element against the finite difference.
-RTOL = ATOL = 1e-6
-
 #: Distance (units of the reference σ) within which the EKF's x̂ and P count as equal.
 EKF_TOL = 1e-6
 
-INPUTS = ("vg", "φg", "va", "ωa")
-
 #: The EKF mistakes recognised (code -> what it is), in the order they are tried.
 EKF_MISTAKES = {
-    "innovation-not-wrapped": "the bearing residuals y − h(x̄) are not wrapped to [−π, π)",
-    "euler-prediction": "x̄ = x̂ + ΔT·f(x̂) (one Euler step) instead of the exact step",
-    "jacobian-at-previous": "H = C(x̂ₖ₋₁) evaluated at the previous estimate instead of x̄ₖ",
+    "no-angle-wrap": "the bearing residuals y − h(x̄) are not wrapped to [−π, π)",
+    "euler-propagation": "x̄ = x̂ + ΔT·f(x̂) (one Euler step) instead of the exact step",
+    "jacobian-point": "H = C(x̂ₖ₋₁) evaluated at the previous estimate instead of x̄ₖ",
     "returns-a-priori": "the filter returns x̄, M (before the update) instead of x̂, P",
 }
 
 
-# ------------------------------------------------------------------------ finite differences
-def points(seed: int = 0, n: int = 3) -> list[tuple[np.ndarray, np.ndarray]]:
-    """(x, u) test points: the nominal (x0, u0) and ``n`` random ones around it (seeded)."""
+# ------------------------------------------------------------------ Jacobians, DT model
+def states(seed: int = 0, n_random: int = 20) -> tuple[np.ndarray, np.ndarray]:
+    """(X (n, 6), U (n, 4)): the states and inputs :func:`gpsaccel.check.jacobians` uses."""
+    from gpsaccel.check.jacobians import _inputs, check_states
+
     model = CoopModel()
-    rng = np.random.default_rng(seed)
-    out = [(model.x0.copy(), model.u0.copy())]
-    for _ in range(n):
-        x = model.x0 + rng.uniform(-40, 40, 6) * np.array([1, 1, 0, 1, 1, 0])
-        x[[2, 5]] = rng.uniform(-math.pi, math.pi, 2)
-        u = model.u0 * rng.uniform(0.5, 1.5, 4)
-        out.append((x, u))
-    return out
-
-
-def _central(fun, x: np.ndarray, diff) -> np.ndarray:
-    cols = []
-    for j in range(x.size):
-        eps = 1e-6 * max(1.0, abs(x[j]))
-        e = np.zeros_like(x)
-        e[j] = eps
-        cols.append(diff(fun(x + e), fun(x - e)) / (2 * eps))
-    return np.stack(cols, axis=-1)
-
-
-def fd_A(x: np.ndarray, u: np.ndarray, L: float = 0.5) -> np.ndarray:
-    """∂f/∂x by central differences (6 x 6)."""
-    from gpsaccel.coop.model import f
-    return _central(lambda xx: f(xx, u, L), x, np.subtract)
-
-
-def fd_B(x: np.ndarray, u: np.ndarray, L: float = 0.5) -> np.ndarray:
-    """∂f/∂u by central differences (6 x 4)."""
-    from gpsaccel.coop.model import f
-    return _central(lambda uu: f(x, uu, L), u, np.subtract)
-
-
-def fd_C(x: np.ndarray) -> np.ndarray:
-    """∂h/∂x by central differences, bearing differences wrapped (5 x 6)."""
-    from gpsaccel.coop.model import h
-    return _central(h, x, measurement_residual)
-
-
-def _state_name(j: int) -> str:
-    return STATES[j][0]
-
-
-def _meaning_A(ix):
-    return f"∂ẋ{ix[0] + 1}/∂{_state_name(ix[1])}"
-
-
-def _meaning_B(ix):
-    return f"∂ẋ{ix[0] + 1}/∂{INPUTS[ix[1]]}"
-
-
-def _meaning_C(ix):
-    return f"∂{MEASUREMENTS[ix[0]][0].split(' ')[0]}/∂{_state_name(ix[1])}"
-
-
-def _at(x: np.ndarray, u: np.ndarray | None) -> str:
-    xs = ", ".join(f"{v:.4g}" for v in x)
-    return f"at x = [{xs}]" + ("" if u is None else f", u = [{', '.join(f'{v:.4g}' for v in u)}]")
+    X, _ = check_states(model, n_random, seed)
+    return X, _inputs(model, len(X), seed)
 
 
 def jacobians(jacobian_A: object, jacobian_B: object, jacobian_C: object, seed: int = 0,
-              n_points: int = 3) -> Report:
-    """Check the student's A(x, u), B(x, u), C(x) against finite differences; never raises."""
-    report = Report("question 1: Jacobians A, B, C")
-    for name, func, shape, fd, meaning, needs_u in (
-            ("A", jacobian_A, (6, 6), fd_A, _meaning_A, True),
-            ("B", jacobian_B, (6, 4), fd_B, _meaning_B, True),
-            ("C", jacobian_C, (5, 6), fd_C, _meaning_C, False)):
-        for x, u in points(seed, n_points):
-            args = (x.copy(), u.copy()) if needs_u else (x.copy(),)
-            sig = f"jacobian_{name}({'x, u' if needs_u else 'x'})"
-            value = call(report, sig, func, *args)
-            arr = None if value is None else array(report, sig, value, shape)
-            if arr is None:
-                break
-            want = fd(x, u) if needs_u else fd(x)
-            if not compare(report, name, arr, want, RTOL, ATOL,
-                           "(central finite difference of " + ("f" if name != "C" else "h") + ") "
-                           + _at(x, u if needs_u else None), "jacobian-element", meaning,
-                           sign_code="jacobian-sign"):
-                break  # one point is enough to show the mistake
-    if report.passed:
-        report.add("ok", f"A, B and C match central finite differences of f and h at "
-                   f"{n_points + 1} points (tolerance {RTOL:g}).", "note")
+              n_random: int = 20) -> Report:
+    """Question 1: the student's A(x, u), B(x, u), C(x), checked by
+    :func:`gpsaccel.check.jacobians` (analytic, element by element); never raises."""
+    from gpsaccel.check import jacobians as check_jacobians
+
+    given = {"A": jacobian_A, "B": jacobian_B, "C": jacobian_C}
+    missing = [k for k, v in given.items() if v is None or v is Ellipsis]
+    defined = {k: v for k, v in given.items() if k not in missing}
+    report = check_jacobians(**defined, n_random=n_random, seed=seed) if defined else \
+        Report("Jacobians A, B, C")
+    report.subject = "question 1: Jacobians A, B, C"
+    for k in missing:
+        report.add("not-defined", f"jacobian_{k} is not defined yet (or still `...`).")
     report.sort()
     return report
 
 
-def dt_linearization(func: object, seed: int = 0, n_points: int = 2,
-                     dts: tuple[float, ...] = (0.1, 0.05)) -> Report:
-    """Check ``func(x, u, dt) -> (F, G, H)`` against F = I + ΔT·A, G = ΔT·B, H = C."""
+#: What each DT matrix is made of (course's Euler form) and the Jacobian it uses.
+DT_FORMS = {"F": ("A", "F = I + ΔT·A"), "G": ("B", "G = ΔT·B"), "H": ("C", "H = C")}
+
+
+def _close(a: np.ndarray, b: np.ndarray, rtol: float = 1e-6) -> bool:
+    """Every element within rtol of its own size plus rtol times the matrix's largest."""
+    scale = np.abs(b).max(axis=(-2, -1), keepdims=True)
+    return bool(np.all(np.abs(a - b) <= rtol * (np.abs(b) + scale)))
+
+
+def _at_states(report: Report, fn: object, X: np.ndarray, U: np.ndarray, what: str,
+               shape: tuple[int, int], needs_u: bool = True) -> np.ndarray | None:
+    out = []
+    for x, u in zip(X, U, strict=True):
+        value = call(report, what, fn, *((x.copy(), u.copy()) if needs_u else (x.copy(),)))
+        arr = None if value is None else array(report, what, value, shape)
+        if arr is None:
+            return None
+        out.append(arr)
+    return np.stack(out)
+
+
+def dt_linearization(func: object, seed: int = 0, n_random: int = 5,
+                     jacobian_A: object = None, jacobian_B: object = None,
+                     jacobian_C: object = None) -> Report:
+    """Question 2: ``func(x, u, dt) -> (F, G, H)`` at the states of
+    :func:`gpsaccel.check.dt_model` (ΔT of the course model).
+
+    Each matrix is checked by :func:`gpsaccel.check.dt_model` against the right Jacobians; one
+    that fails there but equals the course's form *built from the student's own* Jacobian
+    (jacobian_A, jacobian_B, jacobian_C, when given) passes: a wrong element of B costs
+    question 1, not question 2 too.  An exact zero-order-hold G = ∫₀^ΔT e^{Aτ} dτ B is named as
+    such (the question asks for the Euler form).
+    """
+    from gpsaccel.check import dt_model
+    from gpsaccel.coop.model import jacobian_A as true_A
+    from gpsaccel.coop.model import jacobian_B as true_B
+
+    model = CoopModel()
+    dt = model.dt
+    X, U = states(seed, n_random)
     report = Report("question 2: DT linearization F, G, H")
-    for x, u in points(seed + 1, n_points):
-        for dt in dts:
-            out = call(report, "dt_linearization(x, u, dt)", func, x.copy(), u.copy(), dt)
-            if out is None:
-                break
-            if not isinstance(out, (tuple, list)) or len(out) != 3:
-                report.add("return-value", "dt_linearization must return three matrices "
-                           f"(F, G, H); it returned a {type(out).__name__}.")
-                break
-            A, B, C = fd_A(x, u), fd_B(x, u), fd_C(x)
-            F, G, H = (array(report, n, v, s) for n, v, s in
-                       zip("FGH", out, ((6, 6), (6, 4), (5, 6)), strict=True))
-            if F is None or G is None or H is None:
-                break
-            where = f"(ΔT = {dt:g} s, {_at(x, u)})"
-            ok = True
-            if not compare(report, "F", F, np.eye(6) + dt * A, RTOL, ATOL, where, "dt-F"):
-                ok = False
-                last = report.findings.pop()
-                if not (np.abs(F - dt * A) > ATOL + RTOL * np.abs(dt * A)).any():
-                    report.add("dt-missing-identity", f"F = ΔT·A: the identity is missing. "
-                               f"x_(k+1) ≈ x_k + ΔT·ẋ, so F = I + ΔT·A {where}.")
-                else:
-                    report.findings.append(last)
-            if not compare(report, "G", G, dt * B, RTOL, ATOL, where, "dt-G"):
-                ok = False
-                last = report.findings.pop()
-                if not (np.abs(G - B) > ATOL + RTOL * np.abs(B)).any():
-                    report.add("dt-input-not-scaled", f"G = B: the input acts for ΔT, so "
-                               f"G = ΔT·B {where}.")
-                else:
-                    report.findings.append(last)
-            if not compare(report, "H", H, C, RTOL, ATOL, where, "dt-H", _meaning_C,
-                           sign_code="jacobian-sign"):
-                ok = False
-            if not ok:
-                break
-        if not report.passed:
-            break
+    got: dict[str, list[np.ndarray]] = {"F": [], "G": [], "H": []}
+    for x, u in zip(X, U, strict=True):
+        out = call(report, "dt_linearization(x, u, dt)", func, x.copy(), u.copy(), dt)
+        if out is None:
+            return report
+        if not isinstance(out, (tuple, list)) or len(out) != 3:
+            report.add("return-value", f"dt_linearization must return three matrices (F, G, H);"
+                       f" it returned a {type(out).__name__}.")
+            return report
+        for name, v, shape in zip("FGH", out, ((6, 6), (6, 4), (5, 6)), strict=True):
+            arr = array(report, name, v, shape)
+            if arr is None:
+                return report
+            got[name].append(arr)
+    mats = {k: np.stack(v) for k, v in got.items()}
+    index = {(x.tobytes(), u.tobytes()): i for i, (x, u) in enumerate(zip(X, U, strict=True))}
+    own_fns = {"A": jacobian_A, "B": jacobian_B, "C": jacobian_C}
+    eye = np.eye(6)
+    for name, (base, form) in DT_FORMS.items():
+        def at(x, u=None, _m=mats[name]):
+            key = (np.asarray(x, float).tobytes(),
+                   (U[0] if u is None else np.asarray(u, float)).tobytes())
+            if key not in index:  # C(x) is called without u: find the state alone
+                key = next(k for k in index if k[0] == key[0])
+            return _m[index[key]]
+        sub = dt_model(**{name: at}, n_random=n_random, seed=seed)
+        if sub.passed:
+            continue
+        own = None
+        fn = own_fns[base]
+        if fn is not None and fn is not Ellipsis:
+            quiet = Report("own")
+            own = _at_states(quiet, fn, X, U, f"jacobian_{base}", mats[name].shape[1:] if
+                             base != "A" else (6, 6), needs_u=base != "C")
+        if own is not None:
+            want = eye + dt * own if name == "F" else dt * own if name == "G" else own
+            if _close(mats[name], want):
+                report.add("uses-own-jacobian", f"{name} is {form} with your own "
+                           f"jacobian_{base}: right here (question 1 grades jacobian_{base}).",
+                           "note")
+                continue
+        if name == "G":
+            A_ = np.stack([true_A(x, u) for x, u in zip(X, U, strict=True)])
+            B_ = np.stack([true_B(x, u, model.L) for x, u in zip(X, U, strict=True)])
+            zoh = (dt * eye + dt**2 / 2 * A_) @ B_  # A² = 0: ∫₀^ΔT e^{Aτ} dτ = ΔT I + ΔT²A/2
+            if _close(mats[name], zoh):
+                report.add("zero-order-hold", "Your G is the exact zero-order-hold "
+                           "∫₀^ΔT e^{Aτ} dτ B = (ΔT·I + ΔT²·A/2) B. It is a better discretization"
+                           ", but the question asks for the course's Euler form G = ΔT·B.")
+                continue
+        report.findings.extend(sub.findings)
     if report.passed:
-        report.add("ok", "F = I + ΔT·A, G = ΔT·B and H = C at every point and step checked.",
-                   "note")
+        report.add("ok", "F = I + ΔT·A, G = ΔT·B and H = C at every state checked.", "note")
     report.sort()
     return report
 
@@ -218,7 +194,7 @@ def reference_ekf(model: CoopModel, y: np.ndarray, x0: np.ndarray, P0: np.ndarra
     for k in range(1, n):
         F = np.eye(6) + model.dt * jacobian_A(x, model.u0)
         x_prev = x
-        if mistake == "euler-prediction":
+        if mistake == "euler-propagation":
             x = wrap_state(x + model.dt * f(x, model.u0, model.L))
         else:
             x = model.step(x)
@@ -227,8 +203,8 @@ def reference_ekf(model: CoopModel, y: np.ndarray, x0: np.ndarray, P0: np.ndarra
         if mistake == "returns-a-priori":
             xs[k], Ps[k] = x, M
         if m.any():
-            Hk = jacobian_C(x_prev if mistake == "jacobian-at-previous" else x)[m]
-            r = (y[k] - h(x))[m] if mistake == "innovation-not-wrapped" else \
+            Hk = jacobian_C(x_prev if mistake == "jacobian-point" else x)[m]
+            r = (y[k] - h(x))[m] if mistake == "no-angle-wrap" else \
                 measurement_residual(y[k], h(x))[m]
             Rm = R[np.ix_(m, m)]
             S = Hk @ M @ Hk.T + Rm
@@ -314,13 +290,12 @@ def ekf(func: object, y: np.ndarray, x0: np.ndarray | None = None, P0: np.ndarra
 
 
 _EKF_HINTS = {
-    "innovation-not-wrapped": "The course log's bearings jump between −π and π: an unwrapped "
+    "no-angle-wrap": "The course log's bearings jump between −π and π: an unwrapped "
     "residual of almost 2π then drags the estimate away. Wrap the bearing rows (0 and 2) of "
     "y − h(x̄) with (r + π) % 2π − π.",
-    "euler-prediction": "Predict the state with the exact solution over ΔT (model.step(x)); the "
+    "euler-propagation": "Predict the state with the exact solution over ΔT (model.step(x)); the "
     "Euler step is only the linearization used for F.",
-    "jacobian-at-previous": "The measurement Jacobian belongs to the point the measurement is "
+    "jacobian-point": "The measurement Jacobian belongs to the point the measurement is "
     "predicted from: H = C(x̄ₖ) after the prediction.",
     "returns-a-priori": "Store x̂ and P after the update at each step.",
 }
-

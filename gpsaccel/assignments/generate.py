@@ -77,7 +77,8 @@ def generate(name: str, out: Path | str, run_tests: bool = True, timeout: float 
     raises RuntimeError with otter's output).
     """
     master = master_notebook(name)
-    out = Path(out)
+    # absolute: otter assign runs in a temporary folder, where a relative path would land
+    out = Path(out).resolve()
     if out.exists():
         if out.is_dir() and not any(out.iterdir()):
             out.rmdir()
@@ -105,3 +106,60 @@ def generate(name: str, out: Path | str, run_tests: bool = True, timeout: float 
     shutil.copy(zips[-1], autograder)  # a stable name for the instructor's commands
     return Generated(out / "student" / master.name, autograder, out / "autograder" / master.name,
                      out)
+
+
+def personalize(name: str, student_notebook: Path | str, students: list[str], secret: bytes,
+                out: Path | str) -> Path:
+    """One copy of the student notebook per student, ``out/<id>/NAME.ipynb``, whose variant cell
+    holds that student's numbers (:func:`gpsaccel.assignments.grading.student_variant`): the
+    notebook tells each student their own variant.  Returns ``out``."""
+    import nbformat
+
+    from gpsaccel.assignments.grading import VARIANT_MARK, _safe_name, student_variant
+
+    out = Path(out)
+    nb0 = nbformat.read(str(student_notebook), as_version=4)
+    marked = [c for c in nb0.cells if c.cell_type == "code"
+              and c.source.lstrip().lower().startswith(VARIANT_MARK)]
+    if len(students) != len(set(students)):
+        raise ValueError("students: the roster lists a student id twice")
+    for sid in students:
+        v = student_variant(name, sid, secret)
+        for c in marked:
+            head = [ln for ln in c.source.splitlines() if ln.lstrip().startswith("#")]
+            c.source = "\n".join(head + [f"VARIANT = {v!r}  # {sid}"])
+        target = out / _safe_name(sid) / f"{name}.ipynb"
+        target.parent.mkdir(parents=True, exist_ok=True)
+        nbformat.write(nb0, str(target))
+    return out
+
+
+def student_package_dir() -> Path:
+    """Where the wheel carries each homework's student side: ``gpsaccel/assignments/student/NAME``
+    (the notebook without solutions and otter's public tests, for ``grader.check``)."""
+    return Path(__file__).resolve().parent / "student"
+
+
+def refresh_student_package(name: str) -> Path:
+    """Regenerate the packaged student side of ``name`` from its master (a source checkout's
+    ``otter assign``; run when a master changes — a test compares the two)."""
+    with tempfile.TemporaryDirectory(prefix="gpsaccel-student-") as tmp:
+        g = generate(name, Path(tmp) / name, run_tests=False)
+        target = student_package_dir() / name
+        if target.exists():
+            shutil.rmtree(target)
+        shutil.copytree(g.student.parent, target)
+    return target
+
+
+def copy_student_side(name: str, out: Path | str) -> Path:
+    """The packaged student side of ``name`` copied to ``out`` (what a student needs from
+    ``pip install gpsaccel``: no master, no solutions, no graded questions)."""
+    if name not in ASSIGNMENTS:
+        raise ValueError(f"assignment must be one of {', '.join(ASSIGNMENTS)}, got {name!r}")
+    src = student_package_dir() / name
+    out = Path(out).resolve()
+    if out.exists() and any(out.iterdir()):
+        raise ValueError(f"out: {out} is not empty; give a new or empty folder")
+    shutil.copytree(src, out, dirs_exist_ok=True)
+    return out / f"{name}.ipynb"

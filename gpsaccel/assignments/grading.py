@@ -1,63 +1,154 @@
-"""Grade a class: ``otter run`` on every submitted notebook, in parallel, one isolated job each.
+r"""Grade a class: every notebook only inside the checker's sandbox, every score computed outside.
 
-:func:`grade` takes a folder of submissions (``*.ipynb``, one per student, named as the instructor
-likes) and writes into ``out``:
+The model (issue 19).  A student's notebook is data.  :mod:`gpsaccel.assignments.notebook` turns
+its code cells into one module; :func:`gpsaccel.check.sandbox.run` imports that module in a box
+(bubblewrap namespaces where they work) and calls, one frame each, the cells in order and then
+the *reads* every question declares (:mod:`gpsaccel.assignments.questions`): the student's
+functions called on data drawn from this run's seed, the variables it must define.  What comes
+back is arrays of the declared shapes and a status, nothing else.  Only once the box is empty
+does the grader draw the reference answers and score each question.  The hidden checks, the
+reference answers, the masters' solutions, the run's seed and the instructor's secret are never
+in the box (the box may import gpsaccel's models, simulations and filters, not
+``gpsaccel.check`` or ``gpsaccel.assignments``; see ``docs/grading.md``).
 
-* ``grades.csv``: one row per submission — the file, one column per question, total, possible,
-  status (``graded``, ``timeout``, ``error``) and seconds;
-* ``feedback/NAME.txt``: per question the score and the tests' messages (the checkers' findings,
-  with their codes), or why the notebook could not be graded.
+A question graded from a file the notebook writes (calibration q2, ``%%writefile
+kalman_filter.py``) is graded from the cell's text, in a box of its own without gpsaccel, by
+:func:`gpsaccel.check.submission`.
 
-Each notebook runs in its own isolated job (:func:`gpsaccel.assignments.isolation.run_isolated`):
-a notebook that crashes, loops or attacks its process loses its own grade only.  What comes back
-is untrusted: ``results.json`` is read as data (size-capped JSON, never a pickle), only the
-questions of the master count, and each score is clipped to [0, the master's points].  Note that
-otter runs the tests inside the student's kernel: a hostile notebook can still forge its *own*
-result (as on Gradescope), not anyone else's.
+The class (:func:`grade`):
+
+* submissions as an LMS exports them: a folder per student (its name is the student id; the
+  notebook inside in any case of ``.ipynb``) or one notebook per student at the top (its stem is
+  the id); names with spaces; every entry is either graded or reported with why not
+  (``no-notebook``, ``ambiguous``, ``unreadable``), never skipped silently;
+* each notebook is graded in a forked process of its own (a student who kills it loses only
+  their own grade: ``grader-error``); the run is a child subreaper and sweeps what a dead
+  process left; ``grades.csv`` is rewritten (atomically) after every notebook, so a run killed
+  half-way leaves the grades it had;
+* output (default: ``<submissions>-grades`` next to the submissions folder, never inside it):
+  ``grades.csv`` (student id, file, one column per question, total, possible, status, seconds,
+  and a first row of the points possible), ``feedback/<id>.txt`` (stale files of an earlier run
+  removed), ``summary.csv`` and ``summary.png`` (per question: mean score, how many students got
+  each mistake code), and ``grading.json`` — the instructor's record: the seed, the sandbox,
+  which questions, when.  It holds no answer; keep it from students all the same (with the
+  secret it reproduces their data);
+* ``student=ID`` regrades one student with the recorded seed and updates its row;
+* ``dask=...`` sends each notebook to a Dask cluster (same function, same seed: same grades).
 """
 
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
+import multiprocessing as mp
+import multiprocessing.connection as mpc
 import os
 import re
-import shutil
-import sys
+import secrets
+import signal
 import tempfile
 import time
-from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
+from collections import Counter
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from gpsaccel.assignments.isolation import run_isolated
+import numpy as np
 
-#: Largest results.json read (bytes).
-MAX_RESULTS_BYTES = 5 * 2**20
+from gpsaccel._atomic import write_text
+from gpsaccel.assignments import notebook as nbm
+from gpsaccel.assignments.questions import (
+    Answer,
+    Draw,
+    Question,
+    answer_from,
+    question_seed,
+    variant_number,
+)
+from gpsaccel.check.report import Report
 
-#: Wall-clock limit per notebook (s), default.
-TIMEOUT = 600
+#: Wall-clock limit (s) of one notebook's box (every cell and every read), default.
+TIMEOUT = 120.0
 
-STATUSES = ("graded", "timeout", "error")
+#: Seconds a notebook's process may take beyond its boxes' limits (reference answers, feedback)
+#: before it is killed as a grader error.
+SLACK = 120.0
+
+#: Memory (address space) of a notebook's box: numpy, scipy and matplotlib need about 1 GB.
+BOX_MEMORY = 2 << 30
+
+#: Processes a notebook's box may hold at once.
+BOX_PROCESSES = 32
+
+#: The first line of a master's cell that only makes data to look at: not run when graded.
+SKIP_MARK = "# not run when graded"
+
+#: The first line of the master's variant cell; grading replaces the cell with the student's.
+VARIANT_MARK = "# your variant"
+
+#: Environment variable holding the instructor's secret (or use ``secret_file``).
+SECRET_ENV = "GPSACCEL_GRADING_SECRET"
+
+_CELL_STATUS = nbm.MAX_NDIM + 3
 
 
+def assignment_module(name: str):
+    """The homework's graded questions: ``assignments/NAME/graded.py`` of the source repository
+    (the instructor's side: not in the student wheel; ValueError for an unknown name)."""
+    import importlib.util
+    import sys
+
+    from gpsaccel.assignments.generate import ASSIGNMENTS, assignments_dir
+
+    if name not in ASSIGNMENTS:
+        raise ValueError(f"assignment must be one of {', '.join(ASSIGNMENTS)}, got {name!r}")
+    key = f"gpsaccel_graded_{name}"
+    if key in sys.modules:
+        return sys.modules[key]
+    path = assignments_dir() / name / "graded.py"
+    if not path.is_file():
+        raise FileNotFoundError(f"{path} not found: grading needs a source checkout of gpsaccel "
+                                f"(the graded questions and the masters are not in the wheel)")
+    spec = importlib.util.spec_from_file_location(key, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[key] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def questions_of(name: str) -> tuple[Question, ...]:
+    return tuple(assignment_module(name).graded_questions())
+
+
+def student_variant(name: str, student: str, secret: bytes | None) -> dict:
+    """The student's numbers: from the secret when there is one, else the public notebook's."""
+    mod = assignment_module(name)
+    if not secret:
+        return dict(mod.DEFAULT_VARIANT)
+    return mod.variant(variant_number(secret, name, student))
+
+
+# ------------------------------------------------------------------------------ one notebook
 @dataclass
 class Grade:
-    """One submission's grade.
+    """One student's grade (plain data: it crosses process and Dask boundaries).
 
-    submission : the notebook's file name; scores : question -> points earned (0 when missing);
-    possible : question -> points available (from the master); status : ``graded``, ``timeout``
-    or ``error``; feedback : the text written to ``feedback/``; seconds : wall time of its job.
+    student : the id (LMS folder name or notebook stem); file : the notebook graded (relative
+    to the submissions folder), or "" ; scores, possible : question -> points; status : graded,
+    a sandbox failure (timeout, memory-limit, crashed, ...), no-notebook, ambiguous, unreadable
+    or grader-error; codes : question -> mistake codes; feedback : the text for the student.
     """
 
-    submission: str
+    student: str
+    file: str
     scores: dict[str, float]
     possible: dict[str, float]
     status: str
-    feedback: str
-    seconds: float
-    outputs: dict[str, str] = field(default_factory=dict)
+    feedback: str = ""
+    codes: dict[str, list[str]] = field(default_factory=dict)
+    seconds: float = 0.0
 
     @property
     def total(self) -> float:
@@ -68,150 +159,572 @@ class Grade:
         return sum(self.possible.values())
 
 
-def _safe_name(name: str) -> str:
-    """A file name that cannot leave the folder or start a spreadsheet formula."""
-    stem = re.sub(r"[^\w.\-]+", "_", Path(name).stem).lstrip(".=+-@") or "submission"
-    return stem[:100]
+def _possible(qs: Sequence[Question]) -> dict[str, float]:
+    return {q.name: float(q.points) for q in qs}
 
 
-def _cell(value: str) -> str:
-    """A CSV text cell that a spreadsheet will not evaluate (=, +, -, @ lead a formula)."""
-    return "'" + value if value[:1] in ("=", "+", "-", "@", "\t", "\r") else value
+def unusable(name: str, student: str, file: str, status: str, message: str) -> Grade:
+    """The grade of a submission that could not be run (no notebook, several, not a notebook)."""
+    possible = _possible(questions_of(name))
+    g = Grade(student, file, {q: 0.0 for q in possible}, possible, status)
+    g.feedback = _feedback_text(g, [message], {}, {})
+    return g
 
 
-def parse_results(text: str, possible: dict[str, float]) -> tuple[dict[str, float],
-                                                                  dict[str, str]]:
-    """Scores and test output per question from otter's results.json text (untrusted).
-
-    Only the master's questions count; a score that is missing, not a finite number, or out of
-    [0, points] is clipped (a question absent from the results scores 0).
-    """
-    data = json.loads(text)
-    scores = {q: 0.0 for q in possible}
-    outputs = {q: "" for q in possible}
-    tests = data.get("tests", []) if isinstance(data, dict) else []
-    for test in tests if isinstance(tests, list) else []:
-        if not isinstance(test, dict) or test.get("name") not in possible:
+def _prepare(nb: nbm.Notebook, variant: dict) -> nbm.Notebook:
+    """The cells to run: the variant cell replaced by the student's, data-only cells left out."""
+    cells = [nbm.Cell(0, f"VARIANT = {variant!r}")]
+    for cell in nb.cells:
+        first = cell.source.lstrip().split("\n", 1)[0].strip().lower()
+        if first.startswith(SKIP_MARK):
             continue
-        q = test["name"]
-        score = test.get("score")
-        if isinstance(score, (int, float)) and not isinstance(score, bool) and math.isfinite(score):
-            scores[q] = min(max(float(score), 0.0), possible[q])
-        out = test.get("output")
-        outputs[q] = out[:20_000] if isinstance(out, str) else ""
-    return scores, outputs
+        if first.startswith(VARIANT_MARK):
+            cells.append(nbm.Cell(cell.number, f"VARIANT = {variant!r}"))
+            continue
+        cells.append(cell)
+    return nbm.Notebook(cells, nb.notes)
 
 
-def _feedback(grade: Grade, output_tail: str) -> str:
-    lines = [f"{grade.submission}: {grade.total:g} / {grade.max_total:g} points "
-             f"({grade.status})", ""]
-    if grade.status == "timeout":
-        lines += ["The notebook did not finish within the time limit; nothing after that was "
-                  "graded. Look for a loop that never ends or a very slow cell.", ""]
-    elif grade.status == "error":
-        lines += ["The notebook could not be graded (no results came back). The grader's last "
-                  "output:", "", output_tail[-3000:], ""]
-    for q, points in grade.possible.items():
-        lines.append(f"{q}: {grade.scores[q]:g} / {points:g}")
-        text = grade.outputs.get(q, "").strip()
-        if text:
-            lines += ["    " + line for line in text.splitlines()]
+def _calls(n_cells: int, reads: list[nbm.Read]):
+    from gpsaccel.check.sandbox import Call, Output
+
+    head = (Output("status", (_CELL_STATUS,), "int64"),
+            Output("message", (nbm.MESSAGE_BYTES,), "uint8"))
+    calls = [Call("_gpsaccel_cell", (np.array(i),), head) for i in range(n_cells)]
+    for k, r in enumerate(reads):
+        outs = tuple(Output(f"out{j}", tuple(s)) for j, s in enumerate(r.shapes))
+        calls.append(Call(f"_gpsaccel_probe_{k}", tuple(np.asarray(a, dtype=float)
+                                                        for a in r.args), head + outs))
+    return calls
+
+
+_STOPS = {
+    "timeout": "it was still running at the time limit of {limit:g} s",
+    "memory-limit": "it ran out of memory (the limit is {memory} GB)",
+    "process-limit": "it started too many processes",
+    "output-limit": "it printed too much",
+    "file-limit": "it wrote too large a file",
+    "crashed": "its process ended (a crash, os._exit or a signal)",
+    "result-refused": "the grader's channel received something that is not an answer",
+    "uses-checker": "it tried to use the grader's own checks",
+}
+
+
+def _stop_message(failure: str, where: str, limits) -> str:
+    why = _STOPS.get(failure, failure).format(limit=limits.time, memory=limits.memory >> 30)
+    return f"The notebook stopped {where}: {why}. Nothing after that was graded."
+
+
+def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
+                   secret: bytes | None = None, sandbox: str = "auto",
+                   timeout: float = TIMEOUT, file: str = "") -> Grade:
+    """Grade one notebook (see the module docstring); never raises for what it holds."""
+    from gpsaccel.check import sandbox as sb
+
+    t0 = time.perf_counter()
+    qs = questions_of(name)
+    possible = _possible(qs)
+    try:
+        nb = nbm.read(path)
+    except nbm.NotebookError as exc:
+        return unusable(name, student, file, "unreadable", str(exc))
+    variant = student_variant(name, student, secret)
+    draws = {q.name: Draw(question_seed(seed, name, q.name, student), variant) for q in qs}
+    run = _prepare(nb, variant)
+    reads: list[nbm.Read] = []
+    spans: dict[str, tuple[int, int]] = {}
+    for q in qs:
+        r = list(q.reads(draws[q.name]))
+        spans[q.name] = (len(reads), len(reads) + len(r))
+        reads += r
+    limits = sb.Limits(memory=BOX_MEMORY, time=float(timeout), processes=BOX_PROCESSES)
+    notes: list[str] = []
+    with tempfile.TemporaryDirectory(prefix="gpsaccel-nb-") as tmp:
+        folder = Path(tmp) / "submission"
+        folder.mkdir()
+        (folder / "notebook.py").write_text(nbm.module_source(run, reads), encoding="utf-8")
+        sub = sb.load_submission(folder / "notebook.py", "_gpsaccel_cell")
+        calls = _calls(len(run.cells), reads)
+        box = sb.run(sub, calls, limits, backend=sandbox, allow_gpsaccel=True)
+    # ---- the box is empty from here on: nothing of the student's runs while answers exist
+    results = box.results + [None] * (len(calls) - len(box.results))
+    skipped: list[str] = []
+    for cell, res in zip(run.cells, results[:len(run.cells)], strict=True):
+        if res is None:
+            break
+        msg = answer_from(res, 0)
+        if msg.status == "exception" and cell.number:
+            notes.append(f"Cell {cell.number} raised {msg.message.split(': ', 1)[-1]}")
+        elif msg.message and msg.status == "ok":
+            skipped += [m for m in msg.message.split() if m not in skipped]
+    if skipped:
+        notes.append("Not run when graded (IPython magics and shell lines other than %%time, "
+                     "%%capture, %%writefile): " + ", ".join(skipped[:10]))
+    answers = [answer_from(res, len(r.shapes)) for r, res in
+               zip(reads, results[len(run.cells):], strict=True)]
+    status = "graded"
+    if box.failure is not None:
+        status = box.failure
+        k = len(box.results)
+        if k < len(run.cells):
+            number = run.cells[k].number
+            where = f"in cell {number}" if number else "before the first cell"
+        elif k - len(run.cells) < len(reads):
+            r = reads[k - len(run.cells)]
+            q = next(q for q, (a, b) in spans.items() if a <= k - len(run.cells) < b)
+            where = f"while {'reading' if r.value else 'calling'} {r.name} ({q})"
+        else:
+            where = "after its last answer"
+        notes.append(_stop_message(box.failure, where, limits))
+    reports: dict[str, Report] = {}
+    for q in qs:
+        a, b = spans[q.name]
+        if q.file is not None:
+            reports[q.name] = _grade_file(q, nb, draws[q.name], timeout)
+        elif any(x.status == "not-run" for x in answers[a:b]):
+            rep = Report(q.name)
+            rep.add("not-run", "Not graded: the notebook stopped before this question "
+                    "(see above).")
+            reports[q.name] = rep
+        else:
+            reports[q.name] = _safe_grade(q, draws[q.name], answers[a:b])
+    scores = {q.name: float(q.points) if reports[q.name].passed else 0.0 for q in qs}
+    codes = {k: r.codes for k, r in reports.items()}
+    g = Grade(student, file, scores, possible, status, "", codes, time.perf_counter() - t0)
+    g.feedback = _feedback_text(g, notes, reports, variant)
+    return g
+
+
+def _safe_grade(q: Question, draw: Draw, answers: list[Answer]) -> Report:
+    try:
+        return q.grade(draw, answers)
+    except Exception as exc:  # noqa: BLE001 - a bug of the grader: this question only
+        rep = Report(q.name)
+        rep.add("grader-error", f"The grader failed on this question ({type(exc).__name__}); "
+                "tell your instructor.")
+        return rep
+
+
+def _grade_file(q: Question, nb: nbm.Notebook, draw: Draw, timeout: float) -> Report:
+    found = nb.writefile(q.file)
+    if found is None:
+        rep = Report(q.name)
+        rep.add("no-file", f"The notebook has no cell `%%writefile {q.file}`: the question asks "
+                f"for the function in that file (keep the cell's first line as it is).")
+        return rep
+    with tempfile.TemporaryDirectory(prefix="gpsaccel-file-") as tmp:
+        path = Path(tmp) / q.file
+        path.write_text(found[1], encoding="utf-8")
+        try:
+            return q.grade_file(path, draw, timeout)
+        except Exception as exc:  # noqa: BLE001 - a bug of the grader: this question only
+            rep = Report(q.name)
+            rep.add("grader-error", f"The grader failed on this question "
+                    f"({type(exc).__name__}); tell your instructor.")
+            return rep
+
+
+# --------------------------------------------------------------------------------- feedback
+_NUMBER = re.compile(r"(?<![\w₀-₉.])[-+−]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?(?![\w.])")
+_KEEP = re.compile(r"(t\s*=\s*|step\s+|cell\s+|run\s+|case\s+|row\s+|column\s+|shape\s*\(?)$",
+                   re.IGNORECASE)
+_EXPECTED = re.compile(r"\b(should be|expected|the right value is|instead of|"
+                       r"the ensemble average is|the right one is)\s+"
+                       r"(?:\[[^\n]*?\]+|\([^)\n]*\)|[^\s,;]+)", re.IGNORECASE)
+
+
+def redact(text: str) -> str:
+    """A finding's text without the expected values: every number that is not a location (a
+    time, a step, a cell, a shape) becomes "…", and whatever follows "should be"/"expected"
+    is dropped."""
+    text = _EXPECTED.sub(lambda m: m.group(1) + " …", text)
+
+    def repl(m: re.Match) -> str:
+        before = text[max(0, m.start() - 12):m.start()]
+        after = text[m.end():m.end() + 3]
+        if _KEEP.search(before) or re.match(r"\s*s\b", after) or re.match(r"\s*[×x,)]", after) \
+                and re.search(r"\(\s*[\d, ]*$", before):
+            return m.group(0)
+        return "…"
+
+    return _NUMBER.sub(repl, text)
+
+
+def _feedback_text(g: Grade, notes: list[str], reports: dict[str, Report],
+                   variant: dict) -> str:
+    lines = [f"{g.student}: {g.total:g} / {g.max_total:g} points ({g.status})"]
+    if variant:
+        lines.append("Your variant: " + ", ".join(f"{k} = {v}" for k, v in variant.items()))
+    lines.append("")
+    for n in dict.fromkeys(notes):
+        lines.append(n)
+    if notes:
+        lines.append("")
+    for q, points in g.possible.items():
+        lines.append(f"{q}: {g.scores.get(q, 0):g} / {points:g}")
+        rep = reports.get(q)
+        seen = set()
+        for f in rep.findings if rep else []:
+            if f.severity == "note" and f.code not in ("uses-own-jacobian",):
+                continue
+            text = f"{f.code}: {redact(f.message.splitlines()[0])}"
+            if text in seen:
+                continue  # each failure once
+            seen.add(text)
+            lines.append("    - " + text)
         lines.append("")
     return "\n".join(lines)
 
 
-def grade_one(submission: Path, autograder: Path, possible: dict[str, float],
-              timeout: float = TIMEOUT) -> Grade:
-    """Grade one notebook with ``otter run`` in an isolated job; never raises for its content."""
-    submission = Path(submission)
-    with tempfile.TemporaryDirectory(prefix="gpsaccel-grade-") as tmp:
-        tmp = Path(tmp)
-        job = tmp / "job"
-        results = job / "results"
-        results.mkdir(parents=True)
-        # the notebook's own name is not trusted either: otter gets a fixed one
-        nb = job / "submission.ipynb"
-        try:
-            shutil.copyfile(submission, nb)
-        except OSError as exc:
-            grade = Grade(submission.name, {q: 0.0 for q in possible}, possible, "error", "", 0.0)
-            grade.feedback = _feedback(grade, f"cannot read {submission.name}: {exc}")
-            return grade
-        cmd = [sys.executable, "-m", "otter", "run", "--no-logo", "-a", str(autograder.resolve()),
-               "-o", str(results), str(nb)]
-        job_result = run_isolated(cmd, job, timeout)
-        status, scores, outputs = "error", {q: 0.0 for q in possible}, {}
-        path = results / "results.json"
-        if job_result.timed_out:
-            status = "timeout"
-        elif path.is_file() and path.stat().st_size <= MAX_RESULTS_BYTES:
+# ------------------------------------------------------------------------- the submissions
+@dataclass(frozen=True)
+class Entry:
+    """One student's submission: the id, the notebook (None: why not in ``problem``)."""
+
+    student: str
+    path: Path | None
+    problem: tuple[str, str] | None = None  # (status, message)
+
+
+def find_submissions(folder: Path, name: str) -> tuple[list[Entry], list[str]]:
+    """Every student of an LMS export (module docstring) and notes on what is not a student."""
+    entries: list[Entry] = []
+    notes: list[str] = []
+    for e in sorted(folder.iterdir(), key=lambda p: p.name.lower()):
+        if e.name.startswith(".") or e.name == "__MACOSX":
+            notes.append(f"{e.name}: skipped (hidden)")
+            continue
+        if e.is_symlink():
+            notes.append(f"{e.name}: skipped (a symbolic link)")
+            continue
+        if e.is_file():
+            if e.suffix.lower() == ".ipynb":
+                entries.append(Entry(e.stem, e))
+            else:
+                notes.append(f"{e.name}: skipped (not a notebook or a student's folder)")
+            continue
+        if not e.is_dir():
+            notes.append(f"{e.name}: skipped (not a file or folder)")
+            continue
+        found = sorted(p for p in e.rglob("*") if p.suffix.lower() == ".ipynb" and p.is_file()
+                       and not p.is_symlink() and ".ipynb_checkpoints" not in p.parts)
+        if len(found) > 1:
+            named = [p for p in found if p.stem.lower() == name.lower()]
+            found = named if len(named) == 1 else found
+        if not found:
+            entries.append(Entry(e.name, None, ("no-notebook", f"No .ipynb file in "
+                                 f"{e.name}/: hand in the homework's notebook.")))
+        elif len(found) > 1:
+            names = ", ".join(str(p.relative_to(e)) for p in found)
+            entries.append(Entry(e.name, None, ("ambiguous", f"Several notebooks in {e.name}/ "
+                                 f"({names}) and none named {name}.ipynb: hand in one.")))
+        else:
+            entries.append(Entry(e.name, found[0]))
+    ids = Counter(x.student for x in entries)
+    for sid, n in ids.items():
+        if n > 1:
+            raise ValueError(f"submissions: {n} entries have the student id {sid!r} (a folder "
+                             f"and a notebook of the same name?); rename one")
+    return entries, notes
+
+
+# ------------------------------------------------------------------------- running a class
+def _task(entry: Entry, folder: Path, settings: dict) -> dict:
+    if entry.path is None:
+        g = unusable(settings["name"], entry.student, "", *entry.problem)
+    else:
+        g = grade_notebook(entry.path, settings["name"], entry.student, settings["seed"],
+                           settings["secret"], settings["sandbox"], settings["timeout"],
+                           str(entry.path.relative_to(folder)))
+    return asdict(g)
+
+
+def _child(conn: mpc.Connection, entry: Entry, folder: Path, settings: dict) -> None:
+    from gpsaccel.check import sandbox as sb
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    sb._prctl(sb.PR_SET_DUMPABLE, 0)  # it holds answers after its box while others run
+    try:
+        out = _task(entry, folder, settings)
+    except Exception as exc:  # noqa: BLE001 - a bug of the grader: one student's error
+        out = {"error": f"{type(exc).__name__}: {exc}"}
+    conn.send(out)
+    conn.close()
+
+
+def _grader_error(entry: Entry, folder: Path, settings: dict, why: str) -> dict:
+    file = str(entry.path.relative_to(folder)) if entry.path else ""
+    return asdict(unusable(settings["name"], entry.student, file, "grader-error",
+                           f"The grader could not finish this notebook ({why}); it was not "
+                           f"graded. Tell your instructor."))
+
+
+def _forked(entries: list[Entry], folder: Path, settings: dict, jobs: int,
+            done: Callable[[int, dict], None]) -> None:
+    """Each notebook in a forked process (module docstring); results as they come."""
+    from gpsaccel.check import sandbox as sb
+    from gpsaccel.check.batch import sweep
+
+    ctx = mp.get_context("fork")
+    was = sb._get_subreaper()
+    sb.set_subreaper(True)
+    before = sb._my_children()
+    pending = list(enumerate(entries))[::-1]
+    running: dict[int, tuple] = {}
+    limit = settings["timeout"] * 2 + 60 + SLACK  # the notebook's box, the file's box, the rest
+    try:
+        while pending or running:
+            while pending and len(running) < jobs:
+                i, e = pending.pop()
+                recv, send = ctx.Pipe(duplex=False)
+                p = ctx.Process(target=_child, args=(send, e, folder, settings), daemon=True)
+                p.start()
+                send.close()
+                running[i] = (p, recv, time.monotonic() + limit)
+            mpc.wait([c for _, c, _ in running.values()] + [p.sentinel for p, _, _ in
+                                                             running.values()], timeout=0.2)
+            for i in list(running):
+                p, conn, deadline = running[i]
+                out = None
+                if conn.poll():
+                    try:
+                        out = conn.recv()
+                    except (EOFError, OSError):
+                        out = None
+                if out is None and p.exitcode is None and time.monotonic() < deadline:
+                    continue
+                if not isinstance(out, dict) or "error" in out:
+                    why = (out or {}).get("error") if isinstance(out, dict) else None
+                    if why is None:
+                        why = ("it took too long" if p.exitcode is None else
+                               f"its process died, exit {p.exitcode}")
+                    out = _grader_error(entries[i], folder, settings, why)
+                if p.exitcode is None:
+                    p.kill()
+                p.join()
+                conn.close()
+                del running[i]
+                sweep(before | {q.pid for q, _, _ in running.values()})
+                done(i, out)
+    finally:
+        for p, _, _ in running.values():
+            p.kill()
+            p.join()
+        sweep(before)
+        sb.set_subreaper(bool(was))
+
+
+def _dask(entries: list[Entry], folder: Path, settings: dict, spec: str, jobs: int,
+          done: Callable[[int, dict], None]) -> None:
+    from gpsaccel.executors import resolve_executor
+
+    with resolve_executor(spec, max_workers=jobs) as ex:
+        futures = [ex.submit(_task, e, folder, settings) for e in entries]
+        for i, fut in enumerate(futures):
             try:
-                scores, outputs = parse_results(path.read_text(encoding="utf-8"), possible)
-                status = "graded"
-            except (ValueError, UnicodeDecodeError):
-                status = "error"
-    grade = Grade(submission.name, scores, possible, status, "", job_result.seconds, outputs)
-    grade.feedback = _feedback(grade, job_result.output)
-    return grade
+                out = fut.result()
+            except Exception as exc:  # noqa: BLE001 - a worker lost: that student only
+                out = _grader_error(entries[i], folder, settings, f"{type(exc).__name__}")
+            done(i, out)
 
 
-def write_csv(grades: list[Grade], path: Path) -> None:
-    """``grades.csv``: submission, one column per question, total, possible, status, seconds."""
-    questions = list(grades[0].possible) if grades else []
-    with open(path, "w", newline="", encoding="utf-8") as f:
-        w = csv.writer(f)
-        w.writerow(["submission", *questions, "total", "possible", "status", "seconds"])
-        for g in grades:
-            w.writerow([_cell(g.submission), *(f"{g.scores[q]:g}" for q in questions),
-                        f"{g.total:g}", f"{g.max_total:g}", g.status, f"{g.seconds:.1f}"])
+# ---------------------------------------------------------------------------------- output
+def _cell(value: str) -> str:
+    """A CSV text cell a spreadsheet will not evaluate (=, +, -, @ lead a formula)."""
+    return "'" + value if value[:1] in ("=", "+", "-", "@", "\t", "\r") else value
 
 
-def grade(submissions: Path | str, name: str, out: Path | str | None = None,
-          autograder: Path | str | None = None, jobs: int | None = None,
-          timeout: float = TIMEOUT) -> list[Grade]:
-    """Grade every ``*.ipynb`` in ``submissions`` for homework ``name``; write CSV and feedback.
+def _safe_name(name: str) -> str:
+    """A file name that cannot leave the folder."""
+    return (re.sub(r"[^\w.\- ]+", "_", name).strip(" .") or "student")[:120]
 
-    autograder : the zip from :func:`~gpsaccel.assignments.generate.generate`; None generates it
-        from the master (``otter assign`` without running its tests).
-    out : where ``grades.csv`` and ``feedback/`` go (default ``submissions/grades``).
-    jobs : notebooks graded at once (default: the number of CPUs, at most 4).
-    timeout : wall-clock limit (s) per notebook.
+
+HEADER = ("student", "file")
+
+
+def write_csv(grades: list[Grade], possible: dict[str, float], path: Path) -> None:
+    """``grades.csv``: a header, a row of the points possible, one row per student."""
+    buf = io.StringIO()
+    w = csv.writer(buf)
+    qs = list(possible)
+    w.writerow([*HEADER, *qs, "total", "possible", "status", "seconds"])
+    w.writerow(["Points Possible", "", *(f"{possible[q]:g}" for q in qs),
+                f"{sum(possible.values()):g}", f"{sum(possible.values()):g}", "", ""])
+    for g in grades:
+        w.writerow([_cell(g.student), _cell(g.file), *(f"{g.scores.get(q, 0):g}" for q in qs),
+                    f"{g.total:g}", f"{g.max_total:g}", g.status, f"{g.seconds:.1f}"])
+    write_text(path, buf.getvalue())
+
+
+def summary(grades: list[Grade], possible: dict[str, float]) -> list[dict]:
+    """Per question: mean score, its possible, and how many students got each mistake code."""
+    out = []
+    for q, pts in possible.items():
+        scored = [g.scores.get(q, 0.0) for g in grades]
+        codes = Counter(c for g in grades for c in dict.fromkeys(g.codes.get(q, [])))
+        out.append({"question": q, "possible": pts, "mean": float(np.mean(scored)) if scored
+                    else math.nan, "full": sum(s >= pts for s in scored), "students":
+                    len(scored), "codes": dict(codes.most_common())})
+    return out
+
+
+def write_summary(rows: list[dict], grades: list[Grade], out: Path) -> None:
+    """``summary.csv`` (question, code, students) and ``summary.png`` (the same as bars)."""
+    buf = io.StringIO()
+    w = csv.writer(buf)
+    w.writerow(["question", "possible", "mean", "full marks", "students", "code", "count"])
+    for r in rows:
+        base = [r["question"], f"{r['possible']:g}", f"{r['mean']:.3f}", r["full"],
+                r["students"]]
+        if not r["codes"]:
+            w.writerow([*base, "", ""])
+        for code, n in r["codes"].items():
+            w.writerow([*base, code, n])
+    statuses = Counter(g.status for g in grades)
+    w.writerow([])
+    for s, n in statuses.most_common():
+        w.writerow(["status", "", "", "", "", s, n])
+    write_text(out / "summary.csv", buf.getvalue())
+    _figure(rows, out / "summary.png")
+
+
+def _figure(rows: list[dict], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from gpsaccel._atomic import savefig
+
+    codes = [(f"{r['question']}: {c}", n) for r in rows for c, n in r["codes"].items()]
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11, max(3.0, 0.3 * len(codes) + 1.5)))
+    names = [r["question"] for r in rows]
+    a.bar(names, [r["mean"] / r["possible"] if r["possible"] else 0 for r in rows])
+    a.set_ylim(0, 1)
+    a.set_ylabel("mean score / points possible")
+    a.set_title(f"{rows[0]['students'] if rows else 0} students")
+    if codes:
+        b.barh([c for c, _ in codes][::-1], [n for _, n in codes][::-1])
+        b.set_xlabel("students")
+        b.set_title("mistake codes")
+    else:
+        b.axis("off")
+    fig.tight_layout()
+    savefig(fig, path, dpi=100)
+    plt.close(fig)
+
+
+def default_out(submissions: Path) -> Path:
+    """``<submissions>-grades`` beside the submissions folder (never inside it)."""
+    s = submissions.resolve()
+    return s.parent / f"{s.name}-grades"
+
+
+def read_secret(secret_file: str | os.PathLike | None) -> bytes | None:
+    """The instructor's secret: the file's bytes, else ``$GPSACCEL_GRADING_SECRET``, else None."""
+    if secret_file is not None:
+        data = Path(secret_file).read_bytes().strip()
+        if len(data) < 16:
+            raise ValueError(f"secret_file: {secret_file} must hold at least 16 bytes (e.g. "
+                             f"`python -c 'import secrets; print(secrets.token_hex(32))'`)")
+        return data
+    env = os.environ.get(SECRET_ENV, "").encode()
+    return env or None
+
+
+# ------------------------------------------------------------------------------ the command
+def grade(submissions: str | os.PathLike, name: str, out: str | os.PathLike | None = None,
+          jobs: int | None = None, timeout: float = TIMEOUT, seed: int | None = None,
+          secret: bytes | None = None, student: str | None = None, dask: str | None = None,
+          sandbox: str = "auto") -> list[Grade]:
+    """Grade every student of ``submissions`` for homework ``name`` (module docstring).
+
+    jobs : notebooks at once (default: CPUs, at most 4); timeout : wall-clock seconds of one
+    notebook's box; seed : the fresh data's seed (default: random, or the recorded one when
+    regrading one ``student``); secret : the instructor's secret for per-student variants (None:
+    every student gets the public notebook's numbers); dask : a Dask address or "dask-local".
     """
-    from gpsaccel.assignments.generate import generate, master_notebook, questions
+    from gpsaccel.check import sandbox as sb
 
-    submissions = Path(submissions)
-    if not submissions.is_dir():
-        raise ValueError(f"submissions must be a folder of notebooks, got {submissions}")
-    if timeout <= 0 or not math.isfinite(timeout):
+    folder = Path(submissions)
+    if not folder.is_dir():
+        raise ValueError(f"submissions must be a folder (a student's folder or notebook per "
+                         f"student), got {folder}")
+    if not (isinstance(timeout, (int, float)) and 0 < timeout < math.inf):
         raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
     jobs = min(4, os.cpu_count() or 1) if jobs is None else int(jobs)
     if jobs < 1:
         raise ValueError(f"jobs must be >= 1, got {jobs}")
-    possible = questions(master_notebook(name))
-    out = Path(out) if out is not None else submissions / "grades"
-    notebooks = sorted(p for p in submissions.glob("*.ipynb") if p.is_file())
-    with tempfile.TemporaryDirectory(prefix="gpsaccel-autograder-") as tmp:
-        if autograder is None:
-            autograder = generate(name, Path(tmp) / "dist", run_tests=False).autograder
-        autograder = Path(autograder)
-        if not autograder.is_file():
-            raise ValueError(f"autograder must be the zip written by `gpsaccel assignment`, "
-                             f"got {autograder}")
-        t0 = time.perf_counter()
-        with ThreadPoolExecutor(max_workers=jobs) as pool:
-            grades = list(pool.map(lambda p: grade_one(p, autograder, possible, timeout),
-                                   notebooks))
-        elapsed = time.perf_counter() - t0
+    qs = questions_of(name)
+    possible = _possible(qs)
+    out = Path(out) if out is not None else default_out(folder)
+    if out.resolve().is_relative_to(folder.resolve()):
+        raise ValueError(f"out: {out} is inside the submissions folder; write the grades "
+                         f"elsewhere (a student's files must not share a folder with them)")
+    out.mkdir(parents=True, exist_ok=True)
+    record = out / "grading.json"
+    previous = json.loads(record.read_text(encoding="utf-8")) if record.is_file() else {}
+    entries, notes = find_submissions(folder, name)
+    if student is not None:
+        entries = [e for e in entries if e.student == student]
+        if not entries:
+            raise ValueError(f"student: no submission of {student!r} in {folder}")
+        if seed is None:
+            seed = previous.get("seed")
+    if seed is None:
+        seed = secrets.randbits(63)
+    if not isinstance(seed, int) or seed < 0:
+        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+    backend = sb.resolve_backend(sandbox)
+    sb.refuse_unsafe_basic(backend)  # a class is not graded where basic cannot isolate it
+    settings = {"name": name, "seed": int(seed), "secret": secret, "sandbox": backend,
+                "timeout": float(timeout)}
     feedback = out / "feedback"
-    feedback.mkdir(parents=True, exist_ok=True)
-    used: set[str] = set()
-    for g in grades:
-        stem = _safe_name(g.submission)
-        while stem in used:
-            stem += "_"
-        used.add(stem)
-        (feedback / f"{stem}.txt").write_text(g.feedback, encoding="utf-8")
-    write_csv(grades, out / "grades.csv")
-    (out / "summary.txt").write_text(
-        f"{len(grades)} notebooks graded in {elapsed:.1f} s with {jobs} jobs\n", encoding="utf-8")
-    return grades
+    feedback.mkdir(exist_ok=True)
+    kept_path = out / "grades.json"  # every grade with its codes (the summary of a regrade)
+    old = json.loads(kept_path.read_text(encoding="utf-8")) if student and kept_path.is_file() \
+        else []
+    grades: list[Grade | None] = [None] * len(entries)
+    t0 = time.perf_counter()
+
+    def rows() -> list[Grade]:
+        now = [g for g in grades if g is not None]
+        if student is None:
+            mine = {e.student for e in entries}
+            missing = [Grade(e.student, "", {q: 0.0 for q in possible}, possible, "not-graded")
+                       for e, g in zip(entries, grades, strict=True) if g is None]
+            return sorted(now + missing, key=lambda g: g.student.lower()) if mine else now
+        kept = [Grade(**d) for d in old if d.get("student") != student]
+        return sorted(kept + now, key=lambda g: g.student.lower())
+
+    def done(i: int, data: dict) -> None:
+        g = Grade(**data)
+        grades[i] = g
+        write_text(feedback / f"{_safe_name(g.student)}.txt", g.feedback)
+        current = rows()
+        write_csv(current, possible, out / "grades.csv")
+        write_text(kept_path, json.dumps([{**asdict(x), "feedback": ""} for x in current]))
+
+    write_text(record, json.dumps({
+        "assignment": name, "seed": int(seed), "sandbox": backend, "timeout": timeout,
+        "variants": "per student (HMAC of the id under the instructor's secret)" if secret
+        else "none (no secret given: every student has the public notebook's numbers)",
+        "questions": possible, "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        "student": student, "skipped": notes}, indent=2))
+    if student is None:  # a full run: the feedback of students no longer there is stale
+        keep = {f"{_safe_name(e.student)}.txt" for e in entries}
+        for f in feedback.glob("*.txt"):
+            if f.name not in keep:
+                f.unlink()
+    write_csv(rows(), possible, out / "grades.csv")
+    if dask:
+        _dask(entries, folder, settings, dask, jobs, done)
+    else:
+        _forked(entries, folder, settings, jobs, done)
+    final = rows()
+    write_summary(summary(final, possible), final, out)
+    info = json.loads(record.read_text(encoding="utf-8"))
+    info["seconds"] = round(time.perf_counter() - t0, 1)
+    info["graded"] = len(entries)
+    write_text(record, json.dumps(info, indent=2))
+    return [g for g in grades if g is not None]

@@ -1,52 +1,78 @@
-"""Shared tools for the homework tests: variants of a solved notebook, one graded class per module.
+"""Shared tools for the homework tests: notebooks made from the masters, a class folder.
 
-Grading a notebook costs a Jupyter kernel (~5-20 s on a loaded 2-core machine), so each test
-module generates its assignment once, grades all its notebooks in one parallel ``grade`` call
-(module-scoped fixture) and the tests read that one result.
+A *solved* notebook is what an honest student hands in: the master's markdown and code cells with
+the solutions in, the otter cells (question, solution and test markers) and the test cells out.
+Variants of it are made by replacing text in its code cells, so each hostile or mistaken notebook
+differs from an honest one by exactly what the test is about.
 """
 
 from __future__ import annotations
 
 import csv
+import os
+import signal
 from pathlib import Path
 
 import nbformat
 import pytest
 
-try:  # the assignments extra (otter-grader); the test extra installs it
-    import otter  # noqa: F401
-except ImportError:  # pragma: no cover
-    collect_ignore_glob = ["test_*.py"]
+from gpsaccel.assignments.generate import master_notebook
+
+_MARKERS = ("# BEGIN SOLUTION", "# END SOLUTION")
 
 
-def variant(solution: Path, target: Path, edits: list[tuple[str, str]],
-            extra_first_cell: str | None = None) -> Path:
-    """A copy of the solved notebook with each ``(old, new)`` replaced once in the code cells.
+def solved(name: str) -> nbformat.NotebookNode:
+    """The master of homework ``name`` as an honest student's notebook."""
+    nb = nbformat.read(str(master_notebook(name)), as_version=4)
+    cells, in_tests = [], False
+    for c in nb.cells:
+        first = c.source.strip().splitlines()[0] if c.source.strip() else ""
+        if c.cell_type == "raw":
+            in_tests = {"# BEGIN TESTS": True, "# END TESTS": False}.get(first, in_tests)
+            continue
+        if in_tests:
+            continue
+        if c.cell_type == "code":
+            lines = [ln.replace("  # SOLUTION", "") for ln in c.source.splitlines()
+                     if ln.strip() not in _MARKERS]
+            c = nbformat.v4.new_code_cell("\n".join(lines))
+        cells.append(c)
+    nb.cells = cells
+    return nb
 
-    Fails when ``old`` is not found exactly once (the master changed: update the test).
-    """
-    nb = nbformat.read(str(solution), as_version=4)
+
+def write_variant(name: str, target: Path, edits: list[tuple[str, str]] = (),
+                  first_cell: str | None = None, last_cell: str | None = None) -> Path:
+    """The solved notebook with each ``(old, new)`` replaced once in its code cells (a test
+    fails loudly when ``old`` is not found exactly once: the master changed)."""
+    nb = solved(name)
     for old, new in edits:
         hits = [c for c in nb.cells if c.cell_type == "code" and old in c.source]
-        assert len(hits) == 1, f"{old!r} found in {len(hits)} code cells of {solution.name}"
-        assert hits[0].source.count(old) == 1, f"{old!r} found twice in one cell"
-        hits[0].source = hits[0].source.replace(old, new)
-    if extra_first_cell is not None:  # after otter's init cell
-        nb.cells.insert(1, nbformat.v4.new_code_cell(extra_first_cell))
+        assert len(hits) == 1, f"{old!r} found in {len(hits)} code cells of {name}"
+        hits[0].source = hits[0].source.replace(old, new, 1)
+    if first_cell is not None:
+        nb.cells.insert(0, nbformat.v4.new_code_cell(first_cell))
+    if last_cell is not None:
+        nb.cells.append(nbformat.v4.new_code_cell(last_cell))
+    target.parent.mkdir(parents=True, exist_ok=True)
     nbformat.write(nb, str(target))
     return target
 
 
-def read_csv(path: Path) -> dict[str, dict[str, str]]:
+def read_grades(path: Path) -> dict[str, dict[str, str]]:
     with open(path, newline="", encoding="utf-8") as f:
-        return {row["submission"]: row for row in csv.DictReader(f)}
+        return {row["student"]: row for row in csv.DictReader(f)}
 
 
-@pytest.fixture(scope="module")
-def make_variant():
-    return variant
+def kill_pids(pids) -> None:
+    """SIGKILL the processes a test started, by PID."""
+    for pid in pids:
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):
+            pass
 
 
-@pytest.fixture(scope="module")
-def read_grades():
-    return read_csv
+@pytest.fixture(scope="session")
+def notebook():
+    return write_variant

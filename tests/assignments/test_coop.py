@@ -1,64 +1,79 @@
-"""The coop homework: otter assign, otter run on the solution, the blank and two mistake notebooks;
-the finite-difference and EKF checks on their own."""
+"""The coop homework: graded in the sandbox (solved, blank, a wrong Jacobian element, the DT
+model's mistakes, an unwrapped residual); the checks on their own."""
 
 from __future__ import annotations
-
-import shutil
 
 import numpy as np
 import pytest
 
 from gpsaccel import CoopModel
-from gpsaccel.assignments import coop, generate, grade
+from gpsaccel.assignments import coop, grade
 from gpsaccel.coop import model as cm
 from gpsaccel.coop.filters import run_ekf
 
+from .conftest import write_variant
+
 C_ROW = "C[row, [0, 1, 3, 4]] = [deta / r2, -dxi / r2, -deta / r2, dxi / r2]"
+B_32 = "B[2, 0], B[2, 1] = np.tan(u[1]) / L, u[0] / (L * np.cos(u[1]) ** 2)"
 WRAP = "r[[0, 2]] = wrap(r[[0, 2]])"
 F_EULER = "F = np.eye(6) + dt * jacobian_A(x, u)"
+G_EULER = "G = dt * jacobian_B(x, u)"
 
 
 @pytest.fixture(scope="module")
-def graded(tmp_path_factory, make_variant):
-    dist = generate("coop", tmp_path_factory.mktemp("dist") / "coop", run_tests=False)
-    folder = tmp_path_factory.mktemp("class")
-    shutil.copy(dist.solution, folder / "solved.ipynb")
-    shutil.copy(dist.student, folder / "blank.ipynb")
-    make_variant(dist.solution, folder / "mistakes_q1_q3.ipynb",
-                 [(C_ROW, "C[row, [0, 1, 3, 4]] = [-deta / r2, dxi / r2, deta / r2, -dxi / r2]"),
-                  (WRAP, "pass  # residual not wrapped"),
-                  # question 2 on the course model's C, so that only q1 and q3 carry a mistake
-                  ("    H = jacobian_C(x)\n    return F, G, H", "    H = model.C(x)\n    return F, G, H")])
-    make_variant(dist.solution, folder / "mistake_q2.ipynb", [(F_EULER, "F = dt * jacobian_A(x, u)")])
-    grades = grade(folder, "coop", out=folder / "grades", autograder=dist.autograder, jobs=2,
-                   timeout=300)
-    return {g.submission: g for g in grades}
+def graded(tmp_path_factory):
+    sub = tmp_path_factory.mktemp("class")
+    write_variant("coop", sub / "solved" / "coop.ipynb")
+    write_variant("coop", sub / "blank" / "coop.ipynb", last_cell=(
+        "jacobian_A = jacobian_B = jacobian_C = dt_linearization = ekf = ..."))
+    write_variant("coop", sub / "wrong C, no wrap" / "coop.ipynb",
+                  [(C_ROW, "C[row, [0, 1, 3, 4]] = [-deta / r2, dxi / r2, deta / r2, -dxi / r2]"),
+                   (WRAP, "pass  # residual not wrapped")])
+    write_variant("coop", sub / "one wrong B" / "coop.ipynb",
+                  [(B_32, "B[2, 0], B[2, 1] = np.tan(u[1]) / L, u[0] / L")])
+    write_variant("coop", sub / "F without I" / "coop.ipynb",
+                  [(F_EULER, "F = dt * jacobian_A(x, u)")])
+    write_variant("coop", sub / "zoh" / "coop.ipynb", [(G_EULER, (
+        "G = (dt * np.eye(6) + dt**2 / 2 * jacobian_A(x, u)) @ jacobian_B(x, u)"))])
+    grades = grade(sub, "coop", out=sub.parent / "coop-grades", jobs=2, timeout=120, seed=11)
+    return {g.student: g for g in grades}
 
 
 def test_solution_full_marks_blank_zero(graded):
-    assert graded["solved.ipynb"].scores == {"q1": 3.0, "q2": 2.0, "q3": 5.0}
-    blank = graded["blank.ipynb"]
+    assert graded["solved"].scores == {"q1": 3.0, "q2": 2.0, "q3": 5.0}
+    blank = graded["blank"]
     assert blank.status == "graded" and blank.total == 0
-    assert "returns-none" in blank.feedback
+    assert blank.codes["q3"] == ["not-defined"]
 
 
 def test_mistakes_lose_exactly_their_questions_and_name_the_codes(graded):
-    a, b = graded["mistakes_q1_q3.ipynb"], graded["mistake_q2.ipynb"]
-    assert a.scores == {"q1": 0.0, "q2": 2.0, "q3": 0.0}
-    assert "jacobian-sign" in a.outputs["q1"] and "innovation-not-wrapped" in a.outputs["q3"]
-    assert b.scores == {"q1": 3.0, "q2": 0.0, "q3": 5.0}
-    assert "dt-missing-identity" in b.outputs["q2"]
+    a = graded["wrong C, no wrap"]
+    assert a.scores == {"q1": 0.0, "q2": 2.0, "q3": 0.0}, a.feedback
+    assert a.codes["q1"] == ["jacobian-C"] and a.codes["q3"] == ["no-angle-wrap"]
+    b = graded["F without I"]
+    assert b.scores == {"q1": 3.0, "q2": 0.0, "q3": 5.0} and b.codes["q2"] == ["dt-linearization"]
+
+
+def test_one_wrong_B_element_costs_only_the_jacobian_question(graded):
+    g = graded["one wrong B"]
+    assert g.scores == {"q1": 0.0, "q2": 2.0, "q3": 5.0}, g.feedback
+    assert g.codes["q1"] == ["jacobian-B"] and "B₃₂" in g.feedback
+
+
+def test_an_exact_zero_order_hold_G_is_named(graded):
+    g = graded["zoh"]
+    assert g.scores["q2"] == 0 and g.codes["q2"] == ["zero-order-hold"]
+    assert "zero-order-hold" in g.feedback
+
+
+def test_feedback_names_elements_without_expected_values(graded):
+    text = graded["one wrong B"].feedback
+    assert "should be …" in text or "should be" not in text
+    assert "6.12323e-18" not in text
 
 
 # ------------------------------------------------------------------ the checks on their own
-def test_finite_differences_match_the_analytic_jacobians():
-    for x, u in coop.points(seed=3, n=4):
-        np.testing.assert_allclose(coop.fd_A(x, u), cm.jacobian_A(x, u), rtol=1e-7, atol=1e-8)
-        np.testing.assert_allclose(coop.fd_B(x, u), cm.jacobian_B(x, u), rtol=1e-7, atol=1e-8)
-        np.testing.assert_allclose(coop.fd_C(x), cm.jacobian_C(x), rtol=1e-7, atol=1e-8)
-
-
-def test_jacobian_checks_name_the_element():
+def test_jacobian_checks_call_the_checker_and_name_the_element():
     assert coop.jacobians(cm.jacobian_A, cm.jacobian_B, cm.jacobian_C).passed
 
     def B_no_cos2(x, u):  # ∂θ̇g/∂φg without the 1/cos²
@@ -66,10 +81,26 @@ def test_jacobian_checks_name_the_element():
         B[2, 1] = u[0] / 0.5
         return B
     r = coop.jacobians(cm.jacobian_A, B_no_cos2, cm.jacobian_C)
-    assert r.codes == ["jacobian-element"] and "B₃₂" in str(r)
+    assert r.codes == ["jacobian-B"] and "B₃₂" in str(r)
     assert coop.jacobians(cm.jacobian_A, cm.jacobian_B, lambda x: 1 / 0).codes == ["exception"]
-    assert coop.jacobians(cm.jacobian_A, cm.jacobian_B, lambda x: np.zeros((6, 5))).codes == [
-        "shape"]
+    assert coop.jacobians(None, cm.jacobian_B, cm.jacobian_C).codes == ["not-defined"]
+
+
+def test_dt_linearization_grades_G_against_the_students_own_B():
+    dt = CoopModel().dt
+
+    def B_bad(x, u):
+        B = cm.jacobian_B(x, u).copy()
+        B[2, 1] += 1.0
+        return B
+
+    def lin(x, u, dt, B=B_bad):
+        return np.eye(6) + dt * cm.jacobian_A(x, u), dt * B(x, u), cm.jacobian_C(x)
+    assert not coop.dt_linearization(lin).passed  # against the right B alone: wrong
+    r = coop.dt_linearization(lin, jacobian_A=cm.jacobian_A, jacobian_B=B_bad,
+                              jacobian_C=cm.jacobian_C)
+    assert r.passed and "uses-own-jacobian" in [f.code for f in r.findings]
+    assert dt == 0.1
 
 
 def test_reference_ekf_equals_the_package_ekf_and_each_mistake_is_recognised():
@@ -80,6 +111,8 @@ def test_reference_ekf_equals_the_package_ekf_and_each_mistake_is_recognised():
     assert np.abs(cm.state_residual(x, ref.x_hat)).max() < 1e-9
     assert np.abs(P - ref.P).max() < 1e-9
     assert coop.ekf(lambda y, x0, P0, Q, R: (ref.x_hat, ref.P), y).passed
+    assert set(coop.EKF_MISTAKES) == {"no-angle-wrap", "euler-propagation", "jacobian-point",
+                                      "returns-a-priori"}
     for code in coop.EKF_MISTAKES:
         def student(y, x0, P0, Q, R, code=code):
             return coop.reference_ekf(model, y, x0, P0, Q, R, code)

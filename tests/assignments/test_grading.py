@@ -1,122 +1,244 @@
-"""The isolated job: time limit, leftover processes killed, scrubbed environment; the untrusted
-results.json; the CLI."""
+"""A class as an LMS exports it, graded in the sandbox: grades.csv, feedback, the summary table
+and figure, a regrade, stale feedback, Dask; the notebook-to-module step; the CLI."""
 
 from __future__ import annotations
 
+import csv
 import json
 import os
-import sys
-import textwrap
-import time
 
+import nbformat
+import numpy as np
 import pytest
 
-from gpsaccel.assignments.grading import _cell, _safe_name, parse_results
-from gpsaccel.assignments.isolation import MARKER, run_isolated
+from gpsaccel.assignments import grading
+from gpsaccel.assignments import notebook as nbm
+from gpsaccel.assignments.grading import find_submissions, grade, redact
+from gpsaccel.assignments.questions import question_seed, variant_number
 from gpsaccel.cli import main
 
+from .conftest import read_grades, write_variant
 
-def _alive(pid: int) -> bool:
-    try:
-        with open(f"/proc/{pid}/stat", encoding="utf-8") as f:
-            return f.read().split()[2] != "Z"  # a zombie is dead
-    except FileNotFoundError:
-        return False
-
-
-@pytest.mark.skipif(not os.path.isdir("/proc"), reason="needs /proc")
-def test_timeout_kills_the_job_and_a_process_that_left_its_session(tmp_path):
-    # the child starts a grandchild in a session of its own (as jupyter_client starts a kernel),
-    # writes its pid, then loops forever
-    script = textwrap.dedent("""
-        import subprocess, sys, time
-        p = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(600)"],
-                             start_new_session=True)
-        open("grandchild.pid", "w").write(str(p.pid))
-        while True:
-            time.sleep(0.1)
-    """)
-    t0 = time.perf_counter()
-    result = run_isolated([sys.executable, "-c", script], tmp_path, timeout=3)
-    assert result.timed_out and result.returncode is None
-    assert time.perf_counter() - t0 < 20
-    pid = int((tmp_path / "grandchild.pid").read_text())
-    time.sleep(0.2)
-    assert not _alive(pid), "the grandchild in its own session survived the job"
-    assert result.killed >= 1
+PHI = 'dt = 1 / VARIANT["rate_hz"]\nPhi = np.array([[1.0, dt, -dt**2 / 2],'
+MEAN = "return float(np.mean([ei @ np.linalg.solve(Pi, ei) for ei, Pi in zip(e, P[:, -1])]))"
+SECRET = b"class-test-secret-0123456789abcdef"
+STUDENTS = ("Doe, Jane (1001)", "Smith John 1002", "blank 1003", "crash 1004", "hostile 1005")
 
 
-def test_environment_is_scrubbed(tmp_path, monkeypatch):
-    monkeypatch.setenv("GPSACCEL_TEST_SECRET", "do-not-leak")
-    script = "import json, os; print(json.dumps(dict(os.environ)))"
-    result = run_isolated([sys.executable, "-c", script], tmp_path, timeout=30)
-    assert result.returncode == 0 and not result.timed_out
-    env = json.loads(result.output.strip().splitlines()[-1])
-    assert "GPSACCEL_TEST_SECRET" not in env
-    assert env["HOME"].startswith(str(tmp_path)) and env["TMPDIR"].startswith(str(tmp_path))
-    assert env["OMP_NUM_THREADS"] == "1" and MARKER in env
+def _class(sub):
+    write_variant("calibration", sub / STUDENTS[0] / "Calibration.IPYNB")
+    write_variant("calibration", sub / STUDENTS[1] / "homework" / "calibration.ipynb",
+                  [(PHI, PHI.replace("-dt**2", "+dt**2")),
+                   (MEAN, MEAN.replace("np.mean", "np.sum"))])
+    write_variant("calibration", sub / STUDENTS[2] / "calibration.ipynb",
+                  [("    return x_hat, P", "    return None")],
+                  last_cell="Phi = Gamma = H = V = W = M0 = average_nees = nees_bounds = ...")
+    write_variant("calibration", sub / STUDENTS[3] / "calibration.ipynb",
+                  [("def average_nees(", "import os\nos._exit(3)\n\n\ndef average_nees(")])
+    write_variant("calibration", sub / STUDENTS[4] / "calibration.ipynb",
+                  [("    return x_hat, P",
+                    "    import gpsaccel\n    r = gpsaccel.run_multirate(gpsaccel.CalibrationModel(), z)"
+                    "\n    return r.x_hat, r.P")],
+                  last_cell="import gpsaccel.check as c\nc.assert_submission = lambda *a, **k: None\n"
+                            "Phi = Gamma = H = V = W = M0 = ...")
+    (sub / "empty 1006").mkdir()
+    (sub / "notes.txt").write_text("not a submission", encoding="utf-8")
 
 
-def test_results_json_is_untrusted():
-    possible = {"q1": 3.0, "q2": 4.0}
-    forged = {"tests": [{"name": "q1", "score": 1e9, "output": "x"},
-                        {"name": "q2", "score": float("nan")},
-                        {"name": "bonus", "score": 100},
-                        "junk", {"name": "q1", "score": -5}]}
-    scores, outputs = parse_results(json.dumps(forged), possible)
-    assert scores == {"q1": 0.0, "q2": 0.0}  # last q1 entry wins, clipped to [0, 3]
-    scores, _ = parse_results(json.dumps({"tests": [{"name": "q1", "score": 7}]}), possible)
-    assert scores == {"q1": 3.0, "q2": 0.0}
-    assert parse_results("[]", possible)[0] == {"q1": 0.0, "q2": 0.0}
-    with pytest.raises(ValueError):
-        parse_results("{not json", possible)
+@pytest.fixture(scope="module")
+def graded(tmp_path_factory):
+    root = tmp_path_factory.mktemp("lms")
+    sub = root / "Homework 1 submissions"
+    _class(sub)
+    out = grading.default_out(sub)
+    (out / "feedback").mkdir(parents=True)
+    (out / "feedback" / "dropped the course.txt").write_text("stale", encoding="utf-8")
+    grades = grade(sub, "calibration", jobs=2, timeout=120, seed=2027, secret=SECRET)
+    return {"sub": sub, "out": out, "grades": {g.student: g for g in grades},
+            "csv": read_grades(out / "grades.csv")}
 
 
-def test_names_cannot_escape_or_start_a_formula():
-    assert _safe_name("../../etc/passwd.ipynb") == "passwd"
-    assert "/" not in _safe_name("a/b c.ipynb")
-    assert _cell("=HYPERLINK(1)").startswith("'") and _cell("alice.ipynb") == "alice.ipynb"
+def test_output_is_beside_the_submissions_not_inside(graded):
+    assert graded["out"].parent == graded["sub"].parent
+    with pytest.raises(ValueError, match="inside the submissions"):
+        grade(graded["sub"], "calibration", out=graded["sub"] / "grades")
 
 
-def test_cli_assignment_and_grade(tmp_path, capsys):
-    pytest.importorskip("otter")
-    out = tmp_path / "dist"
-    assert main(["assignment", "ship", "--out", str(out), "--no-run-tests"]) == 0
-    assert (out / "student" / "ship.ipynb").is_file() and (out / "ship-autograder.zip").is_file()
-    subs = tmp_path / "subs"
-    subs.mkdir()
-    (subs / "broken.ipynb").write_text("not a notebook", encoding="utf-8")
-    assert main(["grade", str(subs), "--assignment", "ship", "--autograder",
-                 str(out / "ship-autograder.zip"), "--timeout", "120"]) == 0
-    text = (subs / "grades" / "grades.csv").read_text(encoding="utf-8").splitlines()
-    assert text[0] == "submission,q1,q2,total,possible,status,seconds"
-    assert text[1].startswith("broken.ipynb,0,0,0,10,error,")
-    assert main(["grade", str(tmp_path / "nope"), "--assignment", "ship"]) == 2
-    assert "submissions must be a folder" in capsys.readouterr().err
+def test_grades_csv_has_ids_points_possible_and_status(graded):
+    rows = graded["csv"]
+    assert rows["Points Possible"]["q1"] == "3" and rows["Points Possible"]["total"] == "10"
+    want = {STUDENTS[0]: ("10", "graded"), STUDENTS[1]: ("4", "graded"),
+            STUDENTS[2]: ("0", "graded"), STUDENTS[3]: ("4", "crashed"),
+            STUDENTS[4]: ("6", "graded"), "empty 1006": ("0", "no-notebook")}
+    got = {k: (v["total"], v["status"]) for k, v in rows.items() if k != "Points Possible"}
+    assert got == want, {k: graded["grades"][k].feedback for k in graded["grades"]}
+    assert rows[STUDENTS[0]]["file"] == f"{STUDENTS[0]}/Calibration.IPYNB"
 
 
-def test_generate_does_not_delete_a_folder_it_did_not_write(tmp_path):
-    from gpsaccel.assignments import generate
+def test_mistakes_lose_exactly_their_questions_with_the_checkers_codes(graded):
+    g = graded["grades"][STUDENTS[1]]
+    assert g.scores == {"q1": 0.0, "q2": 4.0, "q3": 0.0}
+    assert g.codes["q3"] == ["nees-sum"] and g.codes["q1"]
 
-    (tmp_path / "notes.txt").write_text("keep me", encoding="utf-8")
-    with pytest.raises(ValueError, match="not an earlier"):
-        generate("ship", tmp_path)
-    assert (tmp_path / "notes.txt").read_text(encoding="utf-8") == "keep me"
+
+def test_a_crash_names_the_students_cell_and_keeps_the_file_question(graded):
+    g = graded["grades"][STUDENTS[3]]
+    nb = nbformat.read(str(graded["sub"] / STUDENTS[3] / "calibration.ipynb"), as_version=4)
+    cell = next(i for i, c in enumerate(nb.cells, 1) if "os._exit(3)" in c.source)
+    assert f"stopped in cell {cell}" in g.feedback
+    assert g.scores["q2"] == 4.0 and g.codes["q3"] == ["not-run"]
+
+
+def test_the_hostile_student_gets_nothing_from_the_package(graded):
+    # its cell that patches the checker fails at the import (the box may not import it), so its
+    # honest q1 and q3 stand; q2's file, which calls the package's filter, runs without gpsaccel
+    g = graded["grades"][STUDENTS[4]]
+    assert g.scores == {"q1": 3.0, "q2": 0.0, "q3": 3.0} and "uses-checker" in g.codes["q2"]
+    assert "ImportError" in g.feedback
+
+
+def test_feedback_once_each_without_answers_stale_files_removed(graded):
+    fb = graded["out"] / "feedback"
+    names = sorted(p.name for p in fb.iterdir())
+    assert names == sorted(f"{grading._safe_name(s)}.txt" for s in (*STUDENTS, "empty 1006"))
+    text = (fb / f"{grading._safe_name(STUDENTS[1])}.txt").read_text(encoding="utf-8")
+    assert "nees-sum" in text and "Your variant: rate_hz = " in text
+    lines = [ln for ln in text.splitlines() if ln.startswith("    - ")]
+    assert len(lines) == len(set(lines))
+    assert "test_q" not in text and "2026" not in text  # no hidden test, no seed
+    blank = (fb / "blank 1003.txt").read_text(encoding="utf-8")
+    assert "returns-none" in blank or "not-defined" in blank
+
+
+def test_summary_table_and_figure(graded):
+    with open(graded["out"] / "summary.csv", newline="", encoding="utf-8") as f:
+        rows = list(csv.reader(f))
+    q3 = [r for r in rows if r[:1] == ["q3"]]
+    assert ["nees-sum", "1"] in [r[5:7] for r in q3]
+    assert float(q3[0][2]) == pytest.approx(6 / 6)  # two full marks (3 points) among six
+    png = (graded["out"] / "summary.png").read_bytes()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n"
+    record = json.loads((graded["out"] / "grading.json").read_text(encoding="utf-8"))
+    assert record["seed"] == 2027 and any("notes.txt" in n for n in record["skipped"])
+
+
+def test_regrade_one_student_with_the_recorded_seed(graded):
+    sub, out = graded["sub"], graded["out"]
+    write_variant("calibration", sub / STUDENTS[4] / "calibration.ipynb")  # handed in again
+    again = grade(sub, "calibration", student=STUDENTS[4], secret=SECRET, timeout=120)
+    rows = read_grades(out / "grades.csv")
+    assert [g.total for g in again] == [10.0]
+    assert rows[STUDENTS[4]]["total"] == "10" and rows[STUDENTS[1]]["total"] == "4"
+    assert len(rows) == 7  # six students and the points-possible row
+
+
+def test_dask_gives_the_same_grades(graded, tmp_path):
+    pytest.importorskip("dask.distributed")
+    sub = tmp_path / "two"
+    for s in STUDENTS[:2]:
+        src = graded["sub"] / s
+        nb = next(p for p in src.rglob("*") if p.suffix.lower() == ".ipynb")
+        (sub / s).mkdir(parents=True)
+        (sub / s / "calibration.ipynb").write_bytes(nb.read_bytes())
+    grades = grade(sub, "calibration", out=tmp_path / "out", seed=2027, secret=SECRET,
+                   dask="dask-local", jobs=2, timeout=120)
+    assert {g.student: g.scores for g in grades} == {
+        s: graded["grades"][s].scores for s in STUDENTS[:2]}
+
+
+# ------------------------------------------------------------------------ the parts alone
+def test_lms_layout_any_case_spaces_nothing_silent(tmp_path):
+    for rel in ("A B/x.IpYnB", "C/one.ipynb", "C/two.ipynb", "D/sub/ship.ipynb",
+                "D/sub/other.ipynb", "E.ipynb"):
+        (tmp_path / rel).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / rel).write_text("{}", encoding="utf-8")
+    (tmp_path / "F").mkdir()
+    (tmp_path / "readme.md").write_text("", encoding="utf-8")
+    os.symlink(tmp_path / "E.ipynb", tmp_path / "G.ipynb")
+    entries, notes = find_submissions(tmp_path, "ship")
+    got = {e.student: (e.path.name if e.path else e.problem[0]) for e in entries}
+    assert got == {"A B": "x.IpYnB", "C": "ambiguous", "D": "ship.ipynb", "E": "E.ipynb",
+                   "F": "no-notebook"}
+    assert any("readme.md" in n for n in notes) and any("G.ipynb" in n for n in notes)
+
+
+def test_redact_keeps_locations_and_drops_values():
+    text = ("B₃₂ = 0.25, should be 6.12323e-18 at t = 12.4 s (step 62); x̂ has shape (151, 3); "
+            "expected 0.4145 m")
+    r = redact(text)
+    assert "6.12323e-18" not in r and "0.4145" not in r and "0.25" not in r
+    assert "B₃₂" in r and "t = 12.4 s" in r and "step 62" in r and "(151, 3)" in r
+
+
+def test_variants_and_seeds_are_keyed_and_independent():
+    a = variant_number(SECRET, "ship", "alice")
+    assert a == variant_number(SECRET, "ship", "alice")
+    assert a != variant_number(SECRET, "ship", "bob")
+    assert a != variant_number(b"another secret of the instructor", "ship", "alice")
+    assert question_seed(1, "ship", "q1", "alice") != question_seed(1, "ship", "q1", "bob")
+    assert question_seed(1, "ship", "q1", "alice") != question_seed(2, "ship", "q1", "alice")
+
+
+def test_ipython_syntax_is_handled_explicitly():
+    nb = nbm.Notebook([nbm.Cell(1, "%matplotlib inline\n!pip install foo\nx = 1"),
+                       nbm.Cell(2, "%%time\ny = x + 1"),
+                       nbm.Cell(3, "%%writefile f.py\ndef f():\n    return 2")])
+    src = nbm.module_source(nb, [nbm.Read("y", (), ((),), value=True)])
+    compile(src, "notebook.py", "exec")
+    assert "get_ipython().run_line_magic('matplotlib', 'inline')" in src
+    assert "get_ipython().system('pip install foo')" in src
+    assert nb.writefile("f.py")[1] == "def f():\n    return 2"
+
+
+def test_module_wrappers_survive_the_students_cells(tmp_path):
+    from gpsaccel.check import sandbox as sb
+
+    nb = nbm.Notebook([nbm.Cell(1, "import numpy as np\ndef f(a):\n    return a * 2"),
+                       nbm.Cell(2, "raise SystemExit(1)"), nbm.Cell(3, "np = None\ng = 1")])
+    reads = [nbm.Read("f", (np.arange(3.0),), ((3,),)), nbm.Read("h", (), ((),), value=True),
+             nbm.Read("g", (np.arange(3.0),), ((3,),))]
+    (tmp_path / "notebook.py").write_text(nbm.module_source(nb, reads), encoding="utf-8")
+    sub = sb.load_submission(tmp_path / "notebook.py", "_gpsaccel_cell")
+    box = sb.run(sub, grading._calls(3, reads), sb.Limits(time=60), allow_gpsaccel=True)
+    assert box.failure is None, box.detail
+    from gpsaccel.assignments.questions import answer_from
+    cells = [answer_from(r, 0) for r in box.results[:3]]
+    assert [c.status for c in cells] == ["ok", "exception", "ok"] and "SystemExit" in \
+        cells[1].message and "cell 2" in cells[1].message
+    f, h, g = (answer_from(r, 1) for r in box.results[3:])
+    assert f.status == "ok" and f.values[0].tolist() == [0.0, 2.0, 4.0]
+    assert (h.status, g.status) == ("not-defined", "not-callable")
+
+
+def test_cli_assignment_with_a_relative_out_and_grade(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "roster.txt").write_text("alice\nbob\n", encoding="utf-8")
+    (tmp_path / "secret").write_bytes(SECRET)
+    assert main(["assignment", "ship", "--out", "dist/ship", "--no-run-tests", "--roster",
+                 "roster.txt", "--secret-file", "secret"]) == 0
+    student = tmp_path / "dist" / "ship" / "student" / "ship.ipynb"
+    assert student.is_file()
+    mine = (tmp_path / "dist" / "ship" / "students" / "alice" / "ship.ipynb").read_text()
+    v = grading.student_variant("ship", "alice", SECRET)
+    assert f"VARIANT = {v!r}" in mine and "BEGIN SOLUTION" not in mine
+    sub = tmp_path / "class"
+    write_variant("ship", sub / "alice" / "ship.ipynb")
+    assert main(["grade", str(sub), "--assignment", "ship", "--seed", "1", "--secret-file",
+                 "secret"]) == 0
+    assert "alice" in capsys.readouterr().out
+    assert read_grades(tmp_path / "class-grades" / "grades.csv")["alice"]["total"] == "10"
 
 
 @pytest.mark.parametrize("name", ["calibration", "coop", "ship"])
-def test_masters_are_committed_clean_with_public_and_hidden_tests(name):
-    import nbformat
+def test_packaged_student_side_is_the_masters_and_holds_no_solution(name, tmp_path):
+    from gpsaccel.assignments.generate import generate, student_package_dir
 
-    from gpsaccel.assignments import master_notebook, questions
-
-    path = master_notebook(name)
-    nb = nbformat.read(str(path), as_version=4)
-    for cell in nb.cells:
-        if cell.cell_type == "code":
-            assert not cell.get("outputs") and cell.get("execution_count") is None
-    code = [c.source for c in nb.cells if c.cell_type == "code"]
-    for q in questions(path):
-        public = [s for s in code if s.startswith(f"def test_{q}_")]
-        hidden = [s for s in code if s.startswith(f"# HIDDEN\ndef test_{q}_")]
-        assert public and hidden, f"{name} {q}: a public and a hidden test"
+    packaged = nbformat.read(str(student_package_dir() / name / f"{name}.ipynb"), as_version=4)
+    fresh = nbformat.read(str(generate(name, tmp_path / name, run_tests=False).student),
+                          as_version=4)
+    def body(nb):  # otter's own init cell (its blank lines vary) left out
+        return [c.source for c in nb.cells if "otter.Notebook(" not in c.source]
+    assert body(packaged) == body(fresh), (
+        "the master changed: run gpsaccel.assignments.generate.refresh_student_package")
+    text = json.dumps(packaged.dict())
+    assert "BEGIN SOLUTION" not in text and "HIDDEN" not in text and "_graded" not in text

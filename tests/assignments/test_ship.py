@@ -1,61 +1,71 @@
-"""The ship homework: otter assign, otter run on the solution, the blank and two mistake notebooks;
-the update check on its own."""
+"""The ship homework: graded in the sandbox (solved, blank, one mistake per question, a classmate's
+number copied); the update and cost checks on their own."""
 
 from __future__ import annotations
-
-import shutil
 
 import numpy as np
 import pytest
 
-from gpsaccel.assignments import generate, grade, ship
+from gpsaccel.assignments import grade, ship
+from gpsaccel.assignments.grading import student_variant
 from gpsaccel.kalman.update import joseph_update
 from gpsaccel.ship.model import ShipModel
 
-UPDATE = """    rows = np.flatnonzero(~np.isnan(z))
-    if rows.size == 0:
-        return x_bar.copy(), M.copy()
-    Hr, Vr = H[rows], V[np.ix_(rows, rows)]
-    K = M @ Hr.T @ np.linalg.inv(Hr @ M @ Hr.T + Vr)
-    x_hat = x_bar + K @ (z[rows] - Hr @ x_bar)
-    A = np.eye(len(x_bar)) - K @ Hr
-    return x_hat, A @ M @ A.T + K @ Vr @ K.T"""
+from .conftest import write_variant
 
-ZEROED = """    missing = np.isnan(z)
-    K = M @ H.T @ np.linalg.inv(H @ M @ H.T + V)
-    K[:, missing] = 0.0
-    r = np.where(missing, 0.0, z - H @ x_bar)
-    A = np.eye(len(x_bar)) - K @ H
-    return x_bar + K @ r, A @ M @ A.T + K @ V @ K.T"""
-
+UPDATE = """    K = M @ Hr.T @ np.linalg.inv(Hr @ M @ Hr.T + Vr)"""
+ZEROED_K = """    K = M @ H.T @ np.linalg.inv(H @ M @ H.T + V)
+    K = K[:, rows]"""
 ACTUAL = "sigma_zeroed = float(np.sqrt(zeroed.P_actual[-1][0, 0]))"
+SECRET = b"ship-test-secret-0123456789"
 
 
 @pytest.fixture(scope="module")
-def graded(tmp_path_factory, make_variant):
-    dist = generate("ship", tmp_path_factory.mktemp("dist") / "ship", run_tests=False)
-    folder = tmp_path_factory.mktemp("class")
-    shutil.copy(dist.solution, folder / "solved.ipynb")
-    shutil.copy(dist.student, folder / "blank.ipynb")
-    make_variant(dist.solution, folder / "mistake_q1.ipynb", [(UPDATE, ZEROED)])
-    make_variant(dist.solution, folder / "mistake_q2.ipynb",
-                 [(ACTUAL, ACTUAL.replace("P_actual", "P"))])
-    grades = grade(folder, "ship", out=folder / "grades", autograder=dist.autograder, jobs=2,
-                   timeout=300)
-    return {g.submission: g for g in grades}
+def graded(tmp_path_factory):
+    sub = tmp_path_factory.mktemp("class")
+    write_variant("ship", sub / "solved" / "ship.ipynb")
+    write_variant("ship", sub / "blank" / "ship.ipynb",
+                  [("def update(x_bar, M, z, H, V):\n", "def update(x_bar, M, z, H, V):\n"
+                    "    return None\n"),
+                   (ACTUAL, "sigma_zeroed = ...")])
+    write_variant("ship", sub / "mistake_q1" / "ship.ipynb", [(UPDATE, ZEROED_K)])
+    write_variant("ship", sub / "mistake_q2" / "ship.ipynb",
+                  [(ACTUAL, ACTUAL.replace("P_actual", "P"))])
+    # the numbers of the public notebook's voyage (seed 0) typed in: wrong for any other variant
+    want = ship.zeroed_gain_cost()
+    write_variant("ship", sub / "copied" / "ship.ipynb",
+                  last_cell=f"sigma_optimal = {want['sigma_optimal']!r}\n"
+                            f"sigma_zeroed = {want['sigma_actual']!r}")
+    grades = grade(sub, "ship", out=sub.parent / "ship-grades", jobs=2, timeout=120, seed=3,
+                   secret=SECRET)
+    return {g.student: g for g in grades}
 
 
 def test_solution_full_marks_blank_zero(graded):
-    assert graded["solved.ipynb"].scores == {"q1": 6.0, "q2": 4.0}
-    blank = graded["blank.ipynb"]
+    assert graded["solved"].scores == {"q1": 6.0, "q2": 4.0}
+    blank = graded["blank"]
     assert blank.status == "graded" and blank.total == 0
-    assert "returns-none" in blank.outputs["q1"] and "not-a-number" in blank.outputs["q2"]
+    assert "returns-none" in blank.codes["q1"] and "not-defined" in blank.codes["q2"]
 
 
 def test_mistakes_lose_exactly_their_questions_and_name_the_codes(graded):
-    a, b = graded["mistake_q1.ipynb"], graded["mistake_q2.ipynb"]
-    assert a.scores == {"q1": 0.0, "q2": 4.0} and "zeroed-gain" in a.outputs["q1"]
-    assert b.scores == {"q1": 6.0, "q2": 0.0} and "claimed-not-actual" in b.outputs["q2"]
+    a, b = graded["mistake_q1"], graded["mistake_q2"]
+    assert a.scores == {"q1": 0.0, "q2": 4.0} and a.codes["q1"] == ["zeroed-gain"]
+    assert b.scores == {"q1": 6.0, "q2": 0.0} and b.codes["q2"] == ["claimed-not-actual"]
+
+
+def test_a_copied_number_is_wrong_for_the_students_own_variant(graded):
+    assert student_variant("ship", "copied", SECRET) != student_variant("ship", "copied", None)
+    g = graded["copied"]
+    assert g.scores == {"q1": 6.0, "q2": 0.0} and g.codes["q2"] == ["sigma-value"]
+    assert "mass_kg = " in g.feedback
+
+
+def test_feedback_never_gives_the_expected_value(graded):
+    want = ship.zeroed_gain_cost(**student_variant("ship", "mistake_q2", SECRET))
+    text = graded["mistake_q2"].feedback
+    for v in want.values():
+        assert f"{v:.4g}" not in text and f"{v:.3g}" not in text
 
 
 # ------------------------------------------------------------------ the checks on their own
@@ -87,10 +97,18 @@ def test_update_answer_names_each_mistake():
     assert r.codes == ["update-mismatch"] and "nothing arrived" in str(r)
 
 
-def test_cost_answer():
+def test_cost_answer_accepts_six_digits_tells_the_filters_apart_without_the_answer():
     want = ship.zeroed_gain_cost()
     assert ship.cost_answer(want["sigma_optimal"], want["sigma_actual"]).passed
-    assert ship.cost_answer(want["sigma_optimal"] ** 2, want["sigma_actual"]).codes == [
-        "std-as-variance"]
+    six = [float(f"{want[k]:.6g}") for k in ("sigma_optimal", "sigma_actual")]
+    assert ship.cost_answer(*six).passed
+    # the three σ agree to 3 digits: "expected 0.4145" for two values was that; 6 digits part them
+    assert f"{want['sigma_optimal']:.4g}" == f"{want['sigma_actual']:.4g}"
+    assert ship.cost_answer(want["sigma_actual"], want["sigma_actual"]).codes == ["sigma-value"]
+    r = ship.cost_answer(want["sigma_optimal"] ** 2, want["sigma_actual"])
+    assert r.codes == ["std-as-variance"]
     assert ship.cost_answer(want["sigma_optimal"], want["sigma_claimed"]).codes == [
         "claimed-not-actual"]
+    r = ship.cost_answer(1.0, 2.0)
+    assert r.codes == ["sigma-value"]
+    assert all(f"{v:.4g}" not in str(r) for v in want.values())

@@ -1,0 +1,61 @@
+"""The ship homework's graded questions (instructor side: in the repository, not the wheel).
+
+q1 calls ``update`` on cases drawn from the student's seed; q2 reads ``sigma_optimal`` and
+``sigma_zeroed`` computed in the box on the student's own voyage (variant).  See
+:mod:`gpsaccel.assignments.questions`.
+"""
+
+from __future__ import annotations
+
+from gpsaccel.assignments.ship import cases, cost_answer, update_answer
+from gpsaccel.check.report import Report
+
+# ----------------------------------------------------------------------- graded questions
+#: The public notebook's variant: report 004's ship.
+DEFAULT_VARIANT = {"mass_kg": 12.0, "gps_rate_hz": 1.0}
+
+#: The student's ship of question 2: its mass (kg) and GPS rate (Hz; each divides the 10 Hz grid).
+MASSES_KG = (8.0, 9.0, 10.0, 11.0, 12.0, 13.0, 14.0, 15.0, 16.0)
+GPS_RATES_HZ = (0.5, 1.0, 2.0)
+
+
+def variant(number: int) -> dict:
+    """The student's numbers: mass and GPS rate of their ship (question 2); 27 variants."""
+    return {"mass_kg": MASSES_KG[number % len(MASSES_KG)],
+            "gps_rate_hz": GPS_RATES_HZ[(number // len(MASSES_KG)) % len(GPS_RATES_HZ)]}
+
+
+def _q1_reads(draw):
+    from gpsaccel.assignments.notebook import Read
+
+    return [Read("update", args, ((9,), (9, 9))) for _, args in cases(draw.seed % 2**32)]
+
+
+def _q1_grade(draw, answers) -> Report:
+    from gpsaccel.assignments.questions import replay
+
+    return update_answer(replay(_q1_reads(draw), answers, "update"), seed=draw.seed % 2**32)
+
+
+def _q2_reads(draw):
+    from gpsaccel.assignments.notebook import Read
+
+    return [Read("sigma_optimal", (), ((),), value=True),
+            Read("sigma_zeroed", (), ((),), value=True)]
+
+
+def _q2_grade(draw, answers) -> Report:
+    from gpsaccel.assignments.questions import value
+
+    report = Report("question 2: what the zeroed gain costs")
+    got = [value(report, r.name, a) for r, a in zip(_q2_reads(draw), answers, strict=True)]
+    if not report.passed:
+        return report
+    return cost_answer(*got, **draw.variant)
+
+
+def graded_questions():
+    """The ship homework's graded questions (:mod:`gpsaccel.assignments.questions`)."""
+    from gpsaccel.assignments.questions import Question
+
+    return (Question("q1", 6, _q1_reads, _q1_grade), Question("q2", 4, _q2_reads, _q2_grade))

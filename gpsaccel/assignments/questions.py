@@ -1,0 +1,184 @@
+r"""What a graded question is: what it reads from the box, and how the grader scores it outside.
+
+A :class:`Question` never runs in the student's box.  Its :attr:`~Question.reads` say what to
+bring back (functions to call on data drawn from the grading run's seed, variables to read); the
+box returns, for each read, an :class:`Answer`: a status (the student's function was missing,
+raised, returned the wrong shape ...) and arrays of exactly the declared shapes.  Only after the
+box is empty does :attr:`~Question.grade` compute the reference and compare, with the checkers of
+:mod:`gpsaccel.check` or the homework's own, to which the answers are handed as :func:`replay`
+functions (they return what the student's function returned on those arguments, and refuse any
+other call).
+
+Fresh data.  Every draw comes from :class:`Draw`: ``seed`` (the grading run's, mixed with the
+question's name and the student's id, so no two students get the same data and nothing a
+classmate's box saw is of use) and ``variant`` (the student's own numbers, from
+:func:`variant_number`: an HMAC of the student's id under the instructor's secret).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import hmac
+import re
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from gpsaccel.assignments.notebook import MAX_NDIM, STATUSES, Read
+from gpsaccel.check.report import Report
+
+
+@dataclass(frozen=True)
+class Draw:
+    """The randomness of one question for one student: ``seed`` (fresh data; never shown to the
+    student) and ``variant`` (the student's numbers; shown to them in their notebook)."""
+
+    seed: int
+    variant: dict = field(default_factory=dict)
+
+    def rng(self) -> np.random.Generator:
+        return np.random.default_rng(self.seed)
+
+
+@dataclass(frozen=True)
+class Answer:
+    """What the box returned for one read.
+
+    status : one of :data:`gpsaccel.assignments.notebook.STATUSES`, or ``not-run`` (the box
+        stopped before this read: a timeout, a crash, a limit).
+    message : the student's exception text (``exception``, ``not-a-matrix``), sanitised.
+    values : the declared arrays (only when status is ``ok``).
+    which : for ``shape``/``not-a-matrix``, which output of a tuple was wrong.
+    shape : for ``shape``, what the student returned.
+    """
+
+    status: str
+    message: str = ""
+    values: tuple[np.ndarray, ...] = ()
+    which: int = -1
+    shape: tuple[int, ...] | None = None
+
+
+def answer_from(result: dict[str, np.ndarray] | None, n_outputs: int) -> Answer:
+    """An :class:`Answer` from one call's frames (None: the call never came back)."""
+    if result is None:
+        return Answer("not-run")
+    status = result["status"]
+    code = int(status[0])
+    name = STATUSES[code] if 0 <= code < len(STATUSES) else "exception"
+    message = text(result["message"])
+    if name != "ok":
+        ndim = int(status[2])
+        shape = tuple(int(s) for s in status[3:3 + ndim]) if 0 < ndim <= MAX_NDIM else None
+        return Answer(name, message, (), int(status[1]), shape if name == "shape" else None)
+    return Answer("ok", message, tuple(result[f"out{k}"] for k in range(n_outputs)))
+
+
+_CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f]")
+
+
+def text(data: np.ndarray) -> str:
+    """A message array from the box as printable text (NUL-padded UTF-8, control chars dropped)."""
+    raw = bytes(np.asarray(data, dtype=np.uint8)).split(b"\0", 1)[0]
+    return _CONTROL.sub("", raw.decode("utf-8", errors="replace"))[:300]
+
+
+class StudentError(Exception):
+    """Raised by a :func:`replay` where the student's function raised (its text is the message)."""
+
+
+def replay(reads: list[Read], answers: list[Answer], name: str, pick: int | None = None
+           ) -> Callable | None:
+    """A stand-in for the student's function ``name``: called with the arguments of one of its
+    reads, it gives back what the box returned for that read (output ``pick`` of a tuple, or all).
+
+    None when the student did not define it (the checkers report that as not defined).  A call
+    with arguments no read had is a bug of the grader: RuntimeError.
+    """
+    mine = [(r, a) for r, a in zip(reads, answers, strict=True) if r.name == name]
+    if mine and all(a.status == "not-defined" for _, a in mine):
+        return None
+
+    def stand_in(*args: object) -> object:
+        arrays = [np.asarray(a, dtype=float) for a in args]
+        for r, a in mine:
+            if len(r.args) == len(arrays) and all(
+                    x.shape == np.shape(y) and np.array_equal(x, y, equal_nan=True)
+                    for x, y in zip(arrays, r.args, strict=True)):
+                return _give(a, pick, r, name)
+        raise RuntimeError(f"grader bug: {name} was called with arguments no read of the box "
+                           f"had")
+
+    return stand_in
+
+
+def _give(a: Answer, pick: int | None, r: Read, name: str) -> object:
+    if a.status == "ok":
+        return a.values[pick] if pick is not None else (
+            a.values[0] if len(a.values) == 1 else tuple(a.values))
+    if a.status == "returns-none":
+        return None
+    if a.status == "shape":
+        bad = np.full(a.shape or (0,), np.nan)
+        if len(r.shapes) == 1:
+            return bad
+        out = [np.zeros(s) for s in r.shapes]
+        out[a.which] = bad
+        return out[pick] if pick is not None else tuple(out)
+    if a.status == "return-value":
+        return a.message or "something else"
+    if a.status == "not-run":
+        raise StudentError("it did not return: the notebook stopped before (see above)")
+    raise StudentError(a.message or f"{name} could not be called ({a.status})")
+
+
+def value(report: Report, name: str, a: Answer) -> np.ndarray | None:
+    """The variable ``name`` the box read, or None with a finding (not defined, wrong shape)."""
+    if a.status == "ok":
+        return a.values[0]
+    if a.status in ("not-defined", "not-run"):
+        report.add("not-defined", f"{name} is not defined (or still `...`) after the notebook "
+                   f"has run.")
+    elif a.status == "shape":
+        report.add("shape", f"{name} has shape {a.shape}; see the question for its shape.")
+    else:
+        report.add("not-a-matrix", f"{name} must be numbers; np.array({name}, dtype=float) "
+                   f"fails ({a.message}).")
+    return None
+
+
+@dataclass(frozen=True)
+class Question:
+    """One graded question of a homework.
+
+    name, points : as in the master's ``# BEGIN QUESTION`` cell.
+    reads : the reads for a draw (empty for a file question).
+    grade : the report from the draw and the answers (run outside the box, after it is empty).
+    file : a question graded from the file the notebook writes with ``%%writefile FILE`` (its
+        text, read from the notebook, runs in a box of its own without gpsaccel); then
+        ``grade_file(path, draw, timeout)`` gives the report.
+    """
+
+    name: str
+    points: float
+    reads: Callable[[Draw], list[Read]] = lambda draw: []
+    grade: Callable[[Draw, list[Answer]], Report] | None = None
+    file: str | None = None
+    grade_file: Callable[..., Report] | None = None
+
+
+def variant_number(secret: bytes, assignment: str, student: str) -> int:
+    """The student's variant: HMAC-SHA256(secret, assignment ␀ student id), as a 63-bit integer.
+
+    Without the secret nobody can derive anyone's variant; with it, the instructor always gets
+    the same one for the same student.
+    """
+    mac = hmac.new(secret, f"{assignment}\0{student}".encode(), hashlib.sha256).digest()
+    return int.from_bytes(mac[:8], "big") >> 1
+
+
+def question_seed(seed: int, assignment: str, question: str, student: str) -> int:
+    """The seed of one question's fresh data for one student, from the grading run's seed."""
+    digest = hashlib.sha256(f"{seed}\0{assignment}\0{question}\0{student}".encode()).digest()
+    return int.from_bytes(digest[:8], "big") >> 1
