@@ -318,7 +318,8 @@ def test_grades_csv_is_the_graders(attacked):
 def test_the_limits_name_the_attack(attacked):
     g = attacked["grades"]
     assert g["fork flood"].status == "process-limit"
-    assert "cell 2" in g["fork flood"].feedback
+    # the box is stopped where the count caught it: in its cell, or at a later read
+    assert "The notebook stopped " in g["fork flood"].feedback
     assert g["forged frames"].status == "result-refused"
     assert "MemoryError" in g["memory flood"].feedback
 
