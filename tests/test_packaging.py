@@ -194,18 +194,43 @@ def _uv() -> str | None:
     return shutil.which("uv")
 
 
-#: The extra the wheel is installed with: none, so the steps below show that the core alone does
-#: them; the homework's steps (``assignment``, ``grade``) need "[grading]" here.
+#: The extra the wheel is installed with first: none, so the steps below show that the core alone
+#: does them; the instructor's steps (HOMEWORK_STEPS) add "[grading]" to the same environment.
 WHEEL_EXTRA = ""
 
 #: What a user does from the installed wheel, in a folder outside the repository: (name, argv,
-#: what the output must hold).  The homework's steps (``assignment``, ``grade``) go here too.
+#: what the output must hold).
 WHEEL_STEPS: list[tuple[str, list[str], str]] = [
     ("version", ["--version"], f"gpsaccel {gpsaccel.__version__}"),
     ("copy the lessons", ["lessons", "--copy", "course"], "notebooks into course"),
     ("check a homework file", ["check", str(ROOT / "tests/submissions/correct_joseph.py"),
                                "--runs", "2", "--sandbox", "basic"], "1 submissions"),
 ]
+
+
+#: The instructor's steps, after ``[grading]`` is added to the same environment, with the masters
+#: in a folder of the instructor's own (a copy of the repository's ``assignments/``, named by
+#: ``$GPSACCEL_ASSIGNMENTS``: the wheel carries only the student side) and a class of one honest
+#: student in LMS layout (a folder named with a space).
+HOMEWORK_STEPS: list[tuple[str, list[str], str]] = [
+    ("generate a homework", ["assignment", "calibration", "--out", "dist/calibration",
+                             "--no-run-tests"], "hand out:"),
+    ("grade a class", ["grade", "--assignment", "calibration", "class"], "10 / 10  graded"),
+]
+
+
+def _solved_notebook(name: str, target: Path) -> None:
+    """An honest student's notebook of homework ``name`` (the homework tests' own maker)."""
+    import importlib.util
+
+    import nbformat
+
+    spec = importlib.util.spec_from_file_location("_homework_conftest",
+                                                  ROOT / "tests" / "assignments" / "conftest.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    target.parent.mkdir(parents=True)
+    nbformat.write(module.solved(name), str(target))
 
 
 @pytest.mark.slow
@@ -239,3 +264,27 @@ def test_the_wheel_in_a_fresh_environment_outside_the_repository(tmp_path):
                   for p in [*(ROOT / "lessons").glob("*.ipynb"),
                             *(ROOT / "lessons").glob("solutions/*.ipynb")])
     assert shipped == repo and not any(p.startswith("masters/") for p in shipped)
+    # the student side of the homework is in the wheel, the masters and graded questions are not
+    files = subprocess.run([str(venv / "bin" / "python"), "-c",
+                            "import importlib.resources as r; root = r.files('gpsaccel'); "
+                            "print(*(p.name for p in root.joinpath('assignments', 'student')"
+                            ".iterdir()))"], cwd=work, env=env, capture_output=True, text=True,
+                           check=True).stdout.split()
+    assert sorted(files) == ["calibration", "coop", "ship"]
+    installed = Path(where[0]).parent
+    assert not list(installed.rglob("graded.py")) and not list(installed.rglob("*master*"))
+    # an instructor: the grading extra, the masters from a folder of their own, a class
+    subprocess.run([_uv(), "pip", "install", "-q", "--python", str(venv / "bin" / "python"),
+                    f"{wheel}[grading]"], check=True, timeout=240)
+    instructor = tmp_path / "instructor"
+    instructor.mkdir()
+    shutil.copytree(ROOT / "assignments", instructor / "masters")
+    _solved_notebook("calibration", instructor / "class" / "Alice Smith" / "calibration.ipynb")
+    env["GPSACCEL_ASSIGNMENTS"] = str(instructor / "masters")
+    for name, argv, expected in HOMEWORK_STEPS:
+        proc = subprocess.run([str(venv / "bin" / "gpsaccel"), *argv], cwd=instructor, env=env,
+                              capture_output=True, text=True, timeout=400)
+        assert proc.returncode == 0 and expected in proc.stdout, (name, proc.stdout, proc.stderr)
+    assert (instructor / "dist" / "calibration" / "student" / "calibration.ipynb").is_file()
+    assert (instructor / "class-grades" / "grades.csv").read_text().splitlines()[-1].startswith(
+        "Alice Smith,")

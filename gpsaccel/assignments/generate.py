@@ -9,6 +9,7 @@ and returns the student notebook (solutions stripped, public tests only) and the
 
 from __future__ import annotations
 
+import os
 import shutil
 import subprocess
 import sys
@@ -22,8 +23,18 @@ import yaml
 ASSIGNMENTS = ("calibration", "coop", "ship")
 
 
+#: Environment variable naming the instructor's folder of masters (``NAME/NAME.ipynb`` and
+#: ``NAME/graded.py``, as in the repository's ``assignments/``), for an instructor who installed
+#: the wheel: the masters are never in it.
+ASSIGNMENTS_ENV = "GPSACCEL_ASSIGNMENTS"
+
+
 def assignments_dir() -> Path:
-    """The ``assignments/`` folder of a source checkout."""
+    """The instructor's masters: ``$GPSACCEL_ASSIGNMENTS`` when set, else the ``assignments/``
+    folder of a source checkout."""
+    env = os.environ.get(ASSIGNMENTS_ENV)
+    if env:
+        return Path(env).expanduser().resolve()
     return Path(__file__).resolve().parents[2] / "assignments"
 
 
@@ -33,8 +44,9 @@ def master_notebook(name: str) -> Path:
         raise ValueError(f"assignment must be one of {', '.join(ASSIGNMENTS)}, got {name!r}")
     path = assignments_dir() / name / f"{name}.ipynb"
     if not path.is_file():
-        raise FileNotFoundError(f"master notebook {path} not found (the assignments ship with a "
-                                f"source checkout of gpsaccel, not with the wheel)")
+        raise FileNotFoundError(f"master notebook {path} not found (the masters ship with a "
+                                f"source checkout of gpsaccel, not with the wheel: point "
+                                f"${ASSIGNMENTS_ENV} at a copy of its assignments/ folder)")
     return path
 
 

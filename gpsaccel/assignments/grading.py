@@ -110,7 +110,8 @@ def assignment_module(name: str):
     path = assignments_dir() / name / "graded.py"
     if not path.is_file():
         raise FileNotFoundError(f"{path} not found: grading needs a source checkout of gpsaccel "
-                                f"(the graded questions and the masters are not in the wheel)")
+                                f"or $GPSACCEL_ASSIGNMENTS naming a copy of its assignments/ "
+                                f"folder (the graded questions and the masters are not in the wheel)")
     spec = importlib.util.spec_from_file_location(key, path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[key] = module
