@@ -329,27 +329,42 @@ def _short(x) -> str:
 # --------------------------------------------------------------------------------------------------
 # Sliders: ipywidgets in JupyterLab, the default drawn once when there is no front end
 
-def sliders(callback, **controls):
-    """An interactive cell: ``controls`` are ipywidgets (or ``interact`` abbreviations).
+def sliders(callback, **controls) -> None:
+    """An interactive cell: ``controls`` are ipywidgets, each opening at the lesson's number.
 
-    In JupyterLab the sliders appear and every change re-runs ``callback(**values)``.  Without a
-    front end (``gpsaccel lessons``, the tests, the HTML pages; :data:`HEADLESS_VARIABLE` set)
-    ``callback`` runs once with the default values, so its figure and text are in the output.
-    Either way the time of the default call is printed: a slider should answer within a second.
+    In JupyterLab the sliders appear (labels in full: ``description_width: initial``) and every
+    change re-runs ``callback(**values)``; nothing else is printed (no ``<function …>`` repr: the
+    cell's value is None).  Without a front end (``gpsaccel lessons``, the tests, the HTML pages;
+    :data:`HEADLESS_VARIABLE` set) ``callback`` runs once with the default values, so its figure
+    and text are in the output.  A control whose widget would open elsewhere than the callback's
+    default (a log slider's steps miss 4e-4 and show 3.98e-4) is refused: use a SelectionSlider
+    whose options include the lesson's number.
     """
+    import inspect
     import time
 
-    defaults = {k: getattr(c, "value", c) for k, c in controls.items()}
+    defaults = {k: p.default for k, p in inspect.signature(callback).parameters.items()
+                if p.default is not inspect.Parameter.empty}
+    for k, c in controls.items():
+        value = getattr(c, "value", c)
+        if k in defaults and value != defaults[k]:
+            raise ValueError(f"sliders: control {k!r} opens at {value!r}, but {callback.__name__}'s "
+                             f"default (the lesson's number) is {defaults[k]!r}")
+        if hasattr(c, "style") and hasattr(c.style, "description_width"):
+            c.style.description_width = "initial"
+    values = {k: getattr(c, "value", c) for k, c in controls.items()}
     if os.environ.get(HEADLESS_VARIABLE):
         t0 = time.perf_counter()
-        result = callback(**defaults)
-        values = ", ".join(f"{k} = {v}" for k, v in defaults.items())
-        print(f"(sliders in JupyterLab; here drawn once with {values}: "
+        result = callback(**values)
+        shown = ", ".join(f"{k} = {v}" for k, v in values.items())
+        print(f"(sliders in JupyterLab; here drawn once with {shown}: "
               f"{time.perf_counter() - t0:.2f} s)")
-        return _display(result)
+        _display(result)
+        return None
     import ipywidgets
 
-    return ipywidgets.interact(callback, **controls)
+    ipywidgets.interact(callback, **controls)
+    return None
 
 
 def _display(result):
@@ -361,3 +376,292 @@ def _display(result):
 
     display(result)
     return None
+
+
+# --------------------------------------------------------------------------------------------------
+# Release: one master, two versions (the way nbgrader and otter build a student release)
+#
+# lessons/masters/NN-topic.ipynb      the source; holds the solutions
+# lessons/NN-topic.ipynb              the student version: no solution text, no outputs
+# lessons/solutions/NN-topic.ipynb    the solutions version (the rendered site's source)
+# lessons/measured/NN-topic.json      measured at the lesson's full size: running time, printed text
+#
+# Cell tags in a master: ``solution`` (code or markdown: removed from the student version),
+# ``answer`` (the student's ``answer_… = None`` cell: removed from the solutions version, where the
+# solution assigns ``answer_…``) and ``check`` (one ``check("NN.k", answer_k)`` line; in the
+# solutions version it moves below the solution, so it shows ✓).
+
+SOLUTION, ANSWER, CHECK = "solution", "answer", "check"
+
+#: A number the text quotes from the lesson's own output is written ``[[0.687]]`` in the master:
+#: the release writes it plainly, and a test finds it, digit for digit, in the measured output.
+PRINTED = re.compile(r"\[\[([^\[\]]+)\]\]")
+
+#: The line the release writes (from lessons/measured/) under each lesson's title.
+_TIME_LINE = re.compile(r"^\*Running time:.*\*$", re.M)
+
+#: What JupyterLab 4 writes into a notebook's metadata on save (kernel ipykernel, Python).  The
+#: interpreter's version, which Lab also writes, differs between machines: :func:`pre_save` drops
+#: it, so a lesson saved from ``make lab`` is byte for byte what the release wrote.
+LAB_METADATA = {
+    "kernelspec": {"display_name": "Python 3 (ipykernel)", "language": "python", "name": "python3"},
+    "language_info": {"codemirror_mode": {"name": "ipython", "version": 3}, "file_extension": ".py",
+                      "mimetype": "text/x-python", "name": "python", "nbconvert_exporter": "python",
+                      "pygments_lexer": "ipython3"},
+}
+NBFORMAT_MINOR = 5
+
+_LESSON_NAME = re.compile(r"^(?:(?:masters|solutions)/)?\d\d[a-z]?-[\w.-]+\.ipynb$")
+
+
+def masters_dir() -> Path:
+    return lessons_dir() / "masters"
+
+
+def _tags(cell) -> list[str]:
+    return list(cell.get("metadata", {}).get("tags", []))
+
+
+def _clean(cell, hidden: bool = False):
+    """A copy of ``cell`` with no outputs, no execution count and the collapse flag set or gone."""
+    import copy
+
+    cell = copy.deepcopy(cell)
+    if cell["cell_type"] == "code":
+        cell["outputs"], cell["execution_count"] = [], None
+    meta = cell.setdefault("metadata", {})
+    jupyter = {k: v for k, v in meta.get("jupyter", {}).items() if k != "source_hidden"}
+    if hidden:
+        jupyter["source_hidden"] = True
+    if jupyter:
+        meta["jupyter"] = jupyter
+    else:
+        meta.pop("jupyter", None)
+    meta.pop("collapsed", None)
+    meta.pop("execution", None)
+    return cell
+
+
+def _fill_text(cell, stem: str, measured: dict | None):
+    """Markdown: ``[[number]]`` written plainly; the first cell gets its running-time line."""
+    if cell["cell_type"] != "markdown":
+        return cell
+    source = PRINTED.sub(r"\1", "".join(cell["source"]) if isinstance(cell["source"], list)
+                         else cell["source"])
+    if source.startswith("# "):
+        line = running_time_line(measured)
+        title, _, rest = source.partition("\n")
+        rest = _TIME_LINE.sub("", rest).lstrip("\n")
+        source = f"{title}\n\n{line}\n\n{rest}".rstrip("\n")
+    cell["source"] = source
+    return cell
+
+
+def running_time_line(measured: dict | None) -> str:
+    """The sentence under a lesson's title, from its measurement."""
+    if not measured:
+        return "*Running time: not measured yet (`python -m gpsaccel.lessons measure`).*"
+    s = measured["seconds"]
+    said = f"{max(5, 5 * round(s / 5)):.0f} s" if s < 90 else f"{s / 60:.1f} min"
+    return (f"*Running time: about {said} for Run All on one unloaded core of a 2-core machine "
+            f"(measured {s:.0f} s); a slider redraws within about a second.*")
+
+
+def _notebook(cells, nb):
+    import nbformat
+
+    out = nbformat.v4.new_notebook()
+    out.cells = cells
+    out.metadata = json.loads(json.dumps(LAB_METADATA))
+    for key, value in nb.metadata.items():
+        if key not in ("kernelspec", "language_info", "widgets"):
+            out.metadata[key] = value
+    out.nbformat, out.nbformat_minor = 4, NBFORMAT_MINOR
+    return out
+
+
+def student_version(nb, stem: str, measured: dict | None = None):
+    """No cell tagged ``solution``; outputs cleared (a student's first Run All is theirs, and the
+    committed file stays what ``git pull`` can update); nothing collapsed."""
+    cells = [_fill_text(_clean(c), stem, measured) for c in nb.cells if SOLUTION not in _tags(c)]
+    return _notebook(cells, nb)
+
+
+def solutions_version(nb, stem: str, measured: dict | None = None):
+    """Every cell but the ``answer`` ones; each ``check`` below the solution cells that follow it
+    (so it checks the solution's ``answer_…``); solutions collapsed; outputs cleared."""
+    cells, pending = [], []
+    for c in nb.cells:
+        tags = _tags(c)
+        if ANSWER in tags:
+            continue
+        if CHECK in tags:
+            pending.append(_fill_text(_clean(c), stem, measured))
+            continue
+        if SOLUTION not in tags and pending:
+            cells += pending
+            pending = []
+        cells.append(_fill_text(_clean(c, hidden=SOLUTION in tags), stem, measured))
+    return _notebook(cells + pending, nb)
+
+
+def lab_text(nb) -> str:
+    """The notebook as JupyterLab's server writes it: nbformat's JSON (indent 1, sorted keys,
+    non-ASCII kept) and a trailing newline."""
+    import nbformat
+
+    text = nbformat.writes(nb, version=4)
+    return text if text.endswith("\n") else text + "\n"
+
+
+def measured(stem: str) -> dict | None:
+    path = lessons_dir() / "measured" / f"{stem}.json"
+    return json.loads(path.read_text(encoding="utf-8")) if path.exists() else None
+
+
+def released(master: Path) -> dict[Path, str]:
+    """What the release writes for ``master``: {target path: text}."""
+    import nbformat
+
+    nb = nbformat.read(master, as_version=4)
+    stem, m = master.stem, measured(master.stem)
+    return {lessons_dir() / master.name: lab_text(student_version(nb, stem, m)),
+            lessons_dir() / "solutions" / master.name: lab_text(solutions_version(nb, stem, m))}
+
+
+def masters(only: list[str] | None = None) -> list[Path]:
+    """Every master (any ``NN-topic.ipynb`` in lessons/masters/), or those starting with ``only``."""
+    paths = sorted(masters_dir().glob("*.ipynb"))
+    if only:
+        paths = [p for p in paths if any(p.name.startswith(o) for o in only)]
+        if not paths:
+            raise ValueError(f"no master in {masters_dir()} starts with {' or '.join(only)}")
+    return paths
+
+
+def release(only: list[str] | None = None) -> list[Path]:
+    """Write the student and solutions versions of every master; returns the paths written."""
+    written = []
+    for master in masters(only):
+        for target, text in released(master).items():
+            target.parent.mkdir(parents=True, exist_ok=True)
+            if not target.exists() or target.read_text(encoding="utf-8") != text:
+                write_text(target, text)
+            written.append(target)
+    return written
+
+
+def code_digest(master: Path) -> str:
+    """SHA-256 of a master's code cells: a measurement is stale once it changes."""
+    import hashlib
+
+    import nbformat
+
+    nb = nbformat.read(master, as_version=4)
+    code = "\n\0".join(c.source for c in nb.cells if c.cell_type == "code")
+    return hashlib.sha256(code.encode()).hexdigest()
+
+
+def measure(only: list[str] | None = None) -> dict[str, float]:
+    """Run each master's solutions version at its full size: record its running time, the text its
+    cells print (lessons/measured/) and the answers its solutions give (gpsaccel/exercises/answers.py)."""
+    import time
+
+    import nbformat
+
+    from gpsaccel.exercises import RECORD_VARIABLE
+
+    times = {}
+    for master in masters(only):
+        nb = solutions_version(nbformat.read(master, as_version=4), master.stem, measured(master.stem))
+        with tempfile.TemporaryDirectory(prefix="gpsaccel-measure-") as tmp:
+            path = masters_dir() / f".measure-{master.name}"
+            record = Path(tmp) / "answers.jsonl"
+            path.write_text(lab_text(nb), encoding="utf-8")
+            os.environ[RECORD_VARIABLE] = str(record)
+            try:
+                t0 = time.perf_counter()
+                done = execute(path, timeout=900)
+                seconds = time.perf_counter() - t0
+            finally:
+                os.environ.pop(RECORD_VARIABLE, None)
+                path.unlink()
+            answers = [json.loads(line) for line in record.read_text().splitlines()] \
+                if record.exists() else []
+        printed = ["".join(_output_text(o) for o in c.get("outputs", []))
+                   for c in done.cells if c.cell_type == "code"]
+        data = {"seconds": round(seconds, 1), "code_sha256": code_digest(master),
+                "printed": printed}
+        target = lessons_dir() / "measured" / f"{master.stem}.json"
+        target.parent.mkdir(exist_ok=True)
+        write_text(target, json.dumps(data, indent=1, ensure_ascii=False) + "\n")
+        _write_answers(master.stem, answers)
+        times[master.stem] = seconds
+    return times
+
+
+def _output_text(output) -> str:
+    if output.get("output_type") == "stream":
+        return output.get("text", "")
+    data = output.get("data", {})
+    return data.get("text/plain", "") + "\n" if "text/plain" in data and "image/png" not in data else ""
+
+
+def _write_answers(stem: str, answers: list[dict]) -> None:
+    """Replace lesson ``stem``'s entries (keys ``NN.k``) in gpsaccel/exercises/answers.py."""
+    from gpsaccel.exercises import answers as module
+
+    prefix = stem.split("-")[0] + "."
+    table = {k: v for k, v in module.ANSWERS.items() if not k.startswith(prefix)}
+    for a in answers:
+        if not a["key"].startswith(prefix):
+            raise ValueError(f"{stem}: a check names exercise {a['key']!r}; its keys start {prefix!r}")
+        table[a["key"]] = a["value"]
+    lines = ['"""Generated by ``python -m gpsaccel.lessons measure`` from the masters\' solutions: '
+             'do not edit."""', "", "ANSWERS: dict = {"]
+    lines += [f"    {k!r}: {v!r}," for k, v in sorted(table.items())]
+    lines.append("}")
+    write_text(Path(module.__file__), "\n".join(lines) + "\n")
+    module.ANSWERS = table
+
+
+def pre_save(model, path, **kwargs) -> None:
+    """JupyterLab pre-save hook (``make lab`` sets it): a lesson is saved without outputs, execution
+    counts or the interpreter's version, i.e. exactly as the release wrote it, so opening and
+    running one leaves ``git status`` clean.  Other notebooks are saved untouched."""
+    if model.get("type") != "notebook" or not _LESSON_NAME.match(path.lstrip("/")):
+        return
+    nb = model["content"]
+    nb.get("metadata", {}).get("language_info", {}).pop("version", None)
+    nb.get("metadata", {}).pop("widgets", None)
+    for cell in nb.get("cells", []):
+        if cell.get("cell_type") == "code":
+            cell["outputs"], cell["execution_count"] = [], None
+        cell.get("metadata", {}).pop("execution", None)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m gpsaccel.lessons release|measure|check [NN ...]``."""
+    import argparse
+
+    p = argparse.ArgumentParser(prog="python -m gpsaccel.lessons", description=main.__doc__)
+    p.add_argument("command", choices=("release", "measure", "check"),
+                   help="release: write lessons/ and lessons/solutions/ from lessons/masters/; "
+                        "measure: run each master at full size (time, printed text, answers), then "
+                        "release; check: exit 1 if a released file differs from its master")
+    p.add_argument("only", nargs="*", metavar="NN", help="only the masters starting with these")
+    args = p.parse_args(argv)
+    if args.command == "measure":
+        for stem, s in measure(args.only).items():
+            print(f"{stem:<40} {s:6.1f} s")
+    if args.command in ("release", "measure"):
+        print(f"wrote {len(release(args.only))} notebooks")
+        return 0
+    stale = [str(t) for m in masters(args.only) for t, text in released(m).items()
+             if not t.exists() or t.read_text(encoding="utf-8") != text]
+    print("\n".join(stale) or "every released lesson matches its master")
+    return 1 if stale else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
