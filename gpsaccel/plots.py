@@ -47,7 +47,14 @@ def finish(ax: Axes, title: str, xlabel: str, ylabel: str, legend: bool = True) 
     ax.set_ylabel(ylabel)
     ax.grid(True, alpha=0.3)
     if legend and ax.get_legend_handles_labels()[0]:
-        ax.legend(loc="best", fontsize="small")
+        outside_legend(ax)
+
+
+def outside_legend(ax: Axes, **kwargs) -> None:
+    """The legend to the right of the axes, never over the data ("best" still covers a panel
+    whose data fill it: the NEES bands, the stacked accelerations)."""
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
+              **{"fontsize": "small", **kwargs})
 
 
 def error_band(t: np.ndarray, error: np.ndarray, sigma: np.ndarray, k: float = 1.0, *,
@@ -226,7 +233,7 @@ def errors_with_sigma(run, result, states: Sequence[int] = (0, 1, 2), k: float =
                    label=f"{name} − {name}̂", unit=unit, ax=ax)
         if shade is not None:
             ax.axvspan(*shade, color=STYLE["measurement"], alpha=0.3, lw=0, label="no GPS")
-            ax.legend(loc="best", fontsize="small")
+            outside_legend(ax)
         if ax is not axs[-1]:
             ax.set_xlabel("")
     return fig
@@ -346,7 +353,7 @@ def system_diagram(ax: Axes | None = None) -> Figure:
     def arrow(x0, y0, x1, y1, text="", dx=0.0, dy=0.12, ha="center"):
         ax.annotate("", (x1, y1), (x0, y0), arrowprops={"arrowstyle": "->", "lw": 1.2})
         if text:
-            ax.text((x0 + x1) / 2 + dx, (y0 + y1) / 2 + dy, text, ha=ha, fontsize="x-small")
+            ax.text((x0 + x1) / 2 + dx, (y0 + y1) / 2 + dy, text, ha=ha, fontsize="small")
 
     arrow(2.2, 2.8, 3.0, 3.85, "a(t)", dx=-0.25)
     arrow(2.2, 2.4, 3.0, 1.25, "p, v", dx=-0.25, dy=-0.2)
