@@ -273,57 +273,11 @@ def write_index(out: Path | str) -> Path:
 
 
 # --------------------------------------------------------------------------------------------------
-# Exercises: a self-check a student runs on their own answer
+# The kernel without a front end (the self-checks are gpsaccel.exercises)
 
 #: Set in the kernel's environment by :func:`execute`: the notebook runs without a front end, so a
 #: slider cell draws its default once instead of showing widgets nobody can move.
 HEADLESS_VARIABLE = "GPSACCEL_HEADLESS"
-
-
-def check_answer(answer, expected, *, name: str = "your answer", rtol: float = 1e-6,
-                 atol: float = 0.0, why: str = "") -> bool | None:
-    """Say whether ``answer`` (a number or an array) equals ``expected`` within ``rtol``/``atol``.
-
-    Prints one line a student can act on: ✓, or ✗ with the shape or the largest difference (where,
-    by how much) and ``why`` (the hint: what the right answer depends on).  ``None`` means not
-    answered yet.  Returns True, False, or None when there is no answer.
-    """
-    import numpy as np
-
-    if answer is None:
-        print(f"… {name}: not answered yet (replace the None above with your answer)")
-        return None
-    try:
-        a = np.asarray(answer, dtype=float)
-    except (TypeError, ValueError):
-        print(f"✗ {name}: expected a number or an array of numbers, got {type(answer).__name__}")
-        return False
-    e = np.asarray(expected, dtype=float)
-    if a.shape != e.shape:
-        print(f"✗ {name}: shape {a.shape}, expected {e.shape}")
-        return False
-    if not np.all(np.isfinite(a)):
-        print(f"✗ {name}: contains NaN or inf")
-        return False
-    diff = np.abs(a - e)
-    tol = atol + rtol * np.abs(e)
-    if np.all(diff <= tol):
-        print(f"✓ {name}: right" + (f" ({_short(a)})" if a.size <= 4 else ""))
-        return True
-    k = np.unravel_index(np.argmax(diff - tol), diff.shape) if diff.ndim else ()
-    where = f" at {tuple(int(i) for i in k)}" if k else ""
-    print(f"✗ {name}: {_short(a[k])}{where}, expected {_short(e[k])} "
-          f"(off by {diff[k]:.3g}, tolerance {tol[k]:.3g})" + (f". Hint: {why}" if why else ""))
-    return False
-
-
-def _short(x) -> str:
-    import numpy as np
-
-    x = np.asarray(x)
-    if x.ndim == 0:
-        return f"{float(x):.6g}"
-    return np.array2string(x, precision=4, separator=", ")
 
 
 # --------------------------------------------------------------------------------------------------
@@ -346,7 +300,7 @@ def sliders(callback, **controls) -> None:
     defaults = {k: p.default for k, p in inspect.signature(callback).parameters.items()
                 if p.default is not inspect.Parameter.empty}
     for k, c in controls.items():
-        value = getattr(c, "value", c)
+        value = _opens_at(c)
         if k in defaults and value != defaults[k]:
             raise ValueError(f"sliders: control {k!r} opens at {value!r}, but {callback.__name__}'s "
                              f"default (the lesson's number) is {defaults[k]!r}")
@@ -365,6 +319,23 @@ def sliders(callback, **controls) -> None:
 
     ipywidgets.interact(callback, **controls)
     return None
+
+
+def _opens_at(control):
+    """The value a slider shows when the front end draws it: JupyterLab snaps a slider's value to
+    its steps (a FloatLogSlider to base**(min + k·step)), and sends the snapped value back."""
+    import math
+
+    value = getattr(control, "value", control)
+    step, lo = getattr(control, "step", None), getattr(control, "min", None)
+    if not step or lo is None or not isinstance(value, int | float) or isinstance(value, bool):
+        return value
+    base = getattr(control, "base", None)
+    position = (math.log(value, base) - lo) / step if base else (value - lo) / step
+    if abs(position - round(position)) < 1e-9:
+        return value
+    snapped = lo + round(position) * step
+    return float(f"{base ** snapped if base else snapped:.6g}")
 
 
 def _display(result):
@@ -442,8 +413,19 @@ def _clean(cell, hidden: bool = False):
     return cell
 
 
+#: A code cell that took at least this long (s) when measured says so in its first line.
+SLOW_CELL = 5.0
+
+
 def _fill_text(cell, stem: str, measured: dict | None):
-    """Markdown: ``[[number]]`` written plainly; the first cell gets its running-time line."""
+    """Markdown: ``[[number]]`` written plainly; the first cell gets its running-time line.  Code:
+    a cell measured at :data:`SLOW_CELL` seconds or more starts with ``# ⏱ about N s``."""
+    if cell["cell_type"] == "code":
+        seconds = (measured or {}).get("cell_seconds", {}).get(cell.get("id", ""), 0.0)
+        if seconds >= SLOW_CELL:
+            note = f"# ⏱ about {_rounded(seconds)} (measured): the output appears when it is done"
+            cell["source"] = note + "\n" + cell["source"]
+        return cell
     if cell["cell_type"] != "markdown":
         return cell
     source = PRINTED.sub(r"\1", "".join(cell["source"]) if isinstance(cell["source"], list)
@@ -462,9 +444,13 @@ def running_time_line(measured: dict | None) -> str:
     if not measured:
         return "*Running time: not measured yet (`python -m gpsaccel.lessons measure`).*"
     s = measured["seconds"]
-    said = f"{max(5, 5 * round(s / 5)):.0f} s" if s < 90 else f"{s / 60:.1f} min"
-    return (f"*Running time: about {said} for Run All on one unloaded core of a 2-core machine "
-            f"(measured {s:.0f} s); a slider redraws within about a second.*")
+    return (f"*Running time: about {_rounded(s)} for Run All (measured {s:.0f} s on a shared 2-core "
+            f"machine at load {measured.get('load', 0):.1f}; an unloaded laptop is faster).*")
+
+
+def _rounded(seconds: float) -> str:
+    """A duration as a lesson states it: 5 s steps up to 90 s, then minutes to one decimal."""
+    return f"{max(5, 5 * round(seconds / 5)):.0f} s" if seconds < 90 else f"{seconds / 60:.1f} min"
 
 
 def _notebook(cells, nb):
@@ -583,6 +569,7 @@ def measure(only: list[str] | None = None) -> dict[str, float]:
                 t0 = time.perf_counter()
                 done = execute(path, timeout=900)
                 seconds = time.perf_counter() - t0
+                load = os.getloadavg()[0]
             finally:
                 os.environ.pop(RECORD_VARIABLE, None)
                 path.unlink()
@@ -590,7 +577,8 @@ def measure(only: list[str] | None = None) -> dict[str, float]:
                 if record.exists() else []
         printed = ["".join(_output_text(o) for o in c.get("outputs", []))
                    for c in done.cells if c.cell_type == "code"]
-        data = {"seconds": round(seconds, 1), "code_sha256": code_digest(master),
+        data = {"seconds": round(seconds, 1), "load": round(load, 1),
+                "code_sha256": code_digest(master), "cell_seconds": _cell_seconds(done),
                 "printed": printed}
         target = lessons_dir() / "measured" / f"{master.stem}.json"
         target.parent.mkdir(exist_ok=True)
@@ -598,6 +586,20 @@ def measure(only: list[str] | None = None) -> dict[str, float]:
         _write_answers(master.stem, answers)
         times[master.stem] = seconds
     return times
+
+
+def _cell_seconds(nb) -> dict[str, float]:
+    """{cell id: seconds} from the timing nbclient records in each executed code cell."""
+    from datetime import datetime
+
+    out = {}
+    for c in nb.cells:
+        timing = c.get("metadata", {}).get("execution", {})
+        start, end = timing.get("iopub.execute_input"), timing.get("shell.execute_reply")
+        if c.cell_type == "code" and start and end:
+            d = datetime.fromisoformat(end.rstrip("Z")) - datetime.fromisoformat(start.rstrip("Z"))
+            out[c["id"]] = round(d.total_seconds(), 1)
+    return out
 
 
 def _output_text(output) -> str:

@@ -34,7 +34,7 @@ def test_names_the_lessons_type_are_reachable_after_import_gpsaccel():
     assert callable(gpsaccel.check.model_matrices)
     assert callable(gpsaccel.calibration.compare.reference_filter)
     assert callable(gpsaccel.calibration.mistakes.mutant)
-    assert callable(gpsaccel.lessons.check_answer)
+    assert callable(gpsaccel.lessons.sliders)
     assert callable(gpsaccel.kalman.update.epoch_transition)
     import pytest
 

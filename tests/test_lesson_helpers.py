@@ -1,42 +1,42 @@
-"""The exercise self-check and the slider helper the lessons use."""
+"""The slider helper the lessons use."""
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
-from gpsaccel.lessons import HEADLESS_VARIABLE, check_answer, sliders
-
-
-def test_check_answer_says_right_wrong_and_why(capsys):
-    assert check_answer(None, 1.0, name="ex 1") is None
-    assert "not answered yet" in capsys.readouterr().out
-    assert check_answer(2.0000001, 2.0, rtol=1e-6) is True
-    assert "✓" in capsys.readouterr().out
-    assert check_answer([[1, 2], [3, 5]], np.array([[1, 2], [3, 4]]), why="look at (1, 1)") is False
-    out = capsys.readouterr().out
-    assert "✗" in out and "at (1, 1)" in out and "expected 4" in out and "Hint: look at (1, 1)" in out
-    assert check_answer([1, 2, 3], np.zeros(2)) is False
-    assert "shape (3,), expected (2,)" in capsys.readouterr().out
-    assert check_answer([np.nan], [1.0]) is False
-    assert "NaN" in capsys.readouterr().out
-    assert check_answer("seven", 7.0) is False
-    assert "expected a number" in capsys.readouterr().out
+from gpsaccel.lessons import HEADLESS_VARIABLE, sliders
 
 
 def test_sliders_draw_the_default_once_without_a_front_end(monkeypatch, capsys):
     widgets = pytest.importorskip("ipywidgets")
     monkeypatch.setenv(HEADLESS_VARIABLE, "1")
     calls = []
-    sliders(lambda a, b: calls.append((a, b)),
-            a=widgets.FloatSlider(value=0.5, min=0, max=1), b=widgets.IntSlider(value=3))
+    assert sliders(lambda a, b: calls.append((a, b)),
+                   a=widgets.FloatSlider(value=0.5, min=0, max=1), b=widgets.IntSlider(value=3)) is None
     assert calls == [(0.5, 3)]
     assert "drawn once with a = 0.5, b = 3" in capsys.readouterr().out
 
 
-def test_sliders_make_widgets_with_a_front_end(monkeypatch):
+def test_sliders_make_widgets_with_a_front_end_and_leave_no_repr(monkeypatch):
     widgets = pytest.importorskip("ipywidgets")
     monkeypatch.delenv(HEADLESS_VARIABLE, raising=False)
     calls = []
-    sliders(lambda a: calls.append(a), a=widgets.FloatSlider(value=0.25, min=0, max=1))
+    s = widgets.FloatSlider(value=0.25, min=0, max=1, description="GPS every (steps)")
+    assert sliders(lambda a: calls.append(a), a=s) is None   # nothing for Jupyter to print
     assert calls == [0.25]          # interact runs the callback once with the default as well
+    assert s.style.description_width == "initial"           # the label in full
+
+
+def test_a_slider_that_cannot_open_at_the_lessons_number_is_refused(monkeypatch):
+    widgets = pytest.importorskip("ipywidgets")
+    monkeypatch.setenv(HEADLESS_VARIABLE, "1")
+
+    def tune(W=4e-4):
+        return None
+
+    log = widgets.FloatLogSlider(value=4e-4, base=10, min=-6, max=-1)   # Lab shows 10^-3.4
+    with pytest.raises(ValueError, match="control 'W' opens at 0.000398.*default .* is 0.0004"):
+        sliders(tune, W=log)
+    sliders(tune, W=widgets.SelectionSlider(options=[1e-4, 4e-4, 1e-3], value=4e-4))
+    with pytest.raises(ValueError, match="opens at 0.35"):
+        sliders(lambda x=0.37: None, x=widgets.FloatSlider(value=0.37, min=0, max=1, step=0.05))

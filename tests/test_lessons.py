@@ -1,30 +1,190 @@
-"""Every lesson executes top to bottom with a small ensemble (GPSACCEL_LESSON_RUNS)."""
+"""The lessons: one master each (lessons/masters/), released as a student version (lessons/) without
+any solution and a solutions version (lessons/solutions/); both are exactly what the release step
+writes, so they cannot drift from the master.  The masters run (as their solutions version, at a
+small ensemble) with ✓ under every self-check; the student versions run with no answer printed."""
 
 from __future__ import annotations
 
+import ast
 import json
+import re
 
+import nbformat
 import pytest
 
-from gpsaccel.lessons import execute, lessons_dir
+from gpsaccel import lessons as L
+from gpsaccel.exercises.answers import ANSWERS
 
-LESSONS = sorted(lessons_dir().glob("*.ipynb"))
-SMALL_RUNS = 40
-
-
-def test_lessons_exist():
-    assert LESSONS, "lessons/ holds no notebook"
-
-
-@pytest.mark.parametrize("path", LESSONS, ids=[p.stem for p in LESSONS])
-def test_lesson_is_committed_without_outputs(path):
-    nb = json.loads(path.read_text(encoding="utf-8"))
-    for cell in nb["cells"]:
-        if cell["cell_type"] == "code":
-            assert not cell.get("outputs"), f"{path.name}: a code cell carries stored output"
-            assert cell.get("execution_count") is None, f"{path.name}: stale execution count"
+MASTERS = L.masters()
+IDS = [p.stem for p in MASTERS]
+SMALL_RUNS = 20
+_CHECK_CALL = re.compile(r'self_check\("([^"]+)",\s*(answer_\w+)')
 
 
-@pytest.mark.parametrize("path", LESSONS, ids=[p.stem for p in LESSONS])
-def test_lesson_executes(path):
-    execute(path, timeout=300, runs=SMALL_RUNS)
+def _nb(path):
+    return nbformat.read(path, as_version=4)
+
+
+def _tagged(nb, tag):
+    return [c for c in nb.cells if tag in c.metadata.get("tags", [])]
+
+
+def test_masters_exist():
+    assert len(MASTERS) >= 12
+
+
+@pytest.mark.parametrize("master", MASTERS, ids=IDS)
+def test_released_versions_are_exactly_what_the_release_step_writes(master):
+    for target, text in L.released(master).items():
+        assert target.exists(), f"{target} missing: run `python -m gpsaccel.lessons release`"
+        assert target.read_text(encoding="utf-8") == text, \
+            f"{target} differs from its master: run `python -m gpsaccel.lessons release`"
+
+
+def test_no_released_file_without_a_master():
+    stems = {p.stem for p in MASTERS}
+    for folder in (L.lessons_dir(), L.lessons_dir() / "solutions"):
+        orphans = {p.stem for p in folder.glob("*.ipynb")} - stems
+        assert not orphans, f"{folder}: {orphans} have no master"
+
+
+def _solution_lines(nb):
+    """The lines of the solution cells that say something (not a blank, a bracket, an import)."""
+    for c in _tagged(nb, L.SOLUTION):
+        for line in c.source.splitlines():
+            s = line.strip()
+            if len(s) >= 25 and not s.startswith(("import ", "from ", "#")):
+                yield s
+
+
+@pytest.mark.parametrize("master", MASTERS, ids=IDS)
+def test_student_version_carries_no_solution_text(master):
+    nb = _nb(master)
+    student = _nb(L.lessons_dir() / master.name)
+    text = "\n".join(c.source for c in student.cells)
+    shared = [s for s in _solution_lines(nb) if s in text
+              and not any(s in c.source for c in nb.cells if L.SOLUTION not in c.metadata.get("tags", []))]
+    assert not shared, f"{master.name}: solution text in the student version: {shared[:3]}"
+    assert not _tagged(student, L.SOLUTION)
+    for c in student.cells:
+        assert not c.get("outputs"), f"{master.name}: stored output in the student version"
+        assert not c.metadata.get("jupyter", {}).get("source_hidden"), "nothing is collapsed"
+
+
+@pytest.mark.parametrize("master", MASTERS, ids=IDS)
+def test_no_visible_text_announces_a_solution(master):
+    """A heading like "*Exercise 2, solution:* K₃₂" outside a solution cell states the answer."""
+    for c in _nb(master).cells:
+        if c.cell_type == "markdown" and L.SOLUTION not in c.metadata.get("tags", []):
+            assert not re.search(r"(?i)exercise \d+, solution|\*\*solution", c.source), \
+                f"{master.name}: visible cell announces a solution: {c.source[:80]!r}"
+
+
+@pytest.mark.parametrize("master", MASTERS, ids=IDS)
+def test_each_exercise_ends_with_its_answer_cell_and_self_check(master):
+    student = _nb(L.lessons_dir() / master.name).cells
+    prefix = master.stem.split("-")[0] + "."
+    for i, c in enumerate(student):
+        if L.CHECK in c.metadata.get("tags", []):
+            key, name = _CHECK_CALL.search(c.source).groups()
+            assert key.startswith(prefix), f"{master.name}: self-check key {key!r}"
+            assert key in ANSWERS, f"{key}: no recorded answer (python -m gpsaccel.lessons measure)"
+            before = student[i - 1]
+            assert L.ANSWER in before.metadata.get("tags", []) and \
+                before.source.startswith(f"{name} = None"), f"{key}: no answer cell right above"
+    solutions = _nb(L.lessons_dir() / "solutions" / master.name)
+    assert not _tagged(solutions, L.ANSWER)
+
+
+@pytest.mark.parametrize("master", MASTERS, ids=IDS)
+def test_solutions_never_need_a_name_only_a_solution_defines_later(master):
+    """Static: a non-solution cell after a solution must not read a name only solutions assign
+    (the student version, without them, would raise NameError)."""
+    nb = _nb(master)
+    defined_by = {"solution": set(), "other": set()}
+    for c in nb.cells:
+        if c.cell_type != "code":
+            continue
+        src = "\n".join(l for l in c.source.splitlines() if not l.startswith(("%", "!")))
+        tree = ast.parse(src)
+        kind = "solution" if L.SOLUTION in c.metadata.get("tags", []) else "other"
+        stored = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store)}
+        stored |= {n.name for n in ast.walk(tree) if isinstance(n, ast.FunctionDef | ast.ClassDef)}
+        stored |= {(a.asname or a.name).split(".")[0] for n in ast.walk(tree)
+                   if isinstance(n, ast.Import | ast.ImportFrom) for a in n.names}
+        if kind == "other":
+            loaded = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)}
+            only = (loaded & defined_by["solution"]) - defined_by["other"] - stored
+            assert not only, f"{master.name}: {sorted(only)} come only from a solution cell"
+        defined_by[kind] |= stored
+
+
+@pytest.mark.parametrize("master", MASTERS, ids=IDS)
+def test_lab_form(master):
+    """Saved as JupyterLab writes it: nbformat 4.5, ipykernel's kernelspec and language_info (no
+    interpreter version), indent 1, trailing newline; so opening one changes nothing."""
+    for path in L.released(master):
+        text = path.read_text(encoding="utf-8")
+        nb = json.loads(text)
+        assert (nb["nbformat"], nb["nbformat_minor"]) == (4, L.NBFORMAT_MINOR)
+        assert nb["metadata"]["kernelspec"] == L.LAB_METADATA["kernelspec"]
+        assert nb["metadata"]["language_info"] == L.LAB_METADATA["language_info"]
+        assert text == json.dumps(nb, indent=1, sort_keys=True, ensure_ascii=False) + "\n"
+
+
+@pytest.mark.parametrize("master", MASTERS, ids=IDS)
+def test_running_time_is_measured_on_the_current_code(master):
+    m = L.measured(master.stem)
+    assert m is not None, f"{master.name}: never measured (python -m gpsaccel.lessons measure)"
+    assert m["code_sha256"] == L.code_digest(master), \
+        f"{master.name}: its code changed since its running time was measured: measure it again"
+    first = _nb(L.lessons_dir() / master.name).cells[0].source
+    assert L.running_time_line(m) in first
+
+
+@pytest.mark.parametrize("master", MASTERS, ids=IDS)
+def test_numbers_the_text_quotes_are_printed_by_the_code(master):
+    """Every ``[[number]]`` of a master's text is, digit for digit, in what its cells printed
+    when it was measured at full size (on the current code: the test above)."""
+    m = L.measured(master.stem)
+    quoted = [q for c in _nb(master).cells if c.cell_type == "markdown" for q in L.PRINTED.findall(c.source)]
+    printed = "\n".join(m["printed"]) if m else ""
+    missing = [q for q in quoted if not re.search(rf"(?<![\d.]){re.escape(q)}(?![\d])", printed)]
+    assert not missing, f"{master.name}: the text quotes {missing}, which its code does not print"
+
+
+def test_pre_save_hook_saves_a_lesson_as_released():
+    nb = {"cells": [{"cell_type": "code", "execution_count": 3, "outputs": [{"output_type": "stream"}],
+                     "metadata": {"execution": {"x": 1}}, "source": "1"}],
+          "metadata": {"language_info": {"name": "python", "version": "3.12.1"}, "widgets": {}}}
+    model = {"type": "notebook", "content": json.loads(json.dumps(nb))}
+    L.pre_save(model, "03-multirate-filter.ipynb")
+    cell = model["content"]["cells"][0]
+    assert cell["outputs"] == [] and cell["execution_count"] is None and cell["metadata"] == {}
+    assert model["content"]["metadata"] == {"language_info": {"name": "python"}}
+    mine = {"type": "notebook", "content": json.loads(json.dumps(nb))}
+    L.pre_save(mine, "my-scratch.ipynb")
+    assert mine["content"] == nb                      # a student's own notebook is left alone
+
+
+def _outputs(cell) -> str:
+    return "".join(o.get("text", "") + o.get("data", {}).get("text/plain", "") for o in cell.outputs)
+
+
+@pytest.mark.parametrize("master", MASTERS, ids=IDS)
+def test_solutions_version_runs_with_a_tick_under_every_self_check(master):
+    nb = L.execute(L.lessons_dir() / "solutions" / master.name, timeout=600, runs=SMALL_RUNS)
+    for c in _tagged(nb, L.CHECK):
+        out = _outputs(c)
+        assert out.startswith("✓") and "\n" == out[-1] and out.count("\n") == 1, \
+            f"{master.name}: the self-check says {out!r} to the solution"
+
+
+@pytest.mark.parametrize("master", MASTERS, ids=IDS)
+def test_student_version_runs_and_shows_no_answer(master):
+    nb = L.execute(L.lessons_dir() / master.name, timeout=600, runs=SMALL_RUNS)
+    for c in nb.cells:
+        out = _outputs(c)
+        assert "<function" not in out, f"{master.name}: a stray repr {out[:80]!r}"
+        if L.CHECK in c.metadata.get("tags", []):
+            assert out.startswith("… ") and "not answered yet" in out and out.count("\n") == 1, out
