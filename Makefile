@@ -47,10 +47,14 @@ FAST_TESTS ?= tests/kalman tests/calibration tests/test_validation.py tests/test
 test-fast: $(VENV)/.installed-test
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q -m "not slow" $(if $(filter-out 0,$(JOBS)),-n $(JOBS)) $(FAST_TESTS)
 
-# LAB_FLAGS: e.g. --no-browser, --port 8890, or --allow-root inside a container run as root.
+# LAB_FLAGS: e.g. --no-browser, --port 8890.  As root (a container, a lab machine's image) JupyterLab
+# refuses to start without --allow-root: it is added when `id -u` is 0.  The pre-save hook saves a
+# lesson without its outputs, so opening and running one leaves `git status` clean (docs/lessons.md).
 LAB_FLAGS ?=
+LAB_ROOT  := $(if $(filter 0,$(shell id -u)),--allow-root,)
 lab: $(STAMP)
-	$(BIN)/jupyter lab --notebook-dir=lessons $(LAB_FLAGS)
+	$(BIN)/jupyter lab --notebook-dir=lessons \
+	    --FileContentsManager.pre_save_hook=gpsaccel.lessons.pre_save $(LAB_ROOT) $(LAB_FLAGS)
 
 # modules that type-check clean with mypy (issue 22); add a module here once it does
 MYPY_CLEAN := gpsaccel/registry.py gpsaccel/kalman gpsaccel/check/findings.py \

@@ -525,8 +525,35 @@ def masters(only: list[str] | None = None) -> list[Path]:
     return paths
 
 
+def lessons_table() -> str:
+    """The table of docs/lessons.md: each lesson, what it covers (its title) and its running time."""
+    import nbformat
+
+    rows = ["| lesson | covers | running time |", "|---|---|---|"]
+    for master in masters():
+        title = _title(nbformat.read(master, as_version=4)).split("—", 1)[-1].strip()
+        m = measured(master.stem)
+        said = f"about {_rounded(m['seconds'])}" if m else "not measured yet"
+        rows.append(f"| `{master.stem}` | {title} | {said} |")
+    return "\n".join(rows)
+
+
+_TABLE = re.compile(r"(<!-- lessons-table -->\n).*?(<!-- /lessons-table -->)", re.S)
+
+
+def docs_page() -> tuple[Path, str]:
+    """docs/lessons.md with its table as the release writes it."""
+    path = lessons_dir().parent / "docs" / "lessons.md"
+    text = path.read_text(encoding="utf-8")
+    return path, _TABLE.sub(lambda m: m.group(1) + lessons_table() + "\n" + m.group(2), text)
+
+
 def release(only: list[str] | None = None) -> list[Path]:
-    """Write the student and solutions versions of every master; returns the paths written."""
+    """Write the student and solutions versions of every master (and the table of
+    docs/lessons.md); returns the notebooks written."""
+    path, text = docs_page()
+    if path.read_text(encoding="utf-8") != text:
+        write_text(path, text)
     written = []
     for master in masters(only):
         for target, text in released(master).items():

@@ -41,6 +41,13 @@ def test_released_versions_are_exactly_what_the_release_step_writes(master):
             f"{target} differs from its master: run `python -m gpsaccel.lessons release`"
 
 
+def test_the_docs_table_is_what_the_release_writes():
+    path, text = L.docs_page()
+    assert path.read_text(encoding="utf-8") == text, "docs/lessons.md: run the release step"
+    for master in MASTERS:
+        assert f"`{master.stem}`" in text
+
+
 def test_no_released_file_without_a_master():
     stems = {p.stem for p in MASTERS}
     for folder in (L.lessons_dir(), L.lessons_dir() / "solutions"):
