@@ -517,7 +517,7 @@ def released(master: Path) -> dict[Path, str]:
 
 def masters(only: list[str] | None = None) -> list[Path]:
     """Every master (any ``NN-topic.ipynb`` in lessons/masters/), or those starting with ``only``."""
-    paths = sorted(masters_dir().glob("*.ipynb"))
+    paths = sorted(p for p in masters_dir().glob("*.ipynb") if _LESSON_NAME.match(p.name))
     if only:
         paths = [p for p in paths if any(p.name.startswith(o) for o in only)]
         if not paths:
@@ -588,7 +588,7 @@ def measure(only: list[str] | None = None) -> dict[str, float]:
     for master in masters(only):
         nb = solutions_version(nbformat.read(master, as_version=4), master.stem, measured(master.stem))
         with tempfile.TemporaryDirectory(prefix="gpsaccel-measure-") as tmp:
-            path = masters_dir() / f".measure-{master.name}"
+            path = Path(tmp) / master.name
             record = Path(tmp) / "answers.jsonl"
             path.write_text(lab_text(nb), encoding="utf-8")
             os.environ[RECORD_VARIABLE] = str(record)
@@ -599,7 +599,6 @@ def measure(only: list[str] | None = None) -> dict[str, float]:
                 load = os.getloadavg()[0]
             finally:
                 os.environ.pop(RECORD_VARIABLE, None)
-                path.unlink()
             answers = [json.loads(line) for line in record.read_text().splitlines()] \
                 if record.exists() else []
         printed = ["".join(_output_text(o) for o in c.get("outputs", []))
