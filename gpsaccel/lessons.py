@@ -443,9 +443,11 @@ def running_time_line(measured: dict | None) -> str:
     """The sentence under a lesson's title, from its measurement."""
     if not measured:
         return "*Running time: not measured yet (`python -m gpsaccel.lessons measure`).*"
-    s = measured["seconds"]
-    return (f"*Running time: about {_rounded(s)} for Run All (measured {s:.0f} s on a shared 2-core "
-            f"machine at load {measured.get('load', 0):.1f}; an unloaded laptop is faster).*")
+    s, runs = measured["seconds"], measured.get("runs")
+    size = "" if runs is None else (f" with {runs} runs per ensemble (`GPSACCEL_LESSON_RUNS={runs}`; "
+                                    "the lesson's full size takes longer)")
+    return (f"*Running time: about {_rounded(s)} for Run All{size} (measured {s:.0f} s on a shared "
+            f"2-core machine at load {measured.get('load', 0):.1f}; an unloaded laptop is faster).*")
 
 
 def _rounded(seconds: float) -> str:
@@ -575,9 +577,10 @@ def code_digest(master: Path) -> str:
     return hashlib.sha256(code.encode()).hexdigest()
 
 
-def measure(only: list[str] | None = None) -> dict[str, float]:
-    """Run each master's solutions version at its full size: record its running time, the text its
-    cells print (lessons/measured/) and the answers its solutions give (gpsaccel/exercises/answers.py)."""
+def measure(only: list[str] | None = None, runs: int | None = None) -> dict[str, float]:
+    """Run each master's solutions version at its full size (or ``runs`` per ensemble, said so in
+    the lesson): record its running time, the text its cells print (lessons/measured/) and the
+    answers its solutions give (gpsaccel/exercises/answers.py)."""
     import time
 
     import nbformat
@@ -594,7 +597,7 @@ def measure(only: list[str] | None = None) -> dict[str, float]:
             os.environ[RECORD_VARIABLE] = str(record)
             try:
                 t0 = time.perf_counter()
-                done = execute(path, timeout=900)
+                done = execute(path, timeout=900, runs=runs)
                 seconds = time.perf_counter() - t0
                 load = os.getloadavg()[0]
             finally:
@@ -603,7 +606,7 @@ def measure(only: list[str] | None = None) -> dict[str, float]:
                 if record.exists() else []
         printed = ["".join(_output_text(o) for o in c.get("outputs", []))
                    for c in done.cells if c.cell_type == "code"]
-        data = {"seconds": round(seconds, 1), "load": round(load, 1),
+        data = {"seconds": round(seconds, 1), "load": round(load, 1), "runs": runs,
                 "code_sha256": code_digest(master), "cell_seconds": _cell_seconds(done),
                 "printed": printed}
         target = lessons_dir() / "measured" / f"{master.stem}.json"
@@ -678,9 +681,11 @@ def main(argv: list[str] | None = None) -> int:
                         "measure: run each master at full size (time, printed text, answers), then "
                         "release; check: exit 1 if a released file differs from its master")
     p.add_argument("only", nargs="*", metavar="NN", help="only the masters starting with these")
+    p.add_argument("--runs", type=int, default=None,
+                   help="measure: runs per ensemble (default: each lesson's full size)")
     args = p.parse_args(argv)
     if args.command == "measure":
-        for stem, s in measure(args.only).items():
+        for stem, s in measure(args.only, runs=args.runs).items():
             print(f"{stem:<40} {s:6.1f} s")
     if args.command in ("release", "measure"):
         print(f"wrote {len(release(args.only))} notebooks")
