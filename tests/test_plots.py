@@ -137,3 +137,19 @@ def test_actual_vs_claimed_draws_exact_statistics():
     np.testing.assert_array_equal(_line(ax, "mistaken filter: claimed σ").get_ydata(),
                                   wrong.claimed_sigma[:, 1])
     assert ax.get_yscale() == "log"
+
+
+def test_legends_sit_beside_the_data_not_over_it():
+    """Lesson 9's NEES panels and 6-panel accelerations, lesson 11's slider figure: the legend of
+    every panel that has one lies right of its axes (``loc="best"`` still covered full panels)."""
+    t = np.arange(200.0)
+    fig, axs = plots.panels(2)
+    plots.chi2_band(t, 6 + np.sin(t), (4.0, 8.0), dof=6, n_runs=10, ax=axs[0])
+    plots.chi2_band(t, 5 + np.cos(t), (3.5, 6.5), statistic="NIS", dof=5, n_runs=10, ax=axs[1])
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    fig.draw(renderer)
+    for ax in axs:
+        legend, box = ax.get_legend().get_window_extent(renderer), ax.get_window_extent(renderer)
+        assert legend.x0 >= box.x1, "the legend overlaps its axes"
