@@ -177,7 +177,8 @@ def test_pre_save_hook_saves_a_lesson_as_released():
 
 
 def _outputs(cell) -> str:
-    return "".join(o.get("text", "") + o.get("data", {}).get("text/plain", "") for o in cell.get("outputs", []))
+    outputs = cell.get("outputs", [])
+    return "".join(o.get("text", "") + o.get("data", {}).get("text/plain", "") for o in outputs)
 
 
 @pytest.mark.parametrize("master", MASTERS, ids=IDS)
