@@ -444,10 +444,11 @@ def running_time_line(measured: dict | None) -> str:
     if not measured:
         return "*Running time: not measured yet (`python -m gpsaccel.lessons measure`).*"
     s, runs = measured["seconds"], measured.get("runs")
-    size = "" if runs is None else (f" with {runs} runs per ensemble (`GPSACCEL_LESSON_RUNS={runs}`; "
-                                    "the lesson's full size takes longer)")
-    return (f"*Running time: about {_rounded(s)} for Run All{size} (measured {s:.0f} s on a shared "
-            f"2-core machine at load {measured.get('load', 0):.1f}; an unloaded laptop is faster).*")
+    size = "" if runs is None else f" with `GPSACCEL_LESSON_RUNS={runs}`"
+    full = "" if runs is None else "; the lesson's full size takes longer (not measured)"
+    return (f"*Running time: about {_rounded(s)} for Run All{size}, measured {s:.0f} s on a shared "
+            f"2-core machine at load {measured.get('load', 0):.1f} (an unloaded laptop is faster)"
+            f"{full}.*")
 
 
 def _rounded(seconds: float) -> str:
