@@ -546,7 +546,7 @@ _TABLE = re.compile(r"(<!-- lessons-table -->\n).*?(<!-- /lessons-table -->)", r
 
 def docs_page() -> tuple[Path, str]:
     """docs/lessons.md with its table as the release writes it."""
-    path = lessons_dir().parent / "docs" / "lessons.md"
+    path = Path(__file__).resolve().parent.parent / "docs" / "lessons.md"   # the checkout's
     text = path.read_text(encoding="utf-8")
     return path, _TABLE.sub(lambda m: m.group(1) + lessons_table() + "\n" + m.group(2), text)
 
