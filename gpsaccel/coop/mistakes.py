@@ -45,6 +45,7 @@ from gpsaccel.coop.model import (
     wrap_state,
 )
 from gpsaccel.kalman import epochs
+from gpsaccel.kalman.update import gain, joseph_update
 
 KINDS = ("ekf", "lkf")
 
@@ -239,10 +240,7 @@ def run(model: CoopModel, y: np.ndarray, Q: np.ndarray, R: np.ndarray, kind: str
         return {"I+dtA": I + model.dt * A, "A": A, "dtA": model.dt * A}[g.F_form]
 
     def update_cov(M, K, H):
-        if g.joseph:
-            I_KH = I - K @ H
-            return I_KH @ M @ _tr(I_KH) + K @ R @ _tr(K)
-        return (I - K @ H) @ M
+        return joseph_update(M, K, H, R) if g.joseph else (I - K @ H) @ M
 
     x_hat = np.empty((N, K1, N_STATES))
     P_out = np.empty((N, K1, N_STATES, N_STATES))
@@ -272,8 +270,7 @@ def run(model: CoopModel, y: np.ndarray, Q: np.ndarray, R: np.ndarray, kind: str
                 xH = {"prior": x, "posterior": x_prev, "nominal": None}[g.H_point]
                 H = model.C(xn[j]) if xH is None else model.C(xH)
                 r = _residual(y[:, m_row], h(x), h_unwrapped(x), g)
-                S = H @ P @ _tr(H) + R
-                K = P @ _tr(H) @ np.linalg.inv(S)
+                K, S = gain(P, H, R)                    # K = P Hᵀ (H P Hᵀ + R)⁻¹
                 x = wrap_x(x + np.einsum("nij,nj->ni", K, r))
                 P = update_cov(P, K, H)
                 r_out[:, j], S_out[:, j] = r, S
@@ -283,8 +280,7 @@ def run(model: CoopModel, y: np.ndarray, Q: np.ndarray, R: np.ndarray, kind: str
             if not skip[m_row]:
                 H = Hs[j]
                 r = _residual(y[:, m_row], yn_w[j] + dx @ H.T, yn_raw[j] + dx @ H.T, g)
-                S = H @ P @ _tr(H) + R
-                K = P @ _tr(H) @ np.linalg.inv(S)
+                K, S = gain(P, H, R)                    # K = P Hᵀ (H P Hᵀ + R)⁻¹
                 dx = dx + np.einsum("nij,nj->ni", K, r)
                 P = update_cov(P, K, H)
                 r_out[:, j], S_out[:, j] = r, S

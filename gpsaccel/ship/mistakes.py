@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gpsaccel.kalman.epochs import Mistake
+from gpsaccel.kalman.update import gain, joseph_update
 from gpsaccel.ship.model import ShipModel
 from gpsaccel.ship.plan import driving_input
 
@@ -158,16 +159,13 @@ def run(model: ShipModel, z: np.ndarray, u: np.ndarray | None = None,
             elif variant.zeroed:  # K = M Hᵀ S⁻¹ as written (M is not symmetric with
                 S = H @ C @ H.T + V    # report-covariance, so the order matters)
                 K[:, rows] = np.linalg.solve(S.T, H @ C.T).T[:, rows]
-            else:
-                Ha = H[rows]
-                S = Ha @ C @ Ha.T + V[np.ix_(rows, rows)]
-                K[:, rows] = np.linalg.solve(S.T, Ha @ C.T).T
+            else:  # the rows that arrived: K = M H_aᵀ (H_a M H_aᵀ + V_aa)⁻¹
+                K[:, rows] = gain(C, H[rows], V[np.ix_(rows, rows)])[0]
             r = np.zeros((R, p))
             r[:, rows] = z[:, j, rows] - x @ H[rows].T
             x = x + r @ K.T
-            IKH = I - K @ H
-            C = IKH @ C if variant.report_covariance else IKH @ C @ IKH.T + K @ V @ K.T
-            Ct = IKH @ Ct @ IKH.T + K @ V @ K.T
+            C = (I - K @ H) @ C if variant.report_covariance else joseph_update(C, K, H, V)
+            Ct = joseph_update(Ct, K, H, V)                 # the true covariance of any gain
         K_all[j] = K
         x_hat[:, j], P[j], P_true[j] = x, C, Ct
     return Output(x_hat, P, P_true, K_all)

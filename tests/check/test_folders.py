@@ -22,7 +22,8 @@ SUBS = Path(__file__).resolve().parent.parent / "submissions"
 #: problem -> a correct single-file fixture, split below into filter.py + helpers.py
 CORRECT = {"calibration": SUBS / "correct_gps_rate.py",
            "coop": SUBS / "coop" / "correct_ekf_closed_form.py",
-           "ship": SUBS / "ship" / "correct_covariance.py"}
+           "ship": SUBS / "ship" / "correct_covariance.py",
+           "tracker": SUBS / "tracker" / "student.py"}  # MISTAKE = None: the correct tracker
 
 
 def _class_folder(tmp_path: Path, problem: str) -> Path:
