@@ -33,6 +33,16 @@ def test_masters_exist():
     assert len(MASTERS) >= 12
 
 
+_WORDS = ("twelve", "thirteen", "fourteen", "fifteen", "sixteen", "seventeen", "eighteen")
+
+
+def test_the_readme_counts_the_lessons():
+    """The README says in words how many lessons there are: the number of masters."""
+    readme = (L.lessons_dir().resolve().parent / "README.md").read_text()
+    said = [w for w in _WORDS if re.search(rf"\b{w}\s+Jupyter lessons", readme)]
+    assert said == [_WORDS[len(MASTERS) - 12]], said
+
+
 @pytest.mark.parametrize("master", MASTERS, ids=IDS)
 def test_released_versions_are_exactly_what_the_release_step_writes(master):
     for target, text in L.released(master).items():
