@@ -37,8 +37,10 @@ $(VENV)/.installed-%: pyproject.toml | $(BIN)/python
 run: $(VENV)/.installed-core
 	MPLBACKEND=Agg $(BIN)/gpsaccel run
 
+# PYTEST_ARGS: more arguments for pytest (e.g. -m "not slow"); empty runs everything
+PYTEST_ARGS ?=
 test: $(VENV)/.installed-test
-	MPLBACKEND=Agg $(BIN)/python -m pytest -q $(if $(filter-out 0,$(JOBS)),-n $(JOBS))
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q $(if $(filter-out 0,$(JOBS)),-n $(JOBS)) $(PYTEST_ARGS)
 
 # the core's tests (the Kalman core, the calibration system, the package's shape) without the
 # slow ones (notebooks, wheels, browsers, big Monte Carlo): under a minute on two idle cores
