@@ -146,7 +146,7 @@ def _cmd_figures(args: argparse.Namespace) -> int:
     from gpsaccel.figures import available_reports, write_figures
 
     reports = available_reports() if args.report == "all" else [args.report]
-    paths = write_figures(reports, args.out, runs=args.runs, seed=args.seed)
+    paths = write_figures(reports, args.out, runs=args.runs, seed=args.seed, progress=True)
     print(f"wrote {len(paths)} figures and index.html to {args.out}/")
     return 0
 
@@ -227,11 +227,19 @@ def _cmd_coop(args: argparse.Namespace) -> int:
 
 def _cmd_ship(args: argparse.Namespace) -> int:
     """Report 004: RMSE and NEES of the ship's monorate, multirate and zeroed-gain filters."""
+    from tqdm.auto import tqdm
+
     from gpsaccel.ship.comparison import compare_ship_filters, compare_wind
 
-    print(compare_ship_filters(n_runs=args.runs, seed=args.seed))
+    # the two tables, each a Monte Carlo of its own: a bar of the two on stderr (a terminal only)
+    with tqdm(total=2, desc="ship", unit="table", leave=False, disable=None) as bar:
+        filters = compare_ship_filters(n_runs=args.runs, seed=args.seed)
+        bar.update()
+        wind = compare_wind(n_runs=args.runs, seed=args.seed)
+        bar.update()
+    print(filters)
     print()
-    print(compare_wind(n_runs=args.runs, seed=args.seed))
+    print(wind)
     return 0
 
 

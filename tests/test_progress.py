@@ -27,3 +27,19 @@ def test_coop_summary_shows_a_bar_on_a_terminal_only(monkeypatch):
     monkeypatch.setattr("sys.stderr", piped)
     summary(n_runs=2, n_sets=1, seed=0, progress=True)
     assert piped.getvalue() == ""
+
+
+@pytest.mark.slow
+def test_figures_show_a_bar_of_the_figures_on_a_terminal_only(monkeypatch, tmp_path):
+    from gpsaccel.figures import write_figures
+
+    terminal = _Terminal()
+    monkeypatch.setattr("sys.stderr", terminal)
+    paths = write_figures(["001"], tmp_path / "a", runs=2, progress=True)
+    shown = terminal.getvalue()
+    assert "figures" in shown and f"{len(paths)}/" not in shown  # a count, no total known ahead
+    assert f"{len(paths)}figure" in shown.replace(" ", "") or f"{len(paths)} figure" in shown
+    piped = io.StringIO()
+    monkeypatch.setattr("sys.stderr", piped)
+    write_figures(["001"], tmp_path / "b", runs=2, progress=True)
+    assert piped.getvalue() == ""

@@ -64,14 +64,19 @@ def report_module(report: str):
 
 
 def write_figures(reports: list[str], out: Path | str, runs: int | None = None, seed: int = 0,
-                  dpi: int = 110, results: dict[str, dict] | None = None) -> list[Path]:
+                  dpi: int = 110, results: dict[str, dict] | None = None,
+                  progress: bool = False) -> list[Path]:
     """Draw ``reports`` into ``out`` as PNG plus ``index.html``; returns the PNG paths.
 
     ``runs`` overrides each report's Monte Carlo size (``DEFAULT_RUNS``) when given.
     ``results[report]``: what the caller has computed already, passed to that report's
     ``figures`` as keywords (``gpsaccel run`` passes report 000's single run and ensemble).
+    ``progress``: a bar of the figures written, on stderr when it is a terminal.
     """
     import matplotlib.pyplot as plt
+    from tqdm.auto import tqdm
+
+    bar = tqdm(desc="figures", unit="figure", leave=False, disable=None if progress else True)
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -85,6 +90,9 @@ def write_figures(reports: list[str], out: Path | str, runs: int | None = None, 
             plt.close(fig.figure)
             fig.figure = None  # drawn and saved; keep only the caption
             written.append((module.TITLE, fig, path))
+            bar.set_postfix_str(f"report {report}", refresh=False)
+            bar.update()
+    bar.close()
     _write_index(out / "index.html", written, runs, seed)
     return [p for _, _, p in written]
 
