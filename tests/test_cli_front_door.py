@@ -287,15 +287,6 @@ def _students_running(folder: Path) -> set[str]:
     return set(_student_pids(folder).values())
 
 
-def _import_cpu_seconds(env: dict, cwd: Path) -> float:
-    """CPU seconds a child spends importing the CLI (user + system), the second of two imports."""
-    for _ in range(2):
-        before = resource.getrusage(resource.RUSAGE_CHILDREN)
-        subprocess.run([sys.executable, "-c", "import gpsaccel.cli"], cwd=cwd, env=env, check=True)
-        after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-
-
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc")
 def test_ctrl_c_during_a_parallel_check_stops_workers_and_students(tmp_path):
     """Ctrl-C reaches the whole group: the busy workers stop their task (the student's process,
