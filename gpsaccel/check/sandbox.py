@@ -22,8 +22,9 @@ Backends (the threat model, what each isolates and what not: ``docs/sandbox.md``
 ``bwrap`` (bubblewrap; ``apt-get install bubblewrap``)
     New user, PID, network, IPC, UTS and cgroup namespaces; inside, uid 65534 with no
     capabilities.  The file system is the interpreter's folders (``/usr``, the Python prefix, the
-    site-packages) read-only, the checker's own package hidden under an empty tmpfs, ``/proc`` of
-    the box's PID namespace only (the checker's memory and environment are not in it), and three
+    site-packages) read-only, the checker's own package hidden under an empty tmpfs (or, for a
+    box that may import gpsaccel, its answers and checks under empty folders:
+    :data:`HIDDEN_WITH_GPSACCEL`), ``/proc`` of the box's PID namespace only (the checker's memory and environment are not in it), and three
     small writable tmpfs: the working directory ``/box`` (holding a copy of the submission's own
     files, nothing else), ``/tmp`` and ``/dev/shm``, each of at most ``Limits.file_size`` bytes;
     the root, ``/dev`` and the folders made for the binds are remounted read-only.  No network.
@@ -100,6 +101,15 @@ PACKAGE_DIR = Path(__file__).resolve().parent.parent
 BLOCKED = (PACKAGE_DIR.name,)
 
 BACKENDS = ("auto", "bwrap", "basic")
+
+#: Folders of the package (relative to it) that are not in a bwrap box even when the box may
+#: import gpsaccel (``allow_gpsaccel``: a notebook using the course's models for data): the
+#: checks, the homework's graded questions and reference answers, the lessons' self-check answers
+#: and the lessons' masters and solutions.  An empty read-only folder is bound over each, so no
+#: call (an ``open`` through ctypes included) finds their files; the audit hook of the notebook's
+#: module (:mod:`gpsaccel.assignments.notebook`) is the only fence under ``basic``.
+HIDDEN_WITH_GPSACCEL = ("check", "assignments", "exercises", "_lessons/masters",
+                        "_lessons/solutions")
 
 #: Largest submission copied into a box: files and bytes (a folder of data files may be large).
 MAX_FILES = 200
@@ -978,6 +988,7 @@ def _bwrap_command(exe: str, tmp: Path, sub: Submission, limits: Limits, allow: 
     pkg = str(PACKAGE_DIR)
     if allow:
         ro(pkg)
+        cmd.extend(_hide_answers(tmp, bound))
     elif any(pkg == b or pkg.startswith(b + "/") for b in bound):
         cmd.extend(["--tmpfs", pkg])  # an editable or installed gpsaccel: hidden
     # every writable mount has a size: /box, /tmp, /dev/shm; the root, /dev and the folders
@@ -1002,6 +1013,23 @@ def _bwrap_command(exe: str, tmp: Path, sub: Submission, limits: Limits, allow: 
     cmd.extend(["--chdir", "/box", "--", exe_py, "-I", "-S", "-B", "/control/_runner.py",
                 "/control", "/box", str(result_fd)] + ([] if go_fd is None else [str(go_fd)]))
     return cmd, fds
+
+
+def _hide_answers(tmp: Path, bound: list[str]) -> list[str]:
+    """bwrap arguments binding an empty read-only folder over :data:`HIDDEN_WITH_GPSACCEL` in
+    every copy of the package the box can see (this one, an installed one in site-packages)."""
+    empty = tmp / "empty"
+    args: list[str] = []
+    for pkg in dict.fromkeys([str(PACKAGE_DIR), *_blocked_dirs()]):
+        for rel in HIDDEN_WITH_GPSACCEL:
+            real = os.path.realpath(os.path.join(pkg, rel))
+            # only what the box sees (a lessons link to a folder outside the binds is not there)
+            if os.path.isdir(real) and any(real.startswith(b + "/") for b in bound) \
+                    and real not in args:
+                args.extend(["--ro-bind", str(empty), real])
+    if args:
+        empty.mkdir(mode=0o555, exist_ok=True)
+    return args
 
 
 def _open_checked(sub: Submission, rel: str) -> int:

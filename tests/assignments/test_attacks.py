@@ -135,6 +135,26 @@ try:
 except Exception:
     pass
 """, 0),
+    # the reference answers read with libc's open/read through ctypes (no audit event: the
+    # import fence's hook never sees it); under bwrap the file is not in the box at all
+    "ctypes read": ("""
+import ast, ctypes, os
+import numpy as np
+import gpsaccel
+libc = ctypes.CDLL(None, use_errno=True)
+path = os.path.join(os.path.dirname(gpsaccel.__file__), "assignments", "ship.py")
+fd = libc.open(path.encode(), os.O_RDONLY)
+src = b""
+if fd >= 0:
+    buf = ctypes.create_string_buffer(1 << 20)
+    n = libc.read(fd, buf, len(buf))
+    src = buf.raw[:max(n, 0)]
+    libc.close(fd)
+for node in ast.parse(src.decode(errors="replace")).body:
+    if isinstance(node, ast.FunctionDef) and node.name == "optimal_update":
+        exec(compile(ast.Module([node], []), "<ship.py>", "exec"), globals())
+        update = optimal_update
+""", 0),
     # a lookup table: the answers of the public cases (seed 0), computed at home, else junk
     "lookup table": ("""
 import numpy as np

@@ -10,6 +10,7 @@ a check's (``LIMITS``).
 
 from __future__ import annotations
 
+import errno
 import glob
 import os
 import shutil
@@ -240,3 +241,51 @@ def test_boxes_at_once_in_one_process_get_uids_of_their_own():
     _boxuser.release(b[1])
     _boxuser.release(c[1])
     assert c[0] == a[0]  # a released slot is taken again
+
+
+# ------------------------------------------------------------------ the answers are not there
+_RAW_READ = '''
+import ctypes, os
+import numpy as np
+import gpsaccel
+
+libc = ctypes.CDLL(None, use_errno=True)
+ROOT = os.path.dirname(gpsaccel.__file__)
+
+
+def raw_read(rel):
+    """Bytes read by libc open/read (no Python-level file call, so no audit event), or -errno."""
+    fd = libc.open(os.path.join(ROOT, rel).encode(), os.O_RDONLY)
+    if fd < 0:
+        return -ctypes.get_errno()
+    buf = ctypes.create_string_buffer(1 << 16)
+    n = libc.read(fd, buf, len(buf))
+    libc.close(fd)
+    return n
+
+
+def f(x):
+    return np.array([raw_read(rel) for rel in REL], dtype=float), np.array(
+        [len(os.listdir(os.path.join(ROOT, d))) for d in DIRS], dtype=float)
+'''
+
+
+@pytest.mark.skipif(not sb.bwrap_path(), reason="needs a working bubblewrap")
+def test_a_box_that_may_import_gpsaccel_finds_no_check_nor_answer_file(tmp_path):
+    """A notebook's box imports the course's models (allow_gpsaccel) but reads no file of the
+    checks, the graded questions or the answers, not even with libc calls no audit hook sees:
+    bwrap binds empty folders over them (a public module of the same package is readable)."""
+    rel = ["check/sandbox.py", "check/problems.py", "assignments/ship.py",
+           "assignments/_answers.py", "exercises/answers.py", "calibration/model.py"]
+    dirs = [d for d in sb.HIDDEN_WITH_GPSACCEL if (sb.PACKAGE_DIR / d).resolve().is_relative_to(
+        sb.PACKAGE_DIR)]
+    f = tmp_path / "s.py"
+    f.write_text(f"REL = {rel!r}\nDIRS = {dirs!r}\n" + _RAW_READ)
+    box = sb.run(sb.load_submission(f, "f"), [sb.Call("f", (np.zeros(1),), (
+        sb.Output("read", (len(rel),)), sb.Output("listed", (len(dirs),))))], LIMITS, "bwrap",
+        allow_gpsaccel=True)
+    assert box.failure is None, box.detail
+    read = box.results[0]["read"]
+    assert list(read[:-1]) == [-float(errno.ENOENT)] * (len(rel) - 1)
+    assert read[-1] == min((sb.PACKAGE_DIR / rel[-1]).stat().st_size, 1 << 16)
+    assert list(box.results[0]["listed"]) == [0.0] * len(dirs)
