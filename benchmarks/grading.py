@@ -7,13 +7,25 @@ as the former grader ran it, two at a time).  Both run in this process's childre
 seconds are theirs (RUSAGE_CHILDREN); the wall time is at two notebooks at once.  The goal of
 issue 19: 100 calibration notebooks in under 5 minutes on a 2-core machine.
 
-Usage: python benchmarks/grading.py [--notebooks N] [--otter M]
+``--cold`` adds a row for the grader as it was before the parent's warm-up
+(:func:`gpsaccel.assignments.grading.warm` made a no-op: every notebook's process imports IPython's
+transformer and the problems again), in the same run.
+
+``--profile`` instead breaks one calibration notebook's CPU down, side by side in one run (the
+median of ``--repeats`` R, alternated): a box that imports nothing (bwrap, Python, the runner;
+the runner imports numpy), one that imports scipy.stats, one gpsaccel; the notebook's own box
+with and without the module's audit hook; the box of the file question (q2); and the grader's
+own CPU for the notebook, cold and warm.
+
+Usage: python benchmarks/grading.py [--notebooks N] [--otter M] [--cold]
+       python benchmarks/grading.py --profile [--repeats R]
 """
 
 from __future__ import annotations
 
 import os
 import resource
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -24,7 +36,11 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from gpsaccel.assignments import generate, grade  # noqa: E402
+import numpy as np  # noqa: E402
+
+from gpsaccel.assignments import generate, grade, grading  # noqa: E402
+from gpsaccel.assignments import notebook as nbm  # noqa: E402
+from gpsaccel.check import sandbox as sb  # noqa: E402
 from tests.assignments.conftest import write_variant  # noqa: E402
 from tests.assignments.test_grading import MEAN, PHI  # noqa: E402
 
@@ -41,10 +57,105 @@ def cpu() -> float:
     return r.ru_utime + r.ru_stime
 
 
-def sandboxed(folder: Path, out: Path) -> tuple[float, float, list]:
-    c0, t0 = cpu(), time.perf_counter()
-    grades = grade(folder, "calibration", out=out, jobs=2, seed=1, secret=b"benchmark-secret-16b")
+def sandboxed(folder: Path, out: Path, cold: bool = False) -> tuple[float, float, list]:
+    warm = grading.warm
+    if cold:
+        grading.warm = lambda name: None
+    try:
+        c0, t0 = cpu(), time.perf_counter()
+        grades = grade(folder, "calibration", out=out, jobs=2, seed=1,
+                       secret=b"benchmark-secret-16b")
+    finally:
+        grading.warm = warm
     return time.perf_counter() - t0, cpu() - c0, grades
+
+
+def self_cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
+def _box_cpu(sub, calls) -> float:
+    """Children's CPU seconds of one box (bwrap, the runner and whatever it starts)."""
+    limits = sb.Limits(memory=grading.BOX_MEMORY, time=grading.TIMEOUT,
+                       processes=grading.BOX_PROCESSES)
+    c0 = cpu()
+    box = sb.run(sub, calls, limits, backend="auto", allow_gpsaccel=True)
+    if box.failure is not None:
+        raise RuntimeError(f"the profile's box failed: {box.failure} {box.detail}")
+    return cpu() - c0
+
+
+def _notebook_cpu(nb_path: Path, cold: bool) -> tuple[float, float]:
+    """(grader's own CPU, boxes' CPU) of grading one notebook in a forked process, as
+    :func:`grade` does (cold: without the parent's warm-up, which this process has done)."""
+    import multiprocessing as mp
+
+    def child(conn) -> None:
+        if cold:  # undo the warm-up in this child: what it imports is imported again
+            import sys as _sys
+            for m in [m for m in _sys.modules if m.startswith(("IPython", "gpsaccel.check.tracker",
+                                                               "traitlets", "pygments"))]:
+                del _sys.modules[m]
+        s0, c0 = self_cpu(), cpu()
+        grading.grade_notebook(nb_path, "calibration", "s", 1, b"benchmark-secret-16b")
+        conn.send((self_cpu() - s0, cpu() - c0))
+
+    recv, send = mp.get_context("fork").Pipe(duplex=False)
+    p = mp.get_context("fork").Process(target=child, args=(send,))
+    p.start()
+    out = recv.recv()
+    p.join()
+    return out
+
+
+def profile(repeats: int) -> None:
+    """One calibration notebook's CPU, part by part (module docstring)."""
+    with tempfile.TemporaryDirectory(prefix="gpsaccel-bench-prof-") as tmp:
+        tmp = Path(tmp)
+        nb_path = make_class(tmp / "class", 1)[0]
+        grading.warm("calibration")
+        qs = grading.questions_of("calibration")
+        variant = grading.student_variant("calibration", "s", b"benchmark-secret-16b")
+        run = grading._prepare(nbm.read(nb_path), variant)
+        reads = [r for q in qs for r in q.reads(grading.Draw(
+            grading.question_seed(1, "calibration", q.name, "s"), variant))]
+        calls = grading._calls(len(run.cells), reads)
+        source = nbm.module_source(run, reads)
+        unhooked = source.replace("\n_gpsaccel_guard(_G_HIDDEN)\n", "\n")
+        assert unhooked != source, "the notebook module's guard call moved: update the profile"
+        parts: dict[str, tuple] = {}
+        one = [sb.Call("f", (np.zeros(1),), (sb.Output("y", (1,)),))]
+        for label, head in (("box: bwrap, Python, runner, numpy", ""),
+                            ("box: import scipy.stats", "import scipy.stats\n"),
+                            ("box: import gpsaccel", "import gpsaccel\n")):
+            (tmp / label).mkdir()
+            (tmp / label / "s.py").write_text(head + "def f(x):\n    return x\n")
+            parts[label] = (sb.load_submission(tmp / label / "s.py", "f"), one)
+        for label, text in (("notebook box (cells and reads)", source),
+                            ("notebook box, no audit hook", unhooked)):
+            (tmp / label).mkdir()
+            (tmp / label / "notebook.py").write_text(text)
+            parts[label] = (sb.load_submission(tmp / label / "notebook.py", "_gpsaccel_cell"),
+                            calls)
+        times: dict[str, list[float]] = {k: [] for k in
+                                         [*parts, "file box (q2)", "grader, cold", "grader, warm",
+                                          "notebook, all boxes"]}
+        for _ in range(repeats):
+            for label, (sub, c) in parts.items():
+                times[label].append(_box_cpu(sub, c))
+            for cold in (True, False):
+                own, boxes = _notebook_cpu(nb_path, cold)
+                times["grader, cold" if cold else "grader, warm"].append(own)
+                if not cold:
+                    times["notebook, all boxes"].append(boxes)
+        times["file box (q2)"] = [a - b for a, b in zip(times["notebook, all boxes"],
+                                                        times["notebook box (cells and reads)"],
+                                                        strict=True)]
+        print(f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}, sandbox "
+              f"{sb.resolve_backend('auto')}; median of {repeats}, CPU s")
+        for label, v in times.items():
+            print(f"  {label:<34}{statistics.median(v):>7.2f}")
 
 
 def otter(notebooks: list[Path], zip_path: Path, work: Path) -> tuple[float, float, list[int]]:
@@ -63,6 +174,9 @@ def otter(notebooks: list[Path], zip_path: Path, work: Path) -> tuple[float, flo
 
 
 def main(argv: list[str]) -> int:
+    if "--profile" in argv:
+        profile(int(argv[argv.index("--repeats") + 1]) if "--repeats" in argv else 3)
+        return 0
     n = int(argv[argv.index("--notebooks") + 1]) if "--notebooks" in argv else 20
     m = int(argv[argv.index("--otter") + 1]) if "--otter" in argv else 3
     with tempfile.TemporaryDirectory(prefix="gpsaccel-bench-grade-") as tmp:
@@ -70,17 +184,21 @@ def main(argv: list[str]) -> int:
         nbs = make_class(tmp / "class", n)
         print(f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}; calibration "
               f"notebooks ({len(KINDS)} kinds)")
-        wall, cpu_s, grades = sandboxed(tmp / "class", tmp / "grades")
-        totals = sorted({g.total for g in grades})
         print(f"{'grader':<22}{'notebooks':>10}{'wall s':>9}{'CPU s':>9}{'CPU s/nb':>10}"
               f"{'100 nb, min':>13}")
-        print(f"{'gpsaccel grade':<22}{n:>10}{wall:>9.1f}{cpu_s:>9.1f}{cpu_s / n:>10.2f}"
-              f"{wall / n * 100 / 60:>13.1f}   totals {totals}")
+        for label, cold in ([("gpsaccel grade, cold", True)] if "--cold" in argv else []) + \
+                [("gpsaccel grade", False)]:
+            wall, cpu_s, grades = sandboxed(tmp / "class", tmp / f"grades-{cold}", cold)
+            totals = sorted({g.total for g in grades})
+            print(f"{label:<22}{n:>10}{wall:>9.1f}{cpu_s:>9.1f}{cpu_s / n:>10.2f}"
+                  f"{wall / n * 100 / 60:>13.1f}   totals {totals}  load "
+                  f"{os.getloadavg()[0]:.1f}")
         if m:
             dist = generate("calibration", tmp / "dist", run_tests=False)
             wall_o, cpu_o, codes = otter(nbs[:m], dist.autograder, tmp)
             print(f"{'otter run (2 at once)':<22}{m:>10}{wall_o:>9.1f}{cpu_o:>9.1f}"
-                  f"{cpu_o / m:>10.2f}{wall_o / m * 100 / 60:>13.1f}   exit codes {codes}")
+                  f"{cpu_o / m:>10.2f}{wall_o / m * 100 / 60:>13.1f}   exit codes {codes}  load "
+                  f"{os.getloadavg()[0]:.1f}")
             print(f"ratio (CPU per notebook, otter / sandbox): {cpu_o / m / (cpu_s / n):.1f}")
     return 0
 
