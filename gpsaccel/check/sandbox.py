@@ -24,10 +24,11 @@ Backends (the threat model, what each isolates and what not: ``docs/sandbox.md``
     capabilities.  The file system is the interpreter's folders (``/usr``, the Python prefix, the
     site-packages) read-only, the checker's own package hidden under an empty tmpfs (or, for a
     box that may import gpsaccel, its answers and checks under empty folders:
-    :data:`HIDDEN_WITH_GPSACCEL`), ``/proc`` of the box's PID namespace only (the checker's memory and environment are not in it), and three
-    small writable tmpfs: the working directory ``/box`` (holding a copy of the submission's own
-    files, nothing else), ``/tmp`` and ``/dev/shm``, each of at most ``Limits.file_size`` bytes;
-    the root, ``/dev`` and the folders made for the binds are remounted read-only.  No network.
+    :data:`HIDDEN_WITH_GPSACCEL`), ``/proc`` of the box's PID namespace only (the checker's
+    memory and environment are not in it), and three small writable tmpfs: the working
+    directory ``/box`` (holding a copy of the submission's own files, nothing else), ``/tmp`` and
+    ``/dev/shm``, each of at most ``Limits.file_size`` bytes; the root, ``/dev`` and the folders
+    made for the binds are remounted read-only.  No network.
     ``--die-with-parent``: when the checker goes, the box goes; when the box's first process is
     killed, the kernel kills every process of its PID namespace.
 ``basic`` (any Linux; the isolation that needs no tool)
