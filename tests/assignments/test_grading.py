@@ -242,3 +242,13 @@ def test_packaged_student_side_is_the_masters_and_holds_no_solution(name, tmp_pa
         "the master changed: run gpsaccel.assignments.generate.refresh_student_package")
     text = json.dumps(packaged.dict())
     assert "BEGIN SOLUTION" not in text and "HIDDEN" not in text and "_graded" not in text
+
+
+def test_what_the_import_fence_refuses_is_not_in_a_bwrap_box():
+    """The notebook module's audit hook (both backends) and bwrap's empty folders (the real
+    fence) name the same sub-packages: one added to the hook must be hidden from the box too."""
+    from gpsaccel.check.sandbox import HIDDEN_WITH_GPSACCEL, PACKAGE_DIR
+
+    for name in nbm.HIDDEN_PACKAGES:
+        top, _, rest = name.partition(".")
+        assert top == PACKAGE_DIR.name and rest.replace(".", "/") in HIDDEN_WITH_GPSACCEL, name
