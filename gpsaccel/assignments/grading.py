@@ -22,7 +22,8 @@ The class (:func:`grade`):
   the id); names with spaces; every entry is either graded or reported with why not
   (``no-notebook``, ``ambiguous``, ``unreadable``), never skipped silently;
 * each notebook is graded in a forked process of its own (a student who kills it loses only
-  their own grade: ``grader-error``); the run is a child subreaper and sweeps what a dead
+  their own grade: ``grader-error``), forked from a parent that has imported what grading a
+  notebook needs (:func:`warm`); the run is a child subreaper and sweeps what a dead
   process left; ``grades.csv`` is rewritten (atomically) after every notebook, so a run killed
   half-way leaves the grades it had;
 * output (default: ``<submissions>-grades`` next to the submissions folder, never inside it):
