@@ -106,6 +106,7 @@ def _notebook_cpu(nb_path: Path, cold: bool) -> tuple[float, float]:
     recv, send = mp.get_context("fork").Pipe(duplex=False)
     p = mp.get_context("fork").Process(target=child, args=(send,))
     p.start()
+    send.close()  # a child that dies gives EOFError here, not a wait for ever
     out = recv.recv()
     p.join()
     return out
