@@ -545,9 +545,30 @@ def _add_check(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_cmd_check)
 
 
+class _Registered:
+    """argparse choices read from :mod:`gpsaccel.registry` when first needed (a parse or a
+    help text), so building the parser imports no homework module."""
+
+    def __init__(self, names) -> None:
+        self._names = names
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._names()
+
+    def __iter__(self):
+        return iter(self._names())
+
+
+def _registered_assignments() -> tuple[str, ...]:
+    from gpsaccel import registry
+
+    return registry.assignments()
+
+
 def _add_assignment(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("assignment", help="otter assign a homework: student notebook + autograder")
-    p.add_argument("name", choices=("calibration", "coop", "ship"))
+    p.add_argument("name", choices=_Registered(_registered_assignments), metavar="NAME",
+                   help="the homework: %(choices)s")
     p.add_argument("--out", type=_v.output_dir, required=True, help="folder to write (replaced)")
     p.add_argument("--no-run-tests", action="store_true",
                    help="do not execute the solution against its tests first (faster)")
@@ -562,7 +583,8 @@ def _add_grade(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("grade", help="grade a class of homework notebooks in the sandbox")
     p.add_argument("submissions", type=Path,
                    help="LMS export: a folder per student (or one .ipynb per student)")
-    p.add_argument("--assignment", required=True, choices=("calibration", "coop", "ship"))
+    p.add_argument("--assignment", required=True, choices=_Registered(_registered_assignments),
+                   metavar="NAME", help="the homework: %(choices)s")
     p.add_argument("--out", type=_v.output_dir, default=None,
                    help="folder for grades.csv, feedback/, summary (default SUBMISSIONS-grades)")
     p.add_argument("--jobs", type=_v.flag_int(minimum=1), default=None,

@@ -192,15 +192,13 @@ def render_html(paths: list[Path], out: Path | str, runs: int | None = None,
     return written
 
 
-#: Every figure each report lists (/work/shared/seeds/README.md): the numbers a lesson must walk
-#: through.  Report 001 has two figures 10 (the gains, the ensemble-average error).
-REPORT_FIGURES: dict[str, tuple[str, ...]] = {
-    "000": ("1", "2", "3", "3b", "4", "5", "6", "7"),
-    "001": tuple(str(i) for i in range(1, 13)),
-    "003": tuple(str(i) for i in range(1, 7)),
-    "002": tuple(str(i) for i in range(1, 20)),
-    "004": tuple(str(i) for i in range(1, 12)),
-}
+def report_figures() -> dict[str, tuple[str, ...]]:
+    """Every figure each report lists, the numbers a lesson must walk through (registered by each
+    report's figure module: :func:`gpsaccel.registry.report_figures`)."""
+    from gpsaccel import registry
+
+    return registry.report_figures()
+
 
 _MENTION = re.compile(
     r"[Rr]eport (\d{3}),? figures? ((?:\d+[a-z]?(?:\s*[–-]\s*\d+[a-z]?)?(?:,\s*|\s+and\s+|\s*/\s*)?)+)")
@@ -260,7 +258,7 @@ def write_index(out: Path | str) -> Path:
         for key in figure_mentions(p):
             shows.setdefault(key, []).append(p)
     parts.append("</ol><h2>The reports' figures, and the lesson that walks through each</h2>")
-    for report, numbers in REPORT_FIGURES.items():
+    for report, numbers in report_figures().items():
         parts.append(f"<h3>Report {report}</h3><table><tr><th>figure</th><th>lesson</th></tr>")
         for n in numbers:
             links = ", ".join(f"<a href='{p.stem}.html#r{report}-fig{n}'>{p.stem}</a>"

@@ -1,4 +1,5 @@
-"""The registry of homework problems (and the systems they check), filled where each is defined.
+"""The registry of homework problems (and the systems they check), the homework assignments and
+the course reports' figures, each filled where it is defined.
 
 A module that defines a problem registers it when imported::
 
@@ -10,6 +11,13 @@ and everything that lists problems reads the registry instead of a literal tuple
 :func:`gpsaccel.check.submission`, the tests (and the homework generator).  The registry imports
 nothing of the package itself (it sits with the infrastructure): the modules that fill it are
 named in :data:`PROVIDERS` and imported, by name, the first time a list is asked for.
+
+The same for the homework (:func:`add_assignment` in ``gpsaccel/assignments/NAME.py``, listed in
+:data:`ASSIGNMENT_PROVIDERS`: the CLI's ``assignment``/``grade`` choices, the generator, the
+grader) and the reports (:func:`add_report` in ``gpsaccel/figures/rNNN.py``, listed in
+:data:`REPORT_PROVIDERS`: ``gpsaccel figures``, the lessons' index of which lesson shows which
+figure, the tests).  Each kind is loaded on its own, so asking for the problems does not import
+matplotlib.
 """
 
 from __future__ import annotations
@@ -32,7 +40,45 @@ class ProblemEntry:
     title: str = ""
 
 
+#: Modules that register a homework assignment when imported (a new homework: one line here).
+ASSIGNMENT_PROVIDERS = ("gpsaccel.assignments.calibration", "gpsaccel.assignments.coop",
+                        "gpsaccel.assignments.ship", "gpsaccel.assignments.tracker")
+
+#: Modules that register a course report's figures when imported, in reading order (a new
+#: report: one line here).
+REPORT_PROVIDERS = ("gpsaccel.figures.r000", "gpsaccel.figures.r001", "gpsaccel.figures.r003",
+                    "gpsaccel.figures.r002", "gpsaccel.figures.r004")
+
+
+@dataclass(frozen=True)
+class AssignmentEntry:
+    """A registered homework: its name (the master is ``assignments/NAME/NAME.ipynb``), the
+    system it is about, the checker's problem whose catalogue grades its filter question (if
+    any), and a title."""
+
+    name: str
+    system: str = ""
+    problem: str = ""
+    title: str = ""
+
+
+@dataclass(frozen=True)
+class ReportEntry:
+    """A registered course report: its number ("000"), the module that draws its figures
+    (``TITLE``, ``DEFAULT_RUNS``, ``figures(runs, seed)``: :mod:`gpsaccel.figures`), and the
+    figures the report lists, numbered as it numbers them ("1", "3b", "10"): the ones a lesson
+    must walk through."""
+
+    report: str
+    module: str
+    figures: tuple[str, ...]
+    title: str = ""
+
+
 _PROBLEMS: dict[str, ProblemEntry] = {}
+_ASSIGNMENTS: dict[str, AssignmentEntry] = {}
+_REPORTS: dict[str, ReportEntry] = {}
+_loaded_kinds: set[str] = set()
 _INSTANCES: dict[str, object] = {}
 _loaded = False
 
@@ -90,3 +136,81 @@ def systems() -> tuple[str, ...]:
     """The systems that registered problems check, in order."""
     _load()
     return tuple(dict.fromkeys(e.system for e in _PROBLEMS.values() if e.system))
+
+
+# ------------------------------------------------------------------ homework assignments
+def _load_kind(kind: str, providers: tuple[str, ...]) -> None:
+    if kind not in _loaded_kinds:
+        _loaded_kinds.add(kind)  # first, so a provider that lists its kind does not recurse
+        try:
+            for module in providers:
+                importlib.import_module(module)
+        except BaseException:
+            _loaded_kinds.discard(kind)
+            raise
+
+
+def _checked_name(what: str, name: object) -> str:
+    if not isinstance(name, str) or not name or not name.replace("-", "").isalnum() or \
+            name != name.lower():
+        raise ValueError(f"{what} must be lower-case letters, digits and dashes, got {name!r}")
+    return name
+
+
+def add_assignment(name: str, *, system: str = "", problem: str = "", title: str = "") -> None:
+    """Register the homework ``name`` (its module calls this when imported; registering the
+    same entry again is harmless, a different one under a taken name is refused)."""
+    entry_ = AssignmentEntry(_checked_name("name", name), system, problem, title)
+    if _ASSIGNMENTS.get(name, entry_) != entry_:
+        raise ValueError(f"name: an assignment {name!r} is already registered")
+    _ASSIGNMENTS[name] = entry_
+
+
+def assignments() -> tuple[str, ...]:
+    """The names of every registered homework, in :data:`ASSIGNMENT_PROVIDERS`' order."""
+    _load_kind("assignments", ASSIGNMENT_PROVIDERS)
+    return tuple(_ASSIGNMENTS)
+
+
+def assignment(name: str) -> AssignmentEntry:
+    """The registered homework ``name``; ValueError naming the choices otherwise."""
+    names = assignments()
+    if name not in names:
+        raise ValueError(f"assignment must be one of {', '.join(names)}, got {name!r}")
+    return _ASSIGNMENTS[name]
+
+
+# ------------------------------------------------------------------ the reports' figures
+def add_report(report: str, module: str, figures: tuple[str, ...], *, title: str = "") -> None:
+    """Register course report ``report`` ("000"): ``module`` draws its figures, ``figures`` are
+    the numbers the report lists ("1", "3b", ...).  Called by the figure module when imported."""
+    if not (isinstance(report, str) and len(report) == 3 and report.isdigit()):
+        raise ValueError(f"report must be three digits such as '000', got {report!r}")
+    numbers = tuple(figures)
+    if not numbers or not all(isinstance(n, str) and n[:1].isdigit() and n[0] != "0"
+                              for n in numbers):
+        raise ValueError(f"figures must be the report's figure numbers as it writes them "
+                         f"('1', '3b', ...), got {figures!r}")
+    entry_ = ReportEntry(report, module, numbers, title)
+    if _REPORTS.get(report, entry_) != entry_:
+        raise ValueError(f"report: {report!r} is already registered")
+    _REPORTS[report] = entry_
+
+
+def reports() -> tuple[str, ...]:
+    """Every registered report, in reading order (:data:`REPORT_PROVIDERS`)."""
+    _load_kind("reports", REPORT_PROVIDERS)
+    return tuple(_REPORTS)
+
+
+def report(number: str) -> ReportEntry:
+    """The registered report ``number``; ValueError naming the choices otherwise."""
+    numbers = reports()
+    if number not in numbers:
+        raise ValueError(f"report must be one of {', '.join(numbers)}, got {number!r}")
+    return _REPORTS[number]
+
+
+def report_figures() -> dict[str, tuple[str, ...]]:
+    """Report -> the figures it lists (what the lessons must walk through)."""
+    return {r: _REPORTS[r].figures for r in reports()}

@@ -17,8 +17,8 @@ notebook and otter's autograder zip for students' ``grader.check`` and Gradescop
 the sandbox, every score computed outside it (:mod:`~gpsaccel.assignments.grading`).
 """
 
-from gpsaccel.assignments.generate import ASSIGNMENTS, Generated, generate, master_notebook, questions
+from gpsaccel.assignments.generate import Generated, generate, master_notebook, questions
 from gpsaccel.assignments.grading import Grade, grade, grade_notebook
 
-__all__ = ["ASSIGNMENTS", "Generated", "Grade", "generate", "grade", "grade_notebook",
+__all__ = ["Generated", "Grade", "generate", "grade", "grade_notebook",
            "master_notebook", "questions"]

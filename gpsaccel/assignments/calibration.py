@@ -19,6 +19,7 @@ from functools import lru_cache
 import numpy as np
 from scipy import stats
 
+from gpsaccel import registry
 from gpsaccel.check.report import Report
 
 #: Relative tolerance of the NEES answer (it is a deterministic function of the seeded ensemble).
@@ -154,3 +155,8 @@ def nees_data(rng: np.random.Generator, n_runs: int, n_times: int = 4
                                                                               3)))
     x_true = rng.standard_normal((n_runs, n_times, 3)) * 10
     return x_true, x_true - e, P
+
+
+# the homework, for `gpsaccel assignment` / `gpsaccel grade` (its master: assignments/calibration/)
+registry.add_assignment("calibration", system="calibration", problem="calibration",
+                        title="Calibrating an accelerometer with GPS (report 000)")

@@ -27,6 +27,7 @@ from functools import lru_cache
 import numpy as np
 
 from gpsaccel.assignments._answers import array, assert_report, call
+from gpsaccel import registry
 from gpsaccel.check.report import Report
 from gpsaccel.coop.model import (
     CoopModel,
@@ -299,3 +300,8 @@ _EKF_HINTS = {
     "predicted from: H = C(x̄ₖ) after the prediction.",
     "returns-a-priori": "Store x̂ and P after the update at each step.",
 }
+
+
+# the homework, for `gpsaccel assignment` / `gpsaccel grade` (its master: assignments/coop/)
+registry.add_assignment("coop", system="coop", problem="coop",
+                        title="Cooperative localization: Jacobians, the DT model, an EKF (report 002)")

@@ -4,7 +4,9 @@ A master notebook (``assignments/NAME/NAME.ipynb`` in a source checkout) is in o
 assign format: raw cells ``# BEGIN QUESTION`` (name, points), ``# BEGIN SOLUTION``, ``# BEGIN
 TESTS`` ...; solutions and hidden tests live only there.  :func:`generate` runs ``otter assign``
 and returns the student notebook (solutions stripped, public tests only) and the autograder zip
-(every test), ready to hand out and to grade.
+(every test), ready to hand out and to grade.  The homeworks are those registered in
+:mod:`gpsaccel.registry` (each ``gpsaccel/assignments/NAME.py`` registers its own:
+:func:`gpsaccel.registry.assignments`).
 """
 
 from __future__ import annotations
@@ -19,9 +21,7 @@ from pathlib import Path
 
 import yaml
 
-#: The homeworks, in course order.
-ASSIGNMENTS = ("calibration", "coop", "ship")
-
+from gpsaccel import registry
 
 #: Environment variable naming the instructor's folder of masters (``NAME/NAME.ipynb`` and
 #: ``NAME/graded.py``, as in the repository's ``assignments/``), for an instructor who installed
@@ -40,8 +40,7 @@ def assignments_dir() -> Path:
 
 def master_notebook(name: str) -> Path:
     """The master notebook of homework ``name`` (ValueError for an unknown name)."""
-    if name not in ASSIGNMENTS:
-        raise ValueError(f"assignment must be one of {', '.join(ASSIGNMENTS)}, got {name!r}")
+    registry.assignment(name)  # ValueError naming the homework registered
     path = assignments_dir() / name / f"{name}.ipynb"
     if not path.is_file():
         raise FileNotFoundError(f"master notebook {path} not found (the masters ship with a "
@@ -167,8 +166,7 @@ def refresh_student_package(name: str) -> Path:
 def copy_student_side(name: str, out: Path | str) -> Path:
     """The packaged student side of ``name`` copied to ``out`` (what a student needs from
     ``pip install gpsaccel``: no master, no solutions, no graded questions)."""
-    if name not in ASSIGNMENTS:
-        raise ValueError(f"assignment must be one of {', '.join(ASSIGNMENTS)}, got {name!r}")
+    registry.assignment(name)  # ValueError naming the homework registered
     src = student_package_dir() / name
     out = Path(out).resolve()
     if out.exists() and any(out.iterdir()):

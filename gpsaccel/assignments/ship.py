@@ -21,6 +21,7 @@ from functools import lru_cache
 import numpy as np
 
 from gpsaccel.assignments._answers import array, assert_report, call
+from gpsaccel import registry
 from gpsaccel.check.report import Report
 from gpsaccel.ship.model import GPS_ROWS, ShipModel
 
@@ -231,3 +232,8 @@ def cost_answer(sigma_optimal: object, sigma_zeroed: object, mass_kg: float = 12
                    "actual σ is larger than the optimal one, and larger than it claims.", "note")
     report.sort()
     return report
+
+
+# the homework, for `gpsaccel assignment` / `gpsaccel grade` (its master: assignments/ship/)
+registry.add_assignment("ship", system="ship", problem="ship",
+                        title="The ship: the multirate update and what the zeroed gain costs (report 004)")

@@ -20,17 +20,22 @@ N_FIXES = 41    # t = 0, 0.5, ..., 20 s
 SIGMA_A = 0.3   # m/s², the acceleration noise
 SIGMA_P = 2.0   # m, a position fix
 
+
+def model(dt: float = DT, sigma_a: float = SIGMA_A, sigma_p: float = SIGMA_P) -> dict:
+    """The tracker's Φ, Γ, W, H, V, M0, x0 for a propagation step ``dt`` (s) (the homework gives
+    each student their own ``dt``, σ_a and σ_p)."""
+    return dict(Phi=[[1.0, dt], [0.0, 1.0]],          # p += v·Δt
+                Gamma=[[dt**2 / 2], [dt]],            # the acceleration enters both
+                W=[[sigma_a**2]],
+                H=[[1.0, 0.0]],                       # a fix measures the position
+                V=[[sigma_p**2]],
+                M0=np.diag([25.0, 4.0]),              # σ = 5 m, 2 m/s at t = 0
+                x0=[0.0, 1.0])
+
+
 #: The tracker problem (``gpsaccel check --problem tracker``, ``check.submission(p, problem=...)``).
 TRACKER = Problem.linear(
-    "tracker",
-    Phi=[[1.0, DT], [0.0, 1.0]],                   # p += v·Δt
-    Gamma=[[DT**2 / 2], [DT]],                     # the acceleration enters both
-    W=[[SIGMA_A**2]],
-    H=[[1.0, 0.0]],                                # a fix measures the position
-    V=[[SIGMA_P**2]],
-    M0=np.diag([25.0, 4.0]),                       # σ = 5 m, 2 m/s at t = 0
-    x0=[0.0, 1.0],
-    every=EVERY, n_epochs=N_FIXES, dt=DT,
+    "tracker", **model(), every=EVERY, n_epochs=N_FIXES, dt=DT,
     states=("p", "v"), measurements=("p",),
     title="Tracker: constant velocity, 10 Hz propagation, 2 Hz position fixes (2 states)",
     z_meaning="the position fix (m) at t = 0, 0.5, ..., 20 s",

@@ -1,11 +1,14 @@
 """Every figure of the course reports, by report: ``gpsaccel figures --report 000|...|all``.
 
-Each report has a module ``gpsaccel.figures.rNNN`` with
+Each report has a module ``gpsaccel.figures.rNNN`` (named in
+:data:`gpsaccel.registry.REPORT_PROVIDERS`) with
 
 * ``TITLE``: the report's one-line title,
 * ``DEFAULT_RUNS``: the Monte Carlo size the report used (the CLI's default for ``--runs``),
 * ``figures(runs: int, seed: int) -> Iterator[ReportFigure]``: draws the report's figures in order,
-  computing what they share once.
+  computing what they share once,
+* ``FIGURES``: the figure numbers the report lists, registered with
+  :func:`gpsaccel.registry.add_report` when the module is imported.
 
 The drawing itself lives in :mod:`gpsaccel.plots` (kinds of figure reused everywhere); a report
 module only says which figure is which.  :func:`write_figures` saves PNGs named
@@ -16,24 +19,14 @@ from __future__ import annotations
 
 import html
 import importlib
-import importlib.util
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 from matplotlib.figure import Figure
 
+from gpsaccel import registry
 from gpsaccel._atomic import savefig, write_text
-
-#: Every report of the course, in reading order, with the module that draws it.
-REPORT_MODULES = {
-    "000": "gpsaccel.figures.r000",
-    "001": "gpsaccel.figures.r001",
-    "003": "gpsaccel.figures.r003",
-    "002": "gpsaccel.figures.r002",
-    "004": "gpsaccel.figures.r004",
-}
-
 
 @dataclass
 class ReportFigure:
@@ -51,8 +44,9 @@ class ReportFigure:
 
 
 def available_reports() -> list[str]:
-    """The reports the package covers so far (those whose figure module exists)."""
-    return [r for r, mod in REPORT_MODULES.items() if importlib.util.find_spec(mod) is not None]
+    """The reports the package covers, in reading order: every report a figure module registered
+    (:func:`gpsaccel.registry.reports`; a new report is one module and one line there)."""
+    return list(registry.reports())
 
 
 def report_module(report: str):
@@ -60,7 +54,7 @@ def report_module(report: str):
     if report not in available_reports():
         raise ValueError(f"report must be one of {', '.join(available_reports())} or 'all'; "
                          f"got {report!r}")
-    return importlib.import_module(REPORT_MODULES[report])
+    return importlib.import_module(registry.report(report).module)
 
 
 def write_figures(reports: list[str], out: Path | str, runs: int | None = None, seed: int = 0,

@@ -13,13 +13,17 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from gpsaccel import plots
+from gpsaccel import plots, registry
 from gpsaccel.calibration.montecarlo import MonteCarloResult
 from gpsaccel.figures import ReportFigure
 from gpsaccel.figures._shared import single_run
 
 TITLE = "GPS-aided accelerometer calibration (MAE 271A, 10,000-run Monte Carlo)"
 DEFAULT_RUNS = 10_000
+
+#: The figures the report lists (a lesson walks through each); a zoom of 7, 7b, is drawn too
+FIGURES = ("1", "2", "3", "3b", "4", "5", "6", "7")
+registry.add_report("000", __name__, FIGURES, title=TITLE)
 
 
 def figures(runs: int, seed: int, single: tuple | None = None,

@@ -11,13 +11,18 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-from gpsaccel import plots
+from gpsaccel import plots, registry
 from gpsaccel.figures import ReportFigure
 from gpsaccel.figures._shared import single_run
 
 REPORT = "001"
 TITLE = "Calibration of an accelerometer using GPS measurements (MAE 271A, 5,000-run Monte Carlo)"
 DEFAULT_RUNS = 5_000
+
+#: The figures the report lists (a lesson walks through each); its two figures 10
+#: are drawn as 10a (the gains) and 10b (the ensemble average)
+FIGURES = tuple(str(i) for i in range(1, 13))
+registry.add_report("001", __name__, FIGURES, title=TITLE)
 
 
 def figures(runs: int, seed: int) -> Iterator[ReportFigure]:

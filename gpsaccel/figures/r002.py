@@ -15,7 +15,7 @@ from collections.abc import Iterator
 import numpy as np
 from matplotlib.figure import Figure
 
-from gpsaccel import plots
+from gpsaccel import plots, registry
 from gpsaccel.coop.filters import FilterResult, run_filter
 from gpsaccel.coop.model import (
     MEASUREMENTS,
@@ -32,6 +32,11 @@ from gpsaccel.figures import ReportFigure
 TITLE = "Cooperative air/ground localization: LKF, EKF and UKF with NEES/NIS tests (ASEN 5044)"
 #: The report's EKF NEES/NIS used 100 runs (its LKF 50).
 DEFAULT_RUNS = 100
+
+#: The figures the report lists (a lesson walks through each)
+FIGURES = tuple(str(i) for i in range(1, 20))
+registry.add_report("002", __name__, FIGURES, title=TITLE)
+
 #: Report 002's initial perturbation for the linearization study (part 1c).
 DX0 = np.array([0.0, 1.0, 0.0, 0.0, 0.0, 0.1])
 S = plots.STYLE

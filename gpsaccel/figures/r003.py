@@ -10,13 +10,17 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-from gpsaccel import plots
+from gpsaccel import plots, registry
 from gpsaccel.figures import ReportFigure
 from gpsaccel.figures._shared import single_run
 
 REPORT = "003"
 TITLE = "Calibration of an accelerometer using GPS measurements (MAE 271A, 10,000-run Monte Carlo)"
 DEFAULT_RUNS = 10_000
+
+#: The figures the report lists (a lesson walks through each)
+FIGURES = tuple(str(i) for i in range(1, 7))
+registry.add_report("003", __name__, FIGURES, title=TITLE)
 
 
 def figures(runs: int, seed: int) -> Iterator[ReportFigure]:

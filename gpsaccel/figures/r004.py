@@ -15,7 +15,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from gpsaccel import plots
+from gpsaccel import plots, registry
 from gpsaccel.figures import ReportFigure
 from gpsaccel.kalman.multirate import MultirateResult, run_multirate
 from gpsaccel.ship.comparison import DESCRIPTIONS, FILTERS, compare_ship_filters, compare_wind
@@ -26,6 +26,10 @@ from gpsaccel.ship.zeroed_gain import run_zeroed_gain
 TITLE = "AAUSHIP ship: monorate vs multirate Kalman filter (GPS 1 Hz, IMU 10 Hz)"
 #: The report has no Monte Carlo; this is the size of figures 12-14's.
 DEFAULT_RUNS = 200
+
+#: The figures the report lists (a lesson walks through each)
+FIGURES = tuple(str(i) for i in range(1, 12))
+registry.add_report("004", __name__, FIGURES, title=TITLE)
 
 GROUPS = (("position", (0, 3, 6)), ("velocity", (1, 4, 7)), ("acceleration", (2, 5, 8)))
 

@@ -11,6 +11,7 @@ import nbformat
 import numpy as np
 import pytest
 
+from gpsaccel import registry
 from gpsaccel.assignments import grading
 from gpsaccel.assignments import notebook as nbm
 from gpsaccel.assignments.grading import find_submissions, grade, redact
@@ -229,7 +230,7 @@ def test_cli_assignment_with_a_relative_out_and_grade(tmp_path, monkeypatch, cap
     assert read_grades(tmp_path / "class-grades" / "grades.csv")["alice"]["total"] == "10"
 
 
-@pytest.mark.parametrize("name", ["calibration", "coop", "ship"])
+@pytest.mark.parametrize("name", registry.assignments())
 def test_packaged_student_side_is_the_masters_and_holds_no_solution(name, tmp_path):
     from gpsaccel.assignments.generate import generate, student_package_dir
 

@@ -8,18 +8,30 @@ import re
 import matplotlib
 import pytest
 
+from gpsaccel import registry
 from gpsaccel.cli import main
 from gpsaccel.figures import iter_report, write_figures
 
 matplotlib.use("Agg")
 
-#: The figures /work/shared/seeds/README.md lists, as numbers (report 001's two figures 10 are
-#: 10a, gains, and 10b, the ensemble average).
-EXPECTED = {
-    "000": ["01", "02", "03", "03b", "04", "05", "06", "07", "07b"],
-    "001": ["01", "02", "03", "04", "05", "06", "07", "08", "09", "10a", "10b", "11", "12"],
-    "003": ["01", "02", "03", "04", "05", "06"],
-}
+#: What the files number beyond the figures each report lists (registry.report(r).figures): report
+#: 000 draws a zoom of figure 7 (07b); report 001's two figures 10 are 10a (gains) and 10b (the
+#: ensemble average).
+EXTRA = {"000": ("07b",)}
+SPLIT = {"001": {"10": ("10a", "10b")}}
+
+
+def _file_numbers(report: str) -> list[str]:
+    """The figure numbers of ``report``'s files, in order: the registered list, zero-padded."""
+    out = list(EXTRA.get(report, ()))
+    for n in registry.report(report).figures:
+        padded = n.zfill(2) if n[-1].isdigit() else n[:-1].zfill(2) + n[-1]
+        out += SPLIT.get(report, {}).get(n, (padded,))
+    return sorted(out)
+
+
+#: The calibration reports (002 and 004 have tests of their own).
+EXPECTED = {r: _file_numbers(r) for r in ("000", "001", "003")}
 RUNS = 30
 NAME = re.compile(r"^r(\d{3})-fig(\d{2}[a-z]?)-[a-z0-9]+(-[a-z0-9]+)*\.png$")
 

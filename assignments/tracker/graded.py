@@ -1,0 +1,61 @@
+"""The tracker homework's graded questions (instructor side: in the repository, not the wheel).
+
+q1 reads the matrices (values) and checks them for the student's rate and noise levels (variant)
+with the tracker's catalogue; q2 is the file ``kalman_filter.py`` the notebook writes, checked by
+:func:`gpsaccel.check.submission` (``problem="tracker"``) on fresh realizations in a box without
+gpsaccel.  See :mod:`gpsaccel.assignments.questions`.
+"""
+
+from __future__ import annotations
+
+from gpsaccel.assignments.linear import MATRICES, matrices_answer, shapes
+from gpsaccel.assignments.tracker import variant_model
+from gpsaccel.check.report import Report
+
+# ----------------------------------------------------------------------- graded questions
+#: The student's tracker of question 1: propagation rate (Hz, a multiple of the 2 Hz fixes),
+#: acceleration noise σ_a (m/s²), position-fix σ_p (m); 27 variants.
+RATES_HZ = (10, 20, 50)
+SIGMAS_A = (0.2, 0.3, 0.5)
+SIGMAS_P = (1.5, 2.0, 3.0)
+
+#: The public notebook's variant (the checker's tracker).
+DEFAULT_VARIANT = {"rate_hz": 10, "sigma_a": 0.3, "sigma_p": 2.0}
+
+
+def variant(number: int) -> dict:
+    """The student's numbers: rate and noise levels of question 1."""
+    return {"rate_hz": RATES_HZ[number % 3], "sigma_a": SIGMAS_A[(number // 3) % 3],
+            "sigma_p": SIGMAS_P[(number // 9) % 3]}
+
+
+def _q1_reads(draw):
+    from gpsaccel.assignments.notebook import Read
+
+    want = shapes(variant_model(**draw.variant))
+    return [Read(name, (), (want[name],), value=True) for name in MATRICES]
+
+
+def _q1_grade(draw, answers) -> Report:
+    from gpsaccel.assignments.questions import value
+
+    report = Report("question 1: model matrices")
+    given = {name: value(report, name, a) for name, a in zip(MATRICES, answers, strict=True)}
+    if not report.passed:
+        return report
+    return matrices_answer(variant_model(**draw.variant), given, "question 1: model matrices")
+
+
+def _q2_grade(path, draw, timeout: float) -> Report:
+    from gpsaccel.check import submission
+
+    return submission(path, problem="tracker", n_runs=10, seed=draw.seed % 2**32,
+                      timeout=timeout)
+
+
+def graded_questions():
+    """The tracker homework's graded questions (:mod:`gpsaccel.assignments.questions`)."""
+    from gpsaccel.assignments.questions import Question
+
+    return (Question("q1", 4, _q1_reads, _q1_grade),
+            Question("q2", 6, file="kalman_filter.py", grade_file=_q2_grade))

@@ -1,0 +1,111 @@
+r"""Homework checks for any linear model: the student's model matrices, named with the catalogue.
+
+A question "build Φ, Γ, Q, H, V, M0 for this system" has one answer, the
+:class:`~gpsaccel.kalman.epochs.LinearModel`'s (Q = Γ W Γᵀ per propagation step).  A wrong matrix
+is explained, where it can be, by the mistakes of the system's catalogue
+(:class:`~gpsaccel.kalman.epochs.LinearCatalogue`: Φᵀ for Φ, Q without Γ, σ for σ² in V, W or
+M0, a permuted M0), alone or two together: each ingredient mistake is applied to the model's
+ingredients and the matrix it gives compared with the student's.  So the homework's codes are
+the checker's (``phi-transposed``, ``q-without-gamma``, ``std-as-variance``, ``m0-order``); a
+wrong matrix no mistake explains is ``matrix-value``, with the elements that differ named (never
+the value they should have).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gpsaccel.assignments._answers import array
+from gpsaccel.check.report import Report
+from gpsaccel.kalman.epochs import (
+    LinearCatalogue,
+    LinearIngredients,
+    LinearModel,
+    Mistake,
+    combinations,
+    with_changes,
+)
+
+#: The matrices the question asks for, in the order it lists them.
+MATRICES = ("Phi", "Gamma", "Q", "H", "V", "M0")
+
+#: Relative tolerance of an element (students type numbers such as 0.0025 by hand).
+RTOL = 1e-6
+
+#: The ingredients a matrix question can show a mistake in (the catalogue's other entries are
+#: about the recursion: skipped updates, the number of steps, what is returned).
+_INGREDIENTS = frozenset({"Phi", "Gamma", "W", "V", "M0"})
+
+_SUB = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
+_SYMBOL = {"Phi": "Φ", "Gamma": "Γ"}
+
+
+def shapes(model: LinearModel) -> dict[str, tuple[int, int]]:
+    """Name -> shape of each matrix of :data:`MATRICES` for ``model``."""
+    n, m, p = model.n, model.Gamma.shape[1], model.H.shape[0]
+    return {"Phi": (n, n), "Gamma": (n, m), "Q": (n, n), "H": (p, n), "V": (p, p), "M0": (n, n)}
+
+
+def matrices(g: LinearIngredients) -> dict[str, np.ndarray]:
+    """The matrices of :data:`MATRICES` a filter with ingredients ``g`` uses (Q = Γ W Γᵀ)."""
+    return {"Phi": g.Phi, "Gamma": g.Gamma, "Q": g.Gamma @ g.W @ g.Gamma.T, "H": g.H, "V": g.V,
+            "M0": g.M0}
+
+
+def _close(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    scale = max(float(np.abs(b).max()), 1e-300)
+    return np.isclose(a, b, rtol=RTOL, atol=RTOL * 1e-6 * scale)
+
+
+def _elem(name: str, idx: tuple[int, ...]) -> str:
+    """Course notation, 1-based: Φ₁₂, V₁₁."""
+    return _SYMBOL.get(name, name) + "".join(str(i + 1) for i in idx).translate(_SUB)
+
+
+def explanations(model: LinearModel, name: str, given: np.ndarray, max_combined: int = 2
+                 ) -> tuple[Mistake, ...]:
+    """The fewest catalogue mistakes (up to ``max_combined``, touching different ingredients)
+    that turn the model's matrix ``name`` into ``given``; () when none does."""
+    correct = LinearIngredients.correct(model)
+    right = matrices(correct)[name]
+    mistakes = [m for m in LinearCatalogue(model).covariance_mistakes()
+                if {c[0] for c in m.changes} <= _INGREDIENTS]
+    for size in range(1, max_combined + 1):
+        for combo in combinations(mistakes, size):
+            g = correct
+            for m in combo:
+                g = with_changes(g, m.changes)
+            made = matrices(g)[name]
+            if not _close(made, right).all() and _close(given, made).all():
+                return combo
+    return ()
+
+
+def matrices_answer(model: LinearModel, given: dict[str, object],
+                    title: str = "model matrices") -> Report:
+    """Check the student's :data:`MATRICES` (name -> value) against ``model``; never raises."""
+    report = Report(title)
+    want = shapes(model)
+    arrays = {k: array(report, k, given.get(k), want[k]) for k in MATRICES}
+    right = matrices(LinearIngredients.correct(model))
+    for k in MATRICES:
+        a = arrays[k]
+        if a is None:
+            continue
+        ok = _close(a, right[k])
+        if ok.all():
+            continue
+        combo = explanations(model, k, a)
+        if combo:
+            for m in combo:
+                report.add(m.code, f"{k}: {m.message}")
+            continue
+        bad = [_elem(k, tuple(int(i) for i in idx)) for idx in np.argwhere(~ok)]
+        verb = "differs" if len(bad) == 1 else "differ"
+        report.add("matrix-value", f"{k}: {', '.join(bad[:6])}{' ...' if len(bad) > 6 else ''}"
+                   f" {verb} from the model's (wrong at {len(bad)} of {ok.size} elements). "
+                   f"Check it against the model's equations and your variant's numbers.")
+    if report.passed:
+        report.add("ok", f"{', '.join(MATRICES)} are the model's (to {RTOL:g} relative).", "note")
+    report.sort()
+    return report

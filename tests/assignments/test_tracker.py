@@ -1,0 +1,109 @@
+"""The tracker homework: graded in the sandbox (solved, blank, one mistake per question), its codes
+the tracker catalogue's; the matrices check on its own for every variant."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gpsaccel import registry
+from gpsaccel.assignments import grade
+from gpsaccel.assignments.grading import assignment_module, student_variant
+from gpsaccel.assignments.linear import matrices, matrices_answer
+from gpsaccel.assignments.tracker import variant_model
+from gpsaccel.check.tracker import TRACKER
+from gpsaccel.kalman.epochs import LinearIngredients
+
+from .conftest import write_variant
+
+PHI = "Phi = np.array([[1.0, dt], [0.0, 1.0]])"
+M0 = "M0 = np.diag([5.0**2, 2.0**2])"
+R = "kf.R = np.array([[2.0**2]])                     # V"
+UPDATE = "        kf.update(z[k])\n        x_hat[k], P[k] = kf.x, kf.P"
+SECRET = b"tracker-test-secret-0123456789"
+graded_module = assignment_module("tracker")
+
+
+@pytest.fixture(scope="module")
+def graded(tmp_path_factory):
+    sub = tmp_path_factory.mktemp("class")
+    write_variant("tracker", sub / "solved" / "tracker.ipynb")
+    write_variant("tracker", sub / "blank" / "tracker.ipynb",
+                  [("def kalman_filter(z):\n", "def kalman_filter(z):\n    return None\n")],
+                  last_cell="Phi = Gamma = Q = H = V = M0 = ...")
+    write_variant("tracker", sub / "transposed" / "tracker.ipynb",
+                  [(PHI, "Phi = np.array([[1.0, 0.0], [dt, 1.0]])")])
+    write_variant("tracker", sub / "sigma_in_R" / "tracker.ipynb",
+                  [(R, R.replace("2.0**2", "2.0"))])
+    write_variant("tracker", sub / "a_priori" / "tracker.ipynb",
+                  [(UPDATE, "        x_hat[k], P[k] = kf.x, kf.P\n        kf.update(z[k])")])
+    grades = grade(sub, "tracker", out=sub.parent / "tracker-grades", jobs=2, timeout=120,
+                   seed=5, secret=SECRET)
+    return {g.student: g for g in grades}
+
+
+def test_an_honest_notebook_gets_full_marks_a_blank_one_nothing(graded):
+    assert graded["solved"].scores == {"q1": 4.0, "q2": 6.0}, graded["solved"].feedback
+    blank = graded["blank"]
+    assert blank.status == "graded" and blank.total == 0
+    assert "not-defined" in blank.codes["q1"] and blank.codes["q2"]
+
+
+def test_each_mistake_loses_exactly_its_question_with_the_catalogue_code(graded):
+    codes = set(TRACKER.codes())
+    for student, question, code in (("transposed", "q1", "phi-transposed"),
+                                    ("sigma_in_R", "q2", "std-as-variance"),
+                                    ("a_priori", "q2", "returns-a-priori")):
+        g = graded[student]
+        full = {"q1": 4.0, "q2": 6.0}
+        assert g.scores == {**full, question: 0.0}, (student, g.feedback)
+        assert g.codes[question] == [code] and code in codes, (student, g.codes)
+
+
+def test_question_1_is_the_students_own_variant(graded):
+    v = student_variant("tracker", "transposed", SECRET)
+    assert f"rate_hz = {v['rate_hz']}" in graded["transposed"].feedback
+
+
+# ------------------------------------------------------------------ the checks on their own
+def _right(model):
+    return {k: np.array(v) for k, v in matrices(LinearIngredients.correct(model)).items()}
+
+
+@pytest.mark.parametrize("number", range(27))
+def test_every_variant_passes_its_own_matrices_and_fails_anothers(number):
+    v = graded_module.variant(number)
+    model = variant_model(**v)
+    assert matrices_answer(model, _right(model)).passed
+    other = variant_model(**graded_module.variant(number + 1))
+    assert not matrices_answer(model, _right(other)).passed
+
+
+def test_each_ingredient_mistake_is_named_with_the_catalogues_code():
+    model = variant_model(rate_hz=20, sigma_a=0.5, sigma_p=3.0)
+    right = _right(model)
+    G, dt = right["Gamma"], model.dt
+    cases = {
+        "phi-transposed": {"Phi": right["Phi"].T},
+        "q-without-gamma": {"Q": 0.25 * np.eye(2)},
+        "std-as-variance": {"V": np.array([[3.0]]), "M0": np.diag([5.0, 2.0]),
+                            "Q": G @ G.T * 0.5},     # σ where σ² belongs: in V, M0 and W
+        "m0-order": {"M0": np.diag([4.0, 25.0])},
+        "matrix-value": {"Q": G @ G.T * 0.3**2},      # another variant's σ_a
+    }
+    for code, wrong in cases.items():
+        report = matrices_answer(model, {**right, **wrong})
+        assert report.codes == [code], (code, report)
+        assert all(f.message.split(":")[0] in wrong for f in report.findings
+                   if f.severity == "error")
+    slip = {**right, "Phi": np.array([[1.0, 2 * dt], [0.0, 1.0]])}
+    msg = matrices_answer(model, slip).findings[0].message
+    assert "Φ₁₂ differs" in msg and f"{dt:g}" not in msg.split("differs")[1]
+
+
+def test_the_homework_is_registered_where_it_is_defined():
+    assert "tracker" in registry.assignments()
+    entry = registry.assignment("tracker")
+    assert entry.problem == "tracker" and entry.problem in registry.problems()
+    with pytest.raises(ValueError, match="assignment must be one of"):
+        registry.assignment("no-such-homework")
