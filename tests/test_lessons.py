@@ -37,10 +37,13 @@ _WORDS = ("twelve", "thirteen", "fourteen", "fifteen", "sixteen", "seventeen", "
 
 
 def test_the_readme_counts_the_lessons():
-    """The README says in words how many lessons there are: the number of masters."""
-    readme = (L.lessons_dir().resolve().parent / "README.md").read_text()
-    said = [w for w in _WORDS if re.search(rf"\b{w}\s+Jupyter lessons", readme)]
-    assert said == [_WORDS[len(MASTERS) - 12]], said
+    """The README (and docs/lessons.md) say in words how many lessons there are: the number of
+    masters."""
+    root = L.lessons_dir().resolve().parent
+    for page, phrase in (("README.md", "Jupyter lessons"), ("docs/lessons.md", "Jupyter notebooks")):
+        text = (root / page).read_text().lower()
+        said = [w for w in _WORDS if re.search(rf"\b{w}\s+{phrase.lower()}", text)]
+        assert said == [_WORDS[len(MASTERS) - 12]], (page, said)
 
 
 @pytest.mark.parametrize("master", MASTERS, ids=IDS)

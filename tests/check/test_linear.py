@@ -1,7 +1,7 @@
 """check.Problem.linear: a problem for any linear model, with the generic catalogue of mistakes.
 
 The fourth problem (gpsaccel/check/tracker.py: a constant-velocity tracker, 10 Hz propagation,
-2 Hz position fixes) is defined in 37 lines of instructor code.  A student-style filter
+2 Hz position fixes) is defined in a few dozen lines of instructor code (counted below).  A student-style filter
 (tests/submissions/tracker/student.py, written step by step, not the catalogue's recursion) makes
 each generic mistake in turn: each gets its code on two seeds, the correct filter passes.
 """
@@ -108,3 +108,20 @@ def test_bad_models_are_refused_with_the_argument_named():
         LinearModel(**{**good, "M0": -np.eye(2)})
     with pytest.raises(ValueError, match="every"):
         LinearModel(**{**good, "every": 0})
+
+
+def test_the_tracker_is_a_few_dozen_lines_of_instructor_code():
+    """The fourth problem's definition, its docstring, blank lines and comments left out, is
+    under 60 lines (lesson 13 prints the count)."""
+    import ast
+    import inspect
+
+    from gpsaccel.check import tracker
+
+    source = inspect.getsource(tracker)
+    doc = ast.get_docstring(ast.parse(source), clean=False)
+    body = source.split('"""', 2)[2]
+    assert doc and doc in source.split('"""', 2)[1]
+    lines = [ln for ln in body.splitlines() if ln.strip() and not ln.strip().startswith("#")]
+    assert 10 < len(lines) < 60, len(lines)
+
