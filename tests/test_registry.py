@@ -1,0 +1,64 @@
+"""The registry: homework and reports are registered where they are defined, and what lists them
+(the CLI, the generator, the packaged student side, the lessons' index) reads it."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from gpsaccel import registry
+from gpsaccel.assignments.generate import assignments_dir, student_package_dir
+from gpsaccel.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_every_homework_with_a_master_is_registered_and_packaged():
+    masters = sorted(p.parent.name for p in assignments_dir().glob("*/*.ipynb")
+                     if p.stem == p.parent.name)
+    assert sorted(registry.assignments()) == masters
+    assert sorted(p.name for p in student_package_dir().iterdir() if p.is_dir()) == masters
+    for name in registry.assignments():
+        entry = registry.assignment(name)
+        assert entry.problem in registry.problems() and entry.title, name
+
+
+def test_every_report_is_registered_by_its_figure_module_in_reading_order():
+    assert registry.reports() == tuple(m.rsplit(".r", 1)[1] for m in registry.REPORT_PROVIDERS)
+    for number in registry.reports():
+        entry = registry.report(number)
+        module = sys.modules[entry.module]
+        assert entry.figures == module.FIGURES and entry.title == module.TITLE
+    assert registry.report_figures()["000"][:4] == ("1", "2", "3", "3b")
+
+
+def test_unknown_names_and_bad_entries_are_refused_naming_the_choices():
+    with pytest.raises(ValueError, match="assignment must be one of calibration, coop, ship"):
+        registry.assignment("nope")
+    with pytest.raises(ValueError, match="report must be one of 000, 001"):
+        registry.report("999")
+    with pytest.raises(ValueError, match="report must be three digits"):
+        registry.add_report("4", "m", ("1",))
+    with pytest.raises(ValueError, match="figures must be"):
+        registry.add_report("998", "m", ("01",))
+    with pytest.raises(ValueError, match="already registered"):
+        registry.add_assignment("tracker", system="other")
+    with pytest.raises(ValueError, match="name must be lower-case"):
+        registry.add_assignment("Tracker 2")
+
+
+def test_the_cli_choices_are_the_registry_s_and_building_the_parser_imports_no_homework(capsys):
+    assert main(["assignment", "nope", "--out", "x"]) == 2
+    err = capsys.readouterr().err
+    assert all(name in err for name in registry.assignments())
+    # the choices are read when a parse needs them: importing and building the parser loads no
+    # homework module and no figure module
+    code = ("import sys; from gpsaccel.cli import build_parser; build_parser(); "
+            "print(any(m.startswith(('gpsaccel.assignments.', 'gpsaccel.figures.r')) "
+            "for m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
+                         check=True, timeout=120).stdout
+    assert out.strip() == "False"
