@@ -62,7 +62,8 @@ lab: $(STAMP)
 MYPY_CLEAN := gpsaccel/registry.py gpsaccel/kalman gpsaccel/check/findings.py \
 	gpsaccel/check/linear.py gpsaccel/check/whole_filter.py gpsaccel/check/tracker.py \
 	gpsaccel/check/report.py gpsaccel/check/student_filter.py gpsaccel/check/problems.py \
-	gpsaccel/calibration/mistakes.py
+	gpsaccel/calibration/mistakes.py \
+	gpsaccel/assignments/linear.py gpsaccel/assignments/tracker.py
 
 lint: $(VENV)/.installed-dev
 	$(BIN)/ruff check .

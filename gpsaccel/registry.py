@@ -76,9 +76,6 @@ class ReportEntry:
 
 
 _PROBLEMS: dict[str, ProblemEntry] = {}
-_ASSIGNMENTS: dict[str, AssignmentEntry] = {}
-_REPORTS: dict[str, ReportEntry] = {}
-_loaded_kinds: set[str] = set()
 _INSTANCES: dict[str, object] = {}
 _loaded = False
 
@@ -138,49 +135,64 @@ def systems() -> tuple[str, ...]:
     return tuple(dict.fromkeys(e.system for e in _PROBLEMS.values() if e.system))
 
 
-# ------------------------------------------------------------------ homework assignments
-def _load_kind(kind: str, providers: tuple[str, ...]) -> None:
-    if kind not in _loaded_kinds:
-        _loaded_kinds.add(kind)  # first, so a provider that lists its kind does not recurse
-        try:
-            for module in providers:
-                importlib.import_module(module)
-        except BaseException:
-            _loaded_kinds.discard(kind)
-            raise
+# ------------------------------------------------------------------ homework and reports
+class _Table:
+    """One kind of registered entry (homework, reports): entries by key, filled by importing the
+    kind's providers, by name, the first time a list is asked for."""
+
+    def __init__(self, what: str, providers: tuple[str, ...]) -> None:
+        self.what, self.providers = what, providers
+        self.entries: dict[str, object] = {}
+        self.loaded = False
+
+    def add(self, key: str, entry: object) -> None:
+        """Register ``entry`` under ``key``; the same entry again is harmless (a module imported
+        twice), a different one under a taken key is refused."""
+        if self.entries.get(key, entry) != entry:
+            raise ValueError(f"{self.what}: {key!r} is already registered")
+        self.entries[key] = entry
+
+    def names(self) -> tuple[str, ...]:
+        if not self.loaded:
+            self.loaded = True  # first, so a provider that lists its kind does not recurse
+            try:
+                for module in self.providers:
+                    importlib.import_module(module)
+            except BaseException:
+                self.loaded = False
+                raise
+        return tuple(self.entries)
+
+    def get(self, key: str) -> object:
+        names = self.names()
+        if key not in names:
+            raise ValueError(f"{self.what} must be one of {', '.join(names)}, got {key!r}")
+        return self.entries[key]
 
 
-def _checked_name(what: str, name: object) -> str:
-    if not isinstance(name, str) or not name or not name.replace("-", "").isalnum() or \
-            name != name.lower():
-        raise ValueError(f"{what} must be lower-case letters, digits and dashes, got {name!r}")
-    return name
+_ASSIGNMENTS = _Table("assignment", ASSIGNMENT_PROVIDERS)
+_REPORTS = _Table("report", REPORT_PROVIDERS)
 
 
 def add_assignment(name: str, *, system: str = "", problem: str = "", title: str = "") -> None:
-    """Register the homework ``name`` (its module calls this when imported; registering the
-    same entry again is harmless, a different one under a taken name is refused)."""
-    entry_ = AssignmentEntry(_checked_name("name", name), system, problem, title)
-    if _ASSIGNMENTS.get(name, entry_) != entry_:
-        raise ValueError(f"name: an assignment {name!r} is already registered")
-    _ASSIGNMENTS[name] = entry_
+    """Register the homework ``name`` (its module ``gpsaccel/assignments/NAME.py`` calls this
+    when imported)."""
+    if not isinstance(name, str) or not name or not name.replace("-", "").isalnum() or \
+            name != name.lower():
+        raise ValueError(f"name must be lower-case letters, digits and dashes, got {name!r}")
+    _ASSIGNMENTS.add(name, AssignmentEntry(name, system, problem, title))
 
 
 def assignments() -> tuple[str, ...]:
     """The names of every registered homework, in :data:`ASSIGNMENT_PROVIDERS`' order."""
-    _load_kind("assignments", ASSIGNMENT_PROVIDERS)
-    return tuple(_ASSIGNMENTS)
+    return _ASSIGNMENTS.names()
 
 
 def assignment(name: str) -> AssignmentEntry:
     """The registered homework ``name``; ValueError naming the choices otherwise."""
-    names = assignments()
-    if name not in names:
-        raise ValueError(f"assignment must be one of {', '.join(names)}, got {name!r}")
-    return _ASSIGNMENTS[name]
+    return _ASSIGNMENTS.get(name)  # type: ignore[return-value]
 
 
-# ------------------------------------------------------------------ the reports' figures
 def add_report(report: str, module: str, figures: tuple[str, ...], *, title: str = "") -> None:
     """Register course report ``report`` ("000"): ``module`` draws its figures, ``figures`` are
     the numbers the report lists ("1", "3b", ...).  Called by the figure module when imported."""
@@ -191,26 +203,19 @@ def add_report(report: str, module: str, figures: tuple[str, ...], *, title: str
                               for n in numbers):
         raise ValueError(f"figures must be the report's figure numbers as it writes them "
                          f"('1', '3b', ...), got {figures!r}")
-    entry_ = ReportEntry(report, module, numbers, title)
-    if _REPORTS.get(report, entry_) != entry_:
-        raise ValueError(f"report: {report!r} is already registered")
-    _REPORTS[report] = entry_
+    _REPORTS.add(report, ReportEntry(report, module, numbers, title))
 
 
 def reports() -> tuple[str, ...]:
     """Every registered report, in reading order (:data:`REPORT_PROVIDERS`)."""
-    _load_kind("reports", REPORT_PROVIDERS)
-    return tuple(_REPORTS)
+    return _REPORTS.names()
 
 
 def report(number: str) -> ReportEntry:
     """The registered report ``number``; ValueError naming the choices otherwise."""
-    numbers = reports()
-    if number not in numbers:
-        raise ValueError(f"report must be one of {', '.join(numbers)}, got {number!r}")
-    return _REPORTS[number]
+    return _REPORTS.get(number)  # type: ignore[return-value]
 
 
 def report_figures() -> dict[str, tuple[str, ...]]:
     """Report -> the figures it lists (what the lessons must walk through)."""
-    return {r: _REPORTS[r].figures for r in reports()}
+    return {r: report(r).figures for r in reports()}

@@ -9,9 +9,12 @@ with the tracker's catalogue; question 2, the whole ``kalman_filter(z)``, by
 
 from __future__ import annotations
 
+from typing import cast
+
 from gpsaccel import registry
 from gpsaccel.assignments._answers import assert_report
 from gpsaccel.assignments.linear import matrices_answer
+from gpsaccel.check.linear import ModelProblem
 from gpsaccel.check.report import Report
 from gpsaccel.check.tracker import N_FIXES, TRACKER, model
 from gpsaccel.kalman.epochs import LinearModel
@@ -25,10 +28,10 @@ def variant_model(rate_hz: int = 10, sigma_a: float = 0.3, sigma_p: float = 2.0)
     noise σ_a (m/s²) and fixes of σ_p (m); the defaults are :data:`gpsaccel.check.tracker.TRACKER`'s."""
     if rate_hz % FIX_RATE_HZ:
         raise ValueError(f"rate_hz must be a multiple of {FIX_RATE_HZ} Hz, got {rate_hz!r}")
-    dt = 1.0 / rate_hz
+    dt, base = 1.0 / rate_hz, cast(ModelProblem, TRACKER).model
     return LinearModel(**model(dt, sigma_a, sigma_p), every=rate_hz // FIX_RATE_HZ,
-                       n_epochs=N_FIXES, dt=dt, states=TRACKER.model.states,
-                       measurements=TRACKER.model.measurements)
+                       n_epochs=N_FIXES, dt=dt, states=base.states,
+                       measurements=base.measurements)
 
 
 def check_matrices(variant: dict, **given: object) -> Report:

@@ -28,6 +28,7 @@ from matplotlib.figure import Figure
 from gpsaccel import registry
 from gpsaccel._atomic import savefig, write_text
 
+
 @dataclass
 class ReportFigure:
     """One drawn figure of a report.  ``number`` is e.g. ``"07"``, ``"03b"``, ``"10a"``."""

@@ -1,9 +1,10 @@
 """check.Problem.linear: a problem for any linear model, with the generic catalogue of mistakes.
 
 The fourth problem (gpsaccel/check/tracker.py: a constant-velocity tracker, 10 Hz propagation,
-2 Hz position fixes) is defined in a few dozen lines of instructor code (counted below).  A student-style filter
-(tests/submissions/tracker/student.py, written step by step, not the catalogue's recursion) makes
-each generic mistake in turn: each gets its code on two seeds, the correct filter passes.
+2 Hz position fixes) is defined in a few dozen lines of instructor code (counted below).  A
+student-style filter (tests/submissions/tracker/student.py, written step by step, not the
+catalogue's recursion) makes each generic mistake in turn: each gets its code on two seeds, the
+correct filter passes.
 """
 
 from __future__ import annotations
