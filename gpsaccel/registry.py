@@ -53,10 +53,11 @@ REPORT_PROVIDERS = ("gpsaccel.figures.r000", "gpsaccel.figures.r001", "gpsaccel.
 @dataclass(frozen=True)
 class AssignmentEntry:
     """A registered homework: its name (the master is ``assignments/NAME/NAME.ipynb``), the
-    system it is about, the checker's problem whose catalogue grades its filter question (if
-    any), and a title."""
+    module that registered it, the system it is about, the checker's problem whose catalogue
+    grades its filter question (if any), and a title."""
 
     name: str
+    module: str
     system: str = ""
     problem: str = ""
     title: str = ""
@@ -153,6 +154,7 @@ class _Table:
         self.entries[key] = entry
 
     def names(self) -> tuple[str, ...]:
+        """Every key: those registered by the providers in their order, then any other."""
         if not self.loaded:
             self.loaded = True  # first, so a provider that lists its kind does not recurse
             try:
@@ -161,7 +163,13 @@ class _Table:
             except BaseException:
                 self.loaded = False
                 raise
-        return tuple(self.entries)
+
+        def rank(key: str) -> int:
+            module = getattr(self.entries[key], "module", "")
+            known = module in self.providers
+            return self.providers.index(module) if known else len(self.providers)
+
+        return tuple(sorted(self.entries, key=rank))
 
     def get(self, key: str) -> object:
         names = self.names()
@@ -174,13 +182,14 @@ _ASSIGNMENTS = _Table("assignment", ASSIGNMENT_PROVIDERS)
 _REPORTS = _Table("report", REPORT_PROVIDERS)
 
 
-def add_assignment(name: str, *, system: str = "", problem: str = "", title: str = "") -> None:
-    """Register the homework ``name`` (its module ``gpsaccel/assignments/NAME.py`` calls this
-    when imported)."""
+def add_assignment(name: str, module: str, *, system: str = "", problem: str = "",
+                   title: str = "") -> None:
+    """Register the homework ``name``: ``module`` (``gpsaccel.assignments.NAME``) calls this when
+    imported, with its ``__name__``."""
     if not isinstance(name, str) or not name or not name.replace("-", "").isalnum() or \
             name != name.lower():
         raise ValueError(f"name must be lower-case letters, digits and dashes, got {name!r}")
-    _ASSIGNMENTS.add(name, AssignmentEntry(name, system, problem, title))
+    _ASSIGNMENTS.add(name, AssignmentEntry(name, module, system, problem, title))
 
 
 def assignments() -> tuple[str, ...]:

@@ -24,6 +24,7 @@ def test_every_homework_with_a_master_is_registered_and_packaged():
     for name in registry.assignments():
         entry = registry.assignment(name)
         assert entry.problem in registry.problems() and entry.title, name
+        assert entry.module == f"gpsaccel.assignments.{name}"
 
 
 def test_every_report_is_registered_by_its_figure_module_in_reading_order():
@@ -45,9 +46,9 @@ def test_unknown_names_and_bad_entries_are_refused_naming_the_choices():
     with pytest.raises(ValueError, match="figures must be"):
         registry.add_report("998", "m", ("01",))
     with pytest.raises(ValueError, match="already registered"):
-        registry.add_assignment("tracker", system="other")
+        registry.add_assignment("tracker", "gpsaccel.assignments.tracker", system="other")
     with pytest.raises(ValueError, match="name must be lower-case"):
-        registry.add_assignment("Tracker 2")
+        registry.add_assignment("Tracker 2", "m")
 
 
 def test_the_cli_choices_are_the_registry_s_and_building_the_parser_imports_no_homework(capsys):

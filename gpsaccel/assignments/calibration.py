@@ -158,5 +158,5 @@ def nees_data(rng: np.random.Generator, n_runs: int, n_times: int = 4
 
 
 # the homework, for `gpsaccel assignment` / `gpsaccel grade` (its master: assignments/calibration/)
-registry.add_assignment("calibration", system="calibration", problem="calibration",
+registry.add_assignment("calibration", __name__, system="calibration", problem="calibration",
                         title="Calibrating an accelerometer with GPS (report 000)")

@@ -303,5 +303,6 @@ _EKF_HINTS = {
 
 
 # the homework, for `gpsaccel assignment` / `gpsaccel grade` (its master: assignments/coop/)
-registry.add_assignment("coop", system="coop", problem="coop",
-                        title="Cooperative localization: Jacobians, the DT model, an EKF (report 002)")
+registry.add_assignment(
+    "coop", __name__, system="coop", problem="coop",
+    title="Cooperative localization: Jacobians, the DT model, an EKF (report 002)")

@@ -235,5 +235,6 @@ def cost_answer(sigma_optimal: object, sigma_zeroed: object, mass_kg: float = 12
 
 
 # the homework, for `gpsaccel assignment` / `gpsaccel grade` (its master: assignments/ship/)
-registry.add_assignment("ship", system="ship", problem="ship",
-                        title="The ship: the multirate update and what the zeroed gain costs (report 004)")
+registry.add_assignment(
+    "ship", __name__, system="ship", problem="ship",
+    title="The ship: the multirate update and what the zeroed gain costs (report 004)")

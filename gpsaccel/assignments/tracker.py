@@ -41,5 +41,5 @@ def check_matrices(variant: dict, **given: object) -> Report:
 
 
 # the homework, for `gpsaccel assignment` / `gpsaccel grade` (its master: assignments/tracker/)
-registry.add_assignment("tracker", system="tracker", problem="tracker",
+registry.add_assignment("tracker", __name__, system="tracker", problem="tracker",
                         title="A constant-velocity tracker: its matrices and its filter")
