@@ -107,3 +107,11 @@ def test_the_homework_is_registered_where_it_is_defined():
     assert entry.problem == "tracker" and entry.problem in registry.problems()
     with pytest.raises(ValueError, match="assignment must be one of"):
         registry.assignment("no-such-homework")
+
+
+def test_feedback_names_the_mistake_without_the_expected_value(graded):
+    text = graded["sigma_in_R"].feedback
+    assert "std-as-variance" in text and "V[" in text
+    assert "should be 4" not in text and "σ² = 4" not in text
+    q1 = graded["transposed"].feedback
+    assert "phi-transposed" in q1 and "Φᵀ" in q1
