@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -503,10 +503,9 @@ def _add_check(sub: argparse._SubParsersAction) -> None:
                    help="submission files, or folders whose every top-level .py file or "
                         "sub-folder is one submission")
     p.add_argument("--problem", choices=registry.problems(), default="calibration",
-                   help="calibration: kalman_filter(z) (report 000, default); coop: ekf(y, Q, R) "
-                        "and/or lkf(y, Q, R) (report 002); ship: multirate_filter(z, u) "
-                        "(report 004); tracker: kalman_filter(z) (a constant-velocity tracker); "
-                        "every problem of gpsaccel.registry")
+                   help="the problem (default calibration), one of gpsaccel.registry's: " +
+                        "; ".join(f"{name}: {registry.entry(name).title}"
+                                  for name in registry.problems()))
     p.add_argument("--json", type=_v.output_file, default=None, metavar="FILE",
                    help="write every finding and number to FILE (e.g. results.json)")
     p.add_argument("--runs", type=_v.flag_int(minimum=2), default=None,
@@ -549,13 +548,13 @@ class _Registered:
     """argparse choices read from :mod:`gpsaccel.registry` when first needed (a parse or a
     help text), so building the parser imports no homework module."""
 
-    def __init__(self, names) -> None:
+    def __init__(self, names: Callable[[], tuple[str, ...]]) -> None:
         self._names = names
 
     def __contains__(self, name: object) -> bool:
         return name in self._names()
 
-    def __iter__(self):
+    def __iter__(self) -> Iterator[str]:
         return iter(self._names())
 
 
