@@ -339,7 +339,10 @@ def redact(text: str) -> str:
     """A finding's text without the expected values: every number that is not a location (a
     time, a step, a cell, a shape) becomes "…", and whatever follows "should be"/"expected"
     is dropped."""
-    text = _EXPECTED.sub(lambda m: m.group(1) + " …", text)
+    # a value after "instead of" is dropped; a name ("instead of Φ", "instead of the a priori")
+    # is the mistake itself and stays
+    text = _EXPECTED.sub(lambda m: m.group(1) + " …" if re.search(r"\d", m.group(0)[len(m.group(1)):])
+                         else m.group(0), text)
 
     def repl(m: re.Match) -> str:
         before = text[max(0, m.start() - 12):m.start()]

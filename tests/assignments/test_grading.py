@@ -171,6 +171,11 @@ def test_redact_keeps_locations_and_drops_values():
     assert "B₃₂" in r and "t = 12.4 s" in r and "step 62" in r and "(151, 3)" in r
 
 
+def test_redact_keeps_the_name_of_what_was_used_instead():
+    r = redact("Φ was used as Φᵀ instead of Φ; V[0, 0] is 0.5 instead of 0.25")
+    assert "instead of Φ;" in r and "0.25" not in r and "0.5" not in r
+
+
 def test_variants_and_seeds_are_keyed_and_independent():
     a = variant_number(SECRET, "ship", "alice")
     assert a == variant_number(SECRET, "ship", "alice")
