@@ -156,7 +156,7 @@ def _cmd_lessons(args: argparse.Namespace) -> int:
     --copy DIR only copy them (and their solutions) where a student edits them."""
     import time
 
-    from gpsaccel.lessons import execute, lessons_dir, render_html
+    from gpsaccel.lessons import execute, lessons_dir, render_html, solutions_dir
 
     if args.copy is not None:
         return _copy_lessons(args.copy, only=args.only, html=args.html)
@@ -171,8 +171,10 @@ def _cmd_lessons(args: argparse.Namespace) -> int:
     total = 0.0
     for path in paths:
         t0 = time.perf_counter()
-        if args.html:
-            target = render_html([path], args.html, runs=args.runs)[0]
+        if args.html:   # the solutions version, solutions collapsed (as on the docs site)
+            solved = solutions_dir() / path.name
+            target = render_html([solved if solved.exists() else path], args.html,
+                                 runs=args.runs)[0]
         else:
             execute(path, runs=args.runs)
             target = None
@@ -424,7 +426,8 @@ def _add_figures(sub: argparse._SubParsersAction) -> None:
 
 def _add_lessons(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("lessons", help="execute the Jupyter lessons; --html DIR renders them")
-    p.add_argument("--html", type=_v.output_dir, default=None, help="folder for the rendered HTML")
+    p.add_argument("--html", type=_v.output_dir, default=None,
+                   help="folder for the rendered HTML (the solutions versions, solutions collapsed)")
     p.add_argument("--runs", type=_v.flag_int(minimum=2), default=None,
                    help="ensemble size for every lesson (GPSACCEL_LESSON_RUNS; default: each "
                         "lesson's full size)")

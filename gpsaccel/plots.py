@@ -327,7 +327,7 @@ def matrix_lines(t: np.ndarray, values: np.ndarray, *, title: str, quantity: str
     finish(ax, title, "time (s)",
            f"{quantity} (1)" if unitless else f"{quantity} (element's unit, see legend)",
            legend=False)
-    ax.legend(loc="best", fontsize="x-small", ncol=3)
+    outside_legend(ax, fontsize="x-small")
     return fig
 
 

@@ -9,6 +9,8 @@ def test_lessons_html_renders_a_lesson_with_its_figures(tmp_path, capsys):
     assert main(["lessons", "--html", str(tmp_path), "--only", "02", "--runs", "10"]) == 0
     html = (tmp_path / "02-error-model.html").read_text(encoding="utf-8")
     assert "image/png" in html and "Deriving" in html
+    # the solutions version, as on the docs site: solutions there, collapsed
+    assert "Solution (click to reveal)" in html and "exercise 02.3: right" in html
     assert "1 lessons executed" in capsys.readouterr().out
 
 

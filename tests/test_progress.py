@@ -43,3 +43,45 @@ def test_figures_show_a_bar_of_the_figures_on_a_terminal_only(monkeypatch, tmp_p
     monkeypatch.setattr("sys.stderr", piped)
     write_figures(["001"], tmp_path / "b", runs=2, progress=True)
     assert piped.getvalue() == ""
+
+
+def test_calibration_monte_carlo_shows_a_bar_on_a_terminal_only(monkeypatch):
+    from gpsaccel.calibration.montecarlo import monte_carlo
+    from gpsaccel.calibration.reports import report_model
+
+    model = report_model("000").replace(duration=1.0)
+    terminal = _Terminal()
+    monkeypatch.setattr("sys.stderr", terminal)
+    monte_carlo(model, 3, seed=0)
+    shown = terminal.getvalue()
+    assert "monte carlo (error-model)" in shown and "/3 [" in shown and "run/s" in shown
+    piped = io.StringIO()
+    monkeypatch.setattr("sys.stderr", piped)
+    monte_carlo(model, 3, seed=0)
+    monte_carlo(model, 3, seed=0, progress=False)
+    assert piped.getvalue() == ""
+
+
+@pytest.mark.slow
+def test_calibration_monte_carlo_shows_the_notebook_bar_in_a_kernel(tmp_path):
+    """In a Jupyter kernel (where stderr is never a terminal) a lesson's Monte Carlo cell shows
+    tqdm's notebook bar, an ipywidgets view; with progress=False it shows nothing."""
+    import nbformat
+
+    from gpsaccel.lessons import execute
+
+    pytest.importorskip("ipywidgets")
+    setup = ("from gpsaccel.calibration.montecarlo import monte_carlo\n"
+             "from gpsaccel.calibration.reports import report_model\n"
+             "model = report_model('000').replace(duration=1.0)")
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(setup),
+                                         nbformat.v4.new_code_cell("_ = monte_carlo(model, 3)"),
+                                         nbformat.v4.new_code_cell(
+                                             "_ = monte_carlo(model, 3, progress=False)")])
+    path = tmp_path / "bar.ipynb"
+    nbformat.write(nb, path)
+    done = execute(path, timeout=120)
+    widget = "application/vnd.jupyter.widget-view+json"
+    shown = [[o for o in c.outputs if widget in o.get("data", {})] for c in done.cells]
+    assert shown[1] and not shown[2], [c.outputs for c in done.cells]
+    assert all(o.get("name") != "stderr" for c in done.cells for o in c.outputs)

@@ -876,10 +876,14 @@ def _chunks(n_runs: int, chunk_size: int) -> Iterator[tuple[int, int]]:
 
 
 def _progress_bar(progress: bool, total: int, desc: str):
+    """tqdm.auto's bar: in a Jupyter kernel with ipywidgets the notebook bar (a lesson's long
+    cell shows progress), elsewhere the terminal bar on stderr when it is a terminal, and nothing
+    on a pipe, a log or under pytest (``disable=None``: tqdm's own "not a tty" rule, which its
+    notebook bar does not apply)."""
     from tqdm.auto import tqdm
 
-    enabled = bool(progress) and sys.stderr is not None and sys.stderr.isatty()
-    return tqdm(total=total, desc=desc, unit="run", disable=not enabled, leave=False)
+    quiet = not progress or sys.stderr is None
+    return tqdm(total=total, desc=desc, unit="run", disable=True if quiet else None, leave=False)
 
 
 def monte_carlo(model: CalibrationModel, n_runs: int, seed: int = 0, truth: str = "error-model",
@@ -907,7 +911,7 @@ def monte_carlo(model: CalibrationModel, n_runs: int, seed: int = 0, truth: str 
         open), or a specification understood by
         :func:`gpsaccel.executors.resolve_executor` (``"processes"``, ``"dask-local"``,
         ``"tcp://host:port"``), which is then opened and closed here.
-    progress : show a tqdm bar (only when stderr is a terminal).
+    progress : show a tqdm bar (in a Jupyter kernel, or when stderr is a terminal).
     max_lag : residual products Σ r(t_i) r(t_{i−k})ᵀ are kept for every epoch i and every lag
         k = 0 .. max_lag (default :data:`DEFAULT_MAX_LAG` = 50, i.e. 10 s at 5 Hz; clipped to
         n_gps − 1); the whiteness verdict tests all of them.

@@ -310,7 +310,8 @@ def _ekf_single(mc: dict[str, ConsistencyRun], t: np.ndarray, x0: np.ndarray, i0
         plots.error_band(t, _breaks(err[:, i], unit), r.sigma[i0][:, i], k=2,
                          label=f"{name} error", unit=unit, ax=ax)
         ax.set_xlabel("time (s)" if i % 3 == 2 else "")
-        ax.legend().set_visible(i == 0)
+        if i:                                    # one legend (error_band's, right of the axes)
+            ax.get_legend().remove()
     fig.suptitle("EKF: state errors with ±2σ, typical run")
     yield ReportFigure("002", "13", "ekf-errors", (
         "EKF state estimation errors of the typical run with the filter's ±2σ (headings wrapped: "

@@ -74,7 +74,7 @@ def test_index_lists_every_figure_with_its_caption(written):
 
 
 @pytest.mark.parametrize("report", list(EXPECTED))
-def test_every_axes_is_labelled(report):
+def test_every_axes_is_labelled(report, legends_beside_axes):
     for fig in iter_report(report, runs=RUNS, seed=0):
         assert fig.caption.strip()
         for ax in fig.figure.axes:
@@ -90,6 +90,8 @@ def test_every_axes_is_labelled(report):
         legends = [ax.get_legend() for ax in fig.figure.axes if ax.get_legend() is not None]
         for leg in legends:
             assert all(t.get_text().strip() for t in leg.get_texts())
+        legends_beside_axes(fig.figure, f"r{report} fig {fig.number}")
+
 
 
 def test_figures_are_reproducible_from_the_seed():

@@ -55,6 +55,11 @@ def test_every_axes_has_labels_with_units_and_every_figure_a_caption(drawn):
             assert any(s.get_xlabel().strip() for s in siblings), f"{where}: no x label"
 
 
+def test_no_legend_lies_over_its_axes(drawn, legends_beside_axes):
+    for fig in drawn[0]:
+        legends_beside_axes(fig.figure, f"r002 fig {fig.number}")
+
+
 def test_captions_carry_the_measured_numbers(drawn):
     figs, _, _ = drawn
     by_number = {f.number: f for f in figs}

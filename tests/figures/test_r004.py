@@ -3,6 +3,13 @@
 from __future__ import annotations
 
 
+def test_no_legend_lies_over_its_axes(legends_beside_axes):
+    from gpsaccel.figures import iter_report
+
+    for fig in iter_report("004", runs=10, seed=2):
+        legends_beside_axes(fig.figure, f"r004 fig {fig.number}")
+
+
 def test_report_004_figures(tmp_path):
     from gpsaccel.figures import write_figures
 
