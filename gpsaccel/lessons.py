@@ -474,6 +474,7 @@ def number_problems(master: Path) -> list[str]:
                 problems.append(f"{where}: the text quotes {number}, which {stem} does not print")
     return problems
 
+
 #: The line the release writes (from lessons/measured/) under each lesson's title.
 _TIME_LINE = re.compile(r"^\*Running time:.*\*$", re.M)
 
