@@ -430,8 +430,9 @@ def untagged_numbers(text: str) -> list[str]:
 
 
 def _prints(text: str, number: str) -> bool:
-    """Does ``text`` print ``number`` digit for digit (not as part of a longer number)?"""
-    return re.search(rf"(?<![\d.]){re.escape(number)}(?![\d])", text) is not None
+    """Does ``text`` print ``number`` digit for digit (not as part of a longer number: 4 is not
+    in 4.5 or 14, 0.5 not in 0.55)?"""
+    return re.search(rf"(?<![\d.]){re.escape(number)}(?!\d|\.\d)", text) is not None
 
 
 def number_problems(master: Path) -> list[str]:
