@@ -13,7 +13,9 @@ STAMP  := $(VENV)/.installed-dev
 
 ifneq ($(UV),)
 MKVENV  = $(UV) venv --python $(PYTHON) $(VENV)
-INSTALL = VIRTUAL_ENV=$(VENV) $(UV) pip install --python $(BIN)/python
+# --compile-bytecode: uv leaves modules uncompiled (pip compiles them); a sandbox box cannot write
+# bytecode into the read-only venv, so without it every box compiles scipy and filterpy again
+INSTALL = VIRTUAL_ENV=$(VENV) $(UV) pip install --compile-bytecode --python $(BIN)/python
 else
 MKVENV  = $(PYTHON) -m venv $(VENV) && $(BIN)/python -m pip install --upgrade pip
 INSTALL = $(BIN)/python -m pip install --progress-bar on
@@ -30,6 +32,7 @@ $(BIN)/python:
 $(VENV)/.installed-%: pyproject.toml | $(BIN)/python
 	@echo "make: installing gpsaccel$(if $(filter core,$*),,[$*]) into $(VENV) with $(if $(UV),uv,pip)"
 	$(INSTALL) -e ".$(if $(filter core,$*),,[$*])"
+	$(BIN)/python -m compileall -q -j 0 gpsaccel >/dev/null  # the editable package's own bytecode
 	@if $(BIN)/python -c "import ipykernel" 2>/dev/null; then \
 	    $(BIN)/python -m ipykernel install --sys-prefix --name python3 >/dev/null; fi
 	touch $@
