@@ -38,11 +38,13 @@ import numpy as np
 
 from gpsaccel.calibration.model import CalibrationModel, gamma, phi
 from gpsaccel.kalman.epochs import (  # noqa: F401 - the recursion and the entry type, re-exported
+    LINEAR_MESSAGES,
     EpochFilter,
     LinearIngredients,
     Mistake,
     batch_gains,
     combinations,
+    predict_before_first_update,
     with_changes,
 )
 
@@ -56,7 +58,8 @@ class Ingredients:
     steps : one-step predictions between GPS updates (40; 1 when stepping over the GPS interval).
     H, V, M0, x0 : measurement matrix, GPS noise, prior covariance and mean.
     mean_propagated : False is the mean-not-propagated mistake (x̄_k = x̂_{k−1}).
-    output, skip_first : see :class:`EpochFilter`.
+    output, skip_first : see :class:`EpochFilter`; predict_first : see
+    :class:`~gpsaccel.kalman.epochs.LinearIngredients`.
     """
 
     phi_dt: float
@@ -72,6 +75,7 @@ class Ingredients:
     mean_propagated: bool = True
     output: str = "posterior"
     skip_first: bool | str = False
+    predict_first: bool = False
 
     @classmethod
     def correct(cls, model: CalibrationModel) -> Ingredients:
@@ -84,7 +88,8 @@ class Ingredients:
         return LinearIngredients(phi(self.phi_dt, self.sign13), gamma(self.gamma_dt),
                                  np.array([[self.W]]), self.steps, self.H, self.V, self.M0,
                                  self.x0, self.n_gps, self.mean_propagated, self.output,
-                                 self.skip_first).epoch_filter()
+                                 self.skip_first,
+                                 predict_first=self.predict_first).epoch_filter()
 
     def with_changes(self, changes: tuple[tuple, ...]) -> Ingredients:
         """Apply ``(field, value)`` or ``(field, (row, col), value)`` changes (see :class:`Mistake`)."""
@@ -146,6 +151,8 @@ def covariance_mistakes(model: CalibrationModel | None = None) -> tuple[Mistake,
             "propagation.",
             (("skip_first", "covariance"),),
         ),
+        predict_before_first_update(LINEAR_MESSAGES["predict-before-first-update"].format(
+            measurement="GPS fix", every=n, step="accelerometer step")),
         Mistake(
             "returns-a-priori", "returns (x̄, M)",
             "Your filter returns the a priori estimate and covariance (x̄, M: before the update) "

@@ -311,6 +311,7 @@ class LinearIngredients:
     output: str = "posterior"
     skip_first: bool | str = False
     skip_last: bool | str = False
+    predict_first: bool = False
 
     @classmethod
     def correct(cls, model: LinearModel) -> LinearIngredients:
@@ -321,7 +322,10 @@ class LinearIngredients:
         Q = self.Gamma @ self.W @ self.Gamma.T                 # Q = Γ W Γᵀ
         F, Qe = epoch_transition(self.Phi, Q, self.steps)
         A = F if self.mean_propagated else np.eye(F.shape[0])
-        return EpochFilter(A, F, Qe, self.H, self.V, self.x0, self.M0, self.n_epochs,
+        x0, M0 = self.x0, self.M0
+        if self.predict_first:                                 # one propagation before z_0:
+            x0, M0 = A @ x0, F @ M0 @ F.T + Qe                 # x̄_0 = A x0, M_0 = F M0 Fᵀ + Q_e
+        return EpochFilter(A, F, Qe, self.H, self.V, x0, M0, self.n_epochs,
                            self.output, self.skip_first, self.skip_last)
 
 
@@ -354,6 +358,13 @@ LINEAR_MESSAGES: dict[str, str] = {
                                  "M: the covariance update with the last measurement is "
                                  "missing, though your x̂ there used it (the propagation is "
                                  "right: every earlier P matches).",
+    "predict-before-first-update": "Your filter propagates before its first update: the "
+                                   "{measurement} at t = 0 updates a prior already carried "
+                                   "{every} {step}(s) ahead (x̄₀ = Φ^{every} x0, M₀ = Φ^{every} "
+                                   "M0 Φ^{every}ᵀ + Q) instead of x0 and M0 themselves, and "
+                                   "every later row inherits it. The prior holds at t = 0, "
+                                   "where z₀ is taken: update first, then propagate (in a "
+                                   "predict-then-update loop, skip the prediction at k = 0).",
     "missing-propagation": "Your filter propagates {steps} step(s) between updates; there are "
                            "{every} (propagation every {dt:g} s, a measurement every "
                            "{interval:g} s).",
@@ -361,6 +372,13 @@ LINEAR_MESSAGES: dict[str, str] = {
                            "estimate is not: the residual uses x̂ₖ₋₁ where it should use "
                            "x̄ₖ = Φ^{every} x̂ₖ₋₁.",
 }
+
+
+def predict_before_first_update(message: str) -> Mistake:
+    """The entry ``predict-before-first-update`` (:attr:`LinearIngredients.predict_first`), the
+    same for every linear system; ``message`` is the system's wording of it."""
+    return Mistake("predict-before-first-update", "propagated before the update at t = 0",
+                   message, (("predict_first", True),))
 
 
 @dataclass(frozen=True, eq=False)
@@ -410,6 +428,9 @@ class LinearCatalogue:
                  "P not updated at the last epoch")):
             out.append(Mistake(key.split(".")[0], variant,
                                self._text(key, t_last=float(m.t[-1])), changes))
+        out.append(predict_before_first_update(self._text(
+            "predict-before-first-update", measurement="measurement", every=m.every,
+            step="propagation step")))
         for steps in sorted({m.every - 1, m.every + 1, 1} - {0, m.every}):
             out.append(Mistake("missing-propagation", f"{steps} step(s) between updates",
                                self._text("missing-propagation", steps=steps, every=m.every,

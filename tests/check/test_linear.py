@@ -28,6 +28,7 @@ GENERIC = {
     "m0-order": ["m0-order"],
     "returns-a-priori": ["returns-a-priori"],
     "first-update-skipped": ["first-update-skipped"],
+    "predict-before-first-update": ["predict-before-first-update"],
     "last-update-missing": ["last-update-missing"],
     "covariance-update-skipped": ["covariance-update-skipped"],
     "update-skipped": ["update-skipped"],

@@ -57,6 +57,7 @@ MUTANTS = [
     ("mutant_x0_total_state.py", ["x0-total-state"]),
     ("mutant_returns_a_priori.py", ["returns-a-priori"]),
     ("mutant_first_update_skipped.py", ["first-update-skipped"]),
+    ("mutant_predict_before_update.py", ["predict-before-first-update"]),
     ("mutant_w_value.py", ["w-value"]),
     ("mutant_two_mistakes.py", ["phi-sign", "x0-total-state"]),
     ("report003.py", ["process-noise-interval", "std-as-variance"]),

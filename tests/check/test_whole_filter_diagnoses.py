@@ -24,6 +24,8 @@ SHARPER = [
     ("mutant_global_m0.py", "state-between-calls", ["first differs on run 1", "M0.copy()"]),
     ("mutant_state_between_calls.py", "wrong-shape", ["on run 1", "between calls"]),
     ("mutant_p_update_skipped_at_0.py", "first-update-skipped", ["did use z₀"]),
+    ("mutant_predict_before_update.py", "predict-before-first-update",
+     ["propagates before its first update", "GPS fix at t = 0", "40 accelerometer step"]),
 ]
 
 

@@ -17,15 +17,17 @@ MODEL = LinearModel(Phi=[[1.0, 0.1], [0.0, 1.0]], Gamma=[[0.005], [0.1]], W=[[0.
                     every=5, n_epochs=12, dt=0.1)
 
 
-def _filterpy(z: np.ndarray, skip_first=False, skip_last=False, prior=False):
+def _filterpy(z: np.ndarray, skip_first=False, skip_last=False, prior=False,
+              predict_first=False):
     """x̂ (or x̄) and P (or M) at the epochs, by filterpy; skip_*: True (no update) or
-    "covariance" (the mean updated, P left at M)."""
+    "covariance" (the mean updated, P left at M); predict_first: predict before every update,
+    the first included."""
     kf = KalmanFilter(dim_x=2, dim_z=1)
     kf.F, kf.Q, kf.H, kf.R = MODEL.Phi, MODEL.Gamma @ MODEL.W @ MODEL.Gamma.T, MODEL.H, MODEL.V
     kf.x, kf.P = MODEL.x0.reshape(2, 1).copy(), MODEL.M0.copy()
     xs, Ps = [], []
     for i in range(MODEL.n_epochs):
-        if i:
+        if i or predict_first:
             for _ in range(MODEL.every):
                 kf.predict()
         x_bar, M = kf.x.copy(), kf.P.copy()
@@ -46,7 +48,8 @@ def z():
 
 @pytest.mark.parametrize("switch", [{}, {"skip_first": True}, {"skip_first": "covariance"},
                                     {"skip_last": True}, {"skip_last": "covariance"},
-                                    {"output": "prior"}])
+                                    {"output": "prior"}, {"predict_first": True},
+                                    {"predict_first": True, "output": "prior"}])
 def test_the_epoch_filter_is_filterpy_stepping(z, switch):
     flt = LinearIngredients.correct(MODEL)
     x, P = replace(flt, **switch).epoch_filter().apply(z)

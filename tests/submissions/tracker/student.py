@@ -28,7 +28,7 @@ def kalman_filter(z):
     x, P = np.array([0.0, 1.0], dtype=dtype), M0.copy()
     xs, Ps = np.zeros((n, 2), dtype=dtype), np.zeros((n, 2, 2), dtype=dtype)
     for k in range(n):
-        if k:
+        if k or m == "predict-before-first-update":
             for _ in range(steps):
                 if m != "mean-not-propagated":
                     x = Phi @ x
