@@ -102,7 +102,7 @@ from gpsaccel.kalman.consistency import (
     z_sample_covariance,
     z_sample_mean,
 )
-from gpsaccel.kalman.update import CovarianceGuard, epoch_transition, joseph_update
+from gpsaccel.kalman.update import CovarianceGuard, epoch_transition, gain, joseph_update
 
 #: Runs per random block: one ``SeedSequence`` child each, and the largest array pass.
 BLOCK_RUNS = 1000
@@ -211,8 +211,7 @@ def plan(model: CalibrationModel, truth: str = "error-model", max_lag: int = DEF
             Xi = Phi_N @ X[i - 1] @ Phi_N.T + Q_N
             Cbar = Phi_N @ Xhat[i - 1] @ Phi_N.T
         M[i], X[i] = Mi, Xi
-        S[i] = H @ Mi @ H.T + V
-        K[i] = Mi @ H.T @ np.linalg.inv(S[i])  # as filterpy computes it
+        K[i], S[i] = gain(Mi, H, V, inverse=True)  # K = M Hᵀ S⁻¹, S⁻¹ as filterpy forms it
         P[i] = joseph_update(Mi, K[i], H, V)
         Xhat[i] = Cbar + K[i] @ S[i] @ K[i].T
     guard = CovarianceGuard(

@@ -62,7 +62,7 @@ from gpsaccel.coop.model import (
     wrap_state,
 )
 from gpsaccel.kalman import consistency
-from gpsaccel.kalman.update import joseph_update
+from gpsaccel.kalman.update import cross_gain, gain, joseph_update
 
 METHODS = ("lkf", "ekf", "ukf")
 
@@ -402,8 +402,7 @@ def _batch_lkf(model, y, skip, Q, R, x, P, out, nominal):
         else:
             H = Hs[j]
             r = measurement_residual(y[:, j], yn[j] + dx @ H.T)
-            S = H @ M @ H.T + R
-            K = M @ H.T @ np.linalg.inv(S)
+            K, S = gain(M, H, R, inverse=True)             # K = M Hᵀ S⁻¹, as filterpy
             dx = dx + r @ K.T
             P = joseph_update(M, K, H, R)
             out["r"][:, j] = r
@@ -422,8 +421,7 @@ def _batch_ekf(model, y, skip, Q, R, x, P, out, nominal):
         if not skip[j]:
             H = model.C(x)
             r = measurement_residual(y[:, j], h(x))
-            S = H @ P @ _tr(H) + R
-            K = P @ _tr(H) @ np.linalg.inv(S)
+            K, S = gain(P, H, R, inverse=True)             # K = M Hᵀ S⁻¹, as filterpy
             x = wrap_state(x + np.einsum("nij,nj->ni", K, r))
             P = joseph_update(P, K, H, R)
             out["r"][:, j], out["S"][:, j] = r, S
@@ -457,7 +455,7 @@ def _batch_ukf(model, y, skip, Q, R, x, P, out, nominal):
             S = np.einsum("m,nmi,nmj->nij", Wc, dz, dz) + R
             dx = state_residual(sig, x[:, None, :])
             Pxz = np.einsum("m,nmi,nmj->nij", Wc, dx, dz)
-            K = Pxz @ np.linalg.inv(S)
+            K = cross_gain(Pxz, S, inverse=True)           # K = Pxz S⁻¹, as filterpy
             r = measurement_residual(y[:, j], zp)
             x = wrap_state(x + np.einsum("nij,nj->ni", K, r))
             P = P - K @ S @ _tr(K)

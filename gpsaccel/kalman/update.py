@@ -48,16 +48,33 @@ def _T(a: np.ndarray) -> np.ndarray:
     return np.swapaxes(a, -1, -2)
 
 
-def gain(M: np.ndarray, H: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def gain(M: np.ndarray, H: np.ndarray, V: np.ndarray, inverse: bool = False
+         ) -> tuple[np.ndarray, np.ndarray]:
     """(K, S): the gain K = M Hᵀ S⁻¹ and the residual covariance S = H M Hᵀ + V.
 
-    M (..., n, n), H (..., p, n), V (..., p, p).  K is computed as Kᵀ = S⁻ᵀ (M Hᵀ)ᵀ by a linear
-    solve, which is M Hᵀ S⁻¹ whether or not M (and so S) is symmetric: a filter that carries the
-    report's non-symmetric (I − K H) M gets exactly the gain its own equations define.
+    M (..., n, n), H (..., p, n), V (..., p, p), broadcast over the leading axes (a stack of
+    filters or of runs at once).  K is computed as Kᵀ = S⁻ᵀ (M Hᵀ)ᵀ by a linear solve, which is
+    M Hᵀ S⁻¹ whether or not M (and so S) is symmetric: a filter that carries the report's
+    non-symmetric (I − K H) M gets exactly the gain its own equations define.  ``inverse=True``
+    forms S⁻¹ and K = (M Hᵀ) S⁻¹ (:func:`cross_gain`), the form of filterpy's
+    ``KalmanFilter.update``; the vectorised Monte Carlo filters use it (it equals filterpy's K
+    to rounding, ~1e-16 relative, not bit for bit: filterpy sums S as H (M Hᵀ) + V).
     """
-    S = H @ M @ _T(H) + V
-    K = _T(np.linalg.solve(_T(S), H @ _T(M)))
+    S = H @ M @ _T(H) + V                                  # S = H M Hᵀ + V
+    if inverse:
+        return cross_gain(M @ _T(H), S, inverse=True), S
+    K = _T(np.linalg.solve(_T(S), H @ _T(M)))              # Kᵀ = S⁻ᵀ (M Hᵀ)ᵀ
     return K, S
+
+
+def cross_gain(C: np.ndarray, S: np.ndarray, inverse: bool = False) -> np.ndarray:
+    """K = C S⁻¹ for a state–measurement cross-covariance C (..., n, p) and the residual
+    covariance S (..., p, p): C = M Hᵀ in a linear filter, the sigma points' Pxz in an
+    unscented one.  ``inverse=True`` forms S⁻¹ explicitly (filterpy's order of operations,
+    K = C·inv(S)); otherwise Kᵀ = S⁻ᵀ Cᵀ by a linear solve."""
+    if inverse:
+        return C @ np.linalg.inv(S)
+    return _T(np.linalg.solve(_T(S), _T(C)))
 
 
 def joseph_update(M: np.ndarray, K: np.ndarray, H: np.ndarray, V: np.ndarray) -> np.ndarray:

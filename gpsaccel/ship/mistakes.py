@@ -156,9 +156,8 @@ def run(model: ShipModel, z: np.ndarray, u: np.ndarray | None = None,
         if rows.size:
             if variant.monorate_gain and rows.size == p:
                 K = mono_K[j]
-            elif variant.zeroed:  # K = M Hᵀ S⁻¹ as written (M is not symmetric with
-                S = H @ C @ H.T + V    # report-covariance, so the order matters)
-                K[:, rows] = np.linalg.solve(S.T, H @ C.T).T[:, rows]
+            elif variant.zeroed:  # K = M Hᵀ S⁻¹ with all rows, then the missing ones zeroed
+                K[:, rows] = gain(C, H, V)[0][:, rows]   # (gain's solve keeps a non-symmetric M)
             else:  # the rows that arrived: K = M H_aᵀ (H_a M H_aᵀ + V_aa)⁻¹
                 K[:, rows] = gain(C, H[rows], V[np.ix_(rows, rows)])[0]
             r = np.zeros((R, p))

@@ -6,7 +6,15 @@ import numpy as np
 import pytest
 
 from gpsaccel.kalman.schedule import Schedule
-from gpsaccel.kalman.update import epoch_transition, gain, joseph_update, step_schedule
+from filterpy.kalman import KalmanFilter
+
+from gpsaccel.kalman.update import (
+    cross_gain,
+    epoch_transition,
+    gain,
+    joseph_update,
+    step_schedule,
+)
 
 RNG = np.random.default_rng(11)
 
@@ -23,6 +31,25 @@ def test_gain_is_M_Ht_S_inverse_even_for_a_non_symmetric_M():
     np.testing.assert_allclose(S, H @ M @ H.T + V, rtol=1e-14)
     np.testing.assert_allclose(K, M @ H.T @ np.linalg.inv(S), rtol=1e-12)
     assert np.abs(K - M @ H.T @ np.linalg.inv(S).T).max() > 1e-3  # the other form is different
+
+
+def test_the_inverse_form_is_filterpy_s_gain():
+    """inverse=True (the vectorised Monte Carlo filters): K = (M Hᵀ)·inv(S), filterpy's form."""
+    rng = np.random.default_rng(3)
+    for n, p in ((3, 2), (6, 5), (2, 1)):
+        A, B = rng.standard_normal((n, n)), rng.standard_normal((p, p))
+        M, V, H = A @ A.T + n * np.eye(n), B @ B.T + np.eye(p), rng.standard_normal((p, n))
+        kf = KalmanFilter(dim_x=n, dim_z=p)
+        kf.P, kf.H, kf.R, kf.x = M.copy(), H, V, np.zeros((n, 1))
+        kf.update(np.zeros((p, 1)))
+        K, S = gain(M, H, V, inverse=True)
+        assert np.array_equal(K, M @ H.T @ np.linalg.inv(H @ M @ H.T + V))
+        np.testing.assert_allclose(K, kf.K, rtol=1e-12)
+        np.testing.assert_allclose(S, kf.S, rtol=1e-14)
+        np.testing.assert_allclose(K, gain(M, H, V)[0], rtol=1e-12)  # the solve: K to rounding
+        C = M @ H.T                                                    # cross_gain: K = C S⁻¹
+        np.testing.assert_allclose(cross_gain(C, S), K, rtol=1e-12)
+        assert np.array_equal(cross_gain(C, S, inverse=True), K)
 
 
 def test_joseph_equals_the_short_form_for_the_optimal_gain_and_is_exact_for_any_gain():
