@@ -6,10 +6,13 @@
 * :mod:`~gpsaccel.calibration.simulation`: one realization (error-model or kinematic truth);
 * :mod:`~gpsaccel.calibration.montecarlo`: the reports' Monte Carlo as arrays, and its table;
 * :mod:`~gpsaccel.calibration.forms`: the update's forms (standard, Joseph, information, filterpy's
-  information and square-root filters) as filter objects for the multirate driver;
-* :mod:`~gpsaccel.calibration.exact`: the exact answer, the filter in 50-digit arithmetic;
-* :mod:`~gpsaccel.calibration.compare`: any filters side by side against the exact answer, and
-  the conditioning sweeps;
+  information and square-root filters) as filter objects for the multirate driver (the core's
+  :mod:`gpsaccel.kalman.forms`, which runs any linear model);
+* :mod:`~gpsaccel.calibration.exact`: the exact answer, the filter in 50-digit arithmetic (the
+  core's :mod:`gpsaccel.kalman.exact`);
+* :mod:`~gpsaccel.calibration.compare`: any filters side by side against the exact answer on
+  report 000's data (the core's :mod:`gpsaccel.kalman.compare` takes any linear model), and the
+  conditioning sweeps;
 * :mod:`~gpsaccel.calibration.mistakes`: known mistakes as filters (used by errata and the checker);
 * :mod:`~gpsaccel.calibration.errata`: the reports' mistakes and their exact cost.
 """

@@ -1,15 +1,17 @@
 r"""Filters side by side, each measured against the exact answer; and the conditioning sweeps.
 
-:func:`compare` runs any number of filters on one realization of the calibration problem: the
-built-in forms by name (:data:`~gpsaccel.calibration.forms.FORMS`: ``standard``, ``joseph``,
-``information``, ``filterpy-information``, ``square-root``) and any callables with the checkers'
+:func:`compare` runs any number of filters on one realization of the calibration problem (the
+core's :func:`gpsaccel.kalman.compare.compare`, which takes any linear model, on a realization of
+report 000 drawn with its truth): the built-in forms by name
+(:data:`~gpsaccel.kalman.forms.FORMS`: ``standard``, ``joseph``, ``information``,
+``filterpy-information``, ``square-root``) and any callables with the checkers'
 signature ``kalman_filter(z) -> (x_hat, P)`` (``z`` the (n_gps, 2) measurements, ``x_hat``
 (n_gps, 3) and ``P`` (n_gps, 3, 3) a posteriori at the GPS times).  A student's *file* becomes
 such a callable with :func:`gpsaccel.check.student_filter`, which runs it in a process of its own;
 ``gpsaccel compare FORM|FILE ...`` does that for you.
 
 None of them is the reference.  The reference is the same filter computed with 50 significant
-digits (:mod:`gpsaccel.calibration.exact`), so every number in the table is that filter's own
+digits (:mod:`gpsaccel.kalman.exact`), so every number in the table is that filter's own
 rounding error, in units that read the same for every state:
 
 * ``max|dx|/sigma``: max over time and state of |x̂ − x̂*| / σ*, σ* = √diag P* (* = exact);
@@ -39,24 +41,26 @@ independent of units, and 6.3·10² on the report's numbers.  Rounding in P = (I
 
 from __future__ import annotations
 
-import time
-import warnings
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from gpsaccel import _validation as _v
-from gpsaccel.calibration.exact import DIGITS, Errors, ExactResult, errors, exact_filter
-from gpsaccel.calibration.exact import min_eigenvalue_exact as _min_eig_exact
-from gpsaccel.calibration.forms import FORMS, run_form
 from gpsaccel.calibration.model import CalibrationModel
 from gpsaccel.calibration.simulation import TRUTHS, simulate
-from gpsaccel.kalman.consistency import sigma_distance
-from gpsaccel.kalman.multirate import run_multirate
-from gpsaccel.kalman.update import NumericalWarning
-
-FilterCallable = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
+from gpsaccel.kalman import compare as _core
+from gpsaccel.kalman.compare import (  # noqa: F401 - the calibration names of the core's table
+    Comparison,
+    ComparisonRow,
+    FilterCallable,
+    differences,
+    form_filter,
+    reference_filter,
+    update_condition_number,
+)
+from gpsaccel.kalman.exact import DIGITS, Errors, exact_filter
+from gpsaccel.kalman.forms import FORMS
 
 #: The sweeps of :func:`sweep` and the scale factor of their last point.
 SWEEPS = ("prior", "gps")
@@ -65,174 +69,15 @@ SWEEPS = ("prior", "gps")
 DEFAULT_FACTORS = {"prior": 10.0 ** np.arange(13), "gps": 10.0 ** -np.arange(13)}
 
 
-def reference_filter(model: CalibrationModel, method: str = "filterpy") -> FilterCallable:
-    """The package's filter (``run_multirate``) as a ``kalman_filter(z) -> (x_hat, P)`` callable."""
-
-    def kalman_filter(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        result = run_multirate(model, z, method=method, check=False)  # measured here instead
-        return result.x_hat, result.P
-
-    kalman_filter.__name__ = f"gpsaccel[{method}]"
-    return kalman_filter
-
-
-def form_filter(name: str, model: CalibrationModel) -> FilterCallable:
-    """Built-in form ``name`` as a ``kalman_filter(z) -> (x_hat, P)`` callable."""
-
-    def kalman_filter(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        with warnings.catch_warnings():  # the table measures what the guard would warn about
-            warnings.simplefilter("ignore", NumericalWarning)
-            result = run_form(name, model, z)
-        return result.x_hat, result.P
-
-    kalman_filter.__name__ = name
-    return kalman_filter
-
-
-def differences(x_ref: np.ndarray, P_ref: np.ndarray, x_hat: np.ndarray,
-                P: np.ndarray) -> tuple[float, float]:
-    """(max |Δx̂|/σ, max |ΔP_ij|/√(P_ii P_jj)) of one float filter against another (σ from P_ref)."""
-    dx, dP = sigma_distance(x_hat, P, x_ref, P_ref)
-    return float(dx.max()), float(dP.max())
-
-
-# ------------------------------------------------------------------------------ one comparison
-@dataclass(frozen=True)
-class ComparisonRow:
-    """One filter against the exact answer.
-
-    errors : its :class:`~gpsaccel.calibration.exact.Errors` (None if it gave nothing back).
-    seconds : time of one run (s).  problem : what went wrong, if it raised (None otherwise).
-    """
-
-    name: str
-    description: str
-    errors: Errors | None
-    seconds: float
-    problem: str | None = None
-
-    @property
-    def max_dx_sigma(self) -> float:
-        return np.nan if self.errors is None else self.errors.dx_sigma
-
-
-@dataclass(frozen=True)
-class Comparison:
-    """:func:`compare`'s table; ``str()`` prints it."""
-
-    seed: int
-    truth: str
-    digits: int
-    exact_seconds: float
-    exact_min_eig: float
-    floor: Errors
-    kappa: float
-    cond_P: float
-    rows: tuple[ComparisonRow, ...]
-
-    def row(self, name: str) -> ComparisonRow:
-        for r in self.rows:
-            if r.name == name:
-                return r
-        raise KeyError(f"no filter named {name!r}; the table has {[r.name for r in self.rows]}")
-
-    def __str__(self) -> str:
-        w = max(30, *(len(r.name) + 1 for r in self.rows))
-        head = (f"{'filter':<{w}} {'max|dx|/sigma':>13} {'max|dP|':>9} {'asym':>9} "
-                f"{'min eig':>9} {'ms/run':>8}")
-        lines = [f"against the exact answer ({self.digits} digits), seed {self.seed}, truth "
-                 f"{self.truth}; κ = {self.kappa:.2g}, cond(P) ≤ {self.cond_P:.2g}", head,
-                 "-" * len(head),
-                 f"{'exact (mpmath)':<{w}} {'0':>13} {'0':>9} {'0':>9} "
-                 f"{self.exact_min_eig:9.4f} {1e3 * self.exact_seconds:8.1f}",
-                 f"{'exact, rounded to float64':<{w}} {self.floor.dx_sigma:13.1e} "
-                 f"{self.floor.dP_rel:9.1e} {self.floor.asymmetry:9.1e} {'':>9} {'':>8}"]
-        for r in self.rows:
-            if r.errors is None:
-                first, *rest = (r.problem or "").splitlines() or [""]
-                lines.append(f"{r.name:<{w}} failed: {first}")
-                lines += [" " * (w + 1) + line for line in rest]
-                continue
-            e = r.errors
-            lines.append(f"{r.name:<{w}} {e.dx_sigma:13.1e} {e.dP_rel:9.1e} {e.asymmetry:9.1e} "
-                         f"{e.min_eig:9.4f} {1e3 * r.seconds:8.1f}")
-        return "\n".join(lines)
-
-
-def _floor(exact: ExactResult) -> Errors:
-    """The errors of the exact answer rounded to float64: the best any float64 filter can do."""
-    return errors(exact, exact.x_hat, exact.P)
-
-
-def update_condition_number(model: CalibrationModel, exact: ExactResult) -> float:
-    """κ = max over epochs of λmax(S V⁻¹) = λmax(M P⁻¹), S = H M Hᵀ + V (every component measured)."""
-    H, V = np.asarray(model.H, dtype=float), np.asarray(model.V, dtype=float)
-    S = H @ exact.M @ H.T + V
-    return float(np.linalg.eigvals(S @ np.linalg.inv(V)).real.max())
-
-
-def _numbers(name: str, value: object, shape: tuple[int, ...]) -> np.ndarray:
-    """``value`` as a float array of ``shape``; NaN and inf are kept (a filter that broke down
-    is measured as infinitely wrong, not refused)."""
-    try:
-        arr = np.array(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be an array of numbers: {exc}") from None
-    if arr.shape != shape:
-        raise ValueError(f"{name} must have shape {shape}, got {arr.shape}")
-    return arr
-
-
-def _run_one(name: str, f: FilterCallable, z: np.ndarray, exact: ExactResult, repeat: int,
-             description: str) -> ComparisonRow:
-    """Run ``f`` on ``z`` (best time of ``repeat``); a filter that raises is a row saying so."""
-    best = np.inf
-    out = None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        try:
-            out = f(z.copy())
-        except Exception as exc:  # noqa: BLE001 - a form that breaks down is a result
-            return ComparisonRow(name, description, None, np.nan,
-                                 f"{type(exc).__name__}: {exc}".strip())
-        best = min(best, time.perf_counter() - t0)
-        reported = getattr(f, "seconds", None)  # a filter timed where it ran
-        if reported is not None:
-            best = float(reported)
-            break
-    if not isinstance(out, (tuple, list)) or len(out) != 2:
-        raise ValueError(f"{name}: kalman_filter(z) must return (x_hat, P), got "
-                         f"{type(out).__name__}")
-    x_hat, P = (_numbers(f"{name}: {what}", value, shape) for what, value, shape in
-                (("x_hat", out[0], exact.x_hat.shape), ("P", out[1], exact.P.shape)))
-    return ComparisonRow(name, description, errors(exact, x_hat, P), best)
-
-
-def _contestants(forms: Sequence[str], filters: Mapping[str, FilterCallable] | None,
-                 model: CalibrationModel) -> list[tuple[str, FilterCallable, str]]:
-    out = []
-    for name in forms:
-        name = _v.choice("forms", name, FORMS)
-        out.append((name, form_filter(name, model), FORMS[name][1]))
-    for name, f in (filters or {}).items():
-        if not callable(f):
-            raise ValueError(f"filters[{name!r}] must be callable as kalman_filter(z)")
-        out.append((str(name), f, getattr(f, "description", "kalman_filter(z)")))
-    names = [n for n, _, _ in out]
-    if len(set(names)) != len(names):
-        raise ValueError(f"every filter needs its own name, got {names}")
-    return out
-
-
 def compare(*forms: str, model: CalibrationModel | None = None, seed: int = 0,
             truth: str = "error-model", filters: Mapping[str, FilterCallable] | None = None,
             repeat: int = 3, digits: int = DIGITS) -> Comparison:
     """Run the built-in ``forms`` and the callables ``filters`` on one realization, each against
-    the exact answer.
+    the exact answer (:func:`gpsaccel.kalman.compare.compare` on report 000's data).
 
     Parameters
     ----------
-    forms : names of built-in forms (see :data:`~gpsaccel.calibration.forms.FORMS`); with neither
+    forms : names of built-in forms (see :data:`~gpsaccel.kalman.forms.FORMS`); with neither
         ``forms`` nor ``filters``, every built-in form.
     model : the problem (report 000's defaults when None).
     seed : seed of the realization (``numpy.random.default_rng(seed)``), a non-negative integer;
@@ -251,14 +96,10 @@ def compare(*forms: str, model: CalibrationModel | None = None, seed: int = 0,
     repeat = _v.integer("repeat", repeat, minimum=1)
     if not forms and not filters:
         forms = tuple(FORMS)
-    contestants = _contestants(forms, filters, model)
+    _core.contestants(forms, filters, model)  # bad names refused before the simulation
     z = simulate(model, np.random.default_rng(seed), truth).z
-    exact = exact_filter(model, z, digits)
-    rows = tuple(_run_one(name, f, z, exact, repeat, description)
-                 for name, f, description in contestants)
-    return Comparison(seed, truth, exact.digits, exact.seconds, _min_eig_exact(exact),
-                      _floor(exact), update_condition_number(model, exact),
-                      exact.condition_number(), rows)
+    return _core.compare(model, *forms, z=z, seed=seed, truth=truth, filters=filters,
+                         repeat=repeat, digits=digits)
 
 
 # ------------------------------------------------------------------------------ the sweeps
@@ -356,9 +197,9 @@ def sweep(kind: str, factors: Sequence[float] | None = None, forms: Sequence[str
         exact = exact_filter(model, z, digits)
         kappa.append(update_condition_number(model, exact))
         cond_P.append(exact.condition_number())
-        floor.append(_floor(exact))
+        floor.append(_core.floor(exact))
         for name in forms:
-            row = _run_one(name, form_filter(name, model), z, exact, 1, "")
+            row = _core.run_one(name, form_filter(name, model), z, exact, 1, "")
             errs[name].append(row.errors or Errors(np.inf, np.inf, np.inf, -np.inf))
             problems[name].append(row.problem)
     return Sweep(kind, seed, np.asarray(factors), np.array(kappa), np.array(cond_P), tuple(floor),

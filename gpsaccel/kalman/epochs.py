@@ -31,8 +31,10 @@ from functools import cached_property
 from typing import Protocol
 
 import numpy as np
+from filterpy.kalman import KalmanFilter
 
 from gpsaccel import _validation as _v
+from gpsaccel.kalman.schedule import Schedule
 from gpsaccel.kalman.update import epoch_transition, gain, joseph_update
 
 
@@ -261,6 +263,33 @@ class LinearModel:
     @property
     def n(self) -> int:
         return int(self.Phi.shape[0])
+
+    @property
+    def dim_x(self) -> int:
+        return self.n
+
+    @property
+    def dim_z(self) -> int:
+        return int(self.H.shape[0])
+
+    @property
+    def Q(self) -> np.ndarray:
+        """The process noise of one step, Q = Γ W Γᵀ (filterpy's ``Q``)."""
+        return self.Gamma @ self.W @ self.Gamma.T
+
+    def schedule(self) -> Schedule:
+        """Every component at every ``every``-th step 0, every, ..., n_steps: what the
+        multirate driver (:func:`gpsaccel.kalman.multirate.run_multirate`), the filter forms
+        (:mod:`gpsaccel.kalman.forms`) and the exact filter (:mod:`gpsaccel.kalman.exact`) run."""
+        return Schedule.from_periods(self.n_steps, [self.every] * self.dim_z)
+
+    def kalman_filter(self) -> KalmanFilter:
+        """A filterpy ``KalmanFilter`` for one step: F = Φ, Q = Γ W Γᵀ, H, R = V, x = x0, P = M0."""
+        kf = KalmanFilter(dim_x=self.dim_x, dim_z=self.dim_z)
+        kf.F, kf.Q, kf.H = self.Phi.copy(), self.Q, self.H.copy()
+        kf.R, kf.P = self.V.copy(), self.M0.copy()
+        kf.x = self.x0.reshape(-1, 1).copy()
+        return kf
 
     @property
     def t(self) -> np.ndarray:

@@ -40,6 +40,21 @@ def test_every_form_matches_the_exact_answer_at_the_reports_numbers(table):
     assert "exact (mpmath)" in text and "square-root" in text and "min eig" in text
 
 
+def test_report_000_as_any_linear_model_gives_the_same_table(table):
+    """The comparison is the core's (kalman.compare), for any LinearModel: report 000 written as
+    one (Φ, Γ, W, H, V, M0, x0, a fix every 40 steps) gives the same errors, to the last bit."""
+    from gpsaccel.calibration.simulation import simulate
+    from gpsaccel.kalman import compare as core
+    from gpsaccel.kalman.epochs import LinearModel
+
+    m = CalibrationModel()
+    linear = LinearModel(m.Phi, m.Gamma, m.W, m.H, m.V, m.M0, m.x0, m.gps_every, m.n_gps, m.dt)
+    z = simulate(m, np.random.default_rng(3), "error-model").z
+    other = core.compare(linear, z=z, seed=3, repeat=1)
+    assert [r.errors for r in other.rows] == [r.errors for r in table.rows]
+    assert other.floor == table.floor and other.kappa == table.kappa
+
+
 def test_kinematic_truth_too():
     t = compare("joseph", "information", seed=1, truth="kinematic", repeat=1)
     assert all(r.errors.dx_sigma < TOLERANCE and r.errors.dP_rel < TOLERANCE for r in t.rows)

@@ -127,3 +127,12 @@ def test_the_tracker_is_a_few_dozen_lines_of_instructor_code():
     lines = [ln for ln in body.splitlines() if ln.strip() and not ln.strip().startswith("#")]
     assert 10 < len(lines) < 60, len(lines)
 
+
+def test_the_forms_compare_against_the_exact_answer_on_the_tracker():
+    """The mpmath comparison of forms takes the instructor's model, not only report 000's."""
+    from gpsaccel.kalman.compare import compare
+
+    table = compare(TRACKER.model, "standard", "joseph", "square-root", seed=2, repeat=1)
+    for row in table.rows:
+        assert row.errors.dx_sigma < 1e-10 and row.errors.dP_rel < 1e-11, row
+    assert table.exact_min_eig > 0

@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from gpsaccel.kalman.schedule import Schedule
 from filterpy.kalman import KalmanFilter
 
+from gpsaccel.kalman.schedule import Schedule
 from gpsaccel.kalman.update import (
     cross_gain,
     epoch_transition,

@@ -1,0 +1,214 @@
+r"""The Kalman filter's algebraically equal forms, each as a filter object the multirate driver runs.
+
+In exact arithmetic every form below computes the same x̂ and P; in float64 they round differently,
+and how much that matters depends on the conditioning (:mod:`gpsaccel.kalman.compare` measures it
+against :mod:`gpsaccel.kalman.exact`).  The model is any linear one the multirate driver runs, with
+Γ, W and its sizes (:class:`FormModel`: report 000's ``CalibrationModel``, an instructor's
+:class:`~gpsaccel.kalman.epochs.LinearModel`).  With S = H M Hᵀ + V and K = M Hᵀ S⁻¹:
+
+``standard``  P = (I − K H) M.  :class:`StandardKalmanFilter`: filterpy's ``KalmanFilter`` with
+    this one line changed.
+``joseph``  P = (I − K H) M (I − K H)ᵀ + K V Kᵀ.  filterpy's ``KalmanFilter.update``.
+``information``  P = (M⁻¹ + Hᵀ V⁻¹ H)⁻¹, K = P Hᵀ V⁻¹.  The hand-written
+    :class:`~gpsaccel.kalman.information.InformationFilter` (the reports' form).
+``filterpy-information``  filterpy's ``InformationFilter``: it carries the information matrix
+    P⁻¹ = M⁻¹ + Hᵀ V⁻¹ H and predicts it as M⁻¹ = ((Φ⁻ᵀ P⁻¹ Φ⁻¹)⁻¹ + Q)⁻¹.
+``square-root``  filterpy's ``SquareRootKalmanFilter``: carries a factor P = P^½ P^½ᵀ; the update
+    is one QR factorisation of [[V^½ᵀ, 0], [(H M^½)ᵀ, M^½ᵀ]] (giving S^½, K and P^½), the
+    prediction one QR of [Φ P^½, Q^½]ᵀ; P is never formed by a subtraction.
+
+Every filter object has filterpy's ``KalmanFilter`` interface as the driver uses it (``x``, ``P``,
+``K``, ``predict()``, ``update(z, R, H)`` with ``R``/``H`` the rows of a partial measurement), so
+:func:`gpsaccel.kalman.multirate.run_multirate` runs each of them at the fast rate (report 000's
+accelerometer rate), as the course's filter runs.
+
+Two of filterpy's filters need care, both handled in their adapters:
+
+* ``InformationFilter`` computes a log-likelihood in ``update`` with the n×n information matrix
+  as the covariance of the p-vector residual, which raises when p < n; it is built with
+  ``compute_log_likelihood=False``.  Its covariance is ``P = inv(P_inv)``, one more inversion.
+* ``SquareRootKalmanFilter``'s ``Q`` setter takes a Cholesky factor of Q, and a Q = Γ W Γᵀ of
+  lower rank (report 000's is rank 1: the bias has no process noise) has none, so it raises
+  ``LinAlgError``.  Its algorithm needs only some factor with Q = Q^½ Q^½ᵀ, and Γ √W is an exact
+  one: the adapter sets the filter's factor (``_Q1_2``) to it.  So the square-root form here is
+  filterpy's, not a hand-written one.  Its ``update`` is for all ``dim_z`` components; a partial
+  measurement (NaN in z) resizes its work matrix for that call.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Protocol
+
+import numpy as np
+from filterpy.kalman import InformationFilter as FilterpyInformationFilter
+from filterpy.kalman import KalmanFilter, SquareRootKalmanFilter
+from scipy.linalg import cholesky
+
+from gpsaccel import _validation as _v
+from gpsaccel.kalman.information import InformationFilter
+from gpsaccel.kalman.multirate import LinearGaussianModel, MultirateResult, run_multirate
+
+
+class FormModel(LinearGaussianModel, Protocol):
+    """What the forms need of a model: the driver's (:class:`LinearGaussianModel`), Γ and W (the
+    square-root form's factor Γ √W of Q) and the sizes."""
+
+    @property
+    def Gamma(self) -> np.ndarray: ...
+
+    @property
+    def W(self) -> np.ndarray: ...
+
+    @property
+    def dim_x(self) -> int: ...
+
+    @property
+    def dim_z(self) -> int: ...
+
+
+class StandardKalmanFilter(KalmanFilter):
+    """filterpy's ``KalmanFilter`` with the standard covariance update P = (I − K H) M.
+
+    filterpy has no switch for it (its ``update`` is always Joseph's); everything else, the
+    prediction included, is filterpy's.  The standard form is cheapest and exact in exact arithmetic,
+    but P is a difference of two nearly equal matrices when the update shrinks M by much, and its
+    rounding is neither symmetric nor guaranteed positive definite.
+    """
+
+    def update(self, z: np.ndarray, R: np.ndarray | None = None,
+               H: np.ndarray | None = None) -> None:
+        """r = z − H x̄,  S = H M Hᵀ + V,  K = M Hᵀ S⁻¹,  x̂ = x̄ + K r,  P = (I − K H) M."""
+        R = self.R if R is None else R
+        H = self.H if H is None else H
+        z = np.asarray(z, dtype=float).reshape(-1, 1)
+        self.y = z - H @ self.x
+        PHT = self.P @ H.T
+        self.S = H @ PHT + R
+        self.SI = self.inv(self.S)
+        self.K = PHT @ self.SI
+        self.x = self.x + self.K @ self.y
+        self.P = (self._I - self.K @ H) @ self.P
+        self.z = z.copy()
+        self.x_post, self.P_post = self.x.copy(), self.P.copy()
+
+
+class _FilterpyAdapter:
+    """The driver's interface (``x``, ``P``, ``predict()``) over a filterpy filter ``self.filter``."""
+
+    filter: object
+
+    @property
+    def x(self) -> np.ndarray:
+        return self.filter.x
+
+    @property
+    def P(self) -> np.ndarray:
+        return self.filter.P
+
+    def predict(self) -> None:
+        self.filter.predict()
+
+
+class FilterpyInformation(_FilterpyAdapter):
+    """filterpy's ``InformationFilter`` with the driver's interface (``x``, ``P``, ``K``).
+
+    The filter itself carries the mean x and the information matrix P⁻¹ (``P_inv``); ``P`` here is
+    filterpy's own ``inv(P_inv)``.
+    """
+
+    def __init__(self, model: FormModel) -> None:
+        kf = FilterpyInformationFilter(dim_x=model.dim_x, dim_z=model.dim_z,
+                                       compute_log_likelihood=False)
+        kf.F = np.asarray(model.Phi, dtype=float)  # filterpy keeps F⁻¹ too
+        kf.Q = np.asarray(model.Q, dtype=float)
+        kf.H = np.asarray(model.H, dtype=float)
+        kf.R_inv = np.linalg.inv(model.V)
+        kf.P_inv = np.linalg.inv(model.M0)
+        kf.x = np.asarray(model.x0, dtype=float).reshape(-1, 1)
+        self.filter = kf
+        self.K = np.zeros((model.dim_x, model.dim_z))
+
+    def update(self, z: np.ndarray, R: np.ndarray | None = None,
+               H: np.ndarray | None = None) -> None:
+        kf = self.filter
+        saved = kf.H, kf.dim_z
+        if H is not None:  # a partial measurement: its rows of H for this call
+            kf.H, kf.dim_z = H, H.shape[0]
+        try:
+            kf.update(np.asarray(z, dtype=float).reshape(-1, 1),
+                      R_inv=None if R is None else np.linalg.inv(R))
+        finally:
+            kf.H, kf.dim_z = saved
+        self.K = kf.K
+
+
+class FilterpySquareRoot(_FilterpyAdapter):
+    """filterpy's ``SquareRootKalmanFilter`` with the driver's interface (``x``, ``P``, ``K``).
+
+    Its process-noise factor is Γ √W (see the module docstring); ``P`` is filterpy's
+    ``P^½ P^½ᵀ``.
+    """
+
+    def __init__(self, model: FormModel) -> None:
+        kf = SquareRootKalmanFilter(dim_x=model.dim_x, dim_z=model.dim_z)
+        kf.F = np.asarray(model.Phi, dtype=float)
+        kf.H = np.asarray(model.H, dtype=float)
+        kf.R = np.asarray(model.V, dtype=float)
+        kf.P = np.asarray(model.M0, dtype=float)
+        kf._Q1_2 = np.asarray(model.Gamma, dtype=float) @ cholesky(model.W, lower=True)
+        kf.x = np.asarray(model.x0, dtype=float).reshape(-1, 1)
+        self.filter = kf
+
+    @property
+    def K(self) -> np.ndarray:
+        return self.filter.K
+
+    def update(self, z: np.ndarray, R: np.ndarray | None = None,
+               H: np.ndarray | None = None) -> None:
+        kf = self.filter
+        z = np.asarray(z, dtype=float).reshape(-1, 1)
+        if H is None or H.shape[0] == kf.dim_z:
+            kf.update(z, None if R is None else cholesky(R, lower=True))
+            return
+        saved = kf.H, kf.dim_z, kf.M
+        kf.H, kf.dim_z = H, H.shape[0]
+        kf.M = np.zeros((kf.dim_z + kf.dim_x, kf.dim_z + kf.dim_x))
+        try:
+            kf.update(z, cholesky(R, lower=True))
+        finally:
+            kf.H, kf.dim_z, kf.M = saved
+
+
+def _standard(model: FormModel) -> StandardKalmanFilter:
+    kf = StandardKalmanFilter(dim_x=model.dim_x, dim_z=model.dim_z)
+    reference = model.kalman_filter()
+    kf.F, kf.Q, kf.H, kf.R, kf.P, kf.x = (reference.F, reference.Q, reference.H, reference.R,
+                                          reference.P, reference.x)
+    return kf
+
+
+def _information(model: FormModel) -> InformationFilter:
+    return InformationFilter(model.Phi, model.Q, model.H, model.V, model.x0, model.M0)
+
+
+#: name -> (factory(model) -> filter object, one-line description).  Ordered as the table prints.
+FORMS: dict[str, tuple[Callable[[FormModel], object], str]] = {
+    "standard": (_standard, "P = (I - KH)M (filterpy's KalmanFilter, this line changed)"),
+    "joseph": (lambda model: model.kalman_filter(), "filterpy KalmanFilter.update (Joseph)"),
+    "information": (_information, "hand-written, P = (M^-1 + H'V^-1 H)^-1"),
+    "filterpy-information": (FilterpyInformation, "filterpy InformationFilter (carries P^-1)"),
+    "square-root": (FilterpySquareRoot, "filterpy SquareRootKalmanFilter (QR)"),
+}
+
+
+def make_form(name: str, model: FormModel):
+    """The filter object of form ``name`` (one of :data:`FORMS`) for ``model``, at (x0, M0)."""
+    name = _v.choice("form", name, FORMS)
+    return FORMS[name][0](model)
+
+
+def run_form(name: str, model: FormModel, z: np.ndarray) -> MultirateResult:
+    """Run form ``name`` on measurements ``z`` (n_gps, 2) under the multirate driver (200 Hz
+    predictions, GPS updates; NaN = not measured); the result's ``method`` is ``name``."""
+    return run_multirate(model, z, method=name, kf=make_form(name, model))
