@@ -38,7 +38,9 @@ import time
 import unicodedata
 from collections import deque
 from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Set as AbstractSet
 from pathlib import Path
+from typing import Any
 
 from gpsaccel import _validation as _v
 from gpsaccel import registry
@@ -98,7 +100,7 @@ def find_submissions(paths: Iterable[str | os.PathLike]) -> tuple[list[Path], li
 
 
 def _check_one(path: str, n_runs: int | None, seed: int, timeout: float,
-               **options: object) -> dict:
+               **options: Any) -> dict:
     report = submission(path, n_runs=n_runs, seed=seed, timeout=timeout, **options)
     out = report.to_dict()
     out["text"] = str(report)
@@ -152,7 +154,7 @@ def check_many(paths: Sequence[str | os.PathLike], n_runs: int | None = None,
     files, _ = find_submissions(paths)
     backend = sb.resolve_backend(sandbox)  # once, and a clear error before anything runs
     sb.refuse_unsafe_basic(backend, allow_unsafe_basic)
-    options = {"sandbox": backend, "limits": limits, "allow_gpsaccel": allow_gpsaccel,
+    options: dict[str, Any] = {"sandbox": backend, "limits": limits, "allow_gpsaccel": allow_gpsaccel,
                "problem": problem}
     args = (n_runs, seed, timeout)
     if executor in ("processes", "local"):
@@ -185,7 +187,7 @@ def _worker(conn: mpc.Connection, path: str, args: tuple, options: dict) -> None
     conn.close()
 
 
-def _context() -> mp.context.BaseContext:
+def _context() -> Any:  # a fork or spawn context (typeshed's BaseContext has no Process)
     methods = mp.get_all_start_methods()
     return mp.get_context("fork" if "fork" in methods else "spawn")
 
@@ -218,7 +220,7 @@ def _reap_zombies(workers: set[int]) -> None:
                 pass
 
 
-def sweep(workers: set[int] = frozenset()) -> int:
+def sweep(workers: AbstractSet[int] = frozenset()) -> int:
     """Kill (SIGKILL, until a scan finds none) every process under this one except ``workers``
     (the running checks, the children it had before) and theirs; returns how many were
     killed."""
@@ -309,7 +311,7 @@ def _isolated(files: list[Path], args: tuple, options: dict, workers: int, timeo
                     proc.join()
                 conn.close()
                 del running[i]
-                sweep(before | {p.pid for p, _, _ in running.values()})
+                sweep(before | {p.pid for p, _, _ in running.values() if p.pid is not None})
                 sb.sweep_stale_boxes()  # the box folder of a worker that was killed
                 finish(i, result)
     except KeyboardInterrupt:

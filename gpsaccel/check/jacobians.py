@@ -36,6 +36,7 @@ import math
 import time
 import traceback
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -122,7 +123,7 @@ def _inputs(model: CoopModel, n: int, seed: int) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- calling the student
-def _call(report: Report, name: str, fn: object, args: tuple, shape: tuple[int, int],
+def _call(report: Report, name: str, fn: Callable[..., object], args: tuple, shape: tuple[int, int],
           what: str) -> np.ndarray | None:
     """fn(*args) as a float array of ``shape``, or None with a finding."""
     try:
@@ -234,7 +235,7 @@ def _matrix_finding(report: Report, code: str, name: str, actual: np.ndarray,
         return True
     display = display or name
     formulas = FORMULAS.get(name, {}) if formulas is None else formulas
-    elems = [tuple(int(v) for v in idx) for idx in np.argwhere(bad.any(axis=0))]
+    elems = [(int(i), int(j)) for i, j in np.argwhere(bad.any(axis=0))]
     per_state = bad.reshape(len(X), -1).sum(axis=1)
     s = int(np.argmax(per_state))  # the state where most elements are wrong: show values there
     groups: dict[str, list[str]] = {}
@@ -330,7 +331,7 @@ def jacobians(A: Callable | None = None, B: Callable | None = None, C: Callable 
     return report
 
 
-def assert_jacobians(**kwargs: object) -> Report:
+def assert_jacobians(**kwargs: Any) -> Report:
     """:func:`jacobians` for a grader cell: raise AssertionError with the findings if it fails."""
     report = jacobians(**kwargs)
     if not report.passed:
@@ -500,7 +501,7 @@ def _check_noise(report: Report, Omega: object, Q: object, model: CoopModel, rto
                 return
 
 
-def assert_dt_model(**kwargs: object) -> Report:
+def assert_dt_model(**kwargs: Any) -> Report:
     """:func:`dt_model` for a grader cell: raise AssertionError with the findings if it fails."""
     report = dt_model(**kwargs)
     if not report.passed:

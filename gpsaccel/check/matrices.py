@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import time
+from typing import Any
 
 import numpy as np
 
@@ -95,15 +96,16 @@ def _check_phi(report: Report, Phi: np.ndarray, dt: float, model: CalibrationMod
     want = phi(dt)
     if _same(Phi, want):
         return
-    formulas = {(0, 1): "Δt", (0, 2): "−Δt²/2", (1, 2): "−Δt", (0, 0): "1", (1, 1): "1",
-                (2, 2): "1", (1, 0): "0", (2, 0): "0", (2, 1): "0"}
+    formulas: dict[tuple[int, ...], str] = {
+        (0, 1): "Δt", (0, 2): "−Δt²/2", (1, 2): "−Δt", (0, 0): "1", (1, 1): "1", (2, 2): "1",
+        (1, 0): "0", (2, 0): "0", (2, 1): "0"}
     if _same(Phi, phi(dt, +1.0)):
         report.add("phi-sign", f"Φ₁₃ = {Phi[0, 2]:.6g} has the wrong sign: the bias enters "
                    f"position as −Δt²/2 = {-dt**2 / 2:.6g}. Likely cause: the accelerometer reads "
                    f"a + b, so δp = p − p_c loses b·Δt²/2 per step (report 001 prints +½Δt²).")
         return
     if _close(Phi[1, 2], dt, dt) and all(
-            _close(Phi[idx], want[idx], 1.0) for idx in np.ndindex(3, 3) if idx[1] != 2):
+            _close(float(Phi[idx]), float(want[idx]), 1.0) for idx in np.ndindex(3, 3) if idx[1] != 2):
         flipped = "Φ₁₃ and Φ₂₃ have" if _close(Phi[0, 2], dt**2 / 2, dt**2) else "Φ₂₃ has"
         report.add("phi-sign", f"{flipped} the wrong sign: the bias enters velocity as −Δt = "
                    f"{-dt:.6g} and position as −Δt²/2 = {-dt**2 / 2:.6g}. Likely cause: "
@@ -359,7 +361,7 @@ def model_matrices(Phi: object = None, Gamma: object = None, H: object = None, V
     return report
 
 
-def assert_model_matrices(**kwargs: object) -> Report:
+def assert_model_matrices(**kwargs: Any) -> Report:
     """:func:`model_matrices` for a grader cell: raise AssertionError with the findings if it fails."""
     report = model_matrices(**kwargs)
     if not report.passed:

@@ -232,7 +232,7 @@ def run(model: CoopModel, y: np.ndarray, Q: np.ndarray, R: np.ndarray, kind: str
     P0 = model.P0 if P0 is None else np.asarray(P0, dtype=float)
     if nominal is None and (kind == "lkf" or "nominal" in (g.F_point, g.H_point)):
         nominal = euler_nominal(model) if g.propagation == "euler" else model.nominal()
-    xn = nominal
+    xn: np.ndarray = np.empty((0, N_STATES)) if nominal is None else nominal  # EKF: unused
     wrap_x = wrap_state if g.wrap_state else (lambda v: np.array(v, dtype=float))
     I = np.eye(N_STATES)
 

@@ -38,7 +38,7 @@ Two of filterpy's filters need care, both handled in their adapters:
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 from filterpy.kalman import InformationFilter as FilterpyInformationFilter
@@ -76,6 +76,9 @@ class StandardKalmanFilter(KalmanFilter):
     rounding is neither symmetric nor guaranteed positive definite.
     """
 
+    x: np.ndarray
+    P: np.ndarray
+
     def update(self, z: np.ndarray, R: np.ndarray | None = None,
                H: np.ndarray | None = None) -> None:
         """r = z − H x̄,  S = H M Hᵀ + V,  K = M Hᵀ S⁻¹,  x̂ = x̄ + K r,  P = (I − K H) M."""
@@ -96,7 +99,7 @@ class StandardKalmanFilter(KalmanFilter):
 class _FilterpyAdapter:
     """The driver's interface (``x``, ``P``, ``predict()``) over a filterpy filter ``self.filter``."""
 
-    filter: object
+    filter: Any  # a filterpy filter (filterpy has no type hints)
 
     @property
     def x(self) -> np.ndarray:

@@ -154,7 +154,7 @@ def run(model: ShipModel, z: np.ndarray, u: np.ndarray | None = None,
         rows = np.flatnonzero(avail[j])
         K = np.zeros((n, p))
         if rows.size:
-            if variant.monorate_gain and rows.size == p:
+            if mono_K is not None and variant.monorate_gain and rows.size == p:
                 K = mono_K[j]
             elif variant.zeroed:  # K = M Hᵀ S⁻¹ with all rows, then the missing ones zeroed
                 K[:, rows] = gain(C, H, V)[0][:, rows]   # (gain's solve keeps a non-symmetric M)
