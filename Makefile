@@ -65,8 +65,9 @@ lab: $(STAMP)
 MYPY_CLEAN := gpsaccel/registry.py gpsaccel/kalman gpsaccel/check/findings.py \
 	gpsaccel/check/linear.py gpsaccel/check/whole_filter.py gpsaccel/check/tracker.py \
 	gpsaccel/check/report.py gpsaccel/check/student_filter.py gpsaccel/check/problems.py \
-	gpsaccel/calibration/mistakes.py \
-	gpsaccel/assignments/linear.py gpsaccel/assignments/tracker.py
+	gpsaccel/calibration/mistakes.py gpsaccel/calibration/errata.py gpsaccel/check/batch.py \
+	gpsaccel/check/matrices.py gpsaccel/check/jacobians.py gpsaccel/coop/mistakes.py \
+	gpsaccel/ship/mistakes.py gpsaccel/assignments/linear.py gpsaccel/assignments/tracker.py
 
 lint: $(VENV)/.installed-dev
 	$(BIN)/ruff check .

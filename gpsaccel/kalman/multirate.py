@@ -44,13 +44,27 @@ class MissingInputWarning(UserWarning):
 class LinearGaussianModel(Protocol):
     """What the driver needs of a model (``CalibrationModel`` and ``ShipModel`` have it)."""
 
-    Phi: np.ndarray
-    Q: np.ndarray
-    H: np.ndarray
-    V: np.ndarray
-    M0: np.ndarray
-    x0: np.ndarray
-    dt: float
+    # read-only members (a model's matrices are often properties computed from its parameters)
+    @property
+    def Phi(self) -> np.ndarray: ...
+
+    @property
+    def Q(self) -> np.ndarray: ...
+
+    @property
+    def H(self) -> np.ndarray: ...
+
+    @property
+    def V(self) -> np.ndarray: ...
+
+    @property
+    def M0(self) -> np.ndarray: ...
+
+    @property
+    def x0(self) -> np.ndarray: ...
+
+    @property
+    def dt(self) -> float: ...
 
     def schedule(self) -> Schedule: ...
 
