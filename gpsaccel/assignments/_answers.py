@@ -10,7 +10,7 @@ import traceback
 
 import numpy as np
 
-from gpsaccel.check.report import Report
+from gpsaccel.check.report import Report, as_array
 
 
 def call(report: Report, what: str, func: object, *args: object) -> object | None:
@@ -34,20 +34,9 @@ def call(report: Report, what: str, func: object, *args: object) -> object | Non
 
 
 def array(report: Report, name: str, value: object, shape: tuple[int, ...]) -> np.ndarray | None:
-    """``value`` as a finite float array of ``shape``, or None with a finding."""
-    try:
-        arr = np.array(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        report.add("not-a-matrix", f"{name} must be an array of numbers; np.array({name}, "
-                   f"dtype=float) fails: {exc}")
-        return None
-    if arr.shape != shape:
-        report.add("shape", f"{name} has shape {arr.shape}; it must be {shape}.")
-        return None
-    if not np.isfinite(arr).all():
-        report.add("not-finite", f"{name} contains NaN or inf.")
-        return None
-    return arr
+    """``value`` as a finite float array of ``shape``, or None with a finding
+    (:func:`gpsaccel.check.report.as_array`)."""
+    return as_array(report, name, value, shape)
 
 
 def assert_report(report: Report) -> Report:

@@ -34,11 +34,14 @@ not the security boundary: that is the sandbox (nothing secret is in the box at 
 
 from __future__ import annotations
 
+import inspect
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from gpsaccel.check._runner import path_test
 
 #: Sub-packages of gpsaccel a notebook may not import in the box (checks, reference answers).
 HIDDEN_PACKAGES = ("gpsaccel.check", "gpsaccel.assignments")
@@ -123,24 +126,18 @@ def transform(source: str) -> str:
     return TransformerManager().transform_cell(source)
 
 
+#: The checker's path test (:func:`gpsaccel.check._runner.path_test`), as source for the box.
+_PATH_TEST = inspect.getsource(path_test)
+
 _PRELUDE = r'''
-def _gpsaccel_guard(hidden):
+def _gpsaccel_guard(hidden, path_test):
     import sys, os, importlib.util
     spec = importlib.util.find_spec("gpsaccel")
     roots = list(spec.submodule_search_locations or []) if spec else []
     dirs = tuple(os.path.realpath(os.path.join(r, *h.split(".")[1:])) + os.sep
                  for r in roots for h in hidden)
     names = tuple(hidden)
-    realpath, fspath = os.path.realpath, os.fspath
-
-    def is_hidden(path):
-        try:
-            p = fspath(path)
-        except TypeError:
-            return False
-        if isinstance(p, bytes):
-            p = p.decode(errors="replace")
-        return isinstance(p, str) and (realpath(p) + os.sep).startswith(dirs)
+    is_hidden = path_test(dirs)  # the checker's runner's path test (its source, above)
 
     def hook(event, args):
         if event == "import" and args and isinstance(args[0], str):
@@ -153,8 +150,8 @@ def _gpsaccel_guard(hidden):
     sys.addaudithook(hook)
 
 
-_gpsaccel_guard(_G_HIDDEN)
-del _gpsaccel_guard
+_gpsaccel_guard(_G_HIDDEN, path_test)
+del _gpsaccel_guard, path_test
 
 
 class _GpsaccelShell:
@@ -310,6 +307,7 @@ def module_source(nb: Notebook, reads: list[Read]) -> str:
              f"_G_MESSAGE_BYTES = {MESSAGE_BYTES}",
              f"_G_MAX_NDIM = {MAX_NDIM}",
              f"_G_STATUSES = {STATUSES!r}",
+             _PATH_TEST,
              _PRELUDE,
              f"_G_CELLS = {cells!r}",
              ""]

@@ -103,108 +103,130 @@ def _plural(n: int, word: str) -> str:
     return f"{n} {word}" + ("" if n == 1 else "s")
 
 
+#: Report 000's wording of its catalogue: code (or code.variant) -> template; the fields are
+#: the model's numbers (:func:`_fields`) and each entry's own.
+MESSAGES: dict[str, str] = {
+    "phi-sign": "Φ₁₃ has the wrong sign: the bias enters position as −Δt²/2 = {half_dt2:.4g}, "
+                "and your filter uses +Δt²/2. Likely cause: the accelerometer reads a + b, so the "
+                "integrated accelerometer runs ahead by the bias and δp = p − p_c loses b·Δt²/2 "
+                "per step (report 001 prints the + sign).",
+    "process-noise-interval": "The process noise between GPS fixes is Γ W Γᵀ built with the GPS "
+                              "interval T = {T:g} s. Stepping once over T with Φ(T) is exact for "
+                              "the mean, but the noise of {n} accelerometer samples adds up as "
+                              "Σ_(j<{n}) Φʲ Γ W Γᵀ Φʲᵀ (velocity variance {n}·Δt²·W = "
+                              "{var_n:.3g} (m/s)², not T²·W = {var_T:.3g}). Likely cause: Φ and "
+                              "Γ written for the GPS step, as report 003 does; sum Q over the "
+                              "{n} steps.",
+    "m0-order": "M0 has position and velocity swapped: the state is [δp, δv, b], so M0 = "
+                "diag({m_p:g} m², {m_v:g} (m/s)², {m_b:g} (m/s²)²); your filter starts with "
+                "diag({m_v:g}, {m_p:g}, {m_b:g}) (as report 001 writes it).",
+    "first-update-skipped": "Your filter does not use the GPS fix at t = 0: its first estimate "
+                            "is the prior (x̂₀ = x̄₀, P₀ = M0) and its first update is at the "
+                            "second GPS time. The GPS reports at t = 0 too; update with z₀ "
+                            "before the first propagation.",
+    "first-update-skipped.covariance": "Your P at t = 0 is the prior M0: the covariance update "
+                                       "with the GPS fix at t = 0 is missing, though your x̂ at "
+                                       "t = 0 did use z₀ (the mean was updated, P was not), and "
+                                       "every later gain follows from that P. Update P at t = 0 "
+                                       "too, before the first propagation.",
+    "returns-a-priori": "Your filter returns the a priori estimate and covariance (x̄, M: before "
+                        "the update) at each GPS time; the checker expects the a posteriori ones "
+                        "(x̂, P: after the update with z at that time). Likely cause: the values "
+                        "are stored before update().",
+    "w-value": "W = {V22:g} is the GPS velocity-noise variance (0.04 m/s)²; the accelerometer "
+               "noise variance is W = {W:g} (m/s²)² (report 001 writes 0.0016).",
+    "missing-propagation": "Your filter propagates {steps_text} between GPS updates; there are "
+                           "{n} (GPS {gps_hz:g} Hz, accelerometer {accel_hz:g} Hz). Likely "
+                           "cause: {cause}.",
+    "missing-propagation.fewer": "a loop such as range(1, {n}), or the first prediction placed "
+                                 "before the loop",
+    "missing-propagation.more": "an extra predict() at the update step",
+    "missing-propagation.once": "one prediction with the {accel_hz:g} Hz Φ per GPS interval",
+    "missing-propagation.tenth": "the GPS interval taken as {tenth:g} s (report 001 writes "
+                                 "0.02 s for its 0.2 s)",
+    "std-as-variance": "{elem} = {value:.4g} in your filter; it should be {right:.4g}: {label}. "
+                       "A covariance holds variances σ² (here σ = {sigma:.4g}, σ² = {right:.4g}); "
+                       "report 003 mixes them up the same way.",
+    "std-as-variance.sigma": "a standard deviation used where a variance belongs",
+    "std-as-variance.squared": "a variance squared again, as if it were a standard deviation",
+}
+
+
+def _fields(model: CalibrationModel) -> dict[str, float]:
+    """The model's numbers the messages quote."""
+    dt, n, T, W = model.dt, model.gps_every, model.gps_interval, float(model.W[0, 0])
+    m_p, m_v, m_b = (float(m) for m in np.diag(model.M0))
+    return {"dt": dt, "n": n, "T": T, "W": W, "half_dt2": -dt**2 / 2, "var_n": n * dt**2 * W,
+            "var_T": T**2 * W, "V11": float(model.V[0, 0]), "V22": float(model.V[1, 1]),
+            "m_p": m_p, "m_v": m_v, "m_b": m_b, "gps_hz": 1 / T, "accel_hz": 1 / dt,
+            "tenth": n // 10 * dt}
+
+
 def covariance_mistakes(model: CalibrationModel | None = None) -> tuple[Mistake, ...]:
     """Mistakes that change P (and, through the gains and Φ, x̂) on ``model``'s numbers."""
     model = CalibrationModel() if model is None else model
-    dt, n = model.dt, model.gps_every
-    T = model.gps_interval
-    W = float(model.W[0, 0])
-    V11, V22 = float(model.V[0, 0]), float(model.V[1, 1])
-    m_p, m_v, m_b = (float(m) for m in np.diag(model.M0))
-    out: list[Mistake] = [
-        Mistake(
-            "phi-sign", "Φ₁₃ = +Δt²/2",
-            f"Φ₁₃ has the wrong sign: the bias enters position as −Δt²/2 = {-dt**2 / 2:.4g}, and "
-            f"your filter uses +Δt²/2. Likely cause: the accelerometer reads a + b, so the "
-            f"integrated accelerometer runs ahead by the bias and δp = p − p_c loses b·Δt²/2 per "
-            f"step (report 001 prints the + sign).",
-            (("sign13", 1.0),),
-        ),
-        Mistake(
-            "process-noise-interval", f"Φ, Γ built with T = {T:g} s, one step per GPS interval",
-            f"The process noise between GPS fixes is Γ W Γᵀ built with the GPS interval "
-            f"T = {T:g} s. Stepping once over T with Φ(T) is exact for the mean, but the noise of "
-            f"{n} accelerometer samples adds up as Σ_(j<{n}) Φʲ Γ W Γᵀ Φʲᵀ (velocity variance "
-            f"{n}·Δt²·W = {n * dt**2 * W:.3g} (m/s)², not T²·W = {T**2 * W:.3g}). Likely cause: "
-            f"Φ and Γ written for the GPS step, as report 003 does; sum Q over the {n} steps.",
-            (("phi_dt", T), ("gamma_dt", T), ("steps", 1)),
-        ),
-        Mistake(
-            "m0-order", "M0 = diag(M_v, M_p, M_b)",
-            f"M0 has position and velocity swapped: the state is [δp, δv, b], so M0 = "
-            f"diag({m_p:g} m², {m_v:g} (m/s)², {m_b:g} (m/s²)²); your filter starts with "
-            f"diag({m_v:g}, {m_p:g}, {m_b:g}) (as report 001 writes it).",
-            (("M0", (0, 0), m_v), ("M0", (1, 1), m_p)),
-        ),
-        Mistake(
-            "first-update-skipped", "no update at t = 0",
-            "Your filter does not use the GPS fix at t = 0: its first estimate is the prior "
-            "(x̂₀ = x̄₀, P₀ = M0) and its first update is at the second GPS time. The GPS reports "
-            "at t = 0 too; update with z₀ before the first propagation.",
-            (("skip_first", True),),
-        ),
-        Mistake(
-            "first-update-skipped", "P not updated at t = 0",
-            "Your P at t = 0 is the prior M0: the covariance update with the GPS fix at t = 0 is "
-            "missing, though your x̂ at t = 0 did use z₀ (the mean was updated, P was not), and "
-            "every later gain follows from that P. Update P at t = 0 too, before the first "
-            "propagation.",
-            (("skip_first", "covariance"),),
-        ),
-        predict_before_first_update(LINEAR_MESSAGES["predict-before-first-update"].format(
-            measurement="GPS fix", every=n, step="accelerometer step")),
-        Mistake(
-            "returns-a-priori", "returns (x̄, M)",
-            "Your filter returns the a priori estimate and covariance (x̄, M: before the update) "
-            "at each GPS time; the checker expects the a posteriori ones (x̂, P: after the "
-            "update with z at that time). Likely cause: the values are stored before update().",
-            (("output", "prior"),),
-        ),
-        Mistake(
-            "w-value", "W = V₂₂",
-            f"W = {V22:g} is the GPS velocity-noise variance (0.04 m/s)²; the accelerometer "
-            f"noise variance is W = {W:g} (m/s²)² (report 001 writes 0.0016).",
-            (("W", V22),),
-        ),
-    ]
-    rate = 1.0 / dt
-    for steps, cause in ((n - 1, f"a loop such as range(1, {n}), or the first prediction placed "
-                                 f"before the loop"),
-                         (n + 1, "an extra predict() at the update step"),
-                         (1, f"one prediction with the {rate:g} Hz Φ per GPS interval"),
-                         (n // 10, f"the GPS interval taken as {n // 10 * dt:g} s (report 001 "
-                                   f"writes 0.02 s for its 0.2 s)")):
+    f = _fields(model)
+    return (_model_mistakes(model, f) + _propagation_mistakes(model, f)
+            + _variance_mistakes(model, f))
+
+
+def _model_mistakes(model: CalibrationModel, f: dict[str, float]) -> tuple[Mistake, ...]:
+    """One entry each: a sign, the interval, the prior's order, the schedule, the output, W."""
+    T, m_p, m_v = f["T"], f["m_p"], f["m_v"]
+    entries: tuple[tuple[str, str, tuple[tuple, ...]], ...] = (
+        ("phi-sign", "Φ₁₃ = +Δt²/2", (("sign13", 1.0),)),
+        ("process-noise-interval", f"Φ, Γ built with T = {T:g} s, one step per GPS interval",
+         (("phi_dt", T), ("gamma_dt", T), ("steps", 1))),
+        ("m0-order", "M0 = diag(M_v, M_p, M_b)", (("M0", (0, 0), m_v), ("M0", (1, 1), m_p))),
+        ("first-update-skipped", "no update at t = 0", (("skip_first", True),)),
+        ("first-update-skipped.covariance", "P not updated at t = 0",
+         (("skip_first", "covariance"),)),
+        ("returns-a-priori", "returns (x̄, M)", (("output", "prior"),)),
+        ("w-value", "W = V₂₂", (("W", f["V22"]),)),
+    )
+    out = [Mistake(key.split(".")[0], variant, MESSAGES[key].format(**f), changes)
+           for key, variant, changes in entries]
+    out.insert(5, predict_before_first_update(LINEAR_MESSAGES["predict-before-first-update"]
+                                              .format(measurement="GPS fix", every=f["n"],
+                                                      step="accelerometer step")))
+    return tuple(out)
+
+
+def _propagation_mistakes(model: CalibrationModel, f: dict[str, float]) -> tuple[Mistake, ...]:
+    """The wrong number of accelerometer steps between GPS updates, each with its likely cause."""
+    n = model.gps_every
+    out = []
+    for steps, cause in ((n - 1, "fewer"), (n + 1, "more"), (1, "once"), (n // 10, "tenth")):
         if steps < 1 or steps == n:
             continue
-        out.append(Mistake(
-            "missing-propagation", f"{_plural(steps, 'step')} between updates",
-            f"Your filter propagates {_plural(steps, 'accelerometer step')} between GPS updates; "
-            f"there are {n} (GPS {1 / T:g} Hz, accelerometer {1 / dt:g} Hz). Likely cause: "
-            f"{cause}.",
-            (("steps", steps),),
-        ))
-    sva = "a standard deviation used where a variance belongs"
-    avs = "a variance squared again, as if it were a standard deviation"
-    entries: list[tuple[str, tuple[int, int] | None, float, float, str]] = []
-    for vi, right in (((0, 0), V11), ((1, 1), V22)):
-        entries += [("V", vi, np.sqrt(right), right, sva), ("V", vi, right**2, right, avs)]
-    entries += [("W", None, np.sqrt(W), W, sva), ("W", None, W**2, W, avs)]
-    for k, right in enumerate((m_p, m_v, m_b)):
-        entries += [("M0", (k, k), np.sqrt(right), right, sva),
-                    ("M0", (k, k), right**2, right, avs)]
-    for name, idx, value, right, label in entries:
-        if np.isclose(value, right, rtol=1e-6):
-            continue  # σ = σ² (a variance of 1): this slip cannot be seen
-        value = float(value)
-        elem = name if idx is None else name + f"{idx[0] + 1}{idx[1] + 1}".translate(_SUB)
-        change = (name, value) if idx is None else (name, idx, value)
-        out.append(Mistake(
-            "std-as-variance", f"{elem} = {value:.4g}",
-            f"{elem} = {value:.4g} in your filter; it should be {right:.4g}: {label}. "
-            f"A covariance holds variances σ² (here σ = {np.sqrt(right):.4g}, "
-            f"σ² = {right:.4g}); report 003 mixes them up the same way.",
-            (change,),
-        ))
+        text = MESSAGES["missing-propagation"].format(
+            steps_text=_plural(steps, "accelerometer step"),
+            cause=MESSAGES[f"missing-propagation.{cause}"].format(**f), **f)
+        out.append(Mistake("missing-propagation", f"{_plural(steps, 'step')} between updates",
+                           text, (("steps", steps),)))
+    return tuple(out)
+
+
+def _variance_mistakes(model: CalibrationModel, f: dict[str, float]) -> tuple[Mistake, ...]:
+    """σ for σ² (and σ² squared again) in each variance of V, W and M0 (one element each)."""
+    V11, V22, W = f["V11"], f["V22"], f["W"]
+    places: list[tuple[str, tuple[int, int] | None, float]] = [
+        ("V", (0, 0), V11), ("V", (1, 1), V22), ("W", None, W),
+        *(("M0", (k, k), f[key]) for k, key in enumerate(("m_p", "m_v", "m_b")))]
+    out = []
+    for name, idx, right in places:
+        for value, label in ((np.sqrt(right), "sigma"), (right**2, "squared")):
+            if np.isclose(value, right, rtol=1e-6):
+                continue  # σ = σ² (a variance of 1): this slip cannot be seen
+            value = float(value)
+            elem = name if idx is None else name + f"{idx[0] + 1}{idx[1] + 1}".translate(_SUB)
+            change = (name, value) if idx is None else (name, idx, value)
+            out.append(Mistake(
+                "std-as-variance", f"{elem} = {value:.4g}",
+                MESSAGES["std-as-variance"].format(
+                    elem=elem, value=value, right=right, sigma=np.sqrt(right),
+                    label=MESSAGES[f"std-as-variance.{label}"]),
+                (change,)))
     return tuple(out)
 
 

@@ -97,6 +97,35 @@ class _Blocker(importlib.abc.MetaPathFinder):
         return None
 
 
+def path_test(dirs: tuple[str, ...]):  # noqa: ANN201 - a closure, kept self-contained
+    """``is_under(path)``: whether ``path`` (str, bytes or os.PathLike) resolves under one of
+    ``dirs`` (real paths ending in "/"); a path that cannot be resolved counts as under (it is
+    not let through).  Resolved real paths: '//path/to/gpsaccel', 'a/../gpsaccel' or a symlink to
+    it is the folder as much as its own name.  This runner's audit hook uses it; a graded
+    notebook's guard (:mod:`gpsaccel.assignments.notebook`), which runs where the checker cannot
+    be imported, carries its source text.  So it imports what it uses and binds it here (patching
+    os later does not change it)."""
+    import os as _os
+
+    realpath, fspath = _os.path.realpath, _os.fspath
+
+    def is_under(path: object) -> bool:
+        try:
+            p = fspath(path)  # type: ignore[call-overload]  # anything the student passes
+        except TypeError:
+            return False
+        if isinstance(p, bytes):
+            p = p.decode(errors="replace")
+        if not isinstance(p, str):
+            return False
+        try:
+            return (realpath(p) + "/").startswith(dirs)
+        except (OSError, ValueError):
+            return True
+
+    return is_under
+
+
 def _audit_hook(names: list[str], dirs: list[str]):  # noqa: ANN202
     """An audit hook (it cannot be removed once added) that reports, then refuses, an import of
     a blocked package or an open of a file under a blocked folder, even after the student's code
@@ -106,24 +135,9 @@ def _audit_hook(names: list[str], dirs: list[str]):  # noqa: ANN202
     dirs_t = tuple(dict.fromkeys(os.path.realpath(d).rstrip("/") + "/" for d in dirs))
     data = json.dumps({"t": "uses-checker", "module": "gpsaccel"}).encode()
     frame = struct.pack(">I", len(data)) + data
-    # resolved real paths: '//path/to/gpsaccel', 'a/../gpsaccel' or a symlink to it is the
-    # package as much as its own name
-    write, fd, realpath, fspath = os.write, _FD, os.path.realpath, os.fspath
-    sent = []
-
-    def blocked(path: object) -> bool:
-        try:
-            p = fspath(path)
-        except TypeError:
-            return False
-        if isinstance(p, bytes):
-            p = p.decode(errors="replace")
-        if not isinstance(p, str):
-            return False
-        try:
-            return (realpath(p) + "/").startswith(dirs_t)
-        except (OSError, ValueError):
-            return True  # a path that cannot be resolved is not let through
+    write, fd = os.write, _FD
+    sent: list[bool] = []
+    blocked = path_test(dirs_t)
 
     def hook(event: str, args: tuple) -> None:
         hit = False
@@ -147,7 +161,7 @@ def _audit_hook(names: list[str], dirs: list[str]):  # noqa: ANN202
 
 def _student_traceback(exc: BaseException, root: Path) -> str:
     """The traceback from the first frame in the student's files on, last lines only."""
-    tb = traceback.extract_tb(exc.__traceback__)
+    tb: list[traceback.FrameSummary] = list(traceback.extract_tb(exc.__traceback__))
     for i, frame in enumerate(tb):
         if not frame.filename.startswith("<") and \
                 Path(frame.filename).resolve().is_relative_to(root):
@@ -162,7 +176,7 @@ def _student_traceback(exc: BaseException, root: Path) -> str:
     return "\n".join(text[-TRACEBACK_LINES:])
 
 
-def _limit_hit(exc: BaseException) -> str | None:
+def _limit_hit(exc: BaseException | None) -> str | None:
     """Which limit of the sandbox an exception (or its cause) comes from, if any."""
     seen = set()
     while exc is not None and id(exc) not in seen:

@@ -40,7 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from gpsaccel.check.report import Report
+from gpsaccel.check.report import Report, as_array
 from gpsaccel.coop.model import (
     CoopModel,
     jacobian_A,
@@ -126,31 +126,25 @@ def _inputs(model: CoopModel, n: int, seed: int) -> np.ndarray:
 def _call(report: Report, name: str, fn: Callable[..., object], args: tuple, shape: tuple[int, int],
           what: str) -> np.ndarray | None:
     """fn(*args) as a float array of ``shape``, or None with a finding."""
+    x = np.array(args[0], dtype=float)  # the state asked about, before the student's code runs
     try:
         out = fn(*args)
     except Exception as exc:  # noqa: BLE001 - the student's function may raise anything
         tb = "".join(traceback.format_exception_only(type(exc), exc)).strip()
         report.add("exception", f"{what} raised {tb} at x = {np.round(args[0], 4).tolist()}.")
         return None
-    try:
-        arr = np.array(out, dtype=float)
-    except (TypeError, ValueError) as exc:
-        report.add("not-a-matrix", f"{what} returned a {type(out).__name__}; np.array(..., "
-                   f"dtype=float) fails: {exc}")
-        return None
-    if arr.shape != shape:
-        report.add("shape", f"{what} returned shape {arr.shape}; it must be "
-                   f"{shape[0]} x {shape[1]}" + (" (it looks transposed)"
-                                                 if arr.shape == shape[::-1] else "") + ".")
-        return None
-    if not np.isfinite(arr).all():
-        report.add("not-finite", f"{what} contains NaN or inf at x = "
-                   f"{np.round(args[0], 6).tolist()}" + (
-                       " (the vehicles are 1 cm apart there: ρ² is small but not zero)"
-                       if np.hypot(args[0][3] - args[0][0], args[0][4] - args[0][1]) < 0.1
-                       else "") + ".")
-        return None
-    return arr
+    near = np.hypot(x[3] - x[0], x[4] - x[1]) < 0.1
+    return as_array(report, what, out, shape, _RETURNED, x=np.round(x, 6).tolist(),
+                    near=_NEAR if near else "")
+
+
+#: The wording of a returned value's findings (:func:`gpsaccel.check.report.as_array`).
+_RETURNED = {
+    "not-a-matrix": "{name} returned a {type}; np.array(..., dtype=float) fails: {error}",
+    "shape": "{name} returned shape {shape}; it must be {want_x}{transposed}.",
+    "not-finite": "{name} contains NaN or inf at x = {x}{near}.",
+}
+_NEAR = " (the vehicles are 1 cm apart there: ρ² is small but not zero)"
 
 
 def _evaluate(report: Report, name: str, fn: object, X: np.ndarray, U: np.ndarray,
@@ -347,20 +341,17 @@ def _dt_value(report: Report, name: str, value: object, X: np.ndarray, U: np.nda
     base = {"F": "A", "G": "B", "H": "C"}[name]
     if callable(value):
         return _evaluate(report, base, value, X, U, display=name)
-    try:
-        arr = np.array(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        report.add("not-a-matrix", f"{name} must be an array of numbers (or a function "
-                   f"{ARGS[base].replace(base, name, 1)}); np.array({name}, dtype=float) fails: "
-                   f"{exc}")
-        return None
-    if arr.shape != shape:
-        report.add("shape", f"{name} has shape {arr.shape}; it must be {shape[0]} x {shape[1]}.")
-        return None
-    if not np.isfinite(arr).all():
-        report.add("not-finite", f"{name} contains NaN or inf.")
-        return None
-    return arr[None]
+    arr = as_array(report, name, value, shape, _VALUE,
+                   signature=ARGS[base].replace(base, name, 1))
+    return None if arr is None else arr[None]
+
+
+#: The wording of a value's findings where a function may stand (:func:`as_array`).
+_VALUE = {
+    "not-a-matrix": "{name} must be an array of numbers (or a function {signature}); "
+                    "np.array({name}, dtype=float) fails: {error}",
+    "shape": "{name} has shape {shape}; it must be {want_x}.",
+}
 
 
 def dt_model(F: object = None, G: object = None, H: object = None, Omega: object = None,

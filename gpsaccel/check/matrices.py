@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from gpsaccel.calibration.model import STATE_UNITS, CalibrationModel, gamma, phi
-from gpsaccel.check.report import Report
+from gpsaccel.check.report import Report, as_array
 from gpsaccel.kalman.update import epoch_transition
 
 #: Relative tolerance of an element against its expected value (students type numbers such as
@@ -44,18 +44,8 @@ def _close(a: float, b: float, scale: float) -> bool:
     return math.isclose(a, b, rel_tol=RTOL, abs_tol=RTOL * 1e-6 * scale)
 
 
-def _as_array(report: Report, name: str, value: object) -> np.ndarray | None:
-    """``value`` as a float array, or None with a finding (not numbers, NaN/inf)."""
-    try:
-        arr = np.array(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        report.add("not-a-matrix", f"{name} must be an array of numbers; np.array({name}, "
-                   f"dtype=float) fails: {exc}")
-        return None
-    if not np.isfinite(arr).all():
-        report.add("not-finite", f"{name} contains NaN or inf: {arr.tolist()}")
-        return None
-    return arr
+#: A matrix with NaN shows the student's own values.
+_VALUES_SHOWN = {"not-finite": "{name} contains NaN or inf: {values}"}
 
 
 def _shape(report: Report, name: str, arr: np.ndarray, want: tuple[int, ...],
@@ -324,7 +314,7 @@ def model_matrices(Phi: object = None, Gamma: object = None, H: object = None, V
     }
     arrays: dict[str, np.ndarray] = {}
     for name, value in given.items():
-        arr = _as_array(report, name, value)
+        arr = as_array(report, name, value, text=_VALUES_SHOWN)
         if arr is None:
             continue
         want, text, also = meaning[name]

@@ -10,7 +10,10 @@ correct filter).  A :class:`Report` passes when it holds no error.
 from __future__ import annotations
 
 import textwrap
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
+
+import numpy as np
 
 SEVERITIES = ("error", "warning", "note")
 
@@ -93,3 +96,39 @@ class Report:
             lines.append("")
             lines.append(textwrap.indent(table, "  "))
         return "\n".join(lines)
+
+
+#: The wording of :func:`as_array`'s findings (code -> template); a caller rewords any entry.
+#: Fields: name, type (of the value), error (why np.array failed), shape (the value's), want and
+#: want_x (the shape asked for, as a tuple and as "3 x 3"), transposed (" (it looks transposed)"
+#: or ""), values (the value as a list), and the caller's own.
+ARRAY_TEXT: dict[str, str] = {
+    "not-a-matrix": "{name} must be an array of numbers; np.array({name}, dtype=float) fails: "
+                    "{error}",
+    "shape": "{name} has shape {shape}; it must be {want}.",
+    "not-finite": "{name} contains NaN or inf.",
+}
+
+
+def as_array(report: Report, name: str, value: object, shape: tuple[int, ...] | None = None,
+             text: Mapping[str, str] | None = None, **fields: object) -> np.ndarray | None:
+    """A student's ``value`` as a finite float array (of ``shape`` when given), or None with a
+    finding ``not-a-matrix`` (not numbers), ``shape`` or ``not-finite`` (NaN or inf), worded by
+    :data:`ARRAY_TEXT` with ``text``'s entries instead.  Every checker of a student's matrices
+    and answers reads them through this."""
+    words = {**ARRAY_TEXT, **(text or {})}
+    fields = {"name": name, "type": type(value).__name__, **fields}
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        report.add("not-a-matrix", words["not-a-matrix"].format(error=exc, **fields))
+        return None
+    if shape is not None and arr.shape != shape:
+        report.add("shape", words["shape"].format(
+            shape=arr.shape, want=shape, want_x=" x ".join(map(str, shape)),
+            transposed=" (it looks transposed)" if arr.shape == shape[::-1] else "", **fields))
+        return None
+    if not np.isfinite(arr).all():
+        report.add("not-finite", words["not-finite"].format(values=arr.tolist(), **fields))
+        return None
+    return arr
