@@ -186,12 +186,12 @@ def sweep(kind: str, factors: Sequence[float] | None = None, forms: Sequence[str
     kind = _v.choice("kind", kind, SWEEPS)
     seed = _v.integer("seed", seed, minimum=0)  # None would draw a sweep nobody can redraw
     truth = _v.choice("truth", truth, TRUTHS)
-    factors = DEFAULT_FACTORS[kind] if factors is None else np.asarray(factors, dtype=float)
+    points = DEFAULT_FACTORS[kind] if factors is None else np.asarray(factors, dtype=float)
     forms = tuple(FORMS) if forms is None else tuple(_v.choice("forms", f, FORMS) for f in forms)
     kappa, cond_P, floor = [], [], []
     errs: dict[str, list[Errors]] = {f: [] for f in forms}
     problems: dict[str, list[str | None]] = {f: [] for f in forms}
-    for factor in factors:
+    for factor in points:
         model, data_model = sweep_model(kind, factor)
         z = simulate(data_model, np.random.default_rng(seed), truth).z
         exact = exact_filter(model, z, digits)
@@ -202,6 +202,6 @@ def sweep(kind: str, factors: Sequence[float] | None = None, forms: Sequence[str
             row = _core.run_one(name, form_filter(name, model), z, exact, 1, "")
             errs[name].append(row.errors or Errors(np.inf, np.inf, np.inf, -np.inf))
             problems[name].append(row.problem)
-    return Sweep(kind, seed, np.asarray(factors), np.array(kappa), np.array(cond_P), tuple(floor),
+    return Sweep(kind, seed, points, np.array(kappa), np.array(cond_P), tuple(floor),
                  {f: tuple(v) for f, v in errs.items()},
                  {f: tuple(v) for f, v in problems.items()})

@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from filterpy.kalman import KalmanFilter
@@ -249,7 +250,7 @@ class CalibrationModel:
         t = np.asarray(t, dtype=float)
         return p0 + v0 * t + A * t * t * _x_minus_sin_over_square(w * t)
 
-    def replace(self, **changes: object) -> CalibrationModel:
+    def replace(self, **changes: Any) -> CalibrationModel:
         """A copy with some fields changed (validated again)."""
         from dataclasses import replace
 

@@ -247,11 +247,11 @@ def _residual_pairs(pairs: Iterable[tuple[int, int]], n: int,
     """Requested epoch pairs as sorted (later, earlier) with a lag beyond max_lag (the others are
     in the lag band anyway); ValueError naming ``residual_pairs`` for anything else."""
     try:
-        pairs = [tuple(p) for p in pairs]
+        given = [tuple(p) for p in pairs]
     except TypeError:
         raise ValueError("residual_pairs must be a sequence of (i, m) epoch-index pairs") from None
     out = set()
-    for p in pairs:
+    for p in given:
         if len(p) != 2:
             raise ValueError(f"residual_pairs: each pair must be (i, m), got {p!r}")
         i, m = (_v.integer("residual_pairs index", q, minimum=0) for q in p)
@@ -328,7 +328,8 @@ class _StreamedNormals(_ArrayNormals):
             E = self.ge.standard_normal((2 * k, BLOCK_RUNS))[:, self.cols]
             for j in range(k):
                 ju = j - 1 if i == 0 else j
-                yield i + j, (U[2 * ju:2 * ju + 2] if i + j else None), E[2 * j:2 * j + 2]
+                u = U[2 * ju:2 * ju + 2] if U is not None and i + j else None
+                yield i + j, u, E[2 * j:2 * j + 2]
             i += k
 
 
@@ -375,7 +376,8 @@ def _run_block(pl: EnsemblePlan, xi: np.ndarray | _ArrayNormals,
     ring = np.empty((2 * (L + 1), 2, m))  # r̃_i at q and q + L + 1, q = −i mod (L + 1)
     band = np.zeros((n, L + 1, 2, 2))  # Σ r̃_i r̃_{i−k}ᵀ
     s_r = np.empty((n, 2))  # Σ r̃_i
-    earlier = {mm: None for _, mm in pl.pairs}  # r̃_m kept for the requested pairs
+    earlier: dict[int, np.ndarray] = {mm: np.empty(0) for _, mm in pl.pairs}  # r̃_m kept for
+    # the requested pairs (each filled at its epoch m, before the later epoch i reads it)
     later: dict[int, list[int]] = {}
     for j, (i, _) in enumerate(pl.pairs):
         later.setdefault(i, []).append(j)
@@ -495,6 +497,7 @@ def realizations(model: CalibrationModel, start: int, stop: int, seed: int = 0,
     stop = _v.integer("stop", stop, minimum=start + 1)
     pl = plan(model, truth)
     out = _run_block(pl, _standard_normals(seed, pl.n_normals, start, stop), keep=True)[1]
+    assert out is not None  # keep=True keeps them
     runs_first = {k: np.ascontiguousarray(v.transpose(2, 0, 1)) for k, v in out.items()}
     return Realizations(np.arange(start, stop), pl.t, runs_first["x"], runs_first["z"],
                         runs_first["x_bar"], runs_first["x_hat"], runs_first["r"])
@@ -540,6 +543,11 @@ class EnsembleSums:
         de = other.mean_e - self.mean_e
         dx = other.mean_xhat - self.mean_xhat
         w = self.n * other.n / n
+        rr_band, rr_pairs = ((np.add(a, b, out=a) if in_place else a + b)
+                             for a, b in ((self.rr_band, other.rr_band),
+                                          (self.rr_pairs, other.rr_pairs)))
+        a, b = self.rr_full, other.rr_full
+        rr_full = None if a is None or b is None else (np.add(a, b, out=a) if in_place else a + b)
         return EnsembleSums(
             n,
             self.mean_e + fb * de,
@@ -548,9 +556,7 @@ class EnsembleSums:
             self.C_ee + other.C_ee + w * de[:, :, None] * de[:, None, :],
             self.C_ex + other.C_ex + w * de[:, :, None] * dx[:, None, :],
             self.C_xx + other.C_xx + w * dx[:, :, None] * dx[:, None, :],
-            *(None if a is None else (np.add(a, b, out=a) if in_place else a + b)
-              for a, b in ((self.rr_band, other.rr_band), (self.rr_pairs, other.rr_pairs),
-                           (self.rr_full, other.rr_full))),
+            rr_band, rr_pairs, rr_full,
             self.nees + other.nees,
             self.nis + other.nis,
         )
@@ -570,6 +576,7 @@ def _chunk_sums(pl: EnsemblePlan, seed: int, start: int, stop: int) -> EnsembleS
             part = _run_block(pl, _block_normals(seed, pl.n_gps, lo, hi))[0]
             acc = part if acc is None else acc.merge(part, in_place=True)
             lo = hi
+    assert acc is not None  # start < stop: one block at least
     return acc
 
 
@@ -800,19 +807,19 @@ class MonteCarloResult:
         se_e, se_P, se_o = self.e_ave_se, self.P_ave_se, self.orthogonality_se
         verdicts = []
         for k, (s, u) in enumerate(zip(STATE_NAMES, STATE_UNITS, strict=True)):
-            verdicts.append(verdict_from_z(
-                f"e_ave[{s}]", z["e_ave"][:, k],
-                lambda i, k=k, u=u: f"t = {t[i[0]]:g} s: e_ave = {self.e_ave[i[0], k]:.3g} {u} "
-                                    f"(SE {se_e[i[0], k]:.2g}, predicted "
-                                    f"{self.predicted_mean_error[i[0], k]:.3g})",
-                a))
+            def mean_at(i: tuple, k: int = k, u: str = u) -> str:
+                return (f"t = {t[i[0]]:g} s: e_ave = {self.e_ave[i[0], k]:.3g} {u} (SE "
+                        f"{se_e[i[0], k]:.2g}, predicted {self.predicted_mean_error[i[0], k]:.3g})")
+
+            verdicts.append(verdict_from_z(f"e_ave[{s}]", z["e_ave"][:, k], mean_at, a))
         dP = self.P_ave - self.P
         for k, s in enumerate(STATE_NAMES):
-            verdicts.append(verdict_from_z(
-                f"P_ave−P[{s},{s}]", z["P_ave"][:, k, k],
-                lambda i, k=k: f"t = {t[i[0]]:g} s: P_ave − P = {dP[i[0], k, k]:.3g} "
-                               f"(P {self.P[i[0], k, k]:.3g}, SE {se_P[i[0], k, k]:.2g})",
-                a))
+            def variance_at(i: tuple, k: int = k) -> str:
+                return (f"t = {t[i[0]]:g} s: P_ave − P = {dP[i[0], k, k]:.3g} "
+                        f"(P {self.P[i[0], k, k]:.3g}, SE {se_P[i[0], k, k]:.2g})")
+
+            verdicts.append(verdict_from_z(f"P_ave−P[{s},{s}]", z["P_ave"][:, k, k],
+                                           variance_at, a))
         off = z["P_ave"].copy()
         idx = np.arange(3)
         off[:, idx, idx] = np.nan
@@ -853,12 +860,13 @@ class MonteCarloResult:
             vals = getattr(self, key)
             bounds = chi2_bounds(dof, N, 0.05)
             inside = fraction_inside(vals, bounds)
-            verdicts.append(verdict_from_z(
-                f"{name} (χ²({dof}N)/N)", z[key],
-                lambda i, vals=vals, bounds=bounds, inside=inside:
-                    f"t = {t[i[0]]:g} s: {vals[i[0]]:.4g}; {inside:.0%} of epochs inside the "
-                    f"95% bounds [{bounds[0]:.4g}, {bounds[1]:.4g}]",
-                a))
+
+            def chi2_at(i: tuple, vals: np.ndarray = vals, bounds: tuple = bounds,
+                        inside: float = inside) -> str:
+                return (f"t = {t[i[0]]:g} s: {vals[i[0]]:.4g}; {inside:.0%} of epochs inside "
+                        f"the 95% bounds [{bounds[0]:.4g}, {bounds[1]:.4g}]")
+
+            verdicts.append(verdict_from_z(f"{name} (χ²({dof}N)/N)", z[key], chi2_at, a))
         assert len(verdicts) == rows
         title = (f"Monte Carlo consistency: {N} runs, truth {self.truth}, seed {self.seed}, "
                  f"{t.size} GPS epochs; residual whiteness over " +
@@ -972,6 +980,7 @@ def _run_ordered(ex, pl: EnsemblePlan, seed: int, n_runs: int, chunk_size: int, 
         for f in pending:
             f.cancel()
         bar.close()
+    assert acc is not None  # n_runs ≥ 1: one chunk at least
     return acc
 
 

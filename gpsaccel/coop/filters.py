@@ -237,6 +237,8 @@ def run_lkf(model: CoopModel, y: np.ndarray, Q: np.ndarray | None = None,
 class _CoopEKF(ExtendedKalmanFilter):
     """filterpy's EKF with the state prediction replaced by the exact nonlinear step."""
 
+    x: np.ndarray
+
     def __init__(self, model: CoopModel) -> None:
         super().__init__(dim_x=N_STATES, dim_z=N_MEAS)
         self.model = model

@@ -183,7 +183,7 @@ def tune_q(model: CoopModel, method: str, grid: Sequence[Sequence[float]] | None
         raise ValueError(f"grid must hold 3 lists of multipliers (UGV pos, UAV pos, heading), "
                          f"got {len(grid)}")
     truths = [truth_runs(model, n_runs, s) for s in set_seeds(seed, n_sets)]
-    scales = [tuple(float(v) for v in c) for c in itertools.product(*grid)]
+    scales = [(float(a), float(b), float(c)) for a, b, c in itertools.product(*grid)]
     nees_f, nis_f = [], []
     for sc in scales:
         Q = scaled_q(model.Qtrue, *sc)
@@ -232,7 +232,7 @@ def summary(model: CoopModel | None = None, n_runs: int = 50, n_sets: int = 5, s
         for s in set_seeds(seed, n_sets):
             truths.append(truth_runs(model, n_runs, s))
             bar.update()
-        sets = {}
+        sets: dict[str, list[ConsistencyRun]] = {}
         for label, m, Q in cases:
             bar.set_postfix_str(label)
             sets[label] = []

@@ -104,7 +104,9 @@ class ShipComparison:
 
     @property
     def n_runs(self) -> int:
-        return self.ensemble.n_runs
+        n = self.ensemble.n_runs
+        assert n is not None  # a comparison's ensemble always has the runs axis
+        return n
 
     @property
     def t_epochs(self) -> np.ndarray:
@@ -113,7 +115,10 @@ class ShipComparison:
     def inside(self, name: str, actual: bool = False) -> float:
         """Fraction of epochs whose ε̄_k is inside the 95 % bounds."""
         s = self.filters[name]
-        return fraction_inside(s.nees_actual if actual else s.nees, self.bounds)
+        nees = s.nees_actual if actual else s.nees
+        if nees is None:
+            raise ValueError(f"actual: filter {name!r} has no actual NEES (its P is the truth's)")
+        return fraction_inside(nees, self.bounds)
 
     def covariance_excess(self, name: str, reference: str = "multirate") -> np.ndarray:
         """(n_epochs,) smallest eigenvalue of P_actual(name) − P(reference), in units of the
@@ -296,9 +301,9 @@ def compare_wind(model: ShipModel | None = None, n_runs: int = 200, seed: int = 
     if not isinstance(model, ShipModel) or not model.wind:
         raise ValueError("model must be a ShipModel with wind=True")
     n_runs = _v.integer("n_runs", n_runs, minimum=2)
-    wind_force = _v.finite_array("wind_force", wind_force, (2,))
+    force = _v.finite_array("wind_force", wind_force, (2,))
     plain = model.replace(wind=False)
-    ens = simulate_ensemble(model, n_runs, np.random.default_rng(seed), wind_force=wind_force)
+    ens = simulate_ensemble(model, n_runs, np.random.default_rng(seed), wind_force=force)
     sched = model.schedule(multirate=True)
     z = ens.measurements(sched)
     steps = sched.steps
@@ -313,7 +318,7 @@ def compare_wind(model: ShipModel | None = None, n_runs: int = 200, seed: int = 
     res_w, x_w = out[True]
     e_w = ens.x[:, steps] - x_w
     return WindComparison(
-        wind_force, ens.t[steps], ens.wind[:, steps], x_w[:, :, 9:],
+        force, ens.t[steps], ens.wind[:, steps], x_w[:, :, 9:],
         np.sqrt(np.diagonal(res_w.P, axis1=1, axis2=2)[:, 9:]),
         np.linalg.norm(err[False], axis=2), np.linalg.norm(err[True], axis=2),
         err[False][:, late].mean(axis=(0, 1)), err[True][:, late].mean(axis=(0, 1)),

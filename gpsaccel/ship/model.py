@@ -73,6 +73,7 @@ The course-notation / filterpy mapping is that of :mod:`gpsaccel.calibration.mod
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from filterpy.kalman import KalmanFilter
@@ -227,6 +228,7 @@ class ShipModel:
         """9x3: force F_x, F_y (N) and torque τ (N m) to the acceleration rows."""
         out = np.zeros((9, 3))
         out[2, 0] = out[5, 1] = 1.0 / self.mass
+        assert self.inertia is not None  # set in __post_init__
         out[8, 2] = 1.0 / self.inertia
         return out
 
@@ -293,7 +295,7 @@ class ShipModel:
         kf.x = self.x0.reshape(n, 1)
         return kf
 
-    def replace(self, **changes: object) -> ShipModel:
+    def replace(self, **changes: Any) -> ShipModel:
         """A copy with some fields changed (validated again)."""
         from dataclasses import replace
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -20,7 +20,7 @@ if TYPE_CHECKING:
 
 #: The racetrack plan of :func:`driving_input`: cruise speed (m/s), the end of the speed-up (s),
 #: the two 180° left turns (start, end in s) and the length of the smooth yaw-rate ramps (s).
-PLAN = {"speed": 1.0, "speed_up": 10.0, "turns": ((25.0, 45.0), (65.0, 85.0)), "ramp": 2.0}
+PLAN: dict[str, Any] = {"speed": 1.0, "speed_up": 10.0, "turns": ((25.0, 45.0), (65.0, 85.0)), "ramp": 2.0}
 
 
 def _smooth_step(s: np.ndarray) -> np.ndarray:
@@ -89,6 +89,7 @@ def driving_input(model: ShipModel) -> np.ndarray:
     plan = nominal_plan(model)[: model.n_samples]
     bx, by, bpsi = model.beta
     m, inertia = model.mass, model.inertia
+    assert inertia is not None  # set in ShipModel.__post_init__
     return np.column_stack([m * (plan[1:, 2] + bx * plan[:-1, 1]),
                             m * (plan[1:, 5] + by * plan[:-1, 4]),
                             inertia * (plan[1:, 8] + bpsi * plan[:-1, 7])])
