@@ -61,17 +61,14 @@ lab: $(STAMP)
 	$(BIN)/jupyter lab --notebook-dir=lessons \
 	    --FileContentsManager.pre_save_hook=gpsaccel.lessons.pre_save $(LAB_ROOT) $(LAB_FLAGS)
 
-# modules that type-check clean with mypy (issue 22); add a module here once it does
-MYPY_CLEAN := gpsaccel/registry.py gpsaccel/kalman gpsaccel/check/findings.py \
-	gpsaccel/check/linear.py gpsaccel/check/whole_filter.py gpsaccel/check/tracker.py \
-	gpsaccel/check/report.py gpsaccel/check/student_filter.py gpsaccel/check/problems.py \
-	gpsaccel/calibration/mistakes.py gpsaccel/calibration/errata.py gpsaccel/check/batch.py \
-	gpsaccel/check/matrices.py gpsaccel/check/jacobians.py gpsaccel/coop/mistakes.py \
-	gpsaccel/ship/mistakes.py gpsaccel/assignments/linear.py gpsaccel/assignments/tracker.py
+# mypy over the whole package (issue 22) but the modules not clean yet (errors left in
+# figures/, plots.py and four assignments modules); remove an entry here once it is clean
+MYPY_CLEAN := gpsaccel
+MYPY_NOT_YET := ^gpsaccel/(figures/|plots\.py|assignments/(calibration|coop|ship|grading)\.py)
 
 lint: $(VENV)/.installed-dev
 	$(BIN)/ruff check .
-	$(BIN)/mypy $(MYPY_CLEAN)
+	$(BIN)/mypy $(MYPY_CLEAN) --exclude '$(MYPY_NOT_YET)'
 
 # every benchmark; their tables are written into docs/benchmarks/ for the documentation
 bench: $(VENV)/.installed-test

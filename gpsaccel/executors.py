@@ -38,7 +38,7 @@ import concurrent.futures as cf
 import os
 import threading
 from collections.abc import Callable
-from typing import Any
+from typing import Any, TypeGuard
 
 #: The string specifications :func:`resolve_executor` understands (besides ``tcp://host:port``).
 NAMED_SPECS = ("inprocess", "threads", "processes", "local", "dask-local")
@@ -168,7 +168,7 @@ class _InterruptiblePool(cf.ProcessPoolExecutor):
         return super().submit(_in_task, fn, *args, **kwargs)
 
 
-def is_executor(obj: object) -> bool:
+def is_executor(obj: object) -> TypeGuard[cf.Executor]:
     """True for a :class:`concurrent.futures.Executor` (a Dask ``ClientExecutor`` is one)."""
     return isinstance(obj, cf.Executor)
 
@@ -193,8 +193,9 @@ def resolve_executor(spec: object = None, max_workers: int | None = None) -> Res
     if is_executor(spec):
         return ResolvedExecutor(spec, type(spec).__name__, False, _known_workers(spec))
     if _is_dask_client(spec):
-        return ResolvedExecutor(spec.get_executor(), f"dask client {spec.scheduler.address}",
-                                False, _dask_workers(spec))
+        client: Any = spec
+        return ResolvedExecutor(client.get_executor(), f"dask client "
+                                f"{client.scheduler.address}", False, _dask_workers(client))
     if not isinstance(spec, str):
         raise ValueError(
             f"executor must be None, a concurrent.futures.Executor, a dask.distributed.Client, "
@@ -203,11 +204,11 @@ def resolve_executor(spec: object = None, max_workers: int | None = None) -> Res
         )
     n = max_workers or os.cpu_count() or 1
     if spec == "threads":
-        ex = cf.ThreadPoolExecutor(max_workers=n)
-        return ResolvedExecutor(ex, f"{n} threads", True, n, [ex.shutdown])
+        threads = cf.ThreadPoolExecutor(max_workers=n)
+        return ResolvedExecutor(threads, f"{n} threads", True, n, [threads.shutdown])
     if spec in ("processes", "local"):
-        ex = _InterruptiblePool(max_workers=n)
-        return ResolvedExecutor(ex, f"{n} processes", True, n, [ex.shutdown])
+        pool = _InterruptiblePool(max_workers=n)
+        return ResolvedExecutor(pool, f"{n} processes", True, n, [pool.shutdown])
     if spec == "dask-local":
         distributed = _import_distributed()
         cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,

@@ -86,9 +86,10 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TypeGuard
 
 import numpy as np
 
@@ -417,7 +418,7 @@ class Refused(Exception):
     """The runner's channel carried something other than the declared frames."""
 
 
-def _is_int(v: object) -> bool:
+def _is_int(v: object) -> TypeGuard[int]:
     return isinstance(v, int) and not isinstance(v, bool) and -(1 << 31) < v < 1 << 31
 
 
@@ -447,7 +448,7 @@ def _optional(check):  # noqa: ANN001, ANN202
 
 #: Every field a frame may carry and the test its value must pass (what the runner sends; the
 #: parent's code reads these and nothing else, so a value of another type never reaches it).
-FRAME_FIELDS: dict[str, dict[str, object]] = {
+FRAME_FIELDS: dict[str, dict[str, Callable[[object], bool]]] = {
     "uses-checker": {"module": _is_text},
     "imported": {"seconds": _is_seconds},
     "result": {"call": _is_int,
@@ -557,9 +558,9 @@ class FrameReader:
         if not isinstance(header, dict):
             raise Refused("a frame header that is not a JSON object")
         kind = header.get("t")
-        fields = FRAME_FIELDS.get(kind) if isinstance(kind, str) else None
-        if fields is None:
+        if not isinstance(kind, str) or kind not in FRAME_FIELDS:
             raise Refused(f"a frame of unknown kind {_shown(repr(kind), 40)}")
+        fields = FRAME_FIELDS[kind]
         if kind != "result":
             self.counts[kind] = self.counts.get(kind, 0) + 1
             if self.counts[kind] > FRAME_COUNTS[kind]:
@@ -796,7 +797,10 @@ def _preexec(limits: Limits, nproc: int, drop_caps: bool, cap_last: int,
                        (resource.RLIMIT_CORE, 0)):
         resource.setrlimit(res, (value, value))
     if c.reveal:
-        _boxuser.apply_reveal(_libc(), c.reveal)
+        libc = _libc()
+        if libc is None:
+            raise OSError("the box's reveal needs Linux's libc")
+        _boxuser.apply_reveal(libc, c.reveal)
     if drop_caps:  # root: after exec the permitted set is the bounding set, so empty it
         for cap in range(cap_last + 1):
             _prctl(PR_CAPBSET_DROP, cap)
@@ -812,27 +816,27 @@ def _preexec(limits: Limits, nproc: int, drop_caps: bool, cap_last: int,
 def _proc_table() -> dict[int, tuple[int, str, str]]:
     """pid -> (ppid, state, comm) of every process visible in /proc (``ps`` where there is no
     /proc)."""
-    table = {}
+    table: dict[int, tuple[int, str, str]] = {}
     if not os.path.isdir("/proc/self"):
         ps = subprocess.run(["ps", "-A", "-o", "pid=,ppid=,stat=,comm="], capture_output=True,
                             text=True, check=True).stdout
         for line in ps.splitlines():
-            pid, ppid, stat, *comm = line.split()
-            table[int(pid)] = (int(ppid), stat[0], " ".join(comm))
+            pid, ppid, stat, *words = line.split()
+            table[int(pid)] = (int(ppid), stat[0], " ".join(words))
         return table
     for entry in os.scandir("/proc"):
         if not entry.name.isdigit():
             continue
         try:
             with open(f"/proc/{entry.name}/stat", "rb") as f:
-                stat = f.read()
+                raw = f.read()
         except OSError:
             continue
-        close = stat.rfind(b")")
-        rest = stat[close + 2:].split()
+        close = raw.rfind(b")")
+        rest = raw[close + 2:].split()
         if close < 0 or len(rest) < 2:
             continue  # the process went away while it was read
-        comm = stat[stat.find(b"(") + 1:close].decode(errors="replace")
+        comm = raw[raw.find(b"(") + 1:close].decode(errors="replace")
         table[int(entry.name)] = (int(rest[1]), rest[0].decode(), comm)
     return table
 
@@ -917,7 +921,7 @@ def _write_control(control: Path, sub: Submission, calls: Sequence[Call], sys_pa
     for k, a in arrays.items():
         if a.dtype.hasobject:
             raise ValueError(f"call arguments must be numeric arrays; {k} is {a.dtype}")
-    np.savez(control / "inputs.npz", **arrays)
+    np.savez(control / "inputs.npz", **arrays)  # type: ignore[arg-type]  # numpy's stub
     plan = {"entry": sub.entry, "sys_path": sys_path, "block": [] if allow else list(BLOCKED),
             "block_dirs": [] if allow else _blocked_dirs(),
             "calls": [{"function": c.function, "n_args": len(c.args),
@@ -1130,7 +1134,11 @@ def run(sub: Submission, calls: Sequence[Call], limits: Limits = Limits(),
         fds: list[int] = []
         try:
             if backend == "bwrap":
-                cmd, fds = _bwrap_command(bwrap_path(), tmp, sub, limits, allow_gpsaccel, res_w,
+                exe = bwrap_path()
+                if exe is None:
+                    raise OSError("bwrap was found usable for this check but its trial box no "
+                                  "longer starts")
+                cmd, fds = _bwrap_command(exe, tmp, sub, limits, allow_gpsaccel, res_w,
                                           go_r)
                 owned += fds
                 cwd, env = str(tmp), _environment("/box")
