@@ -36,6 +36,7 @@ import math
 import time
 import traceback
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -373,83 +374,102 @@ def dt_model(F: object = None, G: object = None, H: object = None, Omega: object
     """
     t0 = time.perf_counter()
     model = CoopModel() if model is None else model
-    dt = model.dt
-    if all(callable(v) or v is None for v in (F, G, H)):
-        X, labels = check_states(model, n_random, seed)
-        U = _inputs(model, len(X), seed)
-    else:
-        xs = model.x0 if x is None else np.asarray(x, dtype=float)
-        us = model.u0 if u is None else np.asarray(u, dtype=float)
-        if xs.shape != (6,) or us.shape != (4,) or not (np.isfinite(xs).all()
-                                                         and np.isfinite(us).all()):
-            raise ValueError(f"x must be a finite state (6,) and u a finite input (4,), got "
-                             f"shapes {xs.shape} and {us.shape}")
-        X, U = wrap_state(xs)[None], us[None]
-        labels = [f"x = {np.round(xs, 4).tolist()}"]
-    report = Report("DT linearization F, G, H")
-    report.details.update({"n_states": len(X), "rtol": rtol, "dt": dt})
-    eye = np.eye(6)
-    for name, value, shape in (("F", F, (6, 6)), ("G", G, (6, 4)), ("H", H, (5, 6))):
-        if value is None:
-            continue
-        got = _dt_value(report, name, value, X, U, shape)
-        if got is None:
-            continue
-        if len(got) == 1 and len(X) > 1:
-            got = np.broadcast_to(got, (len(X),) + shape)
-        if name == "F":
-            A = _expected("A", X, U, model)
-            want = eye + dt * A
-            if _close(got, want, rtol):
-                continue
-            for cand, why in ((A, "F = A, the continuous-time Jacobian; the DT transition is "
-                                  f"F = I + ΔT·A (ΔT = {dt:g} s)"),
-                              (dt * A, "F = ΔT·A: the identity is missing; F = I + ΔT·A"),
-                              (eye + A, f"F = I + A: ΔT = {dt:g} s is missing; F = I + ΔT·A")):
-                if _close(got, cand, rtol):
-                    report.add("dt-linearization", f"Your {why}.")
-                    break
-            else:
-                _matrix_finding(report, "dt-linearization", "F", got, want, X, labels, rtol,
-                                formulas={(i, i): "1" for i in range(6)} | {
-                                    k: f"ΔT·({v})" for k, v in FORMULAS["A"].items()},
-                                unit_hint=f"F = I + ΔT·A with ΔT = {dt:g} s.")
-        elif name == "G":
-            Bm = _expected("B", X, U, model)
-            want = dt * Bm
-            if _close(got, want, rtol):
-                continue
-            if _close(got, Bm, rtol):
-                report.add("dt-linearization", f"Your G = B, the continuous-time ∂f/∂u; the DT "
-                           f"input matrix is G = ΔT·B (ΔT = {dt:g} s).")
-            else:
-                _matrix_finding(report, "dt-linearization", "G", got, want, X, labels, rtol,
-                                formulas={k: f"ΔT·{v}" for k, v in FORMULAS["B"].items()},
-                                unit_hint=f"G = ΔT·B with ΔT = {dt:g} s.")
-        else:
-            want = _expected("C", X, U, model)
-            if _close(got, want, rtol):
-                continue
-            if _close(got, dt * want, rtol):
-                report.add("dt-linearization", "Your H = ΔT·C; the measurement is taken at an "
-                           "instant, so H = C (no ΔT).")
-            else:
-                _matrix_finding(report, "dt-linearization", "H", got, want, X, labels, rtol,
-                                formulas=FORMULAS["C"], unit_hint="H = C = ∂h/∂x.")
-    _check_noise(report, Omega, Q, model, rtol)
     if F is None and G is None and H is None and Omega is None and Q is None:
         raise ValueError("pass at least one of F, G, H, Omega, Q")
+    X, U, labels = _dt_states(model, (F, G, H), x, u, n_random, seed)
+    report = Report("DT linearization F, G, H")
+    report.details.update({"n_states": len(X), "rtol": rtol, "dt": model.dt})
+    for name, value in (("F", F), ("G", G), ("H", H)):
+        if value is not None:
+            _check_dt_matrix(report, name, value, X, U, labels, model, rtol)
+    _check_noise(report, Omega, Q, model, rtol)
     if report.passed:
+        given = [DT_RIGHT[k] for k, v in (("F", F), ("G", G), ("H", H), ("Omega", Omega),
+                                          ("Q", Q)) if v is not None]
         where = f"at all {len(X)} states" if len(X) > 1 else "at the given state"
-        forms = {"F": "F = I + ΔT·A", "G": "G = ΔT·B", "H": "H = C", "Omega": "Ω = I",
-                 "Q": "Q not scaled by ΔT"}
-        given = [forms[k] for k, v in (("F", F), ("G", G), ("H", H), ("Omega", Omega), ("Q", Q))
-                 if v is not None]
-        report.add("dt-model-right", f"{', '.join(given)} {where} (ΔT = {dt:g} s), to {rtol:g} "
-                   f"relative.", "note")
+        report.add("dt-model-right", f"{', '.join(given)} {where} (ΔT = {model.dt:g} s), to "
+                   f"{rtol:g} relative.", "note")
     report.sort()
     report.seconds = time.perf_counter() - t0
     return report
+
+
+#: What each DT matrix is, as the note of a right DT model says it.
+DT_RIGHT = {"F": "F = I + ΔT·A", "G": "G = ΔT·B", "H": "H = C", "Omega": "Ω = I",
+            "Q": "Q not scaled by ΔT"}
+
+
+@dataclass(frozen=True)
+class _DTForm:
+    """One DT matrix: the Jacobian it is built from, its right form, the slips recognised
+    (a wrong form and what is said of it, after "Your "), the formulas element by element and
+    the hint of an element finding.  ``{dt}`` in the texts is ΔT."""
+
+    jacobian: str
+    shape: tuple[int, int]
+    right: Callable[[np.ndarray, float], np.ndarray]
+    slips: tuple[tuple[Callable[[np.ndarray, float], np.ndarray], str], ...]
+    formulas: Callable[[], dict[tuple[int, int], str]]
+    hint: str
+
+
+DT_FORMS = {
+    "F": _DTForm("A", (6, 6), lambda J, dt: np.eye(6) + dt * J, (
+        (lambda J, dt: J, "F = A, the continuous-time Jacobian; the DT transition is "
+                          "F = I + ΔT·A (ΔT = {dt:g} s)"),
+        (lambda J, dt: dt * J, "F = ΔT·A: the identity is missing; F = I + ΔT·A"),
+        (lambda J, dt: np.eye(6) + J, "F = I + A: ΔT = {dt:g} s is missing; F = I + ΔT·A")),
+        lambda: {(i, i): "1" for i in range(6)} | {k: f"ΔT·({v})"
+                                                   for k, v in FORMULAS["A"].items()},
+        "F = I + ΔT·A with ΔT = {dt:g} s."),
+    "G": _DTForm("B", (6, 4), lambda J, dt: dt * J, (
+        (lambda J, dt: J, "G = B, the continuous-time ∂f/∂u; the DT input matrix is G = ΔT·B "
+                          "(ΔT = {dt:g} s)"),),
+        lambda: {k: f"ΔT·{v}" for k, v in FORMULAS["B"].items()},
+        "G = ΔT·B with ΔT = {dt:g} s."),
+    "H": _DTForm("C", (5, 6), lambda J, dt: J, (
+        (lambda J, dt: dt * J, "H = ΔT·C; the measurement is taken at an instant, so H = C "
+                               "(no ΔT)"),),
+        lambda: dict(FORMULAS["C"]), "H = C = ∂h/∂x."),
+}
+
+
+def _dt_states(model: CoopModel, matrices: tuple[object, ...], x: object, u: object,
+               n_random: int, seed: int) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """The states (and inputs) the DT model is checked at: those of :func:`jacobians` when every
+    matrix given is a function, else the one state ``x`` (default the nominal x0, u0)."""
+    if all(callable(v) or v is None for v in matrices):
+        X, labels = check_states(model, n_random, seed)
+        return X, _inputs(model, len(X), seed), labels
+    xs = model.x0 if x is None else np.asarray(x, dtype=float)
+    us = model.u0 if u is None else np.asarray(u, dtype=float)
+    if xs.shape != (6,) or us.shape != (4,) or not (np.isfinite(xs).all()
+                                                     and np.isfinite(us).all()):
+        raise ValueError(f"x must be a finite state (6,) and u a finite input (4,), got "
+                         f"shapes {xs.shape} and {us.shape}")
+    return wrap_state(xs)[None], us[None], [f"x = {np.round(xs, 4).tolist()}"]
+
+
+def _check_dt_matrix(report: Report, name: str, value: object, X: np.ndarray, U: np.ndarray,
+                     labels: list[str], model: CoopModel, rtol: float) -> None:
+    """The student's F, G or H against its right form (:data:`DT_FORMS`): a slip recognised is
+    named, anything else is located element by element."""
+    form, dt = DT_FORMS[name], model.dt
+    got = _dt_value(report, name, value, X, U, form.shape)
+    if got is None:
+        return
+    if len(got) == 1 and len(X) > 1:
+        got = np.broadcast_to(got, (len(X),) + form.shape)
+    J = _expected(form.jacobian, X, U, model)
+    want = form.right(J, dt)
+    if _close(got, want, rtol):
+        return
+    for slip, why in form.slips:
+        if _close(got, slip(J, dt), rtol):
+            report.add("dt-linearization", f"Your {why.format(dt=dt)}.")
+            return
+    _matrix_finding(report, "dt-linearization", name, got, want, X, labels, rtol,
+                    formulas=form.formulas(), unit_hint=form.hint.format(dt=dt))
 
 
 def _matrix(report: Report, name: str, value: object, n: int) -> np.ndarray | None:
