@@ -241,6 +241,57 @@ def sweep(workers: AbstractSet[int] = frozenset()) -> int:
     return len(killed)
 
 
+#: What the batch says of a check's process that gave no report (a checker error of its file).
+NO_REPORT: dict[str, str] = {
+    "not-a-report": "the check's process returned no report",
+    "too-long": "the check took more than {limit:g} s (time limit plus {slack:g} s) and was "
+                "stopped",
+    "died": "the process checking this file died ({how}) before it reported; a submission that "
+            "kills its parent process ends like this",
+}
+
+
+def _start(ctx: Any, i: int, f: Path, args: tuple, options: dict, timeout: float
+           ) -> tuple[mp.Process, mpc.Connection, float]:
+    """A worker process checking file ``f`` (the i-th), its end of the pipe, its deadline."""
+    recv, send = ctx.Pipe(duplex=False)
+    proc = ctx.Process(target=_worker, args=(send, str(f), args, options), daemon=True,
+                       name=f"gpsaccel-check-{i}")
+    proc.start()
+    send.close()
+    return proc, recv, time.monotonic() + timeout + CHECK_SLACK
+
+
+def _outcome(proc: mp.Process, conn: mpc.Connection, deadline: float, now: float,
+             timeout: float) -> dict | str | None:
+    """A worker's report (a dict), why it has none (:data:`NO_REPORT`; one past its deadline is
+    killed), or None while it is still running."""
+    if conn.poll():
+        try:
+            result = conn.recv()
+        except (EOFError, OSError):
+            pass
+        else:
+            return result if isinstance(result, dict) else NO_REPORT["not-a-report"]
+    if proc.exitcode is None and now < deadline:
+        return None
+    if proc.exitcode is None:
+        proc.kill()
+        return NO_REPORT["too-long"].format(limit=timeout + CHECK_SLACK, slack=CHECK_SLACK)
+    code = proc.exitcode
+    how = f"signal {signal.Signals(-code).name}" if code < 0 else f"exit status {code}"
+    return NO_REPORT["died"].format(how=how)
+
+
+def _stop(proc: mp.Process, conn: mpc.Connection) -> None:
+    """Wait for a finished worker (kill it after 5 s) and close its pipe."""
+    proc.join(timeout=5)
+    if proc.exitcode is None:
+        proc.kill()
+        proc.join()
+    conn.close()
+
+
 def _isolated(files: list[Path], args: tuple, options: dict, workers: int, timeout: float,
               on_result: Callable[[dict], None] | None) -> list[dict]:
     ctx = _context()
@@ -268,48 +319,19 @@ def _isolated(files: list[Path], args: tuple, options: dict, workers: int, timeo
                 raise KeyboardInterrupt
             while pending and len(running) < workers:
                 i, f = pending.popleft()
-                recv, send = ctx.Pipe(duplex=False)
-                proc = ctx.Process(target=_worker, args=(send, str(f), args, options),
-                                   daemon=True, name=f"gpsaccel-check-{i}")
-                proc.start()
-                send.close()
-                running[i] = (proc, recv, time.monotonic() + timeout + CHECK_SLACK)
+                running[i] = _start(ctx, i, f, args, options, timeout)
             waitables = [c for _, c, _ in running.values()] + \
                         [p.sentinel for p, _, _ in running.values()]
             mpc.wait(waitables, timeout=0.1)
             now = time.monotonic()
             for i in list(running):
                 proc, conn, deadline = running[i]
-                result = None
-                if conn.poll():
-                    try:
-                        result = conn.recv()
-                    except (EOFError, OSError):
-                        result = None
-                    else:
-                        if not isinstance(result, dict):
-                            result = checker_error(files[i], "the check's process returned "
-                                                             "no report")
-                if result is None and proc.exitcode is None and now < deadline:
+                outcome = _outcome(proc, conn, deadline, now, timeout)
+                if outcome is None:
                     continue  # still running
-                if result is None:
-                    if proc.exitcode is None:
-                        proc.kill()
-                        why = (f"the check took more than {timeout + CHECK_SLACK:g} s "
-                               f"(time limit plus {CHECK_SLACK:g} s) and was stopped")
-                    else:
-                        code = proc.exitcode
-                        how = (f"signal {signal.Signals(-code).name}" if code < 0
-                               else f"exit status {code}")
-                        why = (f"the process checking this file died ({how}) before it "
-                               f"reported; a submission that kills its parent process ends "
-                               f"like this")
-                    result = checker_error(files[i], why)
-                proc.join(timeout=5)
-                if proc.exitcode is None:
-                    proc.kill()
-                    proc.join()
-                conn.close()
+                result = outcome if isinstance(outcome, dict) else checker_error(files[i],
+                                                                                 outcome)
+                _stop(proc, conn)
                 del running[i]
                 sweep(before | {p.pid for p, _, _ in running.values() if p.pid is not None})
                 sb.sweep_stale_boxes()  # the box folder of a worker that was killed
