@@ -39,6 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from gpsaccel import _validation as _v
+from gpsaccel._feedback import describe_miss
 from gpsaccel.check.problems import Argument, Function, Problem
 from gpsaccel.check.report import Report
 from gpsaccel.check.sandbox import Call, Output
@@ -481,9 +482,9 @@ class LinearProblem(Problem):
         worst = covariance_distance(P[:, first:first + 1], ans.P_ref[None, first:first + 1],
                                     ans.sd[first:first + 1])[:, 0]
         r, a, b = np.unravel_index(int(np.argmax(worst)), worst.shape)
-        depart = (f" Your output first departs at t = {t[first]:g} s: P{a + 1}{b + 1} = "
-                  f"{P[r, first, a, b]:.6g}, the optimal filter's is "
-                  f"{ans.P_ref[first, a, b]:.6g}.")
+        # where and how, never the optimal filter's value (the answer itself)
+        miss = describe_miss(float(P[r, first, a, b]), float(ans.P_ref[first, a, b]), typed=False)
+        depart = f" Your output first departs at t = {t[first]:g} s: P{a + 1}{b + 1} {miss}."
         report.add("p-mismatch", self.text("p-mismatch", d=float(dP.max()), hint=hint,
                                            where=where, depart=depart,
                                            matrices=self.text("p-mismatch.matrices")))

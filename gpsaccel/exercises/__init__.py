@@ -15,25 +15,15 @@ digits (3 unless the lesson says otherwise), i.e. the rounding a lesson prints i
 from __future__ import annotations
 
 import json
-import math
 import os
-from collections.abc import Callable
 
 import numpy as np
+
+from gpsaccel._feedback import describe_miss
 
 #: When set (by ``python -m gpsaccel.lessons measure``), :func:`self_check` appends each key and the
 #: answer it was given to this JSON-lines file instead of checking it.
 RECORD_VARIABLE = "GPSACCEL_RECORD_ANSWERS"
-
-#: (upper bound of the ratio |answer|/|expected|, phrase): the rough size of a miss, as data.
-#: A ratio above the last bound is named by its power of ten ("about 100×").
-_SIZES: tuple[tuple[float, Callable[[float], str]], ...] = (
-    (1.01, lambda r: "slightly (under 1 %) too {way}: more digits, or check the rounding"),
-    (1.10, lambda r: "a few per cent too {way}"),
-    (1.50, lambda r: "10–50 % too {way}"),
-    (9.5, lambda r: f"about {round(r)}× too {{way}}"),
-)
-
 
 def _expected(key: str):
     from gpsaccel.exercises.answers import ANSWERS
@@ -50,23 +40,6 @@ def tolerance(expected: np.ndarray, digits: int = 3) -> np.ndarray:
     with np.errstate(divide="ignore"):
         exponent = np.where(e > 0, np.floor(np.log10(np.where(e > 0, e, 1.0))), 0.0)
     return np.where(e > 0, 0.5 * 10.0 ** (exponent - digits + 1) * (1 + 1e-9), 0.0)
-
-
-def describe_miss(answer: float, expected: float) -> str:
-    """How ``answer`` misses ``expected``, without the expected value: sign, direction, size."""
-    if expected == 0:
-        return "should be zero"
-    if answer == 0:
-        return "is zero, and should not be"
-    if np.sign(answer) != np.sign(expected):
-        return "has the wrong sign"
-    r = abs(answer) / abs(expected)
-    way = "large" if r > 1 else "small"
-    r = max(r, 1 / r)
-    for bound, phrase in _SIZES:
-        if r <= bound:
-            return phrase(r).format(way=way)
-    return f"about 10^{round(math.log10(r))}× too {way} (units? a power of ten?)"
 
 
 def self_check(key: str, answer, *, hint: str = "", name: str | None = None, digits: int = 3) -> None:
