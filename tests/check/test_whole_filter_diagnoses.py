@@ -7,7 +7,6 @@ its own code on two seeds.
 from __future__ import annotations
 
 import re
-
 from pathlib import Path
 
 import pytest
