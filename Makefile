@@ -61,14 +61,12 @@ lab: $(STAMP)
 	$(BIN)/jupyter lab --notebook-dir=lessons \
 	    --FileContentsManager.pre_save_hook=gpsaccel.lessons.pre_save $(LAB_ROOT) $(LAB_FLAGS)
 
-# mypy over the whole package (issue 22) but the modules not clean yet (errors left in
-# figures/, plots.py, lessons.py and four assignments modules); remove an entry here once it is clean
+# mypy over the whole package (issue 22): clean
 MYPY_CLEAN := gpsaccel
-MYPY_NOT_YET := ^gpsaccel/(figures/|plots\.py|lessons\.py|assignments/(calibration|coop|ship|grading)\.py)
 
 lint: $(VENV)/.installed-dev
 	$(BIN)/ruff check .
-	$(BIN)/mypy $(MYPY_CLEAN) --exclude '$(MYPY_NOT_YET)'
+	$(BIN)/mypy $(MYPY_CLEAN)
 
 # every benchmark; their tables are written into docs/benchmarks/ for the documentation
 bench: $(VENV)/.installed-test

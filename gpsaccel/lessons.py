@@ -448,7 +448,7 @@ def number_problems(master: Path) -> list[str]:
             m = measured(stem)
             fresh = m is not None and m.get("runs") is None and \
                 m.get("code_sha256") == code_digest(masters_dir() / f"{stem}.ipynb")
-            outputs[stem] = "\n".join(m["printed"]) if fresh else None
+            outputs[stem] = "\n".join(m["printed"]) if m is not None and fresh else None
         return outputs[stem]
 
     for cell in nbformat.read(master, as_version=4).cells:

@@ -8,6 +8,7 @@ Each function takes results objects (and an optional matplotlib ``Axes``) and re
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any, cast
 
 import numpy as np
 from matplotlib.axes import Axes
@@ -17,7 +18,7 @@ from gpsaccel.calibration.model import STATE_NAMES, STATE_UNITS
 
 #: The house style: colours by role, so truth, estimate, measurement and bounds read the same in
 #: every figure.
-STYLE = {
+STYLE: dict[str, Any] = {
     "truth": "#222222",
     "estimate": "#1f77b4",
     "measurement": "#aaaaaa",
@@ -35,7 +36,7 @@ CALIBRATION_STATES = tuple(zip(STATE_NAMES, STATE_UNITS, strict=True))
 def axes(ax: Axes | None = None, figsize: tuple[float, float] | None = None) -> tuple[Figure, Axes]:
     """The axes to draw on: ``ax`` if given, else a new figure in the house size."""
     if ax is not None:
-        return ax.figure, ax
+        return cast(Figure, ax.figure), ax
     fig = Figure(figsize=figsize or STYLE["figsize"], layout="constrained")
     return fig, fig.add_subplot()
 
@@ -78,6 +79,8 @@ def estimate_vs_truth(t_truth: np.ndarray, truth: np.ndarray, t_est: np.ndarray,
     """An estimate against the truth (and optionally the raw measurement) over time."""
     fig, ax = axes(ax)
     if measured is not None:
+        if t_meas is None:
+            raise ValueError("estimate_vs_truth: measured needs t_meas, the times of the measurements")
         ax.plot(t_meas, measured, ".", color=STYLE["measurement"], ms=3, label="measured")
     ax.plot(t_truth, truth, color=STYLE["truth"], lw=1.2, label="truth")
     ax.plot(t_est, estimate, "+", color=STYLE["estimate"], ms=4, label="estimate")
@@ -434,7 +437,7 @@ def chi2_band(t: np.ndarray, values: np.ndarray, bounds: tuple[float, float], *,
 # Overlaid signals in stacked panels and x–y tracks (the ship, report 004)
 
 #: How each role is drawn by :func:`overlay_panels` and :func:`track`.
-_ROLE_STYLE = {
+_ROLE_STYLE: dict[str, dict[str, Any]] = {
     "measurement": {"ls": "none", "marker": "+", "ms": 3, "color": STYLE["measurement"]},
     "truth": {"lw": 1.4, "color": STYLE["truth"]},
     "estimate": {"lw": 1.0, "color": STYLE["estimate"]},

@@ -34,8 +34,8 @@ def calibration_ensemble(n_runs: int = 50, seed: int = 2026
     filtered by the package's multirate filter (:func:`gpsaccel.run_multirate`).  Computed once
     per process and seed; every call returns fresh copies (a notebook may change its arrays).
     """
-    N, *arrays = _ensemble(int(n_runs), int(seed))
-    return (N, *(a.copy() for a in arrays))
+    N, x_true, x_hat, P = _ensemble(int(n_runs), int(seed))
+    return N, x_true.copy(), x_hat.copy(), P.copy()
 
 
 @lru_cache(maxsize=2)

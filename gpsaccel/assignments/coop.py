@@ -24,6 +24,8 @@ from __future__ import annotations
 
 from functools import lru_cache
 
+from typing import Any
+
 import numpy as np
 
 from gpsaccel.assignments._answers import array, assert_report, call
@@ -68,7 +70,7 @@ def jacobians(jacobian_A: object, jacobian_B: object, jacobian_C: object, seed: 
 
     given = {"A": jacobian_A, "B": jacobian_B, "C": jacobian_C}
     missing = [k for k, v in given.items() if v is None or v is Ellipsis]
-    defined = {k: v for k, v in given.items() if k not in missing}
+    defined: dict[str, Any] = {k: v for k, v in given.items() if k not in missing}
     report = check_jacobians(**defined, n_random=n_random, seed=seed) if defined else \
         Report("Jacobians A, B, C")
     report.subject = "question 1: Jacobians A, B, C"
@@ -145,7 +147,8 @@ def dt_linearization(func: object, seed: int = 0, n_random: int = 5,
             if key not in index:  # C(x) is called without u: find the state alone
                 key = next(k for k in index if k[0] == key[0])
             return _m[index[key]]
-        sub = dt_model(**{name: at}, n_random=n_random, seed=seed)
+        one: dict[str, Any] = {name: at}
+        sub = dt_model(**one, n_random=n_random, seed=seed)
         if sub.passed:
             continue
         own = None

@@ -114,6 +114,7 @@ def assignment_module(name: str):
                                 f"or $GPSACCEL_ASSIGNMENTS naming a copy of its assignments/ "
                                 f"folder (the graded questions and the masters are not in the wheel)")
     spec = importlib.util.spec_from_file_location(key, path)
+    assert spec is not None and spec.loader is not None  # a .py file always has both
     module = importlib.util.module_from_spec(spec)
     sys.modules[key] = module
     spec.loader.exec_module(module)
@@ -227,7 +228,7 @@ def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
     qs = questions_of(name)
     possible = _possible(qs)
     try:
-        nb = nbm.read(path)
+        nb = nbm.read(Path(path))
     except nbm.NotebookError as exc:
         return unusable(name, student, file, "unreadable", str(exc))
     variant = student_variant(name, student, secret)
@@ -272,9 +273,9 @@ def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
             number = run.cells[k].number
             where = f"in cell {number}" if number else "before the first cell"
         elif k - len(run.cells) < len(reads):
-            r = reads[k - len(run.cells)]
-            q = next(q for q, (a, b) in spans.items() if a <= k - len(run.cells) < b)
-            where = f"while {'reading' if r.value else 'calling'} {r.name} ({q})"
+            failed = reads[k - len(run.cells)]
+            asked = next(q for q, (a, b) in spans.items() if a <= k - len(run.cells) < b)
+            where = f"while {'reading' if failed.value else 'calling'} {failed.name} ({asked})"
         else:
             where = "after its last answer"
         notes.append(_stop_message(box.failure, where, limits))
@@ -298,6 +299,7 @@ def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
 
 
 def _safe_grade(q: Question, draw: Draw, answers: list[Answer]) -> Report:
+    assert q.grade is not None  # a question read from the box has its grade
     try:
         return q.grade(draw, answers)
     except Exception as exc:  # noqa: BLE001 - a bug of the grader: this question only
@@ -308,6 +310,7 @@ def _safe_grade(q: Question, draw: Draw, answers: list[Answer]) -> Report:
 
 
 def _grade_file(q: Question, nb: nbm.Notebook, draw: Draw, timeout: float) -> Report:
+    assert q.file is not None and q.grade_file is not None  # a file question has both
     found = nb.writefile(q.file)
     if found is None:
         rep = Report(q.name)
@@ -436,6 +439,7 @@ def find_submissions(folder: Path, name: str) -> tuple[list[Entry], list[str]]:
 # ------------------------------------------------------------------------- running a class
 def _task(entry: Entry, folder: Path, settings: dict) -> dict:
     if entry.path is None:
+        assert entry.problem is not None  # an entry without a notebook says why
         g = unusable(settings["name"], entry.student, "", *entry.problem)
     else:
         g = grade_notebook(entry.path, settings["name"], entry.student, settings["seed"],

@@ -68,7 +68,8 @@ MISTAKES = {
     "zeroed-gain": (lambda *a: zeroed_update(*a),
                     "the full gain M Hᵀ (H M Hᵀ + V)⁻¹ with the columns of the missing rows set "
                     "to zero (report 004's BD(:,1,n) = 0)"),
-    "report-covariance": (lambda *a: zeroed_update(*a, short_form=True),
+    "report-covariance": (lambda x_bar, M, z, H, V: zeroed_update(x_bar, M, z, H, V,
+                                                                  short_form=True),
                                "report 004's zeroed gain with P = (I − K H) M"),
     "missing-as-zero": (missing_as_zero, "the missing rows used as measurements of 0"),
 }
@@ -108,7 +109,7 @@ def cases(seed: int = 0) -> list[tuple[str, tuple[np.ndarray, ...]]]:
     M_imu, M_gps = _ship_covariances()
     L = rng.standard_normal((9, 9))
     M_rand = L @ L.T / 9 + np.diag(rng.uniform(0.1, 1.0, 9))
-    out = []
+    out: list[tuple[str, tuple[np.ndarray, ...]]] = []
     for label, M, missing in (("IMU rows only (GPS missing)", M_imu, list(GPS_ROWS)),
                               ("every row arrived", M_gps, []),
                               ("x position only missing, random M", M_rand, [GPS_ROWS[0]]),

@@ -210,6 +210,7 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
 
     mc = monte_carlo(model, runs, seed)
     truth = mc["ekf"].truth
+    assert truth is not None  # monte_carlo keeps its truth
     drift = np.hypot(*(truth.x[:, :, 3:5] - lin["nominal"][:, 3:5]).transpose(2, 0, 1))
     drift_g = np.hypot(*(truth.x[:, :, 0:2] - lin["nominal"][:, 0:2]).transpose(2, 0, 1))
     fig, ax = plots.axes()
@@ -228,6 +229,7 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
     x0 = truth.x[i0]
     for num, m in [("06", "lkf"), ("07", "lkf")]:
         r = mc[m].result
+        assert r is not None  # monte_carlo keeps each filter's result
         ugv = num == "06"
         yield ReportFigure("002", num, f"lkf-{'ugv' if ugv else 'uav'}", (
             f"LKF (tuned Q), typical run (run {i0} of seed {seed}): "
@@ -238,16 +240,16 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
                          ("14", "ekf", "NEES"), ("15", "ekf", "NIS"),
                          ("14b", "ekf-qtrue", "NEES"), ("15b", "ekf-qtrue", "NIS"),
                          ("14c", "ukf", "NEES"), ("15c", "ukf", "NIS")]:
-        c = mc[m]
-        vals, bounds = ((c.nees_mean, c.nees_bounds) if stat == "NEES"
-                        else (c.nis_mean, c.nis_bounds))
-        fig = plots.chi2_band(c.t, vals, bounds, statistic=stat, dof=6 if stat == "NEES" else 5,
-                              n_runs=c.n_runs, log=m == "lkf",
-                              title=f"{NAMES[m]}: {stat} over {c.n_runs} runs, α = {c.alpha:g}")
-        qdiag = ", ".join(f"{q:.3g}" for q in np.diag(c.Q))
+        run = mc[m]
+        vals, bounds = ((run.nees_mean, run.nees_bounds) if stat == "NEES"
+                        else (run.nis_mean, run.nis_bounds))
+        fig = plots.chi2_band(run.t, vals, bounds, statistic=stat, dof=6 if stat == "NEES" else 5,
+                              n_runs=run.n_runs, log=m == "lkf",
+                              title=f"{NAMES[m]}: {stat} over {run.n_runs} runs, α = {run.alpha:g}")
+        qdiag = ", ".join(f"{q:.3g}" for q in np.diag(run.Q))
         yield ReportFigure("002", num, f"{m}-{stat.lower()}", (
-            f"{NAMES[m]} {stat} averaged over {c.n_runs} truth runs with the two-sided χ² bounds; "
-            f"{c.nees_fraction if stat == 'NEES' else c.nis_fraction:.1%} of steps inside, "
+            f"{NAMES[m]} {stat} averaged over {run.n_runs} truth runs with the two-sided χ² bounds; "
+            f"{run.nees_fraction if stat == 'NEES' else run.nis_fraction:.1%} of steps inside, "
             f"time-average {vals.mean():.2f} (expected {6 if stat == 'NEES' else 5}); "
             f"Q = diag({qdiag}).{_NIS_NOTE if num == '15b' else ''}"), fig)
         if num == "08":
@@ -287,6 +289,7 @@ def _ekf_single(mc: dict[str, ConsistencyRun], t: np.ndarray, x0: np.ndarray, i0
                 seed: int) -> Iterator[ReportFigure]:
     r = mc["ekf"].result
     truth = mc["ekf"].truth
+    assert r is not None and truth is not None  # monte_carlo keeps both
     for num, ugv in [("10", True), ("11", False)]:
         who = "UGV" if ugv else "UAV"
         yield ReportFigure("002", num, f"ekf-{who.lower()}", (

@@ -21,7 +21,7 @@ from gpsaccel.kalman.multirate import MultirateResult, run_multirate
 from gpsaccel.ship.comparison import DESCRIPTIONS, FILTERS, compare_ship_filters, compare_wind
 from gpsaccel.ship.model import STATES, ShipModel
 from gpsaccel.ship.simulation import ShipRealization, simulate_ship
-from gpsaccel.ship.zeroed_gain import run_zeroed_gain
+from gpsaccel.ship.zeroed_gain import ZeroedGainResult, run_zeroed_gain
 
 TITLE = "AAUSHIP ship: monorate vs multirate Kalman filter (GPS 1 Hz, IMU 10 Hz)"
 #: The report has no Monte Carlo; this is the size of figures 12-14's.
@@ -149,6 +149,7 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
 
     zr = comp.filters["zeroed-report"].result
     ra = comp.filters["report-as-written"].result
+    assert isinstance(ra, ZeroedGainResult)  # the report's filter carries its true P
     t = comp.t_epochs
     window = t <= 30.0
     lines = [(t[window], np.sqrt(comp.filters["multirate"].result.P[window, 0, 0]),
@@ -170,21 +171,22 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
         "more still."), fig)
 
     wind = compare_wind(model.replace(wind=True), n_runs=runs, seed=seed)
-    panels = []
+    wind_panels: list[tuple[str, str, list[tuple[np.ndarray, np.ndarray, str | None, str]]]] = []
     for c, (name, unit) in enumerate((("b_x", "N"), ("b_y", "N"))):
-        panels.append((name, unit, [
+        wind_lines: list[tuple[np.ndarray, np.ndarray, str | None, str]] = [
             (wind.t, wind.wind[0, :, c], "true wind force", "truth"),
             (wind.t, wind.wind_hat[0, :, c], "estimate (11-state filter)", "estimate"),
             (wind.t, wind.wind_hat[0, :, c] + wind.wind_sigma[:, c], "±1σ", "bound"),
             (wind.t, wind.wind_hat[0, :, c] - wind.wind_sigma[:, c], None, "bound"),
-        ]))
+        ]
+        wind_panels.append((name, unit, wind_lines))
     rms_plain = np.sqrt(np.mean(wind.track_error_plain**2, axis=0))
     rms_wind = np.sqrt(np.mean(wind.track_error_wind**2, axis=0))
-    panels.append(("track error", "m", [
+    wind_panels.append(("track error", "m", [
         (wind.t, rms_plain, "9-state filter (no wind state)", "error"),
         (wind.t, rms_wind, "11-state filter (wind states)", "estimate"),
     ]))
-    fig = plots.overlay_panels(panels, title="Wind bias: estimated, and the track error it removes")
+    fig = plots.overlay_panels(wind_panels, title="Wind bias: estimated, and the track error it removes")
     plain, with_wind = wind.track_rmse
     yield ReportFigure("004", "14", "wind", (
         f"Not in the report (proposed there): a steady wind ({wind.wind_force[0]:g}, "
