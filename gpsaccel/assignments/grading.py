@@ -342,10 +342,13 @@ def redact(text: str) -> str:
     """A finding's text without the expected values: every number that is not a location (a
     time, a step, a cell, a shape) becomes "…", and whatever follows "should be"/"expected"
     is dropped."""
-    # a value after "instead of" is dropped; a name ("instead of Φ", "instead of the a priori")
-    # is the mistake itself and stays
-    text = _EXPECTED.sub(lambda m: m.group(1) + " …" if re.search(r"\d", m.group(0)[len(m.group(1)):])
-                         else m.group(0), text)
+    # whatever follows "should be"/"expected" is dropped (a value or a formula: the answer); after
+    # "instead of" only a value is: a name there ("instead of Φ") is the mistake itself
+    def drop(m: re.Match) -> str:
+        kept = m.group(1).lower() == "instead of" and not re.search(r"\d", m.group(0)[len(m.group(1)):])
+        return m.group(0) if kept else m.group(1) + " …"
+
+    text = _EXPECTED.sub(drop, text)
 
     def repl(m: re.Match) -> str:
         before = text[max(0, m.start() - 12):m.start()]

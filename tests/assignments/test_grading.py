@@ -174,6 +174,9 @@ def test_redact_keeps_locations_and_drops_values():
 def test_redact_keeps_the_name_of_what_was_used_instead():
     r = redact("Φ was used as Φᵀ instead of Φ; V[0, 0] is 0.5 instead of 0.25")
     assert "instead of Φ;" in r and "0.25" not in r and "0.5" not in r
+    # a formula after "should be" is the answer: dropped
+    r = redact("G₃₂ = 0.5, should be ΔT·cos θg = 0.4")
+    assert r.startswith("G₃₂ = …, should be …") and "ΔT" not in r and "0.4" not in r
 
 
 def test_variants_and_seeds_are_keyed_and_independent():
