@@ -177,8 +177,14 @@ def on_the_log(model: CoopModel) -> dict[str, FilterResult]:
 
 def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
     model = CoopModel()
-    t = model.t
     lin = linearization_study(model)
+    yield from _linearization_figures(model.t, lin)
+    yield from _monte_carlo_figures(model, lin, runs, seed)
+    yield from _log_figures(model, lin)
+
+
+def _linearization_figures(t: np.ndarray, lin: dict) -> Iterator[ReportFigure]:
+    """Figures 01-05: the linearized DT model against the nominal and the nonlinear run."""
     dash = {"ls": "--", "lw": 1.0, "color": S["estimate"]}
     solid = {"lw": 1.0, "color": S["truth"]}
     nom = {"lw": 0.8, "color": S["measurement"]}
@@ -208,11 +214,11 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
         measurements_figure(t[1:], [(lin["y_full"][1:], "nonlinear h(x)", solid), y_lin],
                             "Nonlinear simulation: measurements"))
 
-    mc = monte_carlo(model, runs, seed)
-    truth = mc["ekf"].truth
-    assert truth is not None  # monte_carlo keeps its truth
-    drift = np.hypot(*(truth.x[:, :, 3:5] - lin["nominal"][:, 3:5]).transpose(2, 0, 1))
-    drift_g = np.hypot(*(truth.x[:, :, 0:2] - lin["nominal"][:, 0:2]).transpose(2, 0, 1))
+
+def _drift_figure(t: np.ndarray, truth, nominal: np.ndarray) -> ReportFigure:
+    """Figure 08b: how far the Monte Carlo truth wanders from the nominal x*."""
+    drift = np.hypot(*(truth.x[:, :, 3:5] - nominal[:, 3:5]).transpose(2, 0, 1))
+    drift_g = np.hypot(*(truth.x[:, :, 0:2] - nominal[:, 0:2]).transpose(2, 0, 1))
     fig, ax = plots.axes()
     for d, who, c in [(drift, "UAV", S["estimate"]), (drift_g, "UGV", S["error"])]:
         ax.fill_between(t, np.percentile(d, 5, axis=0), np.percentile(d, 95, axis=0), color=c,
@@ -220,11 +226,20 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
         ax.plot(t, np.median(d, axis=0), color=c, lw=1.2, label=f"{who}: median")
     plots.finish(ax, f"How far the truth wanders from the nominal ({truth.n_runs} runs)",
                  "time (s)", "‖truth − nominal‖ position (m)")
-    drift_fig = ReportFigure("002", "08b", "truth-drift", (
+    return ReportFigure("002", "08b", "truth-drift", (
         "Distance of the Monte Carlo truth from the nominal trajectory: heading noise of "
         "0.01 rad² per step makes the UAV's heading a random walk, and by 100 s the truth is "
         "hundreds of metres from x*, far outside the LKF's linear range."), fig)
 
+
+def _monte_carlo_figures(model: CoopModel, lin: dict, runs: int,
+                         seed: int) -> Iterator[ReportFigure]:
+    """Figures 06-15c: the LKF's typical run, then NEES and NIS of every filter."""
+    t = model.t
+    mc = monte_carlo(model, runs, seed)
+    truth = mc["ekf"].truth
+    assert truth is not None  # monte_carlo keeps its truth
+    drift_fig = _drift_figure(t, truth, lin["nominal"])
     i0 = 0
     x0 = truth.x[i0]
     for num, m in [("06", "lkf"), ("07", "lkf")]:
@@ -240,23 +255,31 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
                          ("14", "ekf", "NEES"), ("15", "ekf", "NIS"),
                          ("14b", "ekf-qtrue", "NEES"), ("15b", "ekf-qtrue", "NIS"),
                          ("14c", "ukf", "NEES"), ("15c", "ukf", "NIS")]:
-        run = mc[m]
-        vals, bounds = ((run.nees_mean, run.nees_bounds) if stat == "NEES"
-                        else (run.nis_mean, run.nis_bounds))
-        fig = plots.chi2_band(run.t, vals, bounds, statistic=stat, dof=6 if stat == "NEES" else 5,
-                              n_runs=run.n_runs, log=m == "lkf",
-                              title=f"{NAMES[m]}: {stat} over {run.n_runs} runs, α = {run.alpha:g}")
-        qdiag = ", ".join(f"{q:.3g}" for q in np.diag(run.Q))
-        yield ReportFigure("002", num, f"{m}-{stat.lower()}", (
-            f"{NAMES[m]} {stat} averaged over {run.n_runs} truth runs with the two-sided χ² bounds; "
-            f"{run.nees_fraction if stat == 'NEES' else run.nis_fraction:.1%} of steps inside, "
-            f"time-average {vals.mean():.2f} (expected {6 if stat == 'NEES' else 5}); "
-            f"Q = diag({qdiag}).{_NIS_NOTE if num == '15b' else ''}"), fig)
+        yield _consistency_figure(mc[m], num, m, stat)
         if num == "08":
             yield drift_fig
         if num == "09":
             yield from _ekf_single(mc, t, x0, i0, seed)
 
+
+def _consistency_figure(run: ConsistencyRun, num: str, m: str, stat: str) -> ReportFigure:
+    """One filter's NEES or NIS averaged over the runs, with the two-sided χ² bounds."""
+    vals, bounds = ((run.nees_mean, run.nees_bounds) if stat == "NEES"
+                    else (run.nis_mean, run.nis_bounds))
+    fig = plots.chi2_band(run.t, vals, bounds, statistic=stat, dof=6 if stat == "NEES" else 5,
+                          n_runs=run.n_runs, log=m == "lkf",
+                          title=f"{NAMES[m]}: {stat} over {run.n_runs} runs, α = {run.alpha:g}")
+    qdiag = ", ".join(f"{q:.3g}" for q in np.diag(run.Q))
+    return ReportFigure("002", num, f"{m}-{stat.lower()}", (
+        f"{NAMES[m]} {stat} averaged over {run.n_runs} truth runs with the two-sided χ² bounds; "
+        f"{run.nees_fraction if stat == 'NEES' else run.nis_fraction:.1%} of steps inside, "
+        f"time-average {vals.mean():.2f} (expected {6 if stat == 'NEES' else 5}); "
+        f"Q = diag({qdiag}).{_NIS_NOTE if num == '15b' else ''}"), fig)
+
+
+def _log_figures(model: CoopModel, lin: dict) -> Iterator[ReportFigure]:
+    """Figures 16-19c: the three filters on the course's 100-second log."""
+    t = model.t
     logs = on_the_log(model)
     y = model.log()
     for num, m, ugv in [("16", "lkf", True), ("17", "lkf", False), ("18", "ekf", True),
