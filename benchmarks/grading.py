@@ -40,9 +40,9 @@ sys.path.insert(0, str(ROOT))
 import nbformat  # noqa: E402
 import numpy as np  # noqa: E402
 
+from gpsaccel import sandbox as sb  # noqa: E402
 from gpsaccel.assignments import generate, grade, grading  # noqa: E402
 from gpsaccel.assignments import notebook as nbm  # noqa: E402
-from gpsaccel.check import sandbox as sb  # noqa: E402
 from tests.assignments.conftest import write_variant  # noqa: E402
 from tests.assignments.test_grading import MEAN, PHI  # noqa: E402
 

@@ -7,7 +7,7 @@ wall time, and, as the floor any checker that runs students in a separate Python
 box's time minus that floor.
 
 ``--before DIR`` also times the sandbox of an earlier version, in the same run, alternated with
-this one: DIR holds that version's ``gpsaccel/check/sandbox.py`` and ``_runner.py`` (e.g.
+this one: DIR holds that version's ``gpsaccel/sandbox/`` and ``_runner.py`` (e.g.
 ``git archive main gpsaccel | tar -x -C DIR``), loaded as a module of its own.
 """
 
@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gpsaccel.check import sandbox as sb
+from gpsaccel import sandbox as sb
 
 REPEATS = 7
 
@@ -49,7 +49,7 @@ def _load(root: str):  # noqa: ANN202 - a module
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--before", metavar="DIR", default=None,
-                        help="a folder holding an earlier gpsaccel/check/sandbox.py to compare")
+                        help="a folder holding an earlier gpsaccel/sandbox/ to compare")
     args = parser.parse_args(argv)
     versions = {"now": sb}
     if args.before:

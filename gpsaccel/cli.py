@@ -250,7 +250,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
     for the details."""
     import time
 
-    from gpsaccel.check import sandbox
+    from gpsaccel import sandbox
     from gpsaccel.check.batch import (
         Interrupted,
         appender,

@@ -21,15 +21,16 @@ SYSTEMS = {"calibration", "ship", "coop"}
 ALLOWED = {
     "_validation": set(), "_blas": set(), "_atomic": set(), "executors": {"_validation"},
     "registry": set(), "_version": set(), "_mathjax": set(), "_feedback": set(), "__main__": {"cli"},
+    "sandbox": INFRA,
     "kalman": INFRA,
     **{s: INFRA | {"kalman"} for s in SYSTEMS},
-    "check": INFRA | {"kalman"} | SYSTEMS,
+    "check": INFRA | {"kalman", "sandbox"} | SYSTEMS,
     "plots": INFRA | {"kalman"} | SYSTEMS,
     "figures": INFRA | {"kalman", "plots"} | SYSTEMS,
     "exercises": INFRA,
     "lessons": INFRA | {"exercises"},
-    "assignments": INFRA | {"kalman", "check"} | SYSTEMS,
-    "cli": INFRA | {"kalman", "plots", "figures", "lessons", "check", "assignments"} | SYSTEMS,
+    "assignments": INFRA | {"kalman", "sandbox", "check"} | SYSTEMS,
+    "cli": INFRA | {"kalman", "plots", "figures", "lessons", "sandbox", "check", "assignments"} | SYSTEMS,
     "top": INFRA | {"kalman"} | SYSTEMS,
 }
 

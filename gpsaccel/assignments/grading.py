@@ -1,7 +1,7 @@
 r"""Grade a class: every notebook only inside the checker's sandbox, every score computed outside.
 
 The model (issue 19).  A student's notebook is data.  :mod:`gpsaccel.assignments.notebook` turns
-its code cells into one module; :func:`gpsaccel.check.sandbox.run` imports that module in a box
+its code cells into one module; :func:`gpsaccel.sandbox.run` imports that module in a box
 (bubblewrap namespaces where they work) and calls, one frame each, the cells in order and then
 the *reads* every question declares (:mod:`gpsaccel.assignments.questions`): the student's
 functions called on data drawn from this run's seed, the variables it must define.  What comes
@@ -189,7 +189,7 @@ def _prepare(nb: nbm.Notebook, variant: dict) -> nbm.Notebook:
 
 
 def _calls(n_cells: int, reads: list[nbm.Read]):
-    from gpsaccel.check.sandbox import Call, Output
+    from gpsaccel.sandbox import Call, Output
 
     head = (Output("status", (_CELL_STATUS,), "int64"),
             Output("message", (nbm.MESSAGE_BYTES,), "uint8"))
@@ -222,7 +222,7 @@ def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
                    secret: bytes | None = None, sandbox: str = "auto",
                    timeout: float = TIMEOUT, file: str = "") -> Grade:
     """Grade one notebook (see the module docstring); never raises for what it holds."""
-    from gpsaccel.check import sandbox as sb
+    from gpsaccel import sandbox as sb
 
     t0 = time.perf_counter()
     qs = questions_of(name)
@@ -452,7 +452,7 @@ def _task(entry: Entry, folder: Path, settings: dict) -> dict:
 
 
 def _child(conn: mpc.Connection, entry: Entry, folder: Path, settings: dict) -> None:
-    from gpsaccel.check import sandbox as sb
+    from gpsaccel import sandbox as sb
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     sb._prctl(sb.PR_SET_DUMPABLE, 0)  # it holds answers after its box while others run
@@ -486,7 +486,7 @@ def warm(name: str) -> None:
 def _forked(entries: list[Entry], folder: Path, settings: dict, jobs: int,
             done: Callable[[int, dict], None]) -> None:
     """Each notebook in a forked process (module docstring); results as they come."""
-    from gpsaccel.check import sandbox as sb
+    from gpsaccel import sandbox as sb
     from gpsaccel.check.batch import sweep
 
     warm(settings["name"])
@@ -669,7 +669,7 @@ def grade(submissions: str | os.PathLike, name: str, out: str | os.PathLike | No
     regrading one ``student``); secret : the instructor's secret for per-student variants (None:
     every student gets the public notebook's numbers); dask : a Dask address or "dask-local".
     """
-    from gpsaccel.check import sandbox as sb
+    from gpsaccel import sandbox as sb
 
     folder = Path(submissions)
     if not folder.is_dir():

@@ -1,6 +1,6 @@
 r"""A student's notebook as a module the checker's sandbox can load (never executed here).
 
-Grading runs a notebook only inside :mod:`gpsaccel.check.sandbox`.  Instead of a Jupyter kernel in
+Grading runs a notebook only inside :mod:`gpsaccel.sandbox`.  Instead of a Jupyter kernel in
 the box (a kernel costs 1-2 s to start, a ZeroMQ session and a second process), the notebook is
 turned into one Python file, ``notebook.py``, that the sandbox's runner imports like any ``.py``
 submission:
@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gpsaccel.check._runner import path_test
+from gpsaccel.sandbox._runner import path_test
 
 #: Sub-packages of gpsaccel a notebook may not import in the box (checks, reference answers).
 HIDDEN_PACKAGES = ("gpsaccel.check", "gpsaccel.assignments")
@@ -126,7 +126,7 @@ def transform(source: str) -> str:
     return TransformerManager().transform_cell(source)
 
 
-#: The checker's path test (:func:`gpsaccel.check._runner.path_test`), as source for the box.
+#: The checker's path test (:func:`gpsaccel.sandbox._runner.path_test`), as source for the box.
 _PATH_TEST = inspect.getsource(path_test)
 
 _PRELUDE = r'''

@@ -20,7 +20,7 @@ mistakes live with their systems (:mod:`gpsaccel.calibration.mistakes`,
 :mod:`gpsaccel.coop.mistakes`, :mod:`gpsaccel.ship.mistakes`); ``gpsaccel check PATH --problem
 ...`` checks many files (:mod:`gpsaccel.check.batch`).  :func:`student_filter` makes a file a
 ``kalman_filter(z)`` callable (run in its own box) for :func:`gpsaccel.calibration.compare.compare`.
-Students' code runs only inside a sandbox (:mod:`gpsaccel.check.sandbox`: bubblewrap namespaces or
+Students' code runs only inside a sandbox (:mod:`gpsaccel.sandbox`: bubblewrap namespaces or
 a portable basic box, with limits), whose generic interface (named functions, numpy inputs,
 declared outputs) every problem uses through :meth:`Problem.check`.
 """

@@ -2,7 +2,7 @@
 
 What a submission is: each top-level entry of a folder given on the command line is one
 submission, a ``.py`` file or a folder (one student's: the file that defines ``kalman_filter`` and
-its helpers and data; see :func:`gpsaccel.check.sandbox.load_submission`).  A file given on the
+its helpers and data; see :func:`gpsaccel.sandbox.load_submission`).  A file given on the
 command line is one submission.  A helper module inside a student's folder is part of that
 submission, never a failing submission of its own.
 
@@ -44,8 +44,8 @@ from typing import Any
 
 from gpsaccel import _validation as _v
 from gpsaccel import registry
+from gpsaccel import sandbox as sb
 from gpsaccel._atomic import write_text
-from gpsaccel.check import sandbox as sb
 from gpsaccel.check.problems import submission
 from gpsaccel.executors import resolve_executor
 
@@ -143,7 +143,7 @@ def check_many(paths: Sequence[str | os.PathLike], n_runs: int | None = None,
     ``seed`` and ``timeout`` are checked here, before any submission runs (a bad one would
     otherwise fail every check alike).  ``seed`` None (the default) is :func:`secret_seed`: a
     class is graded on data no student could know in advance; pass a seed to reproduce a run.
-    The basic sandbox is refused unless it is safe here (:func:`gpsaccel.check.sandbox.
+    The basic sandbox is refused unless it is safe here (:func:`gpsaccel.sandbox.
     refuse_unsafe_basic`: the checker runs as root) or ``allow_unsafe_basic``.  Raises
     :class:`Interrupted` on Ctrl-C.
     """

@@ -1,6 +1,6 @@
 """What came back from a student's box, as findings: one function for every problem, wording as data.
 
-:func:`box_findings` turns a :class:`gpsaccel.check.sandbox.BoxResult` into findings of a
+:func:`box_findings` turns a :class:`gpsaccel.sandbox.BoxResult` into findings of a
 :class:`~gpsaccel.check.report.Report`.  Every message is a template of :data:`MESSAGES` (code ->
 text with ``{fields}``); a problem changes its wording by giving its own templates for some codes
 (``Problem.messages``), never by a branch here.  The fields every template may use:
@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 
-from gpsaccel.check import sandbox as sb
+from gpsaccel import sandbox as sb
 from gpsaccel.check.report import Report
 
 #: Characters of the student's printed output kept in a finding.

@@ -42,7 +42,6 @@ from gpsaccel import _validation as _v
 from gpsaccel._feedback import describe_miss
 from gpsaccel.check.problems import Argument, Function, Problem
 from gpsaccel.check.report import Report
-from gpsaccel.check.sandbox import Call, Output
 from gpsaccel.kalman.consistency import (
     chi2_bounds,
     covariance_distance,
@@ -62,6 +61,7 @@ from gpsaccel.kalman.epochs import (
     batch_gains,
     combinations,
 )
+from gpsaccel.sandbox import Call, Output
 
 #: Largest distance (units of the optimal σ) at which P and x̂ count as equal; also the distance
 #: within which a catalogue entry counts as matching.

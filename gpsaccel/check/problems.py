@@ -10,9 +10,9 @@ A :class:`Problem` says
 * the **catalogue** of known mistakes, from the system's package (:meth:`Problem.codes`).
 
 :meth:`Problem.check` is the same for every problem: load the submission (a file or one
-student's folder, :func:`gpsaccel.check.sandbox.load_submission`), read which functions it defines
+student's folder, :func:`gpsaccel.sandbox.load_submission`), read which functions it defines
 (without running it), simulate, call the student's functions in the sandbox
-(:func:`gpsaccel.check.sandbox.run`), turn whatever went wrong into findings with the one
+(:func:`gpsaccel.sandbox.run`), turn whatever went wrong into findings with the one
 :func:`gpsaccel.check.findings.box_findings` (each problem's wording as data), then compare with
 the reference and diagnose.  The result is the one :class:`~gpsaccel.check.report.
 Report` type of the package.
@@ -41,11 +41,11 @@ from typing import Any
 import numpy as np
 
 from gpsaccel import _validation as _v
-from gpsaccel.check import sandbox as sb
+from gpsaccel import sandbox as sb
 from gpsaccel.check.findings import MESSAGES, box_findings
 from gpsaccel.check.report import Report
-from gpsaccel.check.sandbox import Call, Output, defines
 from gpsaccel.kalman import consistency
+from gpsaccel.sandbox import Call, Output, defines
 
 
 @dataclass(frozen=True)
@@ -154,7 +154,7 @@ class Problem:
         never raises for what the file does.
 
         ``sandbox``, ``limits`` and ``allow_gpsaccel`` go to the sandbox
-        (:mod:`gpsaccel.check.sandbox`); the reference answers are computed only after the
+        (:mod:`gpsaccel.sandbox`); the reference answers are computed only after the
         student's box is gone (and no answer of an earlier check is kept meanwhile).
         """
         t0 = time.perf_counter()
@@ -162,7 +162,7 @@ class Problem:
         seed = _v.integer("seed", seed, minimum=0)
         timeout = _v.positive_float("timeout", timeout)
         if limits is not None and not isinstance(limits, sb.Limits):
-            raise ValueError(f"limits must be a gpsaccel.check.sandbox.Limits, got {limits!r}")
+            raise ValueError(f"limits must be a gpsaccel.sandbox.Limits, got {limits!r}")
         limits = sb.Limits(**{**vars(limits or sb.Limits()), "time": timeout})
         backend = sb.resolve_backend(sandbox)
         path = Path(path)
@@ -213,7 +213,7 @@ class Problem:
 
     def _submission(self, path: Path) -> sb.Submission:
         """The submission at ``path``: its entry is the file defining the contract's functions
-        (the first of them found; :func:`gpsaccel.check.sandbox.load_submission`)."""
+        (the first of them found; :func:`gpsaccel.sandbox.load_submission`)."""
         error: sb.SubmissionError | None = None
         for f in self.functions:
             try:

@@ -7,7 +7,7 @@
     from gpsaccel.calibration.compare import compare
     print(compare("joseph", "square-root", filters={"alice": check.student_filter("alice.py")}))
 
-Each call runs the file in a sandbox (:mod:`gpsaccel.check.sandbox`, as
+Each call runs the file in a sandbox (:mod:`gpsaccel.sandbox`, as
 :meth:`gpsaccel.check.problems.Problem.check` does for a check: a box of its own with limits,
 nothing of the student's imported into this process) on ``repeat`` copies of ``z`` and hands back
 the first run's (x_hat, P).  The time per run is measured in the child around the student's calls
@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from gpsaccel import _validation as _v
-from gpsaccel.check import sandbox as sb
+from gpsaccel import sandbox as sb
 from gpsaccel.check.findings import box_findings
 from gpsaccel.check.report import Report
 from gpsaccel.check.whole_filter import FUNCTION, calls
@@ -46,7 +46,7 @@ class StudentFilter:
     path : the student's ``.py`` file, defining ``kalman_filter(z)`` for report 000's problem.
     timeout : wall-clock limit (s) of one call (import and ``repeat`` runs).
     repeat : runs per call, for the time per run (the mean of the runs, measured in the child).
-    sandbox : ``"auto"``, ``"bwrap"`` or ``"basic"`` (:mod:`gpsaccel.check.sandbox`).
+    sandbox : ``"auto"``, ``"bwrap"`` or ``"basic"`` (:mod:`gpsaccel.sandbox`).
 
     After a call, ``seconds`` is the time of one run (s).
     """

@@ -13,7 +13,7 @@ The check is :class:`CalibrationProblem`, the linear pipeline of :mod:`gpsaccel.
 
 1. Simulates ``n_runs`` realizations from ``numpy.random.default_rng(seed)`` with the error-model
    truth (:func:`gpsaccel.simulate`), so it knows the true state of each.
-2. Runs the student's file (or folder) in a sandbox (:mod:`gpsaccel.check.sandbox`: bwrap or
+2. Runs the student's file (or folder) in a sandbox (:mod:`gpsaccel.sandbox`: bwrap or
    basic, with time, memory, file, process and output limits), one call ``kalman_filter(z[r])``
    per run; a crash, an endless loop, wrong shapes, NaN, lists, a flood of prints, a broken limit,
    an import of gpsaccel each become a finding, never an exception here.
@@ -60,10 +60,10 @@ from functools import lru_cache
 
 import numpy as np
 
+from gpsaccel import sandbox as sb
 from gpsaccel.calibration import mistakes as cat
 from gpsaccel.calibration.model import STATE_NAMES, CalibrationModel
 from gpsaccel.calibration.simulation import simulate
-from gpsaccel.check import sandbox as sb
 from gpsaccel.check.linear import (  # noqa: F401 - the calibration names of the linear pipeline
     HINT_FACTOR,
     LOW_PRECISION,
@@ -77,7 +77,7 @@ from gpsaccel.check.linear import (  # noqa: F401 - the calibration names of the
 )
 from gpsaccel.check.problems import Argument, Function
 from gpsaccel.check.report import Report
-from gpsaccel.check.sandbox import Output
+from gpsaccel.sandbox import Output
 
 #: The function a submission defines.
 FUNCTION = "kalman_filter"
@@ -245,7 +245,7 @@ def submission(path: str | os.PathLike, n_runs: int = DEFAULT_RUNS, seed: int = 
     seed : seed of the realizations (``numpy.random.default_rng(seed)``).
     timeout : wall-clock limit (s) for the student's box (import and all runs).
     model, alpha, tol : those of :class:`CalibrationProblem`.
-    sandbox : ``"auto"``, ``"bwrap"`` or ``"basic"`` (:mod:`gpsaccel.check.sandbox`).
+    sandbox : ``"auto"``, ``"bwrap"`` or ``"basic"`` (:mod:`gpsaccel.sandbox`).
     limits : the box's limits (:class:`sandbox.Limits`; its ``time`` is replaced by ``timeout``).
     allow_gpsaccel : let the submission import gpsaccel (e.g. for the model matrices).
 

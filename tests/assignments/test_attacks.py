@@ -25,7 +25,7 @@ from .conftest import kill_pids, read_grades, write_variant
 MARK = f"gpsaccel-attack-{uuid.uuid4().hex[:12]}"
 
 def _bwrap() -> bool:
-    from gpsaccel.check.sandbox import resolve_backend
+    from gpsaccel.sandbox import resolve_backend
 
     return os.path.isdir("/proc") and resolve_backend("auto") == "bwrap"
 

@@ -200,7 +200,7 @@ def test_ipython_syntax_is_handled_explicitly():
 
 
 def test_module_wrappers_survive_the_students_cells(tmp_path):
-    from gpsaccel.check import sandbox as sb
+    from gpsaccel import sandbox as sb
 
     nb = nbm.Notebook([nbm.Cell(1, "import numpy as np\ndef f(a):\n    return a * 2"),
                        nbm.Cell(2, "raise SystemExit(1)"), nbm.Cell(3, "np = None\ng = 1")])
@@ -256,7 +256,7 @@ def test_packaged_student_side_is_the_masters_and_holds_no_solution(name, tmp_pa
 def test_what_the_import_fence_refuses_is_not_in_a_bwrap_box():
     """The notebook module's audit hook (both backends) and bwrap's empty folders (the real
     fence) name the same sub-packages: one added to the hook must be hidden from the box too."""
-    from gpsaccel.check.sandbox import HIDDEN_WITH_GPSACCEL, PACKAGE_DIR
+    from gpsaccel.sandbox import HIDDEN_WITH_GPSACCEL, PACKAGE_DIR
 
     for name in nbm.HIDDEN_PACKAGES:
         top, _, rest = name.partition(".")

@@ -13,7 +13,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from gpsaccel.check import sandbox as sb
+from gpsaccel import sandbox as sb
 
 SUBMISSIONS = Path(__file__).parent.parent / "submissions"
 HOSTILE = SUBMISSIONS / "hostile"

@@ -17,7 +17,7 @@ import time
 
 import pytest
 
-from gpsaccel.check import sandbox as sb
+from gpsaccel import sandbox as sb
 from gpsaccel.check.batch import check_many, find_submissions, log_path, write_json
 
 
@@ -158,7 +158,7 @@ def test_json_is_written_atomically(tmp_path):
 
 
 def test_cli_names_a_bad_limit_and_a_missing_bwrap(tmp_path, hostile, monkeypatch, capsys):
-    from gpsaccel.check import sandbox as sb
+    from gpsaccel import sandbox as sb
     from gpsaccel.cli import main
 
     path = hostile.SUBMISSIONS / "correct_gps_rate.py"

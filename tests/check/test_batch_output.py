@@ -13,7 +13,7 @@ import sys
 import pytest
 
 from gpsaccel import check
-from gpsaccel.check import sandbox as sb
+from gpsaccel import sandbox as sb
 from gpsaccel.check.batch import appender, check_many, printable, table
 
 HOSTILE_NAMES = ["yes\x1b[2K\ryes.py", "line\u2028sep.py", "bidi\u202eyp.txt.py",

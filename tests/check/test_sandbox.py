@@ -1,4 +1,4 @@
-"""The sandbox (gpsaccel.check.sandbox): its generic interface, the result channel, what a
+"""The sandbox (gpsaccel.sandbox): its generic interface, the result channel, what a
 submission is, and every hostile submission of tests/submissions/hostile under every backend.
 
 Hostile runs are bounded (see hostile/README.md): a 512 MiB memory limit and 16 MiB files here, at
@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from gpsaccel import check
-from gpsaccel.check import sandbox as sb
+from gpsaccel import sandbox as sb
 from gpsaccel.check import whole_filter as wf
 
 LIMITS = sb.Limits(memory=512 << 20, file_size=16 << 20, output=1 << 20, time=20)

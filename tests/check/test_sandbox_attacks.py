@@ -22,8 +22,8 @@ import numpy as np
 import pytest
 
 from gpsaccel import check
-from gpsaccel.check import _boxuser, _cgroup
-from gpsaccel.check import sandbox as sb
+from gpsaccel import sandbox as sb
+from gpsaccel.sandbox import _boxuser, _cgroup
 
 LIMITS = sb.Limits(memory=512 << 20, file_size=16 << 20, output=1 << 20, time=20, processes=16)
 
@@ -198,7 +198,7 @@ def test_student_filter_reports_instead_of_raising_something_else(backend, hosti
 def test_a_box_folder_of_a_killed_supervisor_is_removed(tmp_path, hostile):
     """A worker SIGKILLed mid-check leaves its box folder (a copy of the submission): the next
     box removes it."""
-    code = ("import numpy as np\nfrom gpsaccel.check import sandbox as sb\n"
+    code = ("import numpy as np\nfrom gpsaccel import sandbox as sb\n"
             f"sub = sb.load_submission({str(hostile.DIR / 'fork_lingers.py')!r}, "
             f"'kalman_filter')\n"
             "sb.run(sub, [sb.Call('kalman_filter', (np.zeros((3, 2)),), "
@@ -275,7 +275,7 @@ def test_a_box_that_may_import_gpsaccel_finds_no_check_nor_answer_file(tmp_path)
     """A notebook's box imports the course's models (allow_gpsaccel) but reads no file of the
     checks, the graded questions or the answers, not even with libc calls no audit hook sees:
     bwrap binds empty folders over them (a public module of the same package is readable)."""
-    rel = ["check/sandbox.py", "check/problems.py", "assignments/ship.py",
+    rel = ["check/batch.py", "check/problems.py", "assignments/ship.py",
            "assignments/__init__.py", "exercises/answers.py", "calibration/model.py"]
     dirs = [d for d in sb.HIDDEN_WITH_GPSACCEL if (sb.PACKAGE_DIR / d).resolve().is_relative_to(
         sb.PACKAGE_DIR)]

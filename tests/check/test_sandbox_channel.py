@@ -12,7 +12,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from gpsaccel.check import sandbox as sb
+from gpsaccel import sandbox as sb
 
 CALLS = [sb.Call("f", (np.zeros(2),), (sb.Output("a", (2,)), sb.Output("k", (3,), "int64")))
          for _ in range(2)]

@@ -11,7 +11,7 @@ import shutil
 import pytest
 
 from gpsaccel import check
-from gpsaccel.check import sandbox as sb
+from gpsaccel import sandbox as sb
 from gpsaccel.check.batch import check_many, find_submissions
 
 

@@ -7,7 +7,7 @@ import signal
 
 ctypes.CDLL(None).prctl(15, b"gpsacc-hostile", 0, 0, 0)  # PR_SET_NAME
 
-BOX_UIDS = 2_013_265_920  # gpsaccel.check._boxuser.UID_BASE
+BOX_UIDS = 2_013_265_920  # gpsaccel.sandbox._boxuser.UID_BASE
 
 
 def _in_own_pid_namespace():

@@ -1,6 +1,6 @@
 """The box's own user: as root, a student runs as a uid that owns nothing and that nothing else runs as.
 
-Used by :mod:`gpsaccel.check.sandbox` (both backends, when the checker runs as root); not an
+Used by :mod:`gpsaccel.sandbox` (both backends, when the checker runs as root); not an
 interface of its own.
 
 * :func:`acquire`: a uid with no passwd entry, ``UID_BASE + SLOTS * pid + k`` for the

@@ -1,6 +1,6 @@
 """Run named functions of a student's submission on given arrays, inside a sandbox.
 
-Usage (by :mod:`gpsaccel.check.sandbox`, not by hand)::
+Usage (by :mod:`gpsaccel.sandbox`, not by hand)::
 
     python -I -S -B _runner.py CONTROL_DIR SUBMISSION_DIR RESULT_FD [GO_FD]
 
@@ -24,7 +24,7 @@ in order, and stops at the first problem: one broken call says everything a stud
 What comes back goes over the pipe RESULT_FD as frames: a 4-byte big-endian length, a JSON
 header, and for a ``result`` frame the declared arrays' bytes (C order, native byte order, the
 declared dtype).  The parent reads them against the shapes it declared itself and refuses
-anything else (:class:`gpsaccel.check.sandbox.FrameReader`), so nothing the student's code does
+anything else (:class:`gpsaccel.sandbox.FrameReader`), so nothing the student's code does
 to this process (patching numpy, writing to the pipe) can hand back more than an answer of the
 declared size.  Frames: ``uses-checker`` (an import of a blocked package was attempted),
 ``imported``, ``result`` (one per call), ``problem`` (the first problem; the runner stops) and

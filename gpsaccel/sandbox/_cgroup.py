@@ -1,6 +1,6 @@
 """A control group per box: memory, processes and CPU of the whole box, not of each process.
 
-Used by :mod:`gpsaccel.check.sandbox`; not an interface of its own.  One box is one cgroup named
+Used by :mod:`gpsaccel.sandbox`; not an interface of its own.  One box is one cgroup named
 ``gpsaccel-box-<pid>-<random>`` (``pid``: the supervising process) below the cgroup this process
 is in, so a box never escapes the limits its checker runs under.  Where it is made, in order:
 

@@ -2,7 +2,7 @@
 
 The interface is generic (any checker of this package uses it)::
 
-    from gpsaccel.check import sandbox
+    from gpsaccel import sandbox
     sub = sandbox.load_submission("alice/", function="kalman_filter")   # a .py file or a folder
     calls = [sandbox.Call("kalman_filter", (z[r],),
                           (sandbox.Output("x_hat", (151, 3)), sandbox.Output("P", (151, 3, 3))))
@@ -41,10 +41,10 @@ Backends (the threat model, what each isolates and what not: ``docs/sandbox.md``
 ``auto`` is ``bwrap`` when a trial box starts on this machine, else ``basic``.
 
 As root, under both backends, the student runs as a uid of its own that owns nothing and that
-nothing else runs as, with no capability and no new privileges (:mod:`gpsaccel.check._boxuser`;
+nothing else runs as, with no capability and no new privileges (:mod:`gpsaccel.sandbox._boxuser`;
 bwrap itself runs as that uid): it cannot write into the package or the environment (a ``.pth``),
 nor signal the checker, and everything the uid runs is killed at the end, wherever it is in the
-process tree.  Where the machine allows it, a cgroup per box (:mod:`gpsaccel.check._cgroup`:
+process tree.  Where the machine allows it, a cgroup per box (:mod:`gpsaccel.sandbox._cgroup`:
 cgroup v2, else v1) limits the memory (processes, tmpfs files and memfds together), the processes
 and the CPU of the whole box; else the per-process rlimits are the limits
 (:attr:`BoxResult.limit_backend` says which).
@@ -93,7 +93,7 @@ from typing import TypeGuard
 
 import numpy as np
 
-from gpsaccel.check import _boxuser, _cgroup
+from gpsaccel.sandbox import _boxuser, _cgroup
 
 #: The script that runs the student's code in the box.
 RUNNER = Path(__file__).with_name("_runner.py")
@@ -389,9 +389,9 @@ class BoxResult:
         killed at the end.
     limit_backend : what enforced the box's memory and process limits: ``"cgroup2"`` or
         ``"cgroup1"`` (one cgroup for the whole box: every process, tmpfs file and memfd counted
-        together) or ``"rlimit"`` (per process only; see :mod:`gpsaccel.check._cgroup`).
+        together) or ``"rlimit"`` (per process only; see :mod:`gpsaccel.sandbox._cgroup`).
     box_user : the uid the student ran as when the checker is root (a uid of its own, see
-        :mod:`gpsaccel.check._boxuser`), else None (the checker's own user).
+        :mod:`gpsaccel.sandbox._boxuser`), else None (the checker's own user).
     memory_peak : the box's peak memory (bytes) when a cgroup measured it.
     """
 
@@ -673,7 +673,7 @@ def resolve_backend(backend: str = "auto") -> str:
 
 def basic_is_safe() -> bool:
     """Whether the basic backend isolates a student here: only as root, where each box runs as a
-    uid of its own (:mod:`gpsaccel.check._boxuser`).  As any other user the student's code runs
+    uid of its own (:mod:`gpsaccel.sandbox._boxuser`).  As any other user the student's code runs
     as that user: it can write what the user can (the environment's site-packages: a ``.pth``
     that forges the next check), signal the user's processes (kill or stop the batch) and leave
     processes the box cannot name (docs/sandbox.md)."""
