@@ -64,9 +64,13 @@ lab: $(STAMP)
 # mypy over the whole package (issue 22): clean
 MYPY_CLEAN := gpsaccel
 
+# radon: no function above cyclomatic complexity 20 (grade D or worse; boolean operators count)
 lint: $(VENV)/.installed-dev
 	$(BIN)/ruff check .
 	$(BIN)/mypy $(MYPY_CLEAN)
+	@out="$$($(BIN)/radon cc -s -n D gpsaccel)"; if [ -n "$$out" ]; then echo "$$out"; \
+	    echo "make lint: the functions above exceed cyclomatic complexity 20 (radon cc); split them"; \
+	    exit 1; fi
 
 # every benchmark; their tables are written into docs/benchmarks/ for the documentation
 bench: $(VENV)/.installed-test

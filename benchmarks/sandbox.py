@@ -25,12 +25,13 @@ from pathlib import Path
 import numpy as np
 
 from gpsaccel import sandbox as sb
+from gpsaccel.sandbox.confinement import _site_dirs
 
 REPEATS = 7
 
 
 def _bare() -> float:
-    code = f"import sys; sys.path.extend({sb._site_dirs()!r}); import numpy"
+    code = f"import sys; sys.path.extend({_site_dirs()!r}); import numpy"
     t = time.perf_counter()
     subprocess.run([sys.executable, "-I", "-S", "-B", "-c", code], check=True,
                    env={"OPENBLAS_NUM_THREADS": "1", "PATH": "/usr/bin:/bin"})

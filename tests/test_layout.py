@@ -1,9 +1,12 @@
 """The package's layers: imports point down only, and the systems never import each other.
 
-Floors, bottom up: infrastructure (``_validation``, ``_blas``, ``_atomic``, ``executors``) -> ``kalman`` ->
-the systems (``calibration``, ``ship``, ``coop``, side by side) -> ``check`` (-> ``assignments``, the
-homework, which only ``cli`` imports) -> ``plots`` ->
-``figures`` -> ``lessons``, ``cli``.  Read from the source with ``ast`` (every ``import`` and
+Floors, bottom up: infrastructure (``_validation``, ``_blas``, ``_atomic``, ``executors``) ->
+``sandbox`` -> ``kalman`` -> the systems (``calibration``, ``ship``, ``coop``, side by side) ->
+``check`` (-> ``assignments``, the homework, which only ``cli`` imports) -> ``plots`` ->
+``figures`` -> ``lessons``, ``cli``.  The sandbox (``gpsaccel/sandbox/``) is a layer of its own
+below ``check``: it imports nothing of gpsaccel but the infrastructure, and nothing outside it uses
+a private name of it (a module or an attribute whose name starts with ``_``: ``sb._prctl``,
+``gpsaccel.sandbox._runner``).  Read from the source with ``ast`` (every ``import`` and
 ``from ... import``, at module level or inside a function), so a lazy import counts too.
 """
 
@@ -74,3 +77,62 @@ def test_the_rule_catches_a_system_importing_another(tmp_path):
     bad = tmp_path / "x.py"
     bad.write_text("from gpsaccel.coop.model import CoopModel\nfrom gpsaccel import check\n")
     assert _imported_units(bad) == {"coop", "check"}
+
+
+LAYER = "gpsaccel.sandbox"
+
+
+def _private_uses(path: Path) -> list[str]:
+    """Private names of the sandbox layer that ``path`` uses: imported (``from gpsaccel.sandbox
+    import _x``, ``gpsaccel.sandbox._x``) or reached as an attribute of a name bound to the layer
+    or one of its modules (``sb._prctl``)."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    bound: set[str] = set()
+    bad: list[str] = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                if a.name == LAYER or a.name.startswith(LAYER + "."):
+                    if any(part.startswith("_") for part in a.name.split(".")[2:]):
+                        bad.append(a.name)
+                    bound.add(a.asname or a.name)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            full = [f"{node.module}.{a.name}" for a in node.names]
+            for a, name in zip(node.names, full, strict=True):
+                if not (name == LAYER or name.startswith(LAYER + ".")
+                        or node.module.startswith(LAYER + ".")):
+                    continue
+                if any(part.startswith("_") for part in name.split(".")[2:]):
+                    bad.append(name)
+                bound.add(a.asname or a.name)
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and node.attr.startswith("_") \
+                and not node.attr.startswith("__"):
+            base = ast.unparse(node.value)
+            if base in bound:
+                bad.append(f"{base}.{node.attr}")
+    return bad
+
+
+@pytest.mark.parametrize("path", [p for p in _modules() if _unit(p) != "sandbox"],
+                         ids=lambda p: str(p.relative_to(ROOT)))
+def test_nothing_outside_the_sandbox_uses_its_private_names(path):
+    assert not _private_uses(path), f"gpsaccel/{path.relative_to(ROOT)} uses {_private_uses(path)}"
+
+
+def test_the_sandbox_imports_nothing_above_it():
+    assert ALLOWED["sandbox"] <= INFRA
+    for path in (ROOT / "sandbox").rglob("*.py"):
+        assert _imported_units(path) <= INFRA | {"sandbox"}, path
+
+
+def test_the_rule_catches_a_private_name_of_the_sandbox(tmp_path):
+    bad = tmp_path / "x.py"
+    bad.write_text("from gpsaccel import sandbox as sb\nfrom gpsaccel.sandbox import _boxuser\n"
+                   "import gpsaccel.sandbox._runner\nfrom gpsaccel.sandbox.procs import sweep\n"
+                   "sb._prctl(4, 0)\nsb.run\n")
+    assert sorted(_private_uses(bad)) == ["gpsaccel.sandbox._boxuser", "gpsaccel.sandbox._runner",
+                                          "sb._prctl"]
+    good = tmp_path / "y.py"
+    good.write_text("from gpsaccel import sandbox as sb\nsb.run(sb.Limits()).__class__\n")
+    assert _private_uses(good) == []

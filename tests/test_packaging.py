@@ -83,7 +83,7 @@ def test_every_imported_module_is_declared():
         if not dists & declared:
             undeclared[module] = (sorted(dists) or ["not installed"], sorted(files)[:3])
     assert not undeclared, f"imported but not declared in pyproject.toml: {undeclared}"
-    assert {"pyyaml", "psutil"} <= _declared("grading")
+    assert "pyyaml" in _declared("grading") and "psutil" in _declared()  # the sandbox: core
 
 
 @pytest.mark.slow

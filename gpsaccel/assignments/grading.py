@@ -43,12 +43,9 @@ import csv
 import io
 import json
 import math
-import multiprocessing as mp
-import multiprocessing.connection as mpc
 import os
 import re
 import secrets
-import signal
 import tempfile
 import time
 from collections import Counter
@@ -451,19 +448,6 @@ def _task(entry: Entry, folder: Path, settings: dict) -> dict:
     return asdict(g)
 
 
-def _child(conn: mpc.Connection, entry: Entry, folder: Path, settings: dict) -> None:
-    from gpsaccel import sandbox as sb
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    sb._prctl(sb.PR_SET_DUMPABLE, 0)  # it holds answers after its box while others run
-    try:
-        out = _task(entry, folder, settings)
-    except Exception as exc:  # noqa: BLE001 - a bug of the grader: one student's error
-        out = {"error": f"{type(exc).__name__}: {exc}"}
-    conn.send(out)
-    conn.close()
-
-
 def _grader_error(entry: Entry, folder: Path, settings: dict, why: str) -> dict:
     file = str(entry.path.relative_to(folder)) if entry.path else ""
     return asdict(unusable(settings["name"], entry.student, file, "grader-error",
@@ -483,74 +467,47 @@ def warm(name: str) -> None:
     registry.problems()
 
 
+def _graded_item(item: tuple[Entry, Path, dict]) -> dict:
+    return _task(*item)
+
+
+#: What a notebook without a grade was, by :attr:`gpsaccel.sandbox.Lost.reason`.
+_LOST = {"too-long": "it took too long", "died": "its process died, {detail}",
+         "not-a-report": "its process returned no grade"}
+
+
+def _pooled(entries: list[Entry], folder: Path, settings: dict, jobs: int,
+            done: Callable[[int, dict], None], executor: object = None) -> None:
+    """Every notebook through the sandbox's one pool (:func:`gpsaccel.sandbox.run_items`): a
+    forked process each, or a Dask worker each, within the same deadline; results as they
+    come."""
+    from gpsaccel import sandbox as sb
+
+    limit = settings["timeout"] * 2 + 60 + SLACK  # the notebook's box, the file's box, the rest
+
+    def finished(i: int, out: object) -> None:
+        if not isinstance(out, dict):
+            lost = out if isinstance(out, sb.Lost) else sb.Lost("not-a-report")
+            why = lost.detail if lost.reason == "error" else \
+                _LOST.get(lost.reason, "{detail}").format(detail=lost.detail)
+            out = _grader_error(entries[i], folder, settings, why)
+        done(i, out)
+
+    sb.run_items(_graded_item, [(e, folder, settings) for e in entries], jobs, limit, finished,
+                 executor)
+
+
 def _forked(entries: list[Entry], folder: Path, settings: dict, jobs: int,
             done: Callable[[int, dict], None]) -> None:
     """Each notebook in a forked process (module docstring); results as they come."""
-    from gpsaccel import sandbox as sb
-    from gpsaccel.check.batch import sweep
-
     warm(settings["name"])
-    ctx = mp.get_context("fork")
-    was = sb._get_subreaper()
-    sb.set_subreaper(True)
-    before = sb._my_children()
-    pending = list(enumerate(entries))[::-1]
-    running: dict[int, tuple] = {}
-    limit = settings["timeout"] * 2 + 60 + SLACK  # the notebook's box, the file's box, the rest
-    try:
-        while pending or running:
-            while pending and len(running) < jobs:
-                i, e = pending.pop()
-                recv, send = ctx.Pipe(duplex=False)
-                p = ctx.Process(target=_child, args=(send, e, folder, settings), daemon=True)
-                p.start()
-                send.close()
-                running[i] = (p, recv, time.monotonic() + limit)
-            mpc.wait([c for _, c, _ in running.values()] + [p.sentinel for p, _, _ in
-                                                             running.values()], timeout=0.2)
-            for i in list(running):
-                p, conn, deadline = running[i]
-                out = None
-                if conn.poll():
-                    try:
-                        out = conn.recv()
-                    except (EOFError, OSError):
-                        out = None
-                if out is None and p.exitcode is None and time.monotonic() < deadline:
-                    continue
-                if not isinstance(out, dict) or "error" in out:
-                    why = (out or {}).get("error") if isinstance(out, dict) else None
-                    if why is None:
-                        why = ("it took too long" if p.exitcode is None else
-                               f"its process died, exit {p.exitcode}")
-                    out = _grader_error(entries[i], folder, settings, why)
-                if p.exitcode is None:
-                    p.kill()
-                p.join()
-                conn.close()
-                del running[i]
-                sweep(before | {q.pid for q, _, _ in running.values()})
-                done(i, out)
-    finally:
-        for p, _, _ in running.values():
-            p.kill()
-            p.join()
-        sweep(before)
-        sb.set_subreaper(bool(was))
+    _pooled(entries, folder, settings, jobs, done)
 
 
 def _dask(entries: list[Entry], folder: Path, settings: dict, spec: str, jobs: int,
           done: Callable[[int, dict], None]) -> None:
-    from gpsaccel.executors import resolve_executor
-
-    with resolve_executor(spec, max_workers=jobs) as ex:
-        futures = [ex.submit(_task, e, folder, settings) for e in entries]
-        for i, fut in enumerate(futures):
-            try:
-                out = fut.result()
-            except Exception as exc:  # noqa: BLE001 - a worker lost: that student only
-                out = _grader_error(entries[i], folder, settings, f"{type(exc).__name__}")
-            done(i, out)
+    """Each notebook on a Dask worker, with the forked processes' deadline."""
+    _pooled(entries, folder, settings, jobs, done, spec)
 
 
 # ---------------------------------------------------------------------------------- output

@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gpsaccel.sandbox._runner import path_test
+from gpsaccel.sandbox import path_test
 
 #: Sub-packages of gpsaccel a notebook may not import in the box (checks, reference answers).
 HIDDEN_PACKAGES = ("gpsaccel.check", "gpsaccel.assignments")
@@ -126,7 +126,7 @@ def transform(source: str) -> str:
     return TransformerManager().transform_cell(source)
 
 
-#: The checker's path test (:func:`gpsaccel.sandbox._runner.path_test`), as source for the box.
+#: The checker's path test (:func:`gpsaccel.sandbox.path_test`), as source for the box.
 _PATH_TEST = inspect.getsource(path_test)
 
 _PRELUDE = r'''

@@ -28,17 +28,10 @@ that executor (its workers run the boxes; a worker killed by a student is then D
 from __future__ import annotations
 
 import json
-import multiprocessing as mp
-import multiprocessing.connection as mpc
 import os
 import secrets
-import signal
-import threading
-import time
 import unicodedata
-from collections import deque
 from collections.abc import Callable, Iterable, Sequence
-from collections.abc import Set as AbstractSet
 from pathlib import Path
 from typing import Any
 
@@ -47,7 +40,6 @@ from gpsaccel import registry
 from gpsaccel import sandbox as sb
 from gpsaccel._atomic import write_text
 from gpsaccel.check.problems import submission
-from gpsaccel.executors import resolve_executor
 
 #: Seconds a check's process may take beyond the student's time limit (simulating the data,
 #: comparing, diagnosing) before it is killed as a checker error.
@@ -158,202 +150,61 @@ def check_many(paths: Sequence[str | os.PathLike], n_runs: int | None = None,
                "problem": problem}
     args = (n_runs, seed, timeout)
     if executor in ("processes", "local"):
-        return _isolated(files, args, options, max_workers or os.cpu_count() or 1, timeout,
-                         on_result)
-    results = []
-    with resolve_executor(executor, max_workers=max_workers) as ex:
-        futures = [ex.submit(_check_one, str(f), *args, **options) for f in files]
-        for f, fut in zip(files, futures, strict=True):
-            try:
-                result = fut.result()
-            except Exception as exc:  # the checker itself failed: report it, go on
-                result = checker_error(f, f"{type(exc).__name__}: {exc}")
-            results.append(result)
-            if on_result is not None:
-                on_result(result)
-    return results
+        executor = None  # the sandbox's pool: a process forked per check
+    elif executor is None:
+        executor = "inprocess"
+    return _isolated(files, args, options, max_workers or os.cpu_count() or 1, timeout,
+                     on_result, executor)
 
 
 # ------------------------------------------------------------------ a process per check
-def _worker(conn: mpc.Connection, path: str, args: tuple, options: dict) -> None:
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the batch's to handle
-    # for its whole life: after its box it holds the answer, while other boxes may still run
-    sb._prctl(sb.PR_SET_DUMPABLE, 0)
+def _check_item(item: tuple[str, tuple, dict]) -> dict:
+    """One check in its item's process (:mod:`gpsaccel.sandbox.pool`); the checker's own error is
+    that file's result."""
+    path, args, options = item
     try:
-        result = _check_one(path, *args, **options)
+        return _check_one(path, *args, **options)
     except Exception as exc:  # noqa: BLE001 - a bug of the checker: one file's error
-        result = checker_error(path, f"the checker failed: {type(exc).__name__}: {exc}")
-    conn.send(result)
-    conn.close()
+        return checker_error(path, f"the checker failed: {type(exc).__name__}: {exc}")
 
 
-def _context() -> Any:  # a fork or spawn context (typeshed's BaseContext has no Process)
-    methods = mp.get_all_start_methods()
-    return mp.get_context("fork" if "fork" in methods else "spawn")
-
-
-def _orphans(keep: set[int]) -> list[int]:
-    """Live processes under this one, except ``keep`` (the running checks, and the children this
-    process had before the batch) and theirs: what a dead check's box left behind (re-parented
-    here, the subreaper), with their descendants."""
-    table = sb._proc_table()
-    children: dict[int, list[int]] = {}
-    for pid, (ppid, _, _) in table.items():
-        children.setdefault(ppid, []).append(pid)
-    stack = [p for p in children.get(os.getpid(), []) if p not in keep]
-    out: list[int] = []
-    while stack:
-        pid = stack.pop()
-        if pid not in out:
-            out.append(pid)
-            stack.extend(children.get(pid, []))
-    return [p for p in out if table[p][1] not in ("Z", "X")]
-
-
-def _reap_zombies(workers: set[int]) -> None:
-    me = os.getpid()
-    for pid, (ppid, state, _) in sb._proc_table().items():
-        if ppid == me and pid not in workers and state in ("Z", "X"):
-            try:
-                os.waitpid(pid, os.WNOHANG)
-            except ChildProcessError:
-                pass
-
-
-def sweep(workers: AbstractSet[int] = frozenset()) -> int:
-    """Kill (SIGKILL, until a scan finds none) every process under this one except ``workers``
-    (the running checks, the children it had before) and theirs; returns how many were
-    killed."""
-    killed: set[int] = set()
-    for _ in range(200):
-        alive = _orphans(set(workers))
-        if not alive:
-            break
-        for pid in alive:
-            try:
-                os.kill(pid, signal.SIGKILL)
-                killed.add(pid)
-            except (ProcessLookupError, PermissionError):
-                pass
-        time.sleep(0.01)
-        _reap_zombies(set(workers))
-    _reap_zombies(set(workers))
-    return len(killed)
-
-
-#: What the batch says of a check's process that gave no report (a checker error of its file).
+#: What the batch says of a check that gave no report (a checker error of its file), by
+#: :attr:`gpsaccel.sandbox.Lost.reason`.
 NO_REPORT: dict[str, str] = {
+    "error": "the checker failed: {detail}",
     "not-a-report": "the check's process returned no report",
     "too-long": "the check took more than {limit:g} s (time limit plus {slack:g} s) and was "
                 "stopped",
-    "died": "the process checking this file died ({how}) before it reported; a submission that "
-            "kills its parent process ends like this",
+    "died": "the process checking this file died ({detail}) before it reported; a submission "
+            "that kills its parent process ends like this",
 }
 
 
-def _start(ctx: Any, i: int, f: Path, args: tuple, options: dict, timeout: float
-           ) -> tuple[mp.Process, mpc.Connection, float]:
-    """A worker process checking file ``f`` (the i-th), its end of the pipe, its deadline."""
-    recv, send = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_worker, args=(send, str(f), args, options), daemon=True,
-                       name=f"gpsaccel-check-{i}")
-    proc.start()
-    send.close()
-    return proc, recv, time.monotonic() + timeout + CHECK_SLACK
-
-
-def _outcome(proc: mp.Process, conn: mpc.Connection, deadline: float, now: float,
-             timeout: float) -> dict | str | None:
-    """A worker's report (a dict), why it has none (:data:`NO_REPORT`; one past its deadline is
-    killed), or None while it is still running."""
-    if conn.poll():
-        try:
-            result = conn.recv()
-        except (EOFError, OSError):
-            pass
-        else:
-            return result if isinstance(result, dict) else NO_REPORT["not-a-report"]
-    if proc.exitcode is None and now < deadline:
-        return None
-    if proc.exitcode is None:
-        proc.kill()
-        return NO_REPORT["too-long"].format(limit=timeout + CHECK_SLACK, slack=CHECK_SLACK)
-    code = proc.exitcode
-    how = f"signal {signal.Signals(-code).name}" if code < 0 else f"exit status {code}"
-    return NO_REPORT["died"].format(how=how)
-
-
-def _stop(proc: mp.Process, conn: mpc.Connection) -> None:
-    """Wait for a finished worker (kill it after 5 s) and close its pipe."""
-    proc.join(timeout=5)
-    if proc.exitcode is None:
-        proc.kill()
-        proc.join()
-    conn.close()
+def _lost(path: Path, lost: sb.Lost, timeout: float) -> dict:
+    why = NO_REPORT.get(lost.reason, "{detail}").format(detail=lost.detail,
+                                                       limit=timeout + CHECK_SLACK,
+                                                       slack=CHECK_SLACK)
+    return checker_error(path, why)
 
 
 def _isolated(files: list[Path], args: tuple, options: dict, workers: int, timeout: float,
-              on_result: Callable[[dict], None] | None) -> list[dict]:
-    ctx = _context()
-    was_subreaper = sb._get_subreaper()
-    sb.set_subreaper(True)
-    before = sb._my_children()  # not the batch's: never swept
-    # Ctrl-C sets a flag that the loop reads: a KeyboardInterrupt raised wherever the signal lands
-    # (inside fork's at-fork handlers, say) can be swallowed, and then nothing stops
-    interrupted: list[int] = []
-    previous = None
-    if threading.current_thread() is threading.main_thread():
-        previous = signal.signal(signal.SIGINT, lambda signum, frame: interrupted.append(signum))
-    pending = deque(enumerate(files))
-    running: dict[int, tuple[mp.Process, mpc.Connection, float]] = {}
+              on_result: Callable[[dict], None] | None, executor: object = None) -> list[dict]:
+    """Every check through the sandbox's one pool: a process per file (``executor`` None) or
+    the executor's workers, each within the time limit plus :data:`CHECK_SLACK`."""
     results: list[dict | None] = [None] * len(files)
 
-    def finish(i: int, result: dict) -> None:
+    def done(i: int, out: object) -> None:
+        result = out if isinstance(out, dict) else _lost(files[i], out, timeout) \
+            if isinstance(out, sb.Lost) else _lost(files[i], sb.Lost("not-a-report"), timeout)
         results[i] = result
         if on_result is not None:
             on_result(result)
 
+    items = [(str(f), args, options) for f in files]
     try:
-        while pending or running:
-            if interrupted:
-                raise KeyboardInterrupt
-            while pending and len(running) < workers:
-                i, f = pending.popleft()
-                running[i] = _start(ctx, i, f, args, options, timeout)
-            waitables = [c for _, c, _ in running.values()] + \
-                        [p.sentinel for p, _, _ in running.values()]
-            mpc.wait(waitables, timeout=0.1)
-            now = time.monotonic()
-            for i in list(running):
-                proc, conn, deadline = running[i]
-                outcome = _outcome(proc, conn, deadline, now, timeout)
-                if outcome is None:
-                    continue  # still running
-                result = outcome if isinstance(outcome, dict) else checker_error(files[i],
-                                                                                 outcome)
-                _stop(proc, conn)
-                del running[i]
-                sweep(before | {p.pid for p, _, _ in running.values() if p.pid is not None})
-                sb.sweep_stale_boxes()  # the box folder of a worker that was killed
-                finish(i, result)
+        sb.run_items(_check_item, items, workers, timeout + CHECK_SLACK, done, executor)
     except KeyboardInterrupt:
-        for proc, _, _ in running.values():
-            proc.kill()
-        for proc, conn, _ in running.values():
-            proc.join()
-            conn.close()
-        running.clear()
-        sweep(before)
         raise Interrupted(results) from None
-    finally:
-        for proc, _, _ in running.values():  # an exception of ours: leave nothing behind
-            proc.kill()
-            proc.join()
-        sweep(before)
-        sb.sweep_stale_boxes()
-        sb.set_subreaper(bool(was_subreaper))
-        if previous is not None:
-            signal.signal(signal.SIGINT, previous)
     return [r for r in results if r is not None]
 
 

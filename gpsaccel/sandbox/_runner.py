@@ -232,15 +232,25 @@ def run(control: Path, root: Path) -> None:
 
     with np.load(control / "inputs.npz", allow_pickle=False) as data:
         inputs = {k: data[k] for k in data.files}
-    calls = plan["calls"]
     if plan["block"]:
         sys.meta_path.insert(0, _Blocker(plan["block"]))
         sys.addaudithook(_audit_hook(plan["block"], plan["block_dirs"]))
     # only now the student's folder: a numpy.py of theirs must not run before the hook is in
     sys.path.insert(0, str(root))
-    path = root / plan["entry"]
-    os.chdir(path.parent)
     t0 = time.perf_counter()
+    module = _import_student(root / plan["entry"], root)
+    if module is None:
+        return
+    _send({"t": "imported", "seconds": time.perf_counter() - t0})
+    t1 = time.perf_counter()
+    for i, call in enumerate(plan["calls"]):
+        if not _call(i, call, module, inputs, root):
+            return
+    _send({"t": "done", "import_seconds": t1 - t0, "run_seconds": time.perf_counter() - t1})
+
+
+def _import_student(path: Path, root: Path):  # noqa: ANN202 - a module, or None (reported)
+    os.chdir(path.parent)
     try:
         spec = importlib.util.spec_from_file_location("student_submission", path)
         if spec is None or spec.loader is None:
@@ -250,53 +260,64 @@ def run(control: Path, root: Path) -> None:
         spec.loader.exec_module(module)
     except BaseException as exc:  # noqa: BLE001 - the student's code may raise anything
         _problem("import-error", exc, root)
-        return
-    _send({"t": "imported", "seconds": time.perf_counter() - t0})
-    t1 = time.perf_counter()
-    for i, call in enumerate(calls):
-        name = call["function"]
-        f = getattr(module, name, None)
-        if f is None or not callable(f):
-            names = sorted(n for n in vars(module) if not n.startswith("_") and callable(
-                getattr(module, n)))
-            _problem("no-function", function=name, callables=names[:20],
-                     found=None if f is None else _describe(f))
-            return
-        args = [inputs[f"c{i}_{j}"].copy() for j in range(call["n_args"])]
+        return None
+    return module
+
+
+def _call(i: int, call: dict, module, inputs: dict, root: Path) -> bool:  # noqa: ANN001
+    """Call ``i`` of the plan; send its result, or its problem (False: the runner stops)."""
+    name = call["function"]
+    f = getattr(module, name, None)
+    if f is None or not callable(f):
+        names = sorted(n for n in vars(module) if not n.startswith("_") and callable(
+            getattr(module, n)))
+        _problem("no-function", function=name, callables=names[:20],
+                 found=None if f is None else _describe(f))
+        return False
+    args = [inputs[f"c{i}_{j}"].copy() for j in range(call["n_args"])]
+    try:
+        out = f(*args)
+    except BaseException as exc:  # noqa: BLE001
+        _problem("exception", exc, root, call=i, function=name)
+        return False
+    specs = call["outputs"]
+    if len(specs) > 1:
+        if not isinstance(out, (tuple, list)) or len(out) != len(specs):
+            _problem("return-value", call=i, function=name, returned=_describe(out),
+                     length=len(out) if isinstance(out, (tuple, list)) else None,
+                     expected=len(specs))
+            return False
+        values = list(out)
+    else:
+        values = [out]
+    payload = _encode(i, name, specs, values)
+    if payload is None:
+        return False
+    _send({"t": "result", "call": i, "returned": {s["name"]: _describe(v) for s, v in
+                                                  zip(specs, values, strict=True)}}, payload)
+    return True
+
+
+def _encode(i: int, name: str, specs: list[dict], values: list) -> bytes | None:
+    """The declared outputs' bytes, or None (a problem sent) when one is not the declared array."""
+    import numpy as np
+
+    payload = []
+    for spec_, value in zip(specs, values, strict=True):
         try:
-            out = f(*args)
-        except BaseException as exc:  # noqa: BLE001
-            _problem("exception", exc, root, call=i, function=name)
-            return
-        specs = call["outputs"]
-        if len(specs) > 1:
-            if not isinstance(out, (tuple, list)) or len(out) != len(specs):
-                _problem("return-value", call=i, function=name, returned=_describe(out),
-                         length=len(out) if isinstance(out, (tuple, list)) else None,
-                         expected=len(specs))
-                return
-            values = list(out)
-        else:
-            values = [out]
-        payload = []
-        returned = {}
-        for spec_, value in zip(specs, values, strict=True):
-            returned[spec_["name"]] = _describe(value)
-            try:
-                arr = np.array(value, dtype=spec_["dtype"])
-            except BaseException as exc:  # noqa: BLE001 - a student's __array__ may raise anything
-                _problem("not-numeric", call=i, function=name, name=spec_["name"],
-                         returned=_describe(value), error=str(exc)[:500])
-                return
-            if arr.shape != tuple(spec_["shape"]):
-                _problem("wrong-shape", call=i, function=name,
-                         shapes={s["name"]: _describe(v).get("shape")
-                                 for s, v in zip(specs, values, strict=True)},
-                         got=list(arr.shape), name=spec_["name"])
-                return
-            payload.append(np.ascontiguousarray(arr).tobytes())
-        _send({"t": "result", "call": i, "returned": returned}, b"".join(payload))
-    _send({"t": "done", "import_seconds": t1 - t0, "run_seconds": time.perf_counter() - t1})
+            arr = np.array(value, dtype=spec_["dtype"])
+        except BaseException as exc:  # noqa: BLE001 - a student's __array__ may raise anything
+            _problem("not-numeric", call=i, function=name, name=spec_["name"],
+                     returned=_describe(value), error=str(exc)[:500])
+            return None
+        if arr.shape != tuple(spec_["shape"]):
+            _problem("wrong-shape", call=i, function=name,
+                     shapes={s["name"]: _describe(v).get("shape")
+                             for s, v in zip(specs, values, strict=True)},
+                     got=list(arr.shape), name=spec_["name"])
+            return None
+        payload.append(np.ascontiguousarray(arr).tobytes())
+    return b"".join(payload)
 
 
 def _not_dumpable() -> None:

@@ -14,6 +14,7 @@ from types import SimpleNamespace
 import pytest
 
 from gpsaccel import sandbox as sb
+from gpsaccel.sandbox.procs import _proc_table
 
 SUBMISSIONS = Path(__file__).parent.parent / "submissions"
 HOSTILE = SUBMISSIONS / "hostile"
@@ -31,7 +32,7 @@ BACKENDS = [
 
 def marked_pids() -> set[int]:
     """Live (not zombie) processes whose comm is :data:`MARKER`."""
-    return {pid for pid, (_, state, comm) in sb._proc_table().items()
+    return {pid for pid, (_, state, comm) in _proc_table().items()
             if comm == MARKER and state not in ("Z", "X")}
 
 

@@ -19,6 +19,7 @@ import pytest
 
 from gpsaccel import sandbox as sb
 from gpsaccel.check.batch import check_many, find_submissions, log_path, write_json
+from gpsaccel.sandbox import _boxuser
 
 
 def _class(tmp_path, hostile, hostile_files):
@@ -129,7 +130,7 @@ def _interrupt(proc, out, watch, hostile):
 def test_check_many_reports_a_dead_check_and_goes_on(tmp_path, hostile, watch, monkeypatch):
     """The unsafe basic box (the checker's own user, forced): the killer kills its check's
     process; the batch records it and goes on."""
-    monkeypatch.setattr(sb._boxuser, "box_uid", lambda: None)  # as a user other than root
+    monkeypatch.setattr(_boxuser, "box_uid", lambda: None)  # as a user other than root
     seen = []
     paths = [hostile.DIR / "parent_killer.py", hostile.SUBMISSIONS / "correct_gps_rate.py"]
     with pytest.raises(ValueError, match="--allow-unsafe-basic"):
@@ -160,11 +161,12 @@ def test_json_is_written_atomically(tmp_path):
 def test_cli_names_a_bad_limit_and_a_missing_bwrap(tmp_path, hostile, monkeypatch, capsys):
     from gpsaccel import sandbox as sb
     from gpsaccel.cli import main
+    from gpsaccel.sandbox import confinement
 
     path = hostile.SUBMISSIONS / "correct_gps_rate.py"
     assert main(["check", str(path), "--memory", "100"]) == 2  # the flag's own validator
     assert "argument --memory: must be a number >= 256" in capsys.readouterr().err
-    monkeypatch.setattr(sb, "bwrap_path", lambda: None)
+    monkeypatch.setattr(confinement, "bwrap_path", lambda: None)
     assert main(["check", str(path), "--sandbox", "bwrap"]) == 2
     assert "apt-get install bubblewrap" in capsys.readouterr().err
     assert sb.resolve_backend("auto") == "basic"

@@ -15,6 +15,7 @@ import pytest
 from gpsaccel import check
 from gpsaccel import sandbox as sb
 from gpsaccel.check.batch import appender, check_many, printable, table
+from gpsaccel.sandbox import _boxuser, confinement
 
 HOSTILE_NAMES = ["yes\x1b[2K\ryes.py", "line\u2028sep.py", "bidi\u202eyp.txt.py",
                  "nel\x85.py", "tab\tname.py"]
@@ -81,13 +82,13 @@ def test_basic_is_refused_for_a_class_where_it_is_unsafe(tmp_path, hostile, monk
                                                         capsys):
     from gpsaccel.cli import main
 
-    monkeypatch.setattr(sb._boxuser, "box_uid", lambda: None)  # as a user other than root
+    monkeypatch.setattr(_boxuser, "box_uid", lambda: None)  # as a user other than root
     assert not sb.basic_is_safe()
     path = hostile.SUBMISSIONS / "correct_gps_rate.py"
     assert main(["check", str(path), "--sandbox", "basic", "--runs", "2"]) == 2
     err = capsys.readouterr().err
     assert "not safe for grading" in err and "--allow-unsafe-basic" in err
-    monkeypatch.setattr(sb, "bwrap_path", lambda: None)  # auto falls back on basic: refused too
+    monkeypatch.setattr(confinement, "bwrap_path", lambda: None)  # auto falls back on basic: refused
     assert main(["check", str(path), "--runs", "2"]) == 2
     assert main(["check", str(path), "--runs", "2", "--allow-unsafe-basic", "--workers",
                  "1"]) == 0

@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import os
 import struct
+import sys
 
 import numpy as np
 import pytest
@@ -18,6 +19,7 @@ import pytest
 from gpsaccel import check
 from gpsaccel import sandbox as sb
 from gpsaccel.check import whole_filter as wf
+from gpsaccel.sandbox.confinement import _bwrap_command
 
 LIMITS = sb.Limits(memory=512 << 20, file_size=16 << 20, output=1 << 20, time=20)
 
@@ -316,9 +318,9 @@ def test_bwrap_mounts_tmp_before_the_interpreters_folders(tmp_path, monkeypatch)
     entry = tmp_path / "f.py"
     entry.write_text("def kalman_filter(z):\n    return z\n")
     sub = sb.load_submission(entry, "kalman_filter")
-    monkeypatch.setattr(sb.sys, "prefix", "/tmp/some-venv")
+    monkeypatch.setattr(sys, "prefix", "/tmp/some-venv")
     (tmp_path / "control").mkdir()
-    cmd, fds = sb._bwrap_command("bwrap", tmp_path, sub, sb.Limits(), False, 9)
+    cmd, fds = _bwrap_command("bwrap", tmp_path, sub, sb.Limits(), False, 9)
     for fd in fds:
         os.close(fd)
     first_tmpfs = next(i for i in range(len(cmd) - 1) if cmd[i:i + 2] == ["--tmpfs", "/tmp"])

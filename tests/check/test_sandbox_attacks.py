@@ -17,6 +17,8 @@ import shutil
 import signal
 import subprocess
 import sys
+import tempfile
+import time
 
 import numpy as np
 import pytest
@@ -24,6 +26,7 @@ import pytest
 from gpsaccel import check
 from gpsaccel import sandbox as sb
 from gpsaccel.sandbox import _boxuser, _cgroup
+from gpsaccel.sandbox.confinement import _blocked_dirs, _site_dirs
 
 LIMITS = sb.Limits(memory=512 << 20, file_size=16 << 20, output=1 << 20, time=20, processes=16)
 
@@ -37,7 +40,7 @@ needs_root = pytest.mark.skipif(os.geteuid() != 0, reason="a box user needs root
 def _forged_files() -> list[str]:
     """Files the hostile submissions try to leave outside their box."""
     found = []
-    for d in sb._site_dirs() + sb._blocked_dirs():
+    for d in _site_dirs() + _blocked_dirs():
         found += glob.glob(os.path.join(d, "gpsacc_hostile_forged*"))
     for d in _boxuser.SHARED_TMP:
         found += glob.glob(os.path.join(d, "gpsacc-hostile-file"))
@@ -205,11 +208,11 @@ def test_a_box_folder_of_a_killed_supervisor_is_removed(tmp_path, hostile):
             "(sb.Output('x', (3, 3)),))], sb.Limits(time=30), 'basic')\n")
     proc = subprocess.Popen([sys.executable, "-c", code], env=hostile.env())
     try:
-        pattern = os.path.join(sb.tempfile.gettempdir(), f"{sb.BOX_PREFIX}{proc.pid}-*")
+        pattern = os.path.join(tempfile.gettempdir(), f"{sb.BOX_PREFIX}{proc.pid}-*")
         for _ in range(600):
             if glob.glob(pattern + "/control/plan.json"):
                 break
-            sb.time.sleep(0.05)
+            time.sleep(0.05)
         assert glob.glob(pattern), "the box never started"
     finally:
         proc.send_signal(signal.SIGKILL)

@@ -1,0 +1,416 @@
+"""One box, run: start the runner under its confinement and limits, supervise it (pipes, deadline,
+process count), empty it, and name what went wrong (:func:`run`)."""
+
+from __future__ import annotations
+
+import functools
+import os
+import selectors
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from gpsaccel.sandbox import _boxuser
+from gpsaccel.sandbox.channel import FrameReader, Refused
+from gpsaccel.sandbox.confinement import (
+    BOX_PREFIX,
+    PACKAGE_DIR,
+    _bwrap_command,
+    _environment,
+    _python,
+    _remove_tree,
+    _site_dirs,
+    _write_control,
+    bwrap_path,
+    resolve_backend,
+    sweep_stale_boxes,
+)
+from gpsaccel.sandbox.limits import _cap_last, _confine, _Confinement, _nproc, _preexec
+from gpsaccel.sandbox.procs import (
+    PR_GET_DUMPABLE,
+    PR_SET_DUMPABLE,
+    _get_subreaper,
+    _kill_box,
+    _my_children,
+    _prctl,
+    _proc_table,
+    box_processes,
+    set_subreaper,
+    start_time,
+)
+from gpsaccel.sandbox.spec import BoxResult, Call, Limits
+from gpsaccel.sandbox.submission import Submission, SubmissionError, _copy_submission
+
+_POLL = 0.05  # s between looks at the pipes and the process
+#: s between counts of the box's processes, done only where RLIMIT_NPROC does not bind (root): a
+#: count scans all of /proc (about 10 ms for 100 processes)
+COUNT_EVERY = 0.25
+
+
+def run(sub: Submission, calls: Sequence[Call], limits: Limits | None = None,
+        backend: str = "auto", allow_gpsaccel: bool = False) -> BoxResult:
+    """Run ``calls`` on the submission in a new box; return only once every process it started
+    is dead, its cgroup removed and its folder deleted.  Never raises for anything the
+    submission does (ValueError for bad arguments).  ``limits`` None is :class:`Limits`()."""
+    limits = Limits() if limits is None else limits
+    backend = resolve_backend(backend)
+    calls = list(calls)
+    t0 = time.perf_counter()
+    sweep_stale_boxes()
+    tmp = Path(tempfile.mkdtemp(prefix=f"{BOX_PREFIX}{os.getpid()}-"))
+    sys_path = _site_dirs()
+    if allow_gpsaccel:
+        sys_path.insert(0, str(PACKAGE_DIR.parent))
+    needed = [sys.base_prefix, sys.prefix, sys.exec_prefix, *sys_path, str(tmp),
+              os.path.dirname(_python()), os.path.dirname(os.path.realpath(_python()))]
+    confinement = None
+    owned: list[int] = []
+    try:
+        _write_control(tmp / "control", sub, calls, sys_path, allow_gpsaccel)
+        confinement = _confine(limits, backend, needed)
+        if confinement.uid is not None:
+            tmp.chmod(0o711)  # the box's user enters it, lists nothing
+        res_r, res_w = os.pipe()
+        out_r, out_w = os.pipe()
+        go_r, go_w = os.pipe()
+        owned += [res_r, res_w, out_r, out_w, go_r, go_w]  # closed once, here or by _Supervisor
+        try:
+            cmd, cwd, env, drop, fds = _launch(backend, tmp, sub, limits, allow_gpsaccel,
+                                               confinement, res_w, go_r)
+        except SubmissionError as exc:  # a file changed into a link since it was loaded
+            return BoxResult(backend, failure=exc.code, detail=str(exc),
+                             seconds=time.perf_counter() - t0)
+        owned += fds
+        box = _Supervisor(backend, limits, calls, confinement, owned, t0)
+        return box.run(_Launch(cmd, cwd, env, drop, [res_w, out_w, go_r, *fds]), res_r, out_r,
+                       go_w)
+    finally:
+        _release(owned, confinement)
+        _remove_tree(str(tmp))
+
+
+def _launch(backend: str, tmp: Path, sub: Submission, limits: Limits, allow_gpsaccel: bool,
+            confinement: _Confinement, res_w: int, go_r: int
+            ) -> tuple[list[str], str, dict, bool, list[int]]:
+    """The box's command, working folder, environment, whether to drop capabilities, and the
+    file descriptors of the submission's files it inherits (bwrap)."""
+    if backend == "bwrap":
+        exe = bwrap_path()
+        if exe is None:
+            raise OSError("bwrap was found usable for this check but its trial box no "
+                          "longer starts")
+        cmd, fds = _bwrap_command(exe, tmp, sub, limits, allow_gpsaccel, res_w, go_r)
+        # root without a box user: bwrap's user namespace is the box (no capability outside
+        # it); with one, bwrap runs as that user and needs none either
+        return cmd, str(tmp), _environment("/box"), confinement.uid is not None, fds
+    box = tmp / "box"
+    box.mkdir()
+    _copy_submission(sub, box, confinement.uid)
+    cmd = [_python(), "-I", "-S", "-B", str(tmp / "control" / "_runner.py"),
+           str(tmp / "control"), str(box), str(res_w), str(go_r)]
+    return cmd, str(box), _environment(str(box)), os.geteuid() == 0, []
+
+
+def _release(owned: list[int], confinement: _Confinement | None) -> None:
+    """Close what is left of the box's pipes; kill what its uid runs, remove its cgroup, give
+    its uid back."""
+    for fd in owned:
+        try:
+            os.close(fd)
+        except OSError:
+            pass
+    if confinement is None:
+        return
+    if confinement.uid is not None:
+        _boxuser.kill_uid(confinement.uid)
+        _boxuser.remove_files(confinement.uid)
+    if confinement.cgroup is not None:
+        confinement.cgroup.remove()
+    if confinement.lock is not None:
+        _boxuser.release(confinement.lock)
+
+
+def _runner_pid(pids: set[int], table: dict[int, tuple[int, str, str]]) -> int | None:
+    """The runner among a box's processes: the first started that is not bwrap's own."""
+    started = [(t, pid) for pid in pids if table.get(pid, (0, "", "bwrap"))[2] != "bwrap"
+               for t in [start_time(pid)] if t is not None]
+    return min(started)[1] if started else None
+
+
+def _left_behind(proc: subprocess.Popen, before: set[int], c: _Confinement) -> int:
+    """Processes of the box besides bwrap's and the runner, while the runner waits to exit."""
+    pids = set(box_processes(proc.pid, before)) | c.pids()
+    table = _proc_table()
+    runner = proc.pid if table.get(proc.pid, (0, "", ""))[2] != "bwrap" else \
+        _runner_pid(pids, table)
+    return sum(1 for p in pids if p != runner and table.get(p, (0, "", "bwrap"))[2] != "bwrap")
+
+
+@dataclass
+class _Launch:
+    """How the box's first process starts; ``child_fds`` are the ends it inherits (the result
+    pipe's, the output pipe's, the go pipe's, the submission's files), closed here once it runs."""
+
+    cmd: list[str]
+    cwd: str
+    env: dict
+    drop_caps: bool
+    child_fds: list[int]
+
+
+class _Supervisor:
+    """Supervise one box from its start to its emptying: read both pipes (output tail and limit,
+    result frames), watch the deadline and (where nothing else binds them) the process count,
+    count what the student left running once the runner has said its last word, then kill
+    everything and drain the pipes.  The checker is a subreaper and not dumpable meanwhile."""
+
+    KEEP = 1 << 16  # bytes of the student's output kept
+
+    def __init__(self, backend: str, limits: Limits, calls: list[Call],
+                 confinement: _Confinement | None, owned: list[int], t0: float) -> None:
+        self.c = c = confinement or _Confinement()
+        self.backend, self.limits, self.owned, self.t0 = backend, limits, owned, t0
+        self.result = BoxResult(backend, limit_backend=c.limit_backend, box_user=c.uid)
+        self.reader = FrameReader(calls)
+        self.tail = bytearray()
+        self.hit: str | None = None
+        self.refused: str | None = None
+        self.proc: subprocess.Popen | None = None
+        self.sel: selectors.BaseSelector | None = None
+        self.left: int | None = None
+        self.go_w: int | None = None
+        self.open_pipes = 2
+        self.exited_at: float | None = None
+        self.before: set[int] = set()
+        self.extra = 2 if backend == "bwrap" else 0  # bwrap's own two processes
+        # a count of the box's processes is needed only where nothing else binds them: root's
+        # processes are not counted by RLIMIT_NPROC, and there is neither a cgroup nor a box uid
+        self.count = (os.getuid() == 0 or not sys.platform.startswith("linux")) and \
+            c.cgroup is None and c.uid is None
+
+    def run(self, launch: _Launch, res_r: int, out_r: int, go_w: int) -> BoxResult:
+        self.go_w = go_w
+        was_dumpable = _prctl(PR_GET_DUMPABLE)
+        was_subreaper = _get_subreaper()
+        set_subreaper(True)
+        _prctl(PR_SET_DUMPABLE, 0)  # /proc/<checker>/mem, environ: closed to the student
+        self.before = _my_children()
+        emptied = False
+        try:
+            self._start(launch, res_r, out_r)
+            self._watch()
+            self._empty()
+            emptied = True
+            self._drain(res_r, out_r)
+            self._cgroup_verdict()
+        finally:
+            if self.proc is not None and not emptied:  # Ctrl-C or an error of ours: the box too
+                _kill_box(self.proc, self.before, self.c)
+            if self.sel is not None:
+                self.sel.close()
+            set_subreaper(bool(was_subreaper))
+            if was_dumpable > 0:
+                _prctl(PR_SET_DUMPABLE, was_dumpable)
+        return self._finish()
+
+    def _nproc(self) -> int:
+        """RLIMIT_NPROC: a box uid runs nothing else, so it counts the box exactly; with a
+        cgroup it is set a little above pids.max, so that the cgroup refuses the fork first and
+        counts it."""
+        if self.c.uid is None:
+            return _nproc(self.limits)
+        return self.limits.processes + 1 + self.extra + (8 if self.c.cgroup is not None else 0)
+
+    def _start(self, launch: _Launch, res_r: int, out_r: int) -> None:
+        res_w, out_w = launch.child_fds[:2]
+        self.proc = subprocess.Popen(
+            launch.cmd, stdin=subprocess.DEVNULL, stdout=out_w, stderr=out_w, cwd=launch.cwd,
+            env=launch.env, pass_fds=(res_w, *launch.child_fds[2:]), close_fds=True,
+            start_new_session=True,
+            preexec_fn=functools.partial(_preexec, self.limits, self._nproc(), launch.drop_caps,
+                                         _cap_last(), self.c))
+        for fd in launch.child_fds:  # the parent keeps only the reading ends
+            os.close(fd)
+            self.owned.remove(fd)
+        self.sel = selectors.DefaultSelector()
+        self.sel.register(res_r, selectors.EVENT_READ, "res")
+        self.sel.register(out_r, selectors.EVENT_READ, "out")
+
+    def _watch(self) -> None:
+        """Until the deadline, a limit, or the runner's end (its pipes closed, or 0.2 s after
+        it exited while a child of the student's holds them)."""
+        deadline = time.monotonic() + self.limits.time
+        next_count = time.monotonic() + COUNT_EVERY
+        while True:
+            now = time.monotonic()
+            if now >= deadline:
+                self.hit = "timeout"
+                return
+            self._read(min(_POLL, deadline - now))
+            if self.hit:
+                return
+            self._runner_done()
+            now = time.monotonic()
+            if self._runner_gone(now):
+                return
+            if self.count and now >= next_count:
+                next_count = now + COUNT_EVERY
+                if self._too_many():
+                    self.hit = "process-limit"
+                    return
+
+    def _read(self, timeout: float) -> None:
+        assert self.sel is not None
+        for key, _ in self.sel.select(timeout=timeout):
+            data = os.read(key.fd, 1 << 16)
+            if not data:
+                self.sel.unregister(key.fd)
+                self.open_pipes -= 1
+            elif key.data == "out":
+                self._output(data)
+                if self.result.output_bytes > self.limits.output:
+                    self.hit = "output-limit"
+            elif not self.hit:
+                self._feed(data)
+
+    def _output(self, data: bytes) -> None:
+        self.result.output_bytes += len(data)
+        self.tail += data
+        del self.tail[:-self.KEEP]
+
+    def _feed(self, data: bytes) -> None:
+        try:
+            self.reader.feed(data)
+        except Refused as exc:
+            self.refused = str(exc)
+            self.hit = self.hit or "result-refused"
+
+    def _runner_done(self) -> None:
+        """Once the runner said its last word and waits: what else runs, the student left."""
+        if self.left is not None or self.go_w is None or not (
+                self.reader.done or self.reader.problem is not None):
+            return
+        assert self.proc is not None
+        self.left = _left_behind(self.proc, self.before, self.c)
+        os.close(self.go_w)
+        self.owned.remove(self.go_w)
+        self.go_w = None
+
+    def _runner_gone(self, now: float) -> bool:
+        """The runner is gone: its pipes close unless a child of the student's holds them."""
+        assert self.proc is not None
+        if self.proc.poll() is None:
+            return False
+        self.exited_at = self.exited_at or now
+        return self.open_pipes == 0 or now - self.exited_at > 0.2
+
+    def _too_many(self) -> bool:
+        assert self.proc is not None
+        n = len(box_processes(self.proc.pid, self.before))
+        return n - self.extra > self.limits.processes  # under bwrap two bwrap processes stand
+        # above the student's
+
+    def _empty(self) -> None:
+        """Kill every process of the box; count what the student left.  The runner is still
+        alive when the box's first process is (basic) or when anything is (bwrap: the PID
+        namespace ends with the runner)."""
+        assert self.proc is not None
+        runner_alive = self.proc.poll() is None
+        found = _kill_box(self.proc, self.before, self.c)
+        if self.left is not None:
+            self.result.killed = self.left
+            return
+        runner = runner_alive if self.backend == "basic" else bool(found)
+        self.result.killed = max(0, found - (1 if runner else 0))
+
+    def _drain(self, res_r: int, out_r: int) -> None:
+        """Every writer is dead: what is left in the pipes is all there will be."""
+        for fd in (res_r, out_r):
+            os.set_blocking(fd, False)
+            while True:
+                try:
+                    data = os.read(fd, 1 << 16)
+                except BlockingIOError:
+                    break
+                if not data:
+                    break
+                if fd == out_r:
+                    self._output(data)
+                elif self.refused:
+                    break  # refused already: the rest is not read
+                else:
+                    self._feed(data)
+        assert self.proc is not None
+        self.result.returncode = self.proc.returncode
+
+    def _cgroup_verdict(self) -> None:
+        cg = self.c.cgroup
+        if cg is None:
+            return
+        self.result.memory_peak = cg.memory_peak()
+        if not self.hit and cg.memory_killed():
+            self.hit = "memory-limit"
+        elif not self.hit and cg.fork_refused():
+            self.hit = "process-limit"
+
+    def _finish(self) -> BoxResult:
+        result, reader = self.result, self.reader
+        result.output = self.tail.decode("utf-8", errors="replace")
+        result.results = reader.results
+        result.problem = reader.problem
+        result.seconds = time.perf_counter() - self.t0
+        for ev in reader.events:
+            if ev.get("t") == "uses-checker":
+                result.uses_checker = True
+            elif ev.get("t") == "done":
+                result.import_seconds = ev.get("import_seconds")
+                result.run_seconds = ev.get("run_seconds")
+            elif ev.get("t") == "result" and result.returned is None:
+                result.returned = ev.get("returned")
+        result.failure, result.detail = _failure(result, self.hit, self.refused, reader,
+                                                 self.limits)
+        return result
+
+
+def _failure(result: BoxResult, hit: str | None, refused: str | None, reader: FrameReader,
+             limits: Limits) -> tuple[str | None, str]:
+    """The failure code of a box, most telling first."""
+    if hit == "result-refused":
+        return hit, f"the result channel carried {refused}"
+    if hit == "output-limit":
+        return hit, f"more than {limits.output} bytes printed"
+    if hit == "process-limit":
+        return hit, f"more than {limits.processes} processes at once"
+    if hit == "memory-limit":
+        return hit, (f"the box's processes together used more than {limits.memory:,} bytes "
+                     f"(memory, tmpfs files and memfds, counted by its {result.limit_backend})")
+    if result.uses_checker and not reader.done:
+        return "uses-checker", "an import of the checker's package was attempted"
+    problem = reader.problem
+    if problem is not None:
+        limit = problem.get("limit")
+        if limit in ("memory", "file", "process"):
+            return f"{limit}-limit", f"{problem.get('exception')} in the student's code"
+        return problem["kind"], ""
+    if hit == "timeout":
+        return "timeout", f"still running after {limits.time:g} s"
+    if reader.done:
+        return ("uses-checker", "") if result.uses_checker else (None, "")
+    # the runner ended without a last frame: which limit, if any, killed it
+    rc = result.returncode
+    text = result.output[-4000:]
+    if rc == -signal.SIGXFSZ:
+        return "file-limit", "killed by SIGXFSZ (file size limit)"
+    if rc == -signal.SIGXCPU:
+        return "timeout", "killed at the CPU-time limit"
+    if "MemoryError" in text or "Cannot allocate memory" in text or "std::bad_alloc" in text \
+            or "failed to allocate" in text.lower():
+        return "memory-limit", "the process ran out of its address space"
+    if "Resource temporarily unavailable" in text:
+        return "process-limit", "fork() refused"
+    return "crashed", f"exit status {rc}"

@@ -1,0 +1,211 @@
+"""Processes: prctl (subreaper, dumpable, death signal), the process table (psutil), a box's
+processes, and the checked kill that empties a box."""
+
+from __future__ import annotations
+
+import ctypes
+import functools
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Set as AbstractSet
+from typing import TYPE_CHECKING
+
+import psutil
+
+if TYPE_CHECKING:
+    from gpsaccel.sandbox.limits import _Confinement
+
+# psutil.process_iter keeps its Process objects between calls, each with a lock: a thread of the
+# parent (a watcher, a second pool) may hold one at the moment of a fork, and the forked item
+# would wait on it for ever.  The forked child starts with an empty cache instead.
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=psutil.process_iter.cache_clear)
+
+
+@functools.lru_cache(maxsize=1)
+def _libc() -> ctypes.CDLL | None:
+    if not sys.platform.startswith("linux"):
+        return None
+    try:
+        return ctypes.CDLL(None, use_errno=True)
+    except OSError:
+        return None
+
+
+PR_SET_PDEATHSIG, PR_GET_DUMPABLE, PR_SET_DUMPABLE = 1, 3, 4
+PR_CAPBSET_DROP, PR_SET_NO_NEW_PRIVS = 24, 38
+PR_SET_CHILD_SUBREAPER, PR_GET_CHILD_SUBREAPER = 36, 37
+
+
+def _prctl(option: int, arg: int = 0) -> int:
+    libc = _libc()
+    if libc is None:
+        return -1
+    return libc.prctl(ctypes.c_int(option), ctypes.c_ulong(arg), ctypes.c_ulong(0),
+                      ctypes.c_ulong(0), ctypes.c_ulong(0))
+
+
+def _get_subreaper() -> int:
+    libc = _libc()
+    if libc is None:
+        return 0
+    value = ctypes.c_int(0)
+    libc.prctl(ctypes.c_int(PR_GET_CHILD_SUBREAPER), ctypes.byref(value), ctypes.c_ulong(0),
+               ctypes.c_ulong(0), ctypes.c_ulong(0))
+    return value.value
+
+
+def set_subreaper(on: bool) -> bool:
+    """Make this process a child subreaper (orphans of its descendants become its children)."""
+    return _prctl(PR_SET_CHILD_SUBREAPER, int(on)) == 0
+
+
+def _proc_table() -> dict[int, tuple[int, str, str]]:
+    """pid -> (ppid, state, name) of every process this one can see (psutil: /proc on Linux, the
+    kernel's tables elsewhere); state is ``"Z"`` for a zombie, ``"X"`` for a dead one, else
+    ``"R"``."""
+    table: dict[int, tuple[int, str, str]] = {}
+    for p in psutil.process_iter(["ppid", "status", "name"]):
+        info = p.info
+        if info["ppid"] is None:
+            continue  # gone while it was read
+        status = info["status"]
+        state = "Z" if status == psutil.STATUS_ZOMBIE else "X" if status == psutil.STATUS_DEAD \
+            else "R"
+        table[p.pid] = (int(info["ppid"]), state, info["name"] or "")
+    return table
+
+
+def start_time(pid: int) -> float | None:
+    """When process ``pid`` started (s since the epoch), None when it is gone."""
+    try:
+        return psutil.Process(pid).create_time()
+    except psutil.Error:
+        return None
+
+
+def box_processes(first: int, adopted_from: set[int] | None) -> list[int]:
+    """Live processes of a box: descendants of ``first`` (itself included) and, when
+    ``adopted_from`` is given, every new child of this process (orphans it adopted as a subreaper)
+    with its descendants.  Zombies are not counted."""
+    table = _proc_table()
+    children: dict[int, list[int]] = {}
+    for pid, (ppid, _, _) in table.items():
+        children.setdefault(ppid, []).append(pid)
+    roots = [first] if first in table else []
+    if adopted_from is not None:
+        me = os.getpid()
+        roots += [p for p in children.get(me, []) if p != first and p not in adopted_from]
+    out, stack = [], list(roots)
+    while stack:
+        pid = stack.pop()
+        if pid in out:
+            continue
+        out.append(pid)
+        stack.extend(children.get(pid, []))
+    return [p for p in out if table.get(p, (0, "Z", ""))[1] not in ("Z", "X")]
+
+
+def _kill_box(proc: subprocess.Popen, before: set[int],
+              confinement: _Confinement | None = None) -> int:
+    """SIGKILL every process of the box (its process tree, its cgroup, its uid) until none is
+    alive; reap them.  Returns how many processes (bwrap's own not counted) were alive when the
+    kill began."""
+    found: int | None = None
+    for _ in range(200):
+        alive = set(box_processes(proc.pid, before))
+        if confinement is not None:
+            alive |= confinement.pids()
+        if found is None:
+            table = _proc_table()
+            found = sum(table.get(p, (0, "", ""))[2] != "bwrap" for p in alive)
+        if not alive:
+            break
+        for pid in alive:
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except (ProcessLookupError, PermissionError):
+                pass
+        if proc.poll() is None:
+            try:
+                proc.wait(timeout=0.05)
+            except subprocess.TimeoutExpired:
+                pass
+        _reap_adopted(before, proc.pid)
+    else:  # pragma: no cover - a box that outlives 200 rounds of SIGKILL
+        raise RuntimeError(f"the sandbox could not kill processes {alive}")
+    proc.wait()
+    _reap_adopted(before, proc.pid)
+    return found or 0
+
+
+def _reap_adopted(before: set[int], first: int) -> None:
+    """waitpid every exited child of this process that the box left (orphans adopted)."""
+    for pid, (ppid, state, _) in _proc_table().items():
+        if ppid == os.getpid() and pid not in before and pid != first and state in ("Z", "X"):
+            try:
+                os.waitpid(pid, os.WNOHANG)
+            except ChildProcessError:
+                pass
+
+
+def _my_children() -> set[int]:
+    me = os.getpid()
+    return {pid for pid, (ppid, _, _) in _proc_table().items() if ppid == me}
+
+
+def orphans(keep: AbstractSet[int]) -> list[int]:
+    """Live processes under this one, except ``keep`` (the running items, and the children this
+    process had before) and theirs: what a dead item's box left behind (re-parented here, the
+    subreaper), with their descendants."""
+    table = _proc_table()
+    children: dict[int, list[int]] = {}
+    for pid, (ppid, _, _) in table.items():
+        children.setdefault(ppid, []).append(pid)
+    stack = [p for p in children.get(os.getpid(), []) if p not in keep]
+    out: list[int] = []
+    while stack:
+        pid = stack.pop()
+        if pid not in out:
+            out.append(pid)
+            stack.extend(children.get(pid, []))
+    return [p for p in out if table[p][1] not in ("Z", "X")]
+
+
+def _reap_zombies(keep: AbstractSet[int]) -> None:
+    me = os.getpid()
+    for pid, (ppid, state, _) in _proc_table().items():
+        if ppid == me and pid not in keep and state in ("Z", "X"):
+            try:
+                os.waitpid(pid, os.WNOHANG)
+            except ChildProcessError:
+                pass
+
+
+def sweep(keep: AbstractSet[int] = frozenset()) -> int:
+    """Kill (SIGKILL, until a scan finds none) every process under this one except ``keep`` and
+    theirs; returns how many were killed."""
+    killed: set[int] = set()
+    for _ in range(200):
+        alive = orphans(keep)
+        if not alive:
+            break
+        for pid in alive:
+            try:
+                os.kill(pid, signal.SIGKILL)
+                killed.add(pid)
+            except (ProcessLookupError, PermissionError):
+                pass
+        time.sleep(0.01)
+        _reap_zombies(keep)
+    _reap_zombies(keep)
+    return len(killed)
+
+
+def set_dumpable(on: bool) -> None:
+    """Open or close /proc/<this>/mem, environ, ... to processes of the same user (a process that
+    holds answers while a student's code runs elsewhere closes them)."""
+    _prctl(PR_SET_DUMPABLE, int(on))
