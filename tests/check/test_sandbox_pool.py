@@ -1,0 +1,80 @@
+"""The sandbox's one pool (gpsaccel.sandbox.run_items): each item's own result or the reason it has
+none, a deadline forked or on an executor (the path Dask takes), nothing left running."""
+
+from __future__ import annotations
+
+import os
+import time
+
+import psutil
+import pytest
+
+from gpsaccel import sandbox as sb
+
+
+def _task(item: str) -> dict:
+    if item == "raise":
+        raise RuntimeError("a bug of the task")
+    if item == "exit":
+        os._exit(3)
+    if item == "hang":
+        time.sleep(60)
+    if item == "orphan":  # a grandchild that outlives its item: the pool sweeps it
+        if os.fork() == 0:
+            time.sleep(60)
+            os._exit(0)
+    return {"item": item, "pid": os.getpid()}
+
+
+def _run(items: list[str], executor: object = None, deadline: float = 30) -> dict[int, object]:
+    out: dict[int, object] = {}
+    sb.run_items(_task, items, 2, deadline, out.__setitem__, executor)
+    return out
+
+
+def test_forked_items_each_get_their_result_or_the_reason_they_have_none():
+    out = _run(["a", "raise", "exit", "b"])
+    assert out[0]["item"] == "a" and out[3]["item"] == "b"
+    assert out[0]["pid"] != os.getpid() != out[3]["pid"]  # each in a process of its own
+    assert out[1] == sb.Lost("error", "RuntimeError: a bug of the task")
+    assert out[2] == sb.Lost("died", "exit status 3")
+
+
+def test_a_forked_item_past_its_deadline_is_killed_and_the_others_go_on():
+    out = _run(["hang", "a"], deadline=1.0)
+    assert out[0] == sb.Lost("too-long", "1 s")
+    assert out[1]["item"] == "a"
+
+
+def test_what_an_item_left_running_is_swept():
+    before = {p.pid for p in psutil.Process().children(recursive=True)}
+    out = _run(["orphan"])
+    assert out[0]["item"] == "orphan"
+    left = {p.pid for p in psutil.Process().children(recursive=True)} - before
+    assert not left
+
+
+def test_an_executor_has_the_same_deadline():
+    """The path of --dask (any executor): an item past its deadline is reported, not waited for
+    (before, a Dask run had no deadline at all)."""
+    out = _run(["a", "raise"], executor="threads")
+    assert out[0]["item"] == "a" and out[1] == sb.Lost("error", "RuntimeError: a bug of the task")
+    out = _run(["a"], executor="inprocess", deadline=1.0)
+    assert out[0]["item"] == "a"
+
+
+def test_an_executor_item_past_its_deadline_is_lost():
+    def slow(item: str) -> str:
+        time.sleep(3)
+        return item
+
+    out: dict[int, object] = {}
+    sb.run_items(slow, ["x"], 1, 0.5, out.__setitem__, "threads")
+    assert out == {0: sb.Lost("too-long", "0.5 s")}
+
+
+@pytest.mark.parametrize("bad", [{"jobs": 0}, {"deadline": 0}])
+def test_bad_arguments_are_named(bad):
+    kwargs = {"jobs": 1, "deadline": 1.0, **bad}
+    with pytest.raises(ValueError, match=next(iter(bad))):
+        sb.run_items(_task, ["a"], kwargs["jobs"], kwargs["deadline"], lambda i, o: None)
