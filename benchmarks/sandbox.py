@@ -1,87 +1,105 @@
-"""What the homework checker's sandbox costs per check, per backend, side by side in one run.
+"""What the homework checker's sandbox costs per check, per backend, in CPU seconds, side by side.
 
 A trivial submission (``f(z)`` returns ``z``) is run in a box with 1 call and with 200 calls (a
-check's usual number of runs), alternating the backends, 7 times each; the table shows the median
-wall time, and, as the floor any checker that runs students in a separate Python pays, a bare
-``python -I -S -c "import numpy"`` (one BLAS thread, as in a box).  The sandbox's overhead is a
-box's time minus that floor.
+check's usual number of runs), alternating the backends, ``--repeats`` times each (7).  Each box is
+measured in CPU seconds, children included: the box's processes (bwrap, the runner: this process's
+children, RUSAGE_CHILDREN) plus the supervising checker's own (RUSAGE_SELF).  The floor any
+checker that runs students in a separate Python pays is a bare ``python -I -S -c "import numpy"``
+(one BLAS thread, as in a box), measured the same way.  The sandbox's overhead is a box's CPU
+minus that floor.  CPU, not wall time: on a shared machine the wall time measures the other
+users (an earlier wall-clock version printed negative overheads under load); the load average
+before and after is printed with the table.
 
-``--before DIR`` also times the sandbox of an earlier version, in the same run, alternated with
-this one: DIR holds that version's ``gpsaccel/sandbox/`` and ``_runner.py`` (e.g.
-``git archive main gpsaccel | tar -x -C DIR``), loaded as a module of its own.
+``--before DIR`` also measures an earlier version (DIR holds its ``gpsaccel/``, e.g. ``git archive
+main gpsaccel | tar -x -C DIR``): this script is run again in a child Python with DIR first on
+its path, right after this one, and its table printed below (its sandbox is
+``gpsaccel.sandbox``, or ``gpsaccel.check.sandbox`` before the layer existed).
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib.util
+import os
+import resource
 import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 
-from gpsaccel import sandbox as sb
-from gpsaccel.sandbox.confinement import _site_dirs
+try:
+    from gpsaccel import sandbox as sb
+    from gpsaccel.sandbox.confinement import _site_dirs
+except ImportError:  # an earlier version (--before): the sandbox was a module of check/
+    from gpsaccel.check import sandbox as sb  # type: ignore[no-redef]
 
-REPEATS = 7
+    _site_dirs = sb._site_dirs
+
+
+def cpu() -> float:
+    """CPU seconds of this process and its reaped children."""
+    s, c = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return s.ru_utime + s.ru_stime + c.ru_utime + c.ru_stime
 
 
 def _bare() -> float:
     code = f"import sys; sys.path.extend({_site_dirs()!r}); import numpy"
-    t = time.perf_counter()
+    c0 = cpu()
     subprocess.run([sys.executable, "-I", "-S", "-B", "-c", code], check=True,
                    env={"OPENBLAS_NUM_THREADS": "1", "PATH": "/usr/bin:/bin"})
-    return time.perf_counter() - t
+    return cpu() - c0
 
 
-def _load(root: str):  # noqa: ANN202 - a module
-    spec = importlib.util.spec_from_file_location(
-        "sandbox_before", Path(root) / "gpsaccel" / "check" / "sandbox.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up there
-    spec.loader.exec_module(module)
-    return module
-
-
-def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--before", metavar="DIR", default=None,
-                        help="a folder holding an earlier gpsaccel/sandbox/ to compare")
-    args = parser.parse_args(argv)
-    versions = {"now": sb}
-    if args.before:
-        versions = {"before": _load(args.before), "now": sb}
+def measure(repeats: int) -> None:
     backends = ["basic"] + (["bwrap"] if sb.bwrap_path() else [])
+    load0 = os.getloadavg()[0]
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "student.py"
         path.write_text("def f(z):\n    return z\n")
         z = np.zeros((151, 2))
         times: dict[str, list[float]] = {"bare python + numpy": []}
-        for v in versions:
-            for b in backends:
-                for n in (1, 200):
-                    times[f"{v}: {b}, {n} call(s)"] = []
-        for _ in range(REPEATS):
+        for b in backends:
+            for n in (1, 200):
+                times[f"{b}, {n} call(s)"] = []
+        for _ in range(repeats):
             times["bare python + numpy"].append(_bare())
             for b in backends:
                 for n in (1, 200):
-                    for v, m in versions.items():
-                        sub = m.load_submission(path, "f")
-                        calls = [m.Call("f", (z,), (m.Output("z", (151, 2)),))] * n
-                        t = time.perf_counter()
-                        box = m.run(sub, calls, backend=b)
-                        times[f"{v}: {b}, {n} call(s)"].append(time.perf_counter() - t)
-                        assert box.failure is None, box
+                    sub = sb.load_submission(path, "f")
+                    calls = [sb.Call("f", (z,), (sb.Output("z", (151, 2)),))] * n
+                    c0 = cpu()
+                    box = sb.run(sub, calls, sb.Limits(), b)
+                    times[f"{b}, {n} call(s)"].append(cpu() - c0)
+                    assert box.failure is None, box
     floor = statistics.median(times["bare python + numpy"])
-    print(f"{'':30} {'median ms':>10} {'overhead ms':>12}   ({REPEATS} repeats, alternated)")
+    print(f"{sb.__name__}: {os.cpu_count()} CPUs, load average {load0:.1f} before, "
+          f"{os.getloadavg()[0]:.1f} after; median of {repeats} (alternated), CPU ms children "
+          f"included")
+    print(f"{'':30} {'CPU ms':>8} {'overhead ms':>12} {'ratio':>6}")
     for name, ts in times.items():
         med = statistics.median(ts)
-        over = "" if name.startswith("bare") else f"{1e3 * (med - floor):12.0f}"
-        print(f"{name:30} {1e3 * med:10.0f} {over:>12}")
+        over = "" if name.startswith("bare") else f"{1e3 * (med - floor):12.0f} {med / floor:6.2f}"
+        print(f"{name:30} {1e3 * med:8.0f} {over}")
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0])
+    parser.add_argument("--before", metavar="DIR", default=None,
+                        help="a folder holding an earlier gpsaccel/ to measure after this one")
+    parser.add_argument("--repeats", type=int, default=7, help="boxes per row (default 7)")
+    args = parser.parse_args(argv)
+    if args.repeats < 1:
+        parser.error(f"--repeats must be >= 1, got {args.repeats}")
+    if args.before and not (Path(args.before) / "gpsaccel" / "__init__.py").is_file():
+        parser.error(f"--before: {args.before} holds no gpsaccel/ package")
+    measure(args.repeats)
+    if args.before:
+        print(f"\nbefore ({args.before}):", flush=True)
+        env = {**os.environ, "PYTHONPATH": os.path.abspath(args.before)}
+        subprocess.run([sys.executable, __file__, "--repeats", str(args.repeats)], check=True,
+                       env=env, cwd=args.before)
 
 
 if __name__ == "__main__":
