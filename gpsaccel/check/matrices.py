@@ -290,17 +290,7 @@ def model_matrices(Phi: object = None, Gamma: object = None, H: object = None, V
     if not given:
         report.add("nothing-to-check", "No matrix was passed: call model_matrices(Phi=..., "
                    "Gamma=..., H=..., V=..., W=..., M0=...) with the ones you use.")
-    try:
-        step = float(dt)
-    except (TypeError, ValueError):
-        step = float("nan")
-    valid = (model.dt, model.gps_interval)
-    if not any(math.isclose(step, s, rel_tol=1e-9) for s in valid):
-        report.add("dt", f"dt = {dt!r}: the accelerometer interval is Δt = {model.dt:g} s "
-                   f"({1 / model.dt:g} Hz); a filter that steps only at GPS times uses the GPS "
-                   f"interval {model.gps_interval:g} s (report 001 writes 0.02 s). Checking "
-                   f"against Δt = {model.dt:g} s.")
-        step = model.dt
+    step = _step(report, dt, model)
     step_is_gps = math.isclose(step, model.gps_interval, rel_tol=1e-9)
     meaning = {
         "Phi": ((3, 3), "Φ maps the state [δp, δv, b] to the next step", ()),
@@ -321,6 +311,36 @@ def model_matrices(Phi: object = None, Gamma: object = None, H: object = None, V
         arr = _shape(report, name, arr, want, text, also)
         if arr is not None:
             arrays[name] = arr
+    _check_arrays(report, arrays, step, step_is_gps, model)
+    report.details = {"dt": step, "checked": sorted(arrays)}
+    if report.passed:
+        report.add("ok", f"{', '.join(sorted(arrays))}: every element matches the problem "
+                   f"(Δt = {step:g} s, relative tolerance {RTOL:g}).", "note")
+    report.sort()
+    report.seconds = time.perf_counter() - t0
+    return report
+
+
+def _step(report: Report, dt: float, model: CalibrationModel) -> float:
+    """The step the student's matrices are for: ``dt`` when it is Δt or the GPS interval, else
+    Δt with a finding."""
+    try:
+        step = float(dt)
+    except (TypeError, ValueError):
+        step = float("nan")
+    valid = (model.dt, model.gps_interval)
+    if not any(math.isclose(step, s, rel_tol=1e-9) for s in valid):
+        report.add("dt", f"dt = {dt!r}: the accelerometer interval is Δt = {model.dt:g} s "
+                   f"({1 / model.dt:g} Hz); a filter that steps only at GPS times uses the GPS "
+                   f"interval {model.gps_interval:g} s (report 001 writes 0.02 s). Checking "
+                   f"against Δt = {model.dt:g} s.")
+        step = model.dt
+    return step
+
+
+def _check_arrays(report: Report, arrays: dict[str, np.ndarray], step: float, step_is_gps: bool,
+                  model: CalibrationModel) -> None:
+    """Each matrix that has the right shape, against the problem's."""
     if "Phi" in arrays:
         _check_phi(report, arrays["Phi"], step, model)
     if "Gamma" in arrays:
@@ -342,13 +362,6 @@ def model_matrices(Phi: object = None, Gamma: object = None, H: object = None, V
             check(report, arrays[name], model)
     if "Q" in arrays:
         _check_Q(report, arrays["Q"], step, model)
-    report.details = {"dt": step, "checked": sorted(arrays)}
-    if report.passed:
-        report.add("ok", f"{', '.join(sorted(arrays))}: every element matches the problem "
-                   f"(Δt = {step:g} s, relative tolerance {RTOL:g}).", "note")
-    report.sort()
-    report.seconds = time.perf_counter() - t0
-    return report
 
 
 def assert_model_matrices(**kwargs: Any) -> Report:

@@ -233,15 +233,10 @@ class Problem:
         """A filterpy filter keeps x as a column: an output of shape ``declared + (1,)`` is
         filterpy's own and is accepted (the box is run again declaring that shape, the axis is
         dropped) with a note.  Any other box comes back as it is."""
-        p = box.problem or {}
-        shapes = p.get("shapes") or {}
-        if box.failure != "wrong-shape" or not isinstance(p.get("call"), int):
+        found = _column_outputs(box, calls)
+        if found is None:
             return box
-        outs = calls[p["call"]].outputs
-        column = {o.name for o in outs if tuple(shapes.get(o.name) or ()) == tuple(o.shape) + (1,)}
-        if not column or any(tuple(shapes.get(o.name) or ()) != tuple(o.shape)
-                             for o in outs if o.name not in column):
-            return box
+        column, outs = found
         wide = [Call(c.function, c.args, tuple(
             Output(o.name, tuple(o.shape) + (1,), o.dtype) if o.name in column else o
             for o in c.outputs)) for c in calls]
@@ -256,6 +251,22 @@ class Problem:
             report.add("filterpy-column", MESSAGES["filterpy-column"].format(
                 name=name, shape=tuple(o.shape) + (1,), wanted=tuple(o.shape)), "note")
         return again
+
+
+def _column_outputs(box: sb.BoxResult, calls: list[Call]
+                    ) -> tuple[set[str], tuple[Output, ...]] | None:
+    """The outputs a box returned as filterpy's columns (declared shape + (1,)) when that is its
+    only wrong shape, with the call's outputs; None otherwise."""
+    p = box.problem or {}
+    shapes = p.get("shapes") or {}
+    if box.failure != "wrong-shape" or not isinstance(p.get("call"), int):
+        return None
+    outs = calls[p["call"]].outputs
+    column = {o.name for o in outs if tuple(shapes.get(o.name) or ()) == tuple(o.shape) + (1,)}
+    if not column or any(tuple(shapes.get(o.name) or ()) != tuple(o.shape)
+                         for o in outs if o.name not in column):
+        return None
+    return column, outs
 
 
 def _nan_finding(report: Report, fname: str, name: str, arr: np.ndarray, t: np.ndarray,
