@@ -34,7 +34,8 @@ The class (:func:`grade`):
   which questions, when.  It holds no answer; keep it from students all the same (with the
   secret it reproduces their data);
 * ``student=ID`` regrades one student with the recorded seed and updates its row;
-* ``dask=...`` sends each notebook to a Dask cluster (same function, same seed: same grades).
+* ``dask=...`` sends each notebook to a Dask cluster (same function, same seed: same grades)
+  through the same pool and with the same deadline (:func:`gpsaccel.sandbox.run_items`).
 """
 
 from __future__ import annotations

@@ -6,7 +6,8 @@ its helpers and data; see :func:`gpsaccel.sandbox.load_submission`).  A file giv
 command line is one submission.  A helper module inside a student's folder is part of that
 submission, never a failing submission of its own.
 
-How the batch runs (:func:`check_many` with the default ``executor="processes"``): each check
+How the batch runs (:func:`check_many` with the default ``executor="processes"``), through the
+sandbox's one pool (:func:`gpsaccel.sandbox.run_items`, which grading uses too): each check
 runs in a process of its own, forked for that one file (``--workers 1`` too), which runs the
 student's box, then computes the optimal answer, then hands back a plain dictionary over a pipe and
 exits.  So:
@@ -22,7 +23,8 @@ exits.  So:
 
 ``executor=None`` checks the files one after the other in this process (each still in its box);
 a Dask specification (``"dask-local"``, ``"tcp://..."``) or an ``Executor`` sends each check to
-that executor (its workers run the boxes; a worker killed by a student is then Dask's to handle).
+that executor (its workers run the boxes; a worker killed by a student is then Dask's to handle),
+with the same deadline per check (:data:`CHECK_SLACK` beyond the time limit).
 """
 
 from __future__ import annotations
