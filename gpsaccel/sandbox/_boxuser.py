@@ -96,7 +96,9 @@ def release(lock: int) -> None:
 
 
 def uid_pids(uid: int) -> set[int]:
-    """Live processes any of whose uids (real, effective, saved, file system) is ``uid``."""
+    """Live processes any of whose uids (real, effective, saved, file system) is ``uid``.  Read
+    from /proc by hand: psutil's ``uids()`` has no file-system uid, which a box process may keep
+    (``setfsuid``) while its other uids change."""
     out = set()
     for entry in os.scandir("/proc"):
         if not entry.name.isdigit():
