@@ -29,10 +29,14 @@ from pathlib import Path
 
 import numpy as np
 
-try:
+import gpsaccel
+
+# which sandbox is gpsaccel's own (an editable install's finder would hand an earlier version
+# the current layer, so look at the package's folder): the layer, or before it a module of check/
+if (Path(gpsaccel.__file__).parent / "sandbox").is_dir():
     from gpsaccel import sandbox as sb
     from gpsaccel.sandbox.confinement import _site_dirs
-except ImportError:  # an earlier version (--before): the sandbox was a module of check/
+else:  # an earlier version (--before)
     from gpsaccel.check import sandbox as sb  # type: ignore[no-redef]
 
     _site_dirs = sb._site_dirs

@@ -74,9 +74,10 @@ runner's own: ``import-error``, ``no-function``, ``exception``, ``return-value``
 Layout (each module under 500 lines): :mod:`.spec` (what to run, what comes back),
 :mod:`.submission` (a student's files, walked and checked), :mod:`.channel` (the result channel),
 :mod:`.confinement` (the backends, what a box sees, box folders), :mod:`.limits` (rlimits, the box's
-cgroup and uid: :mod:`._cgroup`, :mod:`._boxuser`), :mod:`.procs` (prctl, the process table through
-psutil, the checked kill), :mod:`.box` (one box run and supervised), :mod:`.pool` (a class's items).
-The layer imports nothing of gpsaccel above it: it knows neither the checks nor the homework.
+cgroup and uid: :mod:`._cgroup`, :mod:`._boxuser`), :mod:`.procs` (prctl, the process table: /proc
+on Linux, psutil elsewhere; the checked kill), :mod:`.box` (one box run and supervised),
+:mod:`.pool` (a class's items).  The layer imports nothing of gpsaccel above it: it knows
+neither the checks nor the homework.
 """
 
 from __future__ import annotations

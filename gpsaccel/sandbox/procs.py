@@ -1,4 +1,4 @@
-"""Processes: prctl (subreaper, dumpable, death signal), the process table (psutil), a box's
+"""Processes: prctl (subreaper, dumpable, death signal), the process table (/proc, psutil), a box's
 processes, and the checked kill that empties a box."""
 
 from __future__ import annotations
@@ -64,9 +64,31 @@ def set_subreaper(on: bool) -> bool:
 
 
 def _proc_table() -> dict[int, tuple[int, str, str]]:
-    """pid -> (ppid, state, name) of every process this one can see (psutil: /proc on Linux, the
-    kernel's tables elsewhere); state is ``"Z"`` for a zombie, ``"X"`` for a dead one, else
-    ``"R"``."""
+    """pid -> (ppid, state, name) of every process this one can see; state is ``"Z"`` for a
+    zombie, ``"X"`` for a dead one.  On Linux read from /proc/<pid>/stat directly: the checked
+    kill scans the table several times per box, and psutil's generic objects cost three times
+    the CPU for it (benchmarks/sandbox.py); elsewhere psutil (macOS, the BSDs)."""
+    if not os.path.isdir("/proc/self"):
+        return _psutil_table()
+    table: dict[int, tuple[int, str, str]] = {}
+    for entry in os.scandir("/proc"):
+        if not entry.name.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry.name}/stat", "rb") as f:
+                raw = f.read()
+        except OSError:
+            continue
+        close = raw.rfind(b")")
+        rest = raw[close + 2:].split()
+        if close < 0 or len(rest) < 2:
+            continue  # the process went away while it was read
+        comm = raw[raw.find(b"(") + 1:close].decode(errors="replace")
+        table[int(entry.name)] = (int(rest[1]), rest[0].decode(), comm)
+    return table
+
+
+def _psutil_table() -> dict[int, tuple[int, str, str]]:
     table: dict[int, tuple[int, str, str]] = {}
     for p in psutil.process_iter(["ppid", "status", "name"]):
         info = p.info
