@@ -262,7 +262,6 @@ def _cmd_check(args: argparse.Namespace) -> int:
         table,
         write_json,
     )
-
     from gpsaccel.check.own import is_file_spec, load_problem
 
     if is_file_spec(args.problem) and args.dask is not None:
@@ -370,7 +369,11 @@ def _cmd_assignment(args: argparse.Namespace) -> int:
               leave=False, disable=None) as bar:  # on stderr, when it is a terminal
         bar.set_postfix_str("otter assign" + ("" if args.no_run_tests else " (testing the "
                                                                           "solution)"))
-        g = generate(name, args.out, run_tests=not args.no_run_tests)
+        try:
+            g = generate(name, args.out, run_tests=not args.no_run_tests)
+        except RuntimeError as exc:  # the master's own tests failed: otter's output says why
+            print(f"gpsaccel assignment: error: {exc}", file=sys.stderr)
+            return 1
         bar.update()
         if students is not None:
             assert secret is not None

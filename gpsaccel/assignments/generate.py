@@ -76,7 +76,7 @@ def use_folder(folder: str | os.PathLike) -> str:
     if name in registry.assignments() and name not in _FOLDERS:
         raise ValueError(f"assignment: {name!r} is a homework of the package; name your folder "
                          f"otherwise")
-    registry.add_assignment(name, f"gpsaccel_graded_{name}", title=f"{name} (from {path})")
+    registry.add_assignment(name, f"gpsaccel_graded_{name}", title=name)
     _FOLDERS[name] = path
     return name
 
@@ -187,6 +187,7 @@ def personalize(name: str, student_notebook: Path | str, students: list[str], se
     nb0 = nbformat.read(str(student_notebook), as_version=4)
     marked = [c for c in nb0.cells if c.cell_type == "code"
               and c.source.lstrip().lower().startswith(VARIANT_MARK)]
+    others = [p for p in Path(student_notebook).parent.iterdir() if p.name != f"{name}.ipynb"]
     if len(students) != len(set(students)):
         raise ValueError("students: the roster lists a student id twice")
     for sid in students:
@@ -196,6 +197,9 @@ def personalize(name: str, student_notebook: Path | str, students: list[str], se
             c.source = "\n".join(head + [f"VARIANT = {v!r}  # {sid}"])
         target = out / _safe_name(sid) / f"{name}.ipynb"
         target.parent.mkdir(parents=True, exist_ok=True)
+        for extra in others:  # what otter hands out beside the notebook (data, tests, files)
+            copy = shutil.copytree if extra.is_dir() else shutil.copy2
+            copy(extra, target.parent / extra.name)
         nbformat.write(nb0, str(target))
         if progress is not None:
             progress.set_postfix_str(sid[:40])

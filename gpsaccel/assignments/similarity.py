@@ -135,27 +135,35 @@ def answers(notebook: Path, questions: Sequence, draw) -> dict[str, str]:
     return out
 
 
-def _fingerprint(code: str, boilerplate=None):
+def _fingerprint(code: str):
     import copydetect
 
-    return copydetect.CodeFingerprint("answer.py", K, 1, boilerplate=boilerplate,
-                                      language="python", fp=io.StringIO(code))
+    return copydetect.CodeFingerprint("answer.py", K, 1, language="python",
+                                      fp=io.StringIO(code))
+
+
+def _drop(fp, common: set) -> None:
+    """Remove the class's common fingerprints from ``fp`` (copydetect's own boilerplate filter
+    assumes unique hashes; with every k-gram kept they repeat)."""
+    from copydetect.utils import get_token_coverage
+
+    fp.hashes = fp.hashes - common
+    fp.hash_idx = {h: i for h, i in fp.hash_idx.items() if h not in common}
+    fp.token_coverage = get_token_coverage(fp.hash_idx, fp.k, len(fp.filtered_code))
 
 
 def compare(codes: dict[str, str], question: str = "") -> list[Pair]:
     """The flagged pairs among ``codes`` (student -> normalised code of one question)."""
     import copydetect
-    import numpy as np
 
     codes = {s: c for s, c in codes.items() if c.strip()}
     prints = {s: _fingerprint(c) for s, c in codes.items()}
-    df = Counter(h for fp in prints.values() for h in set(fp.hashes.tolist()))
+    df = Counter(h for fp in prints.values() for h in fp.hashes)
     limit = max(COMMON_STUDENTS, math.ceil(COMMON_FRACTION * len(codes)))
-    common = np.array(sorted(h for h, n in df.items() if n > limit), dtype=np.int64)
-    if len(common):
-        prints = {s: _fingerprint(codes[s], boilerplate=common) for s in codes}
-    names = sorted(s for s, fp in prints.items() if len(fp.hashes) > 0
-                   and fp.token_coverage >= MIN_CHARS)
+    common = {h for h, n in df.items() if n > limit}
+    for fp in prints.values():
+        _drop(fp, common)
+    names = sorted(s for s, fp in prints.items() if fp.token_coverage >= MIN_CHARS)
     pairs = []
     for i, a in enumerate(names):
         for b in names[i + 1:]:

@@ -71,8 +71,8 @@ def load_problem(value: str) -> str:
         return found.name
     if name in registry.problems():
         return name
-    made = sorted(set(registry.problems()) - before) + sorted(
-        k for k, v in vars(module).items() if isinstance(v, Problem))
+    made = dict.fromkeys([*sorted(set(registry.problems()) - before),
+                          *(v.name for v in vars(module).values() if isinstance(v, Problem))])
     raise ValueError(f"problem: {file} defines no problem {name!r} (it defines "
                      f"{', '.join(made) or 'none'}: a check.Problem.linear(...) call or a "
                      f"variable holding a Problem)")
