@@ -325,8 +325,47 @@ def test_an_instructors_own_homework_is_handed_out_and_graded(tmp_path, capsys, 
     assert main(["grade", "class", "--assignment", "course/cv2d", "--secret-file", "secret",
                  "--roster", "roster.csv", "--seed", "3"]) == 0
     out = capsys.readouterr().out
-    assert "ann" in out and "similarity: 0 pair(s)" in out
+    # both handed in the master's solution (ben with one edit): the same code, flagged
+    assert "ann" in out and "q1: ann & ben" in out and "q2: ann & ben" in out
     rows = {r[0]: r for r in _rows(tmp_path / "class-grades" / "moodle.csv")}
     assert rows["Ann"][-1] == "10" and rows["Ben"][-1] == "4"
     feedback = (tmp_path / "class-grades" / "feedback" / "ben.txt").read_text()
     assert "std-as-variance" in feedback or "variance" in feedback
+
+
+# ------------------------------------------------------------------ variants
+def test_pick_covers_the_grid_except_the_public_point():
+    from gpsaccel.assignments.variants import pick
+
+    axes = {"a": (1, 2, 3), "b": (0.5, 1.5)}
+    got = [tuple(pick(n, axes, {"a": 2, "b": 1.5}).values()) for n in range(5)]
+    assert sorted(got) == sorted({(a, b) for a in (1, 2, 3) for b in (0.5, 1.5)} - {(2, 1.5)})
+    assert pick(7, axes, {"a": 9, "b": 0.5}) == pick(1, axes, {"a": 9, "b": 0.5})  # off-grid
+
+
+#: Largest number of pairs sharing a variant among 200 students that the test accepts, for the
+#: expected n(n-1)/2/|space| (Poisson): P(X > bound) < 1e-3 for each (one fixed secret: the
+#: figures are deterministic; the bound says what a fair draw gives).
+SHARED_BOUND = {"calibration": (9.96, 21), "ship": (1.66, 7), "tracker": (0.113, 2)}
+
+
+@pytest.mark.parametrize("name", sorted(SHARED_BOUND))
+def test_a_class_of_200_hardly_shares_a_variant_and_nobody_gets_the_public_one(name):
+    from collections import Counter
+
+    from gpsaccel.assignments.grading import assignment_module, student_variant
+    from gpsaccel.assignments.variants import expected_shared_pairs, size
+
+    mod = assignment_module(name)
+    axes = {"calibration": ("RATES_HZ",), "ship": ("MASSES_KG", "GPS_RATES_HZ"),
+            "tracker": ("RATES_HZ", "SIGMAS_A", "SIGMAS_P")}[name]
+    points = size({a: getattr(mod, a) for a in axes}) - 1  # the public point is never given
+    expected, bound = SHARED_BOUND[name]
+    assert expected_shared_pairs(200, points) == pytest.approx(expected, rel=1e-2)
+    secret = b"fixed-secret-for-the-variant-test"
+    got = Counter(tuple(sorted(student_variant(name, f"s{i:03d}", secret).items()))
+                  for i in range(200))
+    assert tuple(sorted(mod.DEFAULT_VARIANT.items())) not in got
+    assert sum(n * (n - 1) // 2 for n in got.values()) <= bound
+    first8 = [student_variant(name, f"s{i:03d}", secret) for i in range(8)]
+    assert len({tuple(sorted(v.items())) for v in first8}) == 8
