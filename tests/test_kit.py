@@ -303,7 +303,7 @@ def test_an_instructors_own_homework_is_handed_out_and_graded(tmp_path, capsys, 
     """The docs' course: otter assign of a master outside the package, per-student variants,
     grading in the sandbox with the problem of the instructor's file, the exports."""
     monkeypatch.chdir(tmp_path)
-    course = _course(tmp_path)
+    _course(tmp_path)
     (tmp_path / "secret").write_text("s" * 40)
     (tmp_path / "roster.csv").write_text("id,name,email\nann,Ann Lee,ann@u.edu\n"
                                          "ben,Ben Ng,ben@u.edu\n")
