@@ -365,7 +365,9 @@ def _cmd_assignment(args: argparse.Namespace) -> int:
             raise ValueError("--roster: per-student variants need the instructor's secret "
                              "(--secret-file FILE, or $GPSACCEL_GRADING_SECRET)")
     t0 = time.perf_counter()
-    with tqdm(total=1 + (len(students) if students else 0), desc=name, unit="step",
+    from gpsaccel.assignments.gradescope import build
+
+    with tqdm(total=2 + (len(students) if students else 0), desc=name, unit="step",
               leave=False, disable=None) as bar:  # on stderr, when it is a terminal
         bar.set_postfix_str("otter assign" + ("" if args.no_run_tests else " (testing the "
                                                                           "solution)"))
@@ -379,8 +381,12 @@ def _cmd_assignment(args: argparse.Namespace) -> int:
             assert secret is not None
             folder = personalize(name, g.student, [s.id for s in students], secret,
                                  g.out / "students", progress=bar)
+        bar.set_postfix_str("Gradescope autograder")
+        gradescope = build(name, g.out, students, secret)
+        bar.update()
     print(f"hand out:  {g.student}\ngrade with: gpsaccel grade SUBMISSIONS --assignment "
-          f"{args.name} (Gradescope: {g.autograder})\nsolution:  {g.solution}")
+          f"{args.name}\nGradescope: {gradescope} (scores computed outside the sandbox; "
+          f"otter's own zip: {g.autograder.name})\nsolution:  {g.solution}")
     if students is not None:
         print(f"per student: {folder}/<id>/{name}.ipynb ({len(students)} students)")
     print(f"{time.perf_counter() - t0:.1f} s")

@@ -369,3 +369,119 @@ def test_a_class_of_200_hardly_shares_a_variant_and_nobody_gets_the_public_one(n
     assert sum(n * (n - 1) // 2 for n in got.values()) <= bound
     first8 = [student_variant(name, f"s{i:03d}", secret) for i in range(8)]
     assert len({tuple(sorted(v.items())) for v in first8}) == 8
+
+
+# ------------------------------------------------------------------ Gradescope stand-in
+#: Ship question 1 answered honestly (6 points): what the honest submission hands in.
+_HONEST_UPDATE = """import numpy as np
+def update(x_bar, M, z, H, V):
+    rows = np.flatnonzero(~np.isnan(z))
+    if rows.size == 0:
+        return x_bar.copy(), M.copy()
+    Hr, Vr = H[rows], V[np.ix_(rows, rows)]
+    K = M @ Hr.T @ np.linalg.inv(Hr @ M @ Hr.T + Vr)
+    A = np.eye(len(x_bar)) - K @ Hr
+    return x_bar + K @ (z[rows] - Hr @ x_bar), A @ M @ A.T + K @ Vr @ K.T
+"""
+
+#: Forging notebooks: each answers nothing honestly and tries to get marks another way.
+_FORGERS = {
+    "patch otter and gpsaccel": """
+import os, glob
+try:
+    import otter
+    otter.Notebook.check = lambda self, *a, **k: None
+except Exception:
+    pass
+import gpsaccel
+for f in glob.glob(os.path.join(os.path.dirname(gpsaccel.__file__), "**", "*.py"), recursive=True):
+    try:
+        with open(f, "a") as h:
+            h.write("\\nraise SystemExit('forged')\\n")
+    except OSError:
+        pass
+update = lambda *a: None
+""",
+    "forge results": """
+import json, os
+forged = {"score": 1000, "tests": [{"name": "q1", "score": 6, "max_score": 6},
+                                   {"name": "q2", "score": 4, "max_score": 4}]}
+for d in ("{root}/results", "/autograder/results", "results", "."):
+    try:
+        os.makedirs(d, exist_ok=True)
+        with open(os.path.join(d, "results.json"), "w") as f:
+            json.dump(forged, f)
+    except OSError:
+        pass
+""",
+    "read the tests": """
+import glob, os
+found = ""
+for pattern in ("{root}/source/*", "{root}/source/homework/*/*", "/autograder/source/*"):
+    for f in glob.glob(pattern):
+        try:
+            found += open(f, errors="replace").read()
+        except OSError:
+            pass
+if "assignment" in found or "graded_questions" in found:
+    exec(compile('''HONEST''', "stolen", "exec"))
+""",
+}
+
+
+def _standin(tmp_path: Path, zip_path: Path, cell: str, email: str) -> Path:
+    """Gradescope's layout under a temporary root: the zip unpacked into source/, the notebook
+    in submission/, the metadata, an empty results/."""
+    import json
+    import zipfile
+
+    root = tmp_path / "autograder"
+    with zipfile.ZipFile(zip_path) as z:
+        z.extractall(root / "source")
+    (root / "submission").mkdir()
+    (root / "results").mkdir()
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [nbformat.v4.new_code_cell(cell.replace("{root}", str(root)))]
+    nbformat.write(nb, str(root / "submission" / "ship.ipynb"))
+    (root / "submission_metadata.json").write_text(json.dumps(
+        {"users": [{"email": email, "id": 1, "name": "A Student"}]}))
+    return root
+
+
+def _backends() -> list[str]:
+    from gpsaccel.check.sandbox import basic_is_safe, resolve_backend
+
+    out = ["bwrap"] if resolve_backend("auto") == "bwrap" else []
+    return out + (["basic"] if basic_is_safe() else [])  # basic: as root, the box user
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("backend", _backends())
+def test_gradescope_standin_honest_marks_and_no_forged_marks(tmp_path, backend):
+    import json
+    import zipfile
+
+    from gpsaccel.assignments.gradescope import build, run
+
+    secret = b"gradescope-standin-secret-0123456789"
+    roster = [Student("Ann", email="ann@u.edu"), Student("Ben", email="ben@u.edu", sis_id="7")]
+    zip_path = build("ship", tmp_path, roster, secret)
+    names = zipfile.ZipFile(zip_path).namelist()
+    assert {"setup.sh", "run_autograder", "config.json", "secret"} <= set(names)
+    assert any(n.startswith("gpsaccel-") and n.endswith(".whl") for n in names)
+    cases = {"honest": _HONEST_UPDATE, **{k: v.replace("HONEST", _HONEST_UPDATE)
+                                          for k, v in _FORGERS.items()}}
+    scores = {}
+    for i, (case, cell) in enumerate(cases.items()):
+        root = _standin(tmp_path / str(i), zip_path, cell, "ann@u.edu")
+        run(root, sandbox=backend)
+        written = json.loads((root / "results" / "results.json").read_text())
+        scores[case] = {t["name"]: t["score"] for t in written["tests"]}
+        assert written["score"] == sum(scores[case].values())
+        assert "expected" not in written["output"].lower() or case != "honest"
+    assert scores["honest"] == {"q1": 6.0, "q2": 0.0}, scores
+    for case in _FORGERS:
+        assert scores[case] == {"q1": 0.0, "q2": 0.0}, (case, scores[case])
+    # an account not on the roster is not graded on someone else's variant
+    root = _standin(tmp_path / "stranger", zip_path, _HONEST_UPDATE, "eve@u.edu")
+    assert run(root, sandbox=backend)["score"] == 0.0
