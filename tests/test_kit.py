@@ -445,6 +445,7 @@ def _standin(tmp_path: Path, zip_path: Path, cell: str, email: str) -> Path:
     nbformat.write(nb, str(root / "submission" / "ship.ipynb"))
     (root / "submission_metadata.json").write_text(json.dumps(
         {"users": [{"email": email, "id": 1, "name": "A Student"}]}))
+    (root / "source").chmod(0o700)  # what setup.sh does (chmod -R go-rwx /autograder/source)
     return root
 
 
