@@ -299,6 +299,14 @@ def test_the_wheel_in_a_fresh_environment_outside_the_repository(tmp_path):
     dist = instructor / "dist" / "calibration"
     mine = sorted((dist / "students").glob("*/calibration.ipynb"))
     assert len(mine) == 8 and (dist / "calibration-autograder.zip").is_file()
+    import zipfile  # the Gradescope zip carries a wheel rebuilt from the installed package
+
+    with zipfile.ZipFile(dist / "calibration-gradescope.zip") as z:
+        (carried,) = [n for n in z.namelist() if n.endswith(".whl")]
+        with zipfile.ZipFile(z.open(carried)) as w:
+            names = set(w.namelist())
+    assert "gpsaccel/assignments/masters/calibration/graded.py" in names
+    assert not any("_lessons/masters" in n for n in names)
     variants = {next(line for line in p.read_text().splitlines() if "VARIANT =" in line)
                 .split("#")[0] for p in mine}
     assert len(variants) == 8 and not any("'rate_hz': 200}" in v for v in variants), variants

@@ -158,9 +158,10 @@ def _notebook(submission: Path, name: str) -> Path | None:
 def results(grade, possible: dict[str, float]) -> dict:
     """Gradescope's results.json for a :class:`~gpsaccel.assignments.grading.Grade`: one test per
     question (its score and points), the student's feedback as the output."""
-    tests = [{"name": q, "score": float(grade.scores.get(q, 0.0)), "max_score": float(p),
-              "visibility": "visible"} for q, p in possible.items()]
-    return {"score": float(sum(t["score"] for t in tests)), "output": grade.feedback,
+    scores = {q: float(grade.scores.get(q, 0.0)) for q in possible}
+    tests = [{"name": q, "score": scores[q], "max_score": float(p), "visibility": "visible"}
+             for q, p in possible.items()]
+    return {"score": sum(scores.values()), "output": grade.feedback,
             "visibility": "visible", "stdout_visibility": "hidden", "tests": tests}
 
 
