@@ -38,7 +38,7 @@ COURSE = ROOT / "docs" / "examples" / "course"
 # ------------------------------------------------------------------ masters in the package
 @pytest.mark.parametrize("name", registry.assignments())
 def test_every_homework_master_is_in_the_package_under_a_folder_the_box_never_sees(name):
-    from gpsaccel.check.sandbox import HIDDEN_WITH_GPSACCEL, PACKAGE_DIR
+    from gpsaccel.sandbox import HIDDEN_WITH_GPSACCEL, PACKAGE_DIR
 
     folder = packaged_masters() / name
     assert (folder / f"{name}.ipynb").is_file() and (folder / "graded.py").is_file()
@@ -450,7 +450,7 @@ def _standin(tmp_path: Path, zip_path: Path, cell: str, email: str) -> Path:
 
 
 def _backends() -> list[str]:
-    from gpsaccel.check.sandbox import basic_is_safe, resolve_backend
+    from gpsaccel.sandbox import basic_is_safe, resolve_backend
 
     out = ["bwrap"] if resolve_backend("auto") == "bwrap" else []
     return out + (["basic"] if basic_is_safe() else [])  # basic: as root, the box user
