@@ -35,7 +35,8 @@ extensions = [
     "sphinx.ext.mathjax",
     "numpydoc",
 ]
-exclude_patterns = ["_build", "**/.ipynb_checkpoints", "benchmarks/README.md"]
+exclude_patterns = ["_build", "**/.ipynb_checkpoints", "benchmarks/README.md",
+                    "examples/**"]  # a course folder to copy, not pages
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist", "html_image"]
 myst_heading_anchors = 3
 myst_update_mathjax = False  # its settings are MathJax 3's; ours is MathJax 2 (below)

@@ -262,7 +262,13 @@ def _cmd_check(args: argparse.Namespace) -> int:
         table,
         write_json,
     )
+    from gpsaccel.check.own import is_file_spec, load_problem
 
+    if is_file_spec(args.problem) and args.dask is not None:
+        raise ValueError("--dask: a problem from a file of your own is known to this process "
+                         "only, not to Dask's workers; leave out --dask (or register it in a "
+                         "module the workers import)")
+    args.problem = load_problem(args.problem)  # the instructor's file run, its problem registered
     # the notes and the count only: check_many expands the same raw paths itself, once
     files, notes = find_submissions(args.paths)
     for note in notes:
@@ -336,50 +342,88 @@ def _cmd_check(args: argparse.Namespace) -> int:
 
 
 def _cmd_assignment(args: argparse.Namespace) -> int:
-    """``otter assign`` a homework: the student notebook and the autograder zip; with
-    ``--roster``, one notebook per student carrying that student's variant."""
-    from gpsaccel.assignments import generate
-    from gpsaccel.assignments.generate import copy_student_side, master_notebook, personalize
-    from gpsaccel.assignments.grading import read_secret
+    """``otter assign`` a homework (the package's or a folder of the instructor's own): the
+    student notebook and the autograder zip; with ``--roster`` one notebook per student carrying
+    that student's variant.  Every flag is checked before the minutes of ``otter assign``."""
+    import time
 
-    try:
-        master_notebook(args.name)
-    except FileNotFoundError:  # a wheel: the student side only
-        print(f"hand out / work on: {copy_student_side(args.name, args.out)} (no master here: "
-              f"the masters and grading are in gpsaccel's source repository)")
-        return 0
-    g = generate(args.name, args.out, run_tests=not args.no_run_tests)
-    print(f"hand out:  {g.student}\ngrade with: gpsaccel grade SUBMISSIONS --assignment "
-          f"{args.name} (Gradescope: {g.autograder})\nsolution:  {g.solution}")
+    from tqdm.auto import tqdm
+
+    from gpsaccel.assignments.generate import generate, personalize, resolve
+    from gpsaccel.assignments.grading import read_secret
+    from gpsaccel.assignments.roster import read_roster
+
+    name = resolve(args.name)
+    if args.roster is None and args.secret_file is not None:
+        raise ValueError("--secret-file: the secret makes per-student variants, which need "
+                         "--roster (the students to write a notebook for)")
+    students, secret = None, None
     if args.roster is not None:
+        students = read_roster(args.roster)
         secret = read_secret(args.secret_file)
         if secret is None:
-            raise ValueError("roster: per-student variants need the instructor's secret "
-                             "(--secret-file or $GPSACCEL_GRADING_SECRET)")
-        ids = [s.strip() for s in args.roster.read_text(encoding="utf-8").splitlines()
-               if s.strip()]
-        folder = personalize(args.name, g.student, ids, secret, g.out / "students")
-        print(f"per student: {folder}/<id>/{args.name}.ipynb ({len(ids)} students)")
+            raise ValueError("--roster: per-student variants need the instructor's secret "
+                             "(--secret-file FILE, or $GPSACCEL_GRADING_SECRET)")
+    t0 = time.perf_counter()
+    from gpsaccel.assignments.gradescope import build
+
+    with tqdm(total=2 + (len(students) if students else 0), desc=name, unit="step",
+              leave=False, disable=None) as bar:  # on stderr, when it is a terminal
+        bar.set_postfix_str("otter assign" + ("" if args.no_run_tests else " (testing the "
+                                                                          "solution)"))
+        try:
+            g = generate(name, args.out, run_tests=not args.no_run_tests)
+        except RuntimeError as exc:  # the master's own tests failed: otter's output says why
+            print(f"gpsaccel assignment: error: {exc}", file=sys.stderr)
+            return 1
+        bar.update()
+        if students is not None:
+            assert secret is not None
+            folder = personalize(name, g.student, [s.id for s in students], secret,
+                                 g.out / "students", progress=bar)
+        bar.set_postfix_str("Gradescope autograder")
+        gradescope = build(name, g.out, students, secret)
+        bar.update()
+    print(f"hand out:  {g.student}\ngrade with: gpsaccel grade SUBMISSIONS --assignment "
+          f"{args.name}\nGradescope: {gradescope} (scores computed outside the sandbox; "
+          f"otter's own zip: {g.autograder.name})\nsolution:  {g.solution}")
+    if students is not None:
+        print(f"per student: {folder}/<id>/{name}.ipynb ({len(students)} students)")
+    print(f"{time.perf_counter() - t0:.1f} s")
     return 0
 
 
 def _cmd_grade(args: argparse.Namespace) -> int:
-    """Grade a class in the sandbox; grades.csv, feedback/, summary.csv/png in --out."""
+    """Grade a class in the sandbox; grades.csv, feedback/, summary.csv/png in --out; with
+    --roster the LMS gradebook files; the similarity report."""
     from gpsaccel.assignments import grade
+    from gpsaccel.assignments.generate import resolve
     from gpsaccel.assignments.grading import default_out, read_secret
+    from gpsaccel.assignments.roster import read_roster
 
+    name = resolve(args.assignment)
+    if args.dask is not None and name != args.assignment:
+        raise ValueError("--dask: a homework from a folder of your own is known to this process "
+                         "only, not to Dask's workers; leave out --dask")
+    roster = read_roster(args.roster) if args.roster is not None else None
+    secret = read_secret(args.secret_file)
     out = args.out if args.out is not None else default_out(args.submissions)
-    grades = grade(args.submissions, args.assignment, out=out, jobs=args.jobs,
-                   timeout=args.timeout, seed=args.seed, secret=read_secret(args.secret_file),
-                   student=args.student, dask=args.dask, sandbox=args.sandbox)
+    grades = grade(args.submissions, name, out=out, jobs=args.jobs, timeout=args.timeout,
+                   seed=args.seed, secret=secret, student=args.student, dask=args.dask,
+                   sandbox=args.sandbox, progress=True)
     if not grades:
         raise ValueError(f"submissions: no student's folder or notebook in {args.submissions}")
     width = max(len(g.student) for g in grades)
     for g in grades:
         print(f"{g.student:<{width}}  {g.total:>5g} / {g.max_total:g}  {g.status:<13} "
               f"{g.seconds:5.1f} s")
-    print(f"wrote {out / 'grades.csv'}, {out / 'feedback'}/, {out / 'summary.csv'}, "
-          f"{out / 'summary.png'} (seed in {out / 'grading.json'})")
+    print(f"wrote {out / 'grades.csv'}, {out / 'grades.json'}, {out / 'feedback'}/, "
+          f"{out / 'summary.csv'}, {out / 'summary.png'} (seed in {out / 'grading.json'})")
+    from gpsaccel.assignments.classwide import after_grading
+
+    for line in after_grading(Path(args.submissions), out, name, roster, secret,
+                              similarity=not args.no_similarity):
+        print(line)
     return 0
 
 
@@ -497,6 +541,23 @@ def _add_ship(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_cmd_ship)
 
 
+def _problem_flag(value: str) -> str:
+    """--problem: a registered problem's name, or FILE.py:NAME (the file exists; it is run by
+    the command, not by the parser)."""
+    from gpsaccel import registry
+    from gpsaccel.check.own import is_file_spec
+
+    if is_file_spec(value):
+        if not Path(value.rpartition(":")[0]).is_file():
+            raise argparse.ArgumentTypeError(f"{value.rpartition(':')[0]} is not a file "
+                                             f"(expected FILE.py:NAME)")
+        return value
+    if value not in registry.problems():
+        raise argparse.ArgumentTypeError(f"invalid choice: {value!r} (choose from "
+                                         f"{', '.join(registry.problems())}, or FILE.py:NAME)")
+    return value
+
+
 def _add_check(sub: argparse._SubParsersAction) -> None:
     from gpsaccel import registry
 
@@ -505,10 +566,13 @@ def _add_check(sub: argparse._SubParsersAction) -> None:
     p.add_argument("paths", nargs="+", type=Path,
                    help="submission files, or folders whose every top-level .py file or "
                         "sub-folder is one submission")
-    p.add_argument("--problem", choices=registry.problems(), default="calibration",
+    p.add_argument("--problem", type=_problem_flag, default="calibration",
+                   metavar="NAME|FILE.py:NAME",
                    help="the problem (default calibration), one of gpsaccel.registry's: " +
                         "; ".join(f"{name}: {registry.entry(name).title}"
-                                  for name in registry.problems()))
+                                  for name in registry.problems()) +
+                        "; or FILE.py:NAME, a problem of your own defined in FILE.py "
+                        "(check.Problem.linear(NAME, ...))")
     p.add_argument("--json", type=_v.output_file, default=None, metavar="FILE",
                    help="write every finding and number to FILE (e.g. results.json)")
     p.add_argument("--runs", type=_v.flag_int(minimum=2), default=None,
@@ -554,8 +618,8 @@ class _Registered:
     def __init__(self, names: Callable[[], tuple[str, ...]]) -> None:
         self._names = names
 
-    def __contains__(self, name: object) -> bool:
-        return name in self._names()
+    def __contains__(self, name: object) -> bool:  # or a folder of the instructor's own
+        return name in self._names() or (isinstance(name, str) and Path(name).is_dir())
 
     def __iter__(self) -> Iterator[str]:
         return iter(self._names())
@@ -570,12 +634,14 @@ def _registered_assignments() -> tuple[str, ...]:
 def _add_assignment(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("assignment", help="otter assign a homework: student notebook + autograder")
     p.add_argument("name", choices=_Registered(_registered_assignments), metavar="NAME",
-                   help="the homework: %(choices)s")
+                   help="the homework: %(choices)s, or a folder of your own holding NAME.ipynb "
+                        "(the master) and graded.py (its questions)")
     p.add_argument("--out", type=_v.output_dir, required=True, help="folder to write (replaced)")
     p.add_argument("--no-run-tests", action="store_true",
                    help="do not execute the solution against its tests first (faster)")
     p.add_argument("--roster", type=Path, default=None,
-                   help="file of student ids (one a line): one notebook each, with its variant")
+                   help="the class: one student id a line, or a CSV file with an id column "
+                        "(docs/grading.md): one notebook each, with its variant")
     p.add_argument("--secret-file", type=Path, default=None,
                    help="the instructor's secret (default $GPSACCEL_GRADING_SECRET)")
     p.set_defaults(func=_cmd_assignment)
@@ -586,7 +652,13 @@ def _add_grade(sub: argparse._SubParsersAction) -> None:
     p.add_argument("submissions", type=Path,
                    help="LMS export: a folder per student (or one .ipynb per student)")
     p.add_argument("--assignment", required=True, choices=_Registered(_registered_assignments),
-                   metavar="NAME", help="the homework: %(choices)s")
+                   metavar="NAME", help="the homework: %(choices)s, or a folder of your own "
+                                        "holding NAME.ipynb and graded.py")
+    p.add_argument("--roster", type=Path, default=None,
+                   help="the class roster (a CSV file with id, name, email, sis_id, ... "
+                        "columns): write canvas.csv, moodle.csv and Gradescope's CSV files too")
+    p.add_argument("--no-similarity", action="store_true",
+                   help="skip the similarity report (similarity.csv, similarity.html)")
     p.add_argument("--out", type=_v.output_dir, default=None,
                    help="folder for grades.csv, feedback/, summary (default SUBMISSIONS-grades)")
     p.add_argument("--jobs", type=_v.flag_int(minimum=1), default=None,

@@ -208,16 +208,21 @@ WHEEL_STEPS: list[tuple[str, list[str], str]] = [
 ]
 
 
-#: The instructor's steps, after ``[grading]`` is added to the same environment, with the masters
-#: in a folder of the instructor's own (a copy of the repository's ``assignments/``, named by
-#: ``$GPSACCEL_ASSIGNMENTS``: the wheel carries only the student side) and a class of one honest
-#: student in LMS layout (a folder named with a space).
+#: The instructor's steps, after ``[grading]`` is added to the same environment: nothing but the
+#: installed package (its masters and graded questions), a roster of 8, the secret, and a class of
+#: two in LMS layout (folders named with a space; the second copied the first's notebook).
 HOMEWORK_STEPS: list[tuple[str, list[str], str]] = [
-    ("generate a homework", ["assignment", "calibration", "--out", "dist/calibration",
-                             "--no-run-tests"], "hand out:"),
-    ("grade a class", ["grade", "--assignment", "calibration", "class"], "10 / 10  graded"),
+    ("hand out a homework", ["assignment", "calibration", "--out", "dist/calibration",
+                             "--no-run-tests", "--roster", "roster.csv", "--secret-file",
+                             "secret.txt"], "(8 students)"),
+    ("grade a class", ["grade", "--assignment", "calibration", "class", "--secret-file",
+                       "secret.txt", "--roster", "roster.csv"], "10 / 10  graded"),
 ]
 
+ROSTER = "id,name,email,sis_id\n" + "".join(
+    f"{who},{who},{who.split()[0].lower()}@example.edu,10{i:02d}\n" for i, who in enumerate(
+        ["Alice Smith", "Bob Jones", "Carol King", "Dan Wu", "Eve Ode", "Fay Lin", "Gus Roe",
+         "Hal Poe"]))
 
 def _solved_notebook(name: str, target: Path) -> None:
     """An honest student's notebook of homework ``name`` (the homework tests' own maker)."""
@@ -272,19 +277,43 @@ def test_the_wheel_in_a_fresh_environment_outside_the_repository(tmp_path):
                            check=True).stdout.split()
     assert sorted(files) == sorted(registry.assignments())
     installed = Path(where[0]).parent
-    assert not list(installed.rglob("graded.py")) and not list(installed.rglob("*master*"))
-    # an instructor: the grading extra, the masters from a folder of their own, a class
+    # the instructor's kit is in the wheel: every homework's master and graded questions
+    for name in registry.assignments():
+        assert (installed / "assignments" / "masters" / name / "graded.py").is_file(), name
+    # an instructor: the grading extra, nothing else (no checkout, no $GPSACCEL_ASSIGNMENTS)
     subprocess.run([_uv(), "pip", "install", "-q", "--python", str(venv / "bin" / "python"),
                     f"{wheel}[grading]"], check=True, timeout=240)
     instructor = tmp_path / "instructor"
     instructor.mkdir()
-    shutil.copytree(ROOT / "assignments", instructor / "masters")
-    _solved_notebook("calibration", instructor / "class" / "Alice Smith" / "calibration.ipynb")
-    env["GPSACCEL_ASSIGNMENTS"] = str(instructor / "masters")
+    (instructor / "roster.csv").write_text(ROSTER, encoding="utf-8")
+    (instructor / "secret.txt").write_text("k" * 64, encoding="utf-8")
+    for who in ("Alice Smith", "Bob Jones"):  # Bob handed in Alice's notebook
+        _solved_notebook("calibration", instructor / "class" / who / "calibration.ipynb")
+    env.pop("GPSACCEL_ASSIGNMENTS", None)
+    out = {}
     for name, argv, expected in HOMEWORK_STEPS:
         proc = subprocess.run([str(venv / "bin" / "gpsaccel"), *argv], cwd=instructor, env=env,
                               capture_output=True, text=True, timeout=400)
         assert proc.returncode == 0 and expected in proc.stdout, (name, proc.stdout, proc.stderr)
-    assert (instructor / "dist" / "calibration" / "student" / "calibration.ipynb").is_file()
-    assert (instructor / "class-grades" / "grades.csv").read_text().splitlines()[-1].startswith(
-        "Alice Smith,")
+        out[name] = proc.stdout
+    dist = instructor / "dist" / "calibration"
+    mine = sorted((dist / "students").glob("*/calibration.ipynb"))
+    assert len(mine) == 8 and (dist / "calibration-autograder.zip").is_file()
+    import zipfile  # the Gradescope zip carries a wheel rebuilt from the installed package
+
+    with zipfile.ZipFile(dist / "calibration-gradescope.zip") as z:
+        (carried,) = [n for n in z.namelist() if n.endswith(".whl")]
+        with zipfile.ZipFile(z.open(carried)) as w:
+            names = set(w.namelist())
+    assert "gpsaccel/assignments/masters/calibration/graded.py" in names
+    assert not any("_lessons/masters" in n for n in names)
+    variants = {next(line for line in p.read_text().splitlines() if "VARIANT =" in line)
+                .split("#")[0] for p in mine}
+    assert len(variants) == 8 and not any("'rate_hz': 200}" in v for v in variants), variants
+    grades = instructor / "class-grades"
+    assert (grades / "grades.csv").read_text().splitlines()[-1].startswith("Bob Jones,")
+    for f in ("canvas.csv", "moodle.csv", "gradescope-roster.csv", "gradescope-scores.csv",
+              "similarity.html", "grades.json"):
+        assert (grades / f).is_file(), f
+    assert "Alice Smith,,1000,,,10" in (grades / "canvas.csv").read_text()
+    assert "Alice Smith & Bob Jones" in out["grade a class"]  # the copy is flagged

@@ -1,6 +1,7 @@
 """The homework notebooks: where the masters are, their questions, ``otter assign`` on them.
 
-A master notebook (``assignments/NAME/NAME.ipynb`` in a source checkout) is in otter-grader's
+A master notebook (``gpsaccel/assignments/masters/NAME/NAME.ipynb``, shipped in the wheel; or an
+instructor's own folder, :func:`use_folder`) is in otter-grader's
 assign format: raw cells ``# BEGIN QUESTION`` (name, points), ``# BEGIN SOLUTION``, ``# BEGIN
 TESTS`` ...; solutions and hidden tests live only there.  :func:`generate` runs ``otter assign``
 and returns the student notebook (solutions stripped, public tests only) and the autograder zip
@@ -23,29 +24,82 @@ import yaml
 
 from gpsaccel import registry
 
-#: Environment variable naming the instructor's folder of masters (``NAME/NAME.ipynb`` and
-#: ``NAME/graded.py``, as in the repository's ``assignments/``), for an instructor who installed
-#: the wheel: the masters are never in it.
+#: Environment variable naming a folder of masters that replaces the packaged ones
+#: (``NAME/NAME.ipynb`` and ``NAME/graded.py`` for each registered homework): an instructor who
+#: edits the course's homework without editing the package.
 ASSIGNMENTS_ENV = "GPSACCEL_ASSIGNMENTS"
+
+#: The instructor's own homework folders registered in this process (:func:`use_folder`).
+_FOLDERS: dict[str, Path] = {}
+
+
+def packaged_masters() -> Path:
+    """The masters the wheel carries: ``gpsaccel/assignments/masters/NAME/`` (their safety rests
+    on fresh data, per-student variants and the sandbox, which hides this folder from a box)."""
+    return Path(__file__).resolve().parent / "masters"
 
 
 def assignments_dir() -> Path:
-    """The instructor's masters: ``$GPSACCEL_ASSIGNMENTS`` when set, else the ``assignments/``
-    folder of a source checkout."""
+    """The folder of the registered homeworks' masters: ``$GPSACCEL_ASSIGNMENTS`` when set, else
+    the packaged ones (:func:`packaged_masters`)."""
     env = os.environ.get(ASSIGNMENTS_ENV)
     if env:
         return Path(env).expanduser().resolve()
-    return Path(__file__).resolve().parents[2] / "assignments"
+    return packaged_masters()
+
+
+def homework_dir(name: str) -> Path:
+    """The folder holding ``NAME.ipynb`` and ``graded.py`` of homework ``name``: the
+    instructor's own folder (:func:`use_folder`), else :func:`assignments_dir`'s."""
+    return _FOLDERS[name] if name in _FOLDERS else assignments_dir() / name
+
+
+def use_folder(folder: str | os.PathLike) -> str:
+    """Register the instructor's own homework in ``folder`` and return its name (the folder's).
+
+    The folder holds the master notebook ``NAME.ipynb`` (otter's assign format, with a
+    ``# your variant`` cell if it has per-student numbers) and ``graded.py``, which defines
+    ``graded_questions()`` (:class:`gpsaccel.assignments.questions.Question` s),
+    ``DEFAULT_VARIANT`` (the public notebook's numbers) and ``variant(number) -> dict``.  It is
+    then handed out and graded exactly as a packaged homework (same sandbox, variants, feedback);
+    the package is not edited.  ValueError naming what is missing.
+    """
+    path = Path(folder).expanduser().resolve()
+    if not path.is_dir():
+        raise ValueError(f"assignment: {folder} is neither a registered homework nor a folder")
+    name = path.name
+    missing = [f for f in (f"{name}.ipynb", "graded.py") if not (path / f).is_file()]
+    if missing:
+        raise ValueError(f"assignment: the homework folder {path} lacks {' and '.join(missing)} "
+                         f"(a master notebook named after its folder and the file declaring "
+                         f"its graded questions)")
+    if name in registry.assignments() and name not in _FOLDERS:
+        raise ValueError(f"assignment: {name!r} is a homework of the package; name your folder "
+                         f"otherwise")
+    registry.add_assignment(name, f"gpsaccel_graded_{name}", title=name)
+    _FOLDERS[name] = path
+    return name
+
+
+def resolve(name_or_folder: str) -> str:
+    """A registered homework's name as given; a folder path registered with :func:`use_folder`."""
+    if name_or_folder in registry.assignments():
+        return name_or_folder
+    if Path(name_or_folder).expanduser().is_dir():
+        return use_folder(name_or_folder)
+    raise ValueError(f"assignment must be one of {', '.join(registry.assignments())} or a "
+                     f"folder holding NAME.ipynb and graded.py, got {name_or_folder!r}")
 
 
 def master_notebook(name: str) -> Path:
     """The master notebook of homework ``name`` (ValueError for an unknown name)."""
     registry.assignment(name)  # ValueError naming the homework registered
-    path = assignments_dir() / name / f"{name}.ipynb"
+    path = homework_dir(name) / f"{name}.ipynb"
     if not path.is_file():
-        raise FileNotFoundError(f"master notebook {path} not found (the masters ship with a "
-                                f"source checkout of gpsaccel, not with the wheel: point "
-                                f"${ASSIGNMENTS_ENV} at a copy of its assignments/ folder)")
+        raise FileNotFoundError(f"master notebook {path} not found"
+                                + (f" (${ASSIGNMENTS_ENV} names {assignments_dir()}: it must "
+                                   f"hold {name}/{name}.ipynb)" if os.environ.get(ASSIGNMENTS_ENV)
+                                   else " (a broken installation of gpsaccel: reinstall it)"))
     return path
 
 
@@ -120,10 +174,11 @@ def generate(name: str, out: Path | str, run_tests: bool = True, timeout: float 
 
 
 def personalize(name: str, student_notebook: Path | str, students: list[str], secret: bytes,
-                out: Path | str) -> Path:
+                out: Path | str, progress=None) -> Path:
     """One copy of the student notebook per student, ``out/<id>/NAME.ipynb``, whose variant cell
     holds that student's numbers (:func:`gpsaccel.assignments.grading.student_variant`): the
-    notebook tells each student their own variant.  Returns ``out``."""
+    notebook tells each student their own variant.  ``progress``: a tqdm bar advanced once per
+    student.  Returns ``out``."""
     import nbformat
 
     from gpsaccel.assignments.grading import VARIANT_MARK, _safe_name, student_variant
@@ -132,6 +187,7 @@ def personalize(name: str, student_notebook: Path | str, students: list[str], se
     nb0 = nbformat.read(str(student_notebook), as_version=4)
     marked = [c for c in nb0.cells if c.cell_type == "code"
               and c.source.lstrip().lower().startswith(VARIANT_MARK)]
+    others = [p for p in Path(student_notebook).parent.iterdir() if p.name != f"{name}.ipynb"]
     if len(students) != len(set(students)):
         raise ValueError("students: the roster lists a student id twice")
     for sid in students:
@@ -141,7 +197,13 @@ def personalize(name: str, student_notebook: Path | str, students: list[str], se
             c.source = "\n".join(head + [f"VARIANT = {v!r}  # {sid}"])
         target = out / _safe_name(sid) / f"{name}.ipynb"
         target.parent.mkdir(parents=True, exist_ok=True)
+        for extra in others:  # what otter hands out beside the notebook (data, tests, files)
+            copy = shutil.copytree if extra.is_dir() else shutil.copy2
+            copy(extra, target.parent / extra.name)
         nbformat.write(nb0, str(target))
+        if progress is not None:
+            progress.set_postfix_str(sid[:40])
+            progress.update()
     return out
 
 

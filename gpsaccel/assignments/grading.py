@@ -94,23 +94,22 @@ _CELL_STATUS = nbm.MAX_NDIM + 3
 
 
 def assignment_module(name: str):
-    """The homework's graded questions: ``assignments/NAME/graded.py`` of the source repository
-    (the instructor's side: not in the student wheel; ValueError for an unknown name)."""
+    """The homework's graded questions: ``graded.py`` beside its master (the packaged
+    ``gpsaccel/assignments/masters/NAME/``, or the instructor's own folder; ValueError for an
+    unknown name)."""
     import importlib.util
     import sys
 
     from gpsaccel import registry
-    from gpsaccel.assignments.generate import assignments_dir
+    from gpsaccel.assignments.generate import homework_dir
 
     registry.assignment(name)  # ValueError naming the homework registered
     key = f"gpsaccel_graded_{name}"
     if key in sys.modules:
         return sys.modules[key]
-    path = assignments_dir() / name / "graded.py"
+    path = homework_dir(name) / "graded.py"
     if not path.is_file():
-        raise FileNotFoundError(f"{path} not found: grading needs a source checkout of gpsaccel "
-                                f"or $GPSACCEL_ASSIGNMENTS naming a copy of its assignments/ "
-                                f"folder (the graded questions and the masters are not in the wheel)")
+        raise FileNotFoundError(f"{path} not found (the graded questions of {name!r})")
     spec = importlib.util.spec_from_file_location(key, path)
     assert spec is not None and spec.loader is not None  # a .py file always has both
     module = importlib.util.module_from_spec(spec)
@@ -619,13 +618,14 @@ def read_secret(secret_file: str | os.PathLike | None) -> bytes | None:
 def grade(submissions: str | os.PathLike, name: str, out: str | os.PathLike | None = None,
           jobs: int | None = None, timeout: float = TIMEOUT, seed: int | None = None,
           secret: bytes | None = None, student: str | None = None, dask: str | None = None,
-          sandbox: str = "auto") -> list[Grade]:
+          sandbox: str = "auto", progress: bool = False) -> list[Grade]:
     """Grade every student of ``submissions`` for homework ``name`` (module docstring).
 
     jobs : notebooks at once (default: CPUs, at most 4); timeout : wall-clock seconds of one
     notebook's box; seed : the fresh data's seed (default: random, or the recorded one when
     regrading one ``student``); secret : the instructor's secret for per-student variants (None:
-    every student gets the public notebook's numbers); dask : a Dask address or "dask-local".
+    every student gets the public notebook's numbers); dask : a Dask address or "dask-local";
+    progress : a tqdm bar on stderr when it is a terminal (the last student graded, the ETA).
     """
     from gpsaccel import sandbox as sb
 
@@ -680,9 +680,17 @@ def grade(submissions: str | os.PathLike, name: str, out: str | os.PathLike | No
         kept = [Grade(**d) for d in old if d.get("student") != student]
         return sorted(kept + now, key=lambda g: g.student.lower())
 
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=len(entries), desc=name, unit="notebook", leave=False,
+               disable=None if progress else True)
+
     def done(i: int, data: dict) -> None:
         g = Grade(**data)
         grades[i] = g
+        shown = "".join(c if c.isprintable() else "?" for c in g.student[:40])  # a folder name
+        bar.set_postfix_str(f"{shown}: {g.status}")
+        bar.update()
         write_text(feedback / f"{_safe_name(g.student)}.txt", g.feedback)
         current = rows()
         write_csv(current, possible, out / "grades.csv")
@@ -704,6 +712,7 @@ def grade(submissions: str | os.PathLike, name: str, out: str | os.PathLike | No
         _dask(entries, folder, settings, dask, jobs, done)
     else:
         _forked(entries, folder, settings, jobs, done)
+    bar.close()
     final = rows()
     write_summary(summary(final, possible), final, out)
     info = json.loads(record.read_text(encoding="utf-8"))

@@ -13,20 +13,23 @@ from gpsaccel.assignments.tracker import variant_model
 from gpsaccel.check.report import Report
 
 # ----------------------------------------------------------------------- graded questions
-#: The student's tracker of question 1: propagation rate (Hz, a multiple of the 2 Hz fixes),
-#: acceleration noise σ_a (m/s²), position-fix σ_p (m); 27 variants.
-RATES_HZ = (10, 20, 50)
-SIGMAS_A = (0.2, 0.3, 0.5)
-SIGMAS_P = (1.5, 2.0, 3.0)
+#: The student's tracker of question 1: propagation rate (Hz, a multiple of the 2 Hz fixes, 4 to
+#: 100 Hz), acceleration noise σ_a (m/s², 0.10 to 0.99) and position-fix σ_p (m, 1.0 to 4.9):
+#: 49 x 90 x 40 = 176 400 trackers.
+RATES_HZ = tuple(range(4, 101, 2))
+SIGMAS_A = tuple(round(0.10 + 0.01 * i, 2) for i in range(90))
+SIGMAS_P = tuple(round(1.0 + 0.1 * i, 1) for i in range(40))
 
-#: The public notebook's variant (the checker's tracker).
+#: The public notebook's variant (the checker's tracker): never a student's.
 DEFAULT_VARIANT = {"rate_hz": 10, "sigma_a": 0.3, "sigma_p": 2.0}
 
 
 def variant(number: int) -> dict:
     """The student's numbers: rate and noise levels of question 1."""
-    return {"rate_hz": RATES_HZ[number % 3], "sigma_a": SIGMAS_A[(number // 3) % 3],
-            "sigma_p": SIGMAS_P[(number // 9) % 3]}
+    from gpsaccel.assignments.variants import pick
+
+    return pick(number, {"rate_hz": RATES_HZ, "sigma_a": SIGMAS_A, "sigma_p": SIGMAS_P},
+                DEFAULT_VARIANT)
 
 
 def _q1_reads(draw):

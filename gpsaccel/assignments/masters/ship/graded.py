@@ -11,18 +11,22 @@ from gpsaccel.assignments.ship import cases, cost_answer, update_answer
 from gpsaccel.check.report import Report
 
 # ----------------------------------------------------------------------- graded questions
-#: The public notebook's variant: report 004's ship.
+#: The public notebook's variant: report 004's ship (never a student's).
 DEFAULT_VARIANT = {"mass_kg": 12.0, "gps_rate_hz": 1.0}
 
-#: The student's ship of question 2: its mass (kg) and GPS rate (Hz; each divides the 10 Hz grid).
-MASSES_KG = (8.0, 9.0, 10.0, 11.0, 12.0, 13.0, 14.0, 15.0, 16.0)
-GPS_RATES_HZ = (0.5, 1.0, 2.0)
+#: The student's ship of question 2: its mass (kg, 5 to 25 kg in steps of 10 g: each step moves
+#: the answers by about 1e-4 relative, five times the tolerance) and its GPS rate (Hz; each
+#: divides the 10 Hz grid): 2001 x 6 = 12006 ships.  Only these two enter question 2's answer
+#: (:func:`gpsaccel.assignments.ship.zeroed_gain_cost`).
+MASSES_KG = tuple(round(5.0 + 0.01 * i, 2) for i in range(2001))
+GPS_RATES_HZ = (0.2, 0.25, 0.5, 1.0, 2.0, 2.5)
 
 
 def variant(number: int) -> dict:
-    """The student's numbers: mass and GPS rate of their ship (question 2); 27 variants."""
-    return {"mass_kg": MASSES_KG[number % len(MASSES_KG)],
-            "gps_rate_hz": GPS_RATES_HZ[(number // len(MASSES_KG)) % len(GPS_RATES_HZ)]}
+    """The student's numbers: mass and GPS rate of their ship (question 2)."""
+    from gpsaccel.assignments.variants import pick
+
+    return pick(number, {"mass_kg": MASSES_KG, "gps_rate_hz": GPS_RATES_HZ}, DEFAULT_VARIANT)
 
 
 def _q1_reads(draw):
