@@ -33,17 +33,33 @@ def test_masters_exist():
     assert len(MASTERS) >= 12
 
 
-_WORDS = ("twelve", "thirteen", "fourteen", "fifteen", "sixteen", "seventeen", "eighteen")
+_WORDS = ("zero", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten",
+          "eleven", "twelve", "thirteen", "fourteen", "fifteen", "sixteen", "seventeen", "eighteen",
+          "nineteen", "twenty")
+#: "sixteen Jupyter lessons", "the seventeen lessons", "Seventeen Jupyter notebooks", "16 lessons"
+_COUNT = re.compile(rf"\b({'|'.join(_WORDS)}|\d+)\s+(?:jupyter\s+)?(?:lessons|notebooks)\b", re.I)
 
 
-def test_the_readme_counts_the_lessons():
-    """The README (and docs/lessons.md) say in words how many lessons there are: the number of
-    masters."""
+def _stated_counts(text):
+    return [int(w) if w.isdigit() else _WORDS.index(w.lower()) for w in _COUNT.findall(text)]
+
+
+def test_the_count_reader_reads_words_and_digits():
+    assert _stated_counts("teaches them in Sixteen\nJupyter lessons; the 12 lessons; two notebooks") \
+        == [16, 12, 2]
+
+
+def test_every_page_counts_the_lessons_as_there_are_masters():
+    """The README and every docs page that says how many lessons there are says the number of
+    masters (a lesson added without updating a page fails here); the README, docs/index.md,
+    docs/lessons.md and docs/student.md must say it."""
     root = L.lessons_dir().resolve().parent
-    for page, phrase in (("README.md", "Jupyter lessons"), ("docs/lessons.md", "Jupyter notebooks")):
-        text = (root / page).read_text().lower()
-        said = [w for w in _WORDS if re.search(rf"\b{w}\s+{phrase.lower()}", text)]
-        assert said == [_WORDS[len(MASTERS) - 12]], (page, said)
+    pages = [root / "README.md", *sorted((root / "docs").glob("*.md"))]
+    must = {"README.md", "index.md", "lessons.md", "student.md"}
+    for page in pages:
+        counts = _stated_counts(page.read_text(encoding="utf-8"))
+        assert all(c == len(MASTERS) for c in counts), (page.name, counts, len(MASTERS))
+        assert counts or page.name not in must, f"{page.name} no longer says how many lessons"
 
 
 @pytest.mark.parametrize("master", MASTERS, ids=IDS)
