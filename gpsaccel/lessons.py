@@ -164,15 +164,12 @@ def render_html(paths: list[Path], out: Path | str, runs: int | None = None,
     figure the reports list to the lesson that shows it.
     """
     import nbformat
-    from nbconvert import HTMLExporter
 
     from gpsaccel import _mathjax
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    exporter = HTMLExporter(extra_template_basedirs=[str(Path(__file__).parent / "templates")],
-                            template_name="gpsaccel-lesson",
-                            mathjax_url=_mathjax.copy_to(out))  # math typeset offline
+    exporter = html_exporter(_mathjax.copy_to(out))  # math typeset offline
     written = []
     for path in paths:
         nb = execute(path, runs=runs)
@@ -190,6 +187,32 @@ def render_html(paths: list[Path], out: Path | str, runs: int | None = None,
     if index:
         write_index(out)
     return written
+
+
+def html_exporter(mathjax_url: str):
+    """nbconvert's HTML exporter with the lessons' template (``templates/gpsaccel-lesson``).
+
+    The template drops every script nbconvert's lab template loads from elsewhere: require.js,
+    the widgets' html-manager from a CDN and mermaid's module (a lesson has no diagram and no
+    widget state to show offline); such a script fails silently without network and is one more
+    thing fetched from a third party.  MathJax comes from ``mathjax_url``, the copy next to the
+    pages (:mod:`gpsaccel._mathjax`).
+    """
+    from nbconvert import HTMLExporter
+
+    return HTMLExporter(extra_template_basedirs=[str(Path(__file__).parent / "templates")],
+                        template_name="gpsaccel-lesson", mathjax_url=mathjax_url)
+
+
+#: What a rendered page may load: only files next to it (no scheme, no ``//host``).
+_REMOTE = re.compile(r"""<script\b[^>]*\bsrc\s*=\s*["']?\s*(?:[a-z][a-z0-9+.-]*:|//)"""
+                     r"""|\b(?:import|from)\s*(?:\(\s*)?["'](?:[a-z][a-z0-9+.-]*:|//)"""
+                     r"""|<link\b[^>]*\bhref\s*=\s*["']?\s*(?:https?:|//)""", re.I)
+
+
+def remote_scripts(page: str) -> list[str]:
+    """The places in an HTML page that load a script (or a stylesheet) from another host."""
+    return [m.group(0) for m in _REMOTE.finditer(page)]
 
 
 def report_figures() -> dict[str, tuple[str, ...]]:
@@ -250,8 +273,10 @@ def write_index(out: Path | str) -> Path:
              "<style>body{font-family:sans-serif;max-width:1000px;margin:auto;line-height:1.5}"
              "td,th{padding:0.2em 0.8em;text-align:left;vertical-align:top}</style>",
              "<h1>gpsaccel: the lessons, with their outputs</h1>",
-             "<p>Rendered by <code>make lessons-html</code>; to run and change them, "
-             "<code>make lab</code>.</p><h2>Lessons</h2><ol>"]
+             "<p>Every lesson run at its full size, with its outputs. To run and change them "
+             "yourself: <code>gpsaccel lessons --copy my-lessons</code>, then "
+             "<code>gpsaccel lab my-lessons</code> (from a clone of the repository, "
+             "<code>make lab</code>).</p><h2>Lessons</h2><ol>"]
     for p in lessons:
         title = _title(nbformat.read(p, as_version=4)) or p.stem
         parts.append(f"<li><a href='{p.stem}.html'>{html.escape(title)}</a></li>")
@@ -527,11 +552,12 @@ SLOW_CELL = 5.0
 
 def _fill_text(cell, stem: str, measured: dict | None):
     """Markdown: ``[[number]]`` written plainly; the first cell gets its running-time line.  Code:
-    a cell measured at :data:`SLOW_CELL` seconds or more starts with ``# ⏱ about N s``."""
+    a cell measured at :data:`SLOW_CELL` seconds or more starts with ``# Slow cell: about N s``
+    (in words: a clock glyph is an empty box without an emoji font)."""
     if cell["cell_type"] == "code":
         seconds = (measured or {}).get("cell_seconds", {}).get(cell.get("id", ""), 0.0)
         if seconds >= SLOW_CELL:
-            note = f"# ⏱ about {_rounded(seconds)} (measured): the output appears when it is done"
+            note = f"# Slow cell: about {_rounded(seconds)} (measured); the output appears when it is done"
             cell["source"] = note + "\n" + cell["source"]
         return cell
     if cell["cell_type"] != "markdown":
@@ -577,6 +603,18 @@ def _notebook(cells, nb):
     return out
 
 
+#: The first line of every solution cell in the solutions version.  JupyterLab shows a collapsed
+#: cell's first line in its placeholder: this line is what shows, not the solution's first step.
+SOLUTION_LINE = {"code": "# Solution (open once you have tried)",
+                 "markdown": "*Solution (open once you have tried)*"}
+
+
+def _solution_first_line(cell):
+    cell["source"] = SOLUTION_LINE[cell["cell_type"]] + "\n" + (
+        "\n" if cell["cell_type"] == "markdown" else "") + cell["source"]
+    return cell
+
+
 def student_version(nb, stem: str, measured: dict | None = None):
     """No cell tagged ``solution``; outputs cleared (a student's first Run All is theirs, and the
     committed file stays what ``git pull`` can update); nothing collapsed."""
@@ -598,7 +636,8 @@ def solutions_version(nb, stem: str, measured: dict | None = None):
         if SOLUTION not in tags and pending:
             cells += pending
             pending = []
-        cells.append(_fill_text(_clean(c, hidden=SOLUTION in tags), stem, measured))
+        cell = _fill_text(_clean(c, hidden=SOLUTION in tags), stem, measured)
+        cells.append(_solution_first_line(cell) if SOLUTION in tags else cell)
     return _notebook(cells + pending, nb)
 
 

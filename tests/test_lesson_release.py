@@ -1,0 +1,72 @@
+"""What the release and the HTML rendering put in front of a student, checked without executing a
+lesson: no remote script in a rendered page, an index a pip user can follow, solutions whose
+collapsed placeholder gives nothing away, a slow cell's note in words."""
+
+from __future__ import annotations
+
+import nbformat
+import pytest
+
+from gpsaccel import lessons as L
+
+
+def _notebook():
+    nb = nbformat.v4.new_notebook()
+    nb.metadata["widgets"] = {"application/vnd.jupyter.widget-state+json": {"state": {}}}
+    code = nbformat.v4.new_code_cell("print(1)", id="c1")
+    code.outputs = [nbformat.v4.new_output("stream", text="1\n")]
+    nb.cells = [nbformat.v4.new_markdown_cell("# Lesson 99 — x\n\n$a^2$", id="c0"), code]
+    return nb
+
+
+def test_a_rendered_lesson_loads_no_remote_script(tmp_path):
+    """The stock lab template loads require.js, the widgets' manager and mermaid from CDNs (the
+    check finds them: it can fail); the lessons' template loads nothing from another host."""
+    nbconvert = pytest.importorskip("nbconvert")
+    stock, _ = nbconvert.HTMLExporter(template_name="lab").from_notebook_node(_notebook())
+    assert len(L.remote_scripts(stock)) >= 2, "the check no longer sees the stock template's CDN scripts"
+    page, _ = L.html_exporter("mathjax/MathJax.js?config=TeX-AMS_CHTML").from_notebook_node(
+        _notebook(), resources={"gpsaccel_mathjax_config": ""})
+    assert L.remote_scripts(page) == []
+    assert "require.js" not in page and "html-manager" not in page and "mermaid" not in page.lower()
+    assert 'src="mathjax/MathJax.js' in page
+
+
+@pytest.mark.parametrize("html", [
+    '<script src="https://cdn.example/x.js"></script>', "<script type='module'>import m from "
+    "'https://cdn.example/m.mjs'</script>", '<script src=//cdn.example/x.js></script>',
+    '<link rel="stylesheet" href="http://x.example/a.css">'])
+def test_the_remote_check_reads_every_way_a_page_loads_from_elsewhere(html):
+    assert L.remote_scripts(html)
+    assert not L.remote_scripts('<script src="mathjax/MathJax.js?config=x"></script>')
+
+
+def test_the_index_tells_a_pip_user_what_to_run(tmp_path, monkeypatch):
+    monkeypatch.setattr(L, "report_figures", lambda: {})
+    text = L.write_index(tmp_path).read_text(encoding="utf-8")
+    assert "gpsaccel lessons --copy" in text and "gpsaccel lab" in text
+    assert "make lessons-html" not in text
+
+
+def test_a_collapsed_solution_shows_a_neutral_first_line():
+    """JupyterLab's placeholder for a collapsed cell shows its first line: in the solutions
+    version that line is the same for every solution, never the solution's first step."""
+    nb = nbformat.v4.new_notebook()
+    sol = nbformat.v4.new_code_cell("x = secret_method()", id="s1")
+    sol.metadata["tags"] = [L.SOLUTION]
+    text = nbformat.v4.new_markdown_cell("Because of the method.", id="s2")
+    text.metadata["tags"] = [L.SOLUTION]
+    nb.cells = [sol, text]
+    out = L.solutions_version(nb, "99-x").cells
+    assert [c.source.splitlines()[0] for c in out] == [L.SOLUTION_LINE["code"], L.SOLUTION_LINE["markdown"]]
+    assert out[0].source.endswith("x = secret_method()") and out[1].source.endswith("Because of the method.")
+    assert all(c.metadata["jupyter"]["source_hidden"] for c in out)
+
+
+def test_a_slow_cell_says_so_in_words():
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [nbformat.v4.new_code_cell("work()", id="c1")]
+    (cell,) = L.student_version(nb, "99-x", {"seconds": 30, "cell_seconds": {"c1": 12.0}}).cells
+    first = cell.source.splitlines()[0]
+    assert first.startswith("# Slow cell: about 10 s (measured)")
+    assert "⏱" not in cell.source
