@@ -1,0 +1,132 @@
+"""Lessons' Run All at full size, before and after a change, side by side in one run.
+
+    python benchmarks/lessons.py 07 00 14 [--before main] [--repeat 1]
+
+For each lesson (a master's name prefix) the solutions version runs top to bottom in a fresh
+kernel, as ``python -m gpsaccel.lessons measure`` runs it, once with the code of this checkout
+("after") and once with the code of git revision ``--before`` ("before", unpacked with
+``git archive`` into a temporary folder and put first on ``PYTHONPATH``, so its kernel imports that
+gpsaccel).  A lesson the revision does not have is reported as new.  Before and after alternate
+per lesson, so a change of the machine's load hits both alike.
+
+Reported per lesson: wall time and CPU time (user + system of the process that runs the notebook
+and its children, the kernel included: ``resource.getrusage(RUSAGE_CHILDREN)`` around a
+subprocess), the ratio after/before, and the 1-minute load average before each run.  The machine
+is shared: read the ratio and the CPU time, not the wall time alone.  Nothing here is asserted
+(timings belong in benchmarks/, not in tests).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import subprocess
+import sys
+import tarfile
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+#: Runs one notebook in a child process: the solutions version at full size (no
+#: GPSACCEL_LESSON_RUNS), as ``gpsaccel.lessons.measure`` does.
+_RUN = """
+import sys
+from gpsaccel.lessons import execute
+execute(sys.argv[1], timeout=1800)
+"""
+
+
+def _unpack(revision: str, into: Path) -> Path:
+    """The tree of ``revision`` (``git archive``; symlinks such as gpsaccel/_lessons kept)."""
+    archive = into / "tree.tar"
+    with archive.open("wb") as f:
+        subprocess.run(["git", "-C", str(ROOT), "archive", revision], stdout=f, check=True)
+    with tarfile.open(archive) as tar:
+        tar.extractall(into / "tree", filter="tar")
+    return into / "tree"
+
+
+def _lesson(tree: Path, prefix: str) -> Path | None:
+    found = sorted((tree / "lessons" / "masters").glob(f"{prefix}*.ipynb"))
+    return found[0] if found else None
+
+
+def _solutions_copy(tree: Path, master: Path, tmp: Path) -> Path:
+    """The solutions version of ``master`` written next to the tree's lessons (same folder depth),
+    built by the tree's own release code."""
+    code = ("import sys, nbformat; from pathlib import Path; from gpsaccel import lessons as L\n"
+            "m = Path(sys.argv[1]); nb = nbformat.read(m, as_version=4)\n"
+            "Path(sys.argv[2]).write_text(L.lab_text(L.solutions_version(nb, m.stem, "
+            "L.measured(m.stem))), encoding='utf-8')\n")
+    target = tree / "lessons" / "solutions" / f"bench-{master.name}"
+    subprocess.run([sys.executable, "-c", code, str(master), str(target)], check=True,
+                   env=_env(tree), cwd=tmp)
+    return target
+
+
+def _env(tree: Path) -> dict[str, str]:
+    env = {k: v for k, v in os.environ.items() if k != "GPSACCEL_LESSON_RUNS"}
+    env["PYTHONPATH"] = str(tree) + os.pathsep + env.get("PYTHONPATH", "")
+    env.setdefault("MPLBACKEND", "Agg")
+    return env
+
+
+def run_once(tree: Path, notebook: Path, cwd: Path) -> tuple[float, float, float]:
+    """(wall s, CPU s of the child and its descendants, load average before)."""
+    load = os.getloadavg()[0]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    subprocess.run([sys.executable, "-c", _RUN, str(notebook)], check=True, env=_env(tree),
+                   cwd=cwd, stdout=subprocess.DEVNULL)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return wall, cpu, load
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("lessons", nargs="+", metavar="NN", help="master name prefixes, e.g. 07 14")
+    p.add_argument("--before", default="main", help="git revision to compare with (default main)")
+    p.add_argument("--repeat", type=int, default=1, help="runs of each version (the best kept)")
+    args = p.parse_args(argv)
+    if args.repeat < 1:
+        p.error(f"--repeat must be >= 1, got {args.repeat}")
+    print(f"{os.cpu_count()} CPUs; before = {args.before}, after = this checkout ({ROOT})")
+    print(f"{'lesson':<34} {'version':<7} {'wall s':>8} {'CPU s':>8} {'load':>5}")
+    with tempfile.TemporaryDirectory(prefix="gpsaccel-bench-lessons-") as tmp_name:
+        tmp = Path(tmp_name)
+        trees = {"before": _unpack(args.before, tmp), "after": ROOT}
+        for prefix in args.lessons:
+            best: dict[str, tuple[float, float, float]] = {}
+            name = prefix
+            for _ in range(args.repeat):
+                for version, tree in trees.items():
+                    master = _lesson(tree, prefix)
+                    if master is None:
+                        continue
+                    name = master.stem
+                    nb = _solutions_copy(tree, master, tmp)
+                    try:
+                        result = run_once(tree, nb, tmp)
+                    finally:
+                        nb.unlink(missing_ok=True)
+                    if version not in best or result[1] < best[version][1]:
+                        best[version] = result
+            for version in trees:
+                if version not in best:
+                    print(f"{name:<34} {version:<7} {'(new)' if version == 'before' else '-':>8}")
+                    continue
+                wall, cpu, load = best[version]
+                print(f"{name:<34} {version:<7} {wall:8.1f} {cpu:8.1f} {load:5.1f}")
+            if len(best) == 2:
+                print(f"{'':<34} {'after/before':<7}  wall {best['after'][0] / best['before'][0]:.2f}, "
+                      f"CPU {best['after'][1] / best['before'][1]:.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
