@@ -55,13 +55,13 @@ def _lesson(tree: Path, prefix: str) -> Path | None:
 
 
 def _solutions_copy(tree: Path, master: Path, tmp: Path) -> Path:
-    """The solutions version of ``master`` written next to the tree's lessons (same folder depth),
-    built by the tree's own release code."""
+    """The solutions version of ``master``, built by the tree's own release code, written into
+    ``tmp`` (where ``gpsaccel.lessons.measure`` runs a lesson too: never into a checkout)."""
     code = ("import sys, nbformat; from pathlib import Path; from gpsaccel import lessons as L\n"
             "m = Path(sys.argv[1]); nb = nbformat.read(m, as_version=4)\n"
             "Path(sys.argv[2]).write_text(L.lab_text(L.solutions_version(nb, m.stem, "
             "L.measured(m.stem))), encoding='utf-8')\n")
-    target = tree / "lessons" / "solutions" / f"bench-{master.name}"
+    target = tmp / f"{'before' if tree != ROOT else 'after'}-{master.name}"
     subprocess.run([sys.executable, "-c", code, str(master), str(target)], check=True,
                    env=_env(tree), cwd=tmp)
     return target

@@ -583,9 +583,10 @@ def _chunk_sums(pl: EnsemblePlan, seed: int, start: int, stop: int) -> EnsembleS
 # ------------------------------------------------------------------------------ the result
 @dataclass(frozen=True, eq=False)
 class MonteCarloResult:
-    """The ensemble statistics of :func:`monte_carlo`.  Units: m, m/s, m/s² and their products.
+    """The ensemble statistics of :func:`monte_carlo`.  Units: m, m/s, m/s² and their products;
+    n below is the number of GPS epochs (151 on the defaults).
 
-    Attributes (n = n_gps epochs, 151 on the defaults)
+    Attributes
     ----------
     n_runs, seed, truth : what was run.
     t : (n,) GPS times (s).
