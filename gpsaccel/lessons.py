@@ -603,15 +603,19 @@ def _notebook(cells, nb):
     return out
 
 
-#: The first line of every solution cell in the solutions version.  JupyterLab shows a collapsed
-#: cell's first line in its placeholder: this line is what shows, not the solution's first step.
+#: How a solution cell starts in the solutions version.  JupyterLab shows a collapsed code cell's
+#: first line in its placeholder: this line is what shows, not the solution's first step.  A
+#: markdown cell shows its rendered text even when its source is hidden, so a markdown solution is
+#: wrapped in ``<details>``: closed until the student opens it (JupyterLab and the HTML pages).
 SOLUTION_LINE = {"code": "# Solution (open once you have tried)",
-                 "markdown": "*Solution (open once you have tried)*"}
+                 "markdown": "<details><summary>Solution (open once you have tried)</summary>"}
 
 
 def _solution_first_line(cell):
-    cell["source"] = SOLUTION_LINE[cell["cell_type"]] + "\n" + (
-        "\n" if cell["cell_type"] == "markdown" else "") + cell["source"]
+    if cell["cell_type"] == "markdown":
+        cell["source"] = f"{SOLUTION_LINE['markdown']}\n\n{cell['source']}\n\n</details>"
+    else:
+        cell["source"] = f"{SOLUTION_LINE['code']}\n{cell['source']}"
     return cell
 
 

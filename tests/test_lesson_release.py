@@ -49,8 +49,9 @@ def test_the_index_tells_a_pip_user_what_to_run(tmp_path, monkeypatch):
 
 
 def test_a_collapsed_solution_shows_a_neutral_first_line():
-    """JupyterLab's placeholder for a collapsed cell shows its first line: in the solutions
-    version that line is the same for every solution, never the solution's first step."""
+    """JupyterLab's placeholder for a collapsed code cell shows its first line: in the solutions
+    version that line is the same for every solution, never the solution's first step; a
+    markdown solution (rendered even when its source is hidden) is a closed <details>."""
     nb = nbformat.v4.new_notebook()
     sol = nbformat.v4.new_code_cell("x = secret_method()", id="s1")
     sol.metadata["tags"] = [L.SOLUTION]
@@ -59,7 +60,8 @@ def test_a_collapsed_solution_shows_a_neutral_first_line():
     nb.cells = [sol, text]
     out = L.solutions_version(nb, "99-x").cells
     assert [c.source.splitlines()[0] for c in out] == [L.SOLUTION_LINE["code"], L.SOLUTION_LINE["markdown"]]
-    assert out[0].source.endswith("x = secret_method()") and out[1].source.endswith("Because of the method.")
+    assert out[0].source.endswith("x = secret_method()")
+    assert out[1].source.endswith("Because of the method.\n\n</details>")   # shown only when opened
     assert all(c.metadata["jupyter"]["source_hidden"] for c in out)
 
 
