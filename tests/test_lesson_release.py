@@ -72,3 +72,12 @@ def test_a_slow_cell_says_so_in_words():
     first = cell.source.splitlines()[0]
     assert first.startswith("# Slow cell: about 10 s (measured)")
     assert "⏱" not in cell.source
+
+
+def test_the_answers_module_holds_a_matrix_within_the_line_length():
+    table = {"10.2": [[0.5, -0.0, 0.014] * 4] * 6, "01.2": 7.779839051954151, "12.1": 25}
+    text = L.answers_text(table)
+    namespace: dict = {}
+    exec(text, namespace)
+    assert namespace["ANSWERS"] == table
+    assert max(len(line) for line in text.splitlines()) <= 110
