@@ -1,6 +1,8 @@
 """Lessons' Run All at full size, before and after a change, side by side in one run.
 
     python benchmarks/lessons.py 07 00 14 [--before main] [--repeat 1]
+    python benchmarks/lessons.py            # every lesson whose master differs from main's
+
 
 For each lesson (a master's name prefix) the solutions version runs top to bottom in a fresh
 kernel, as ``python -m gpsaccel.lessons measure`` runs it, once with the code of this checkout
@@ -87,20 +89,35 @@ def run_once(tree: Path, notebook: Path, cwd: Path) -> tuple[float, float, float
     return wall, cpu, load
 
 
+def changed_lessons(revision: str) -> list[str]:
+    """The masters that differ from (or are not in) ``revision``, as name prefixes."""
+    out = subprocess.run(["git", "-C", str(ROOT), "diff", "--name-only", revision, "--",
+                          "lessons/masters"], capture_output=True, text=True, check=True).stdout
+    new = subprocess.run(["git", "-C", str(ROOT), "ls-files", "--others", "--exclude-standard",
+                          "lessons/masters"], capture_output=True, text=True, check=True).stdout
+    names = {Path(line).stem for line in (out + new).split() if line.endswith(".ipynb")}
+    return sorted(n for n in names if (ROOT / "lessons" / "masters" / f"{n}.ipynb").exists())
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("lessons", nargs="+", metavar="NN", help="master name prefixes, e.g. 07 14")
+    p.add_argument("lessons", nargs="*", metavar="NN",
+                   help="master name prefixes, e.g. 07 14 (default: the masters changed since --before)")
     p.add_argument("--before", default="main", help="git revision to compare with (default main)")
     p.add_argument("--repeat", type=int, default=1, help="runs of each version (the best kept)")
     args = p.parse_args(argv)
     if args.repeat < 1:
         p.error(f"--repeat must be >= 1, got {args.repeat}")
+    lessons = args.lessons or changed_lessons(args.before)
+    if not lessons:
+        print(f"no lesson master differs from {args.before}: nothing to measure")
+        return 0
     print(f"{os.cpu_count()} CPUs; before = {args.before}, after = this checkout ({ROOT})")
     print(f"{'lesson':<34} {'version':<7} {'wall s':>8} {'CPU s':>8} {'load':>5}")
     with tempfile.TemporaryDirectory(prefix="gpsaccel-bench-lessons-") as tmp_name:
         tmp = Path(tmp_name)
         trees = {"before": _unpack(args.before, tmp), "after": ROOT}
-        for prefix in args.lessons:
+        for prefix in lessons:
             best: dict[str, tuple[float, float, float]] = {}
             name = prefix
             for _ in range(args.repeat):
