@@ -42,15 +42,19 @@ run: $(VENV)/.installed-core
 
 # PYTEST_ARGS: more arguments for pytest (e.g. -m "not slow"); empty runs everything
 PYTEST_ARGS ?=
+# --dist loadscope: each module (and class) runs whole on one worker, so a module fixture (a graded
+# class, a Monte Carlo ensemble, a sweep) is built once, not once per worker that got one of its
+# tests (with --dist load the attack and coop classes were graded on both workers)
+XDIST = $(if $(filter-out 0,$(JOBS)),-n $(JOBS) --dist loadscope)
 test: $(VENV)/.installed-test
-	MPLBACKEND=Agg $(BIN)/python -m pytest -q $(if $(filter-out 0,$(JOBS)),-n $(JOBS)) $(PYTEST_ARGS)
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q $(XDIST) $(PYTEST_ARGS)
 
 # the core's tests (the Kalman core, the calibration system, the package's shape) without the
 # slow ones (notebooks, wheels, browsers, big Monte Carlo): under a minute on two idle cores
 FAST_TESTS ?= tests/kalman tests/calibration tests/test_validation.py tests/test_layout.py \
               tests/test_packaging.py
 test-fast: $(VENV)/.installed-test
-	MPLBACKEND=Agg $(BIN)/python -m pytest -q -m "not slow" $(if $(filter-out 0,$(JOBS)),-n $(JOBS)) $(FAST_TESTS)
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q -m "not slow" $(XDIST) $(FAST_TESTS)
 
 # LAB_FLAGS: e.g. --no-browser, --port 8890.  As root (a container, a lab machine's image) JupyterLab
 # refuses to start without --allow-root: it is added when `id -u` is 0.  The pre-save hook saves a

@@ -8,6 +8,8 @@ so their modules need not change: each entry is a node id prefix ("file" or "fil
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 SLOW: tuple[str, ...] = (
@@ -44,3 +46,148 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     stale = [p for p in SLOW if p not in used and p.split("::")[0] in files and "::" in p]
     if stale:
         raise pytest.UsageError(f"tests/conftest.py SLOW names tests that do not exist: {stale}")
+
+
+# ---------------------------------------------------------------------------- shared, cached work
+# Executing a notebook or running ``otter assign`` costs seconds to minutes; these fixtures do each
+# piece of work once per content: the result is kept on disk under a key that hashes everything
+# it depends on (the file's bytes, the gpsaccel package's source, the Python and library
+# versions, the arguments), so a change to any of them re-executes, and a file lock lets the
+# xdist workers of one run share it.  GPSACCEL_TEST_CACHE names the folder (default
+# .pytest_cache/gpsaccel beside tests/); GPSACCEL_TEST_CACHE=off executes every time.
+
+_ROOT = Path(__file__).resolve().parent.parent
+_DEPENDENCIES = ("numpy", "scipy", "filterpy", "matplotlib", "ipykernel", "jupyter_client",
+                 "nbclient", "nbconvert", "nbformat", "jupyter_server_mathjax", "otter-grader",
+                 "tqdm", "ipywidgets")
+
+
+def _package_digest(root: Path) -> str:
+    """sha256 over every file of the package at ``root`` (source, templates, data; not bytecode),
+    the Python version and the versions of the libraries a notebook imports."""
+    import hashlib
+    import importlib.metadata as md
+    import sys
+
+    h = hashlib.sha256(sys.version.encode())
+    for name in _DEPENDENCIES:
+        try:
+            h.update(f"{name}={md.version(name)};".encode())
+        except md.PackageNotFoundError:
+            h.update(f"{name}=none;".encode())
+    for path in sorted(root.rglob("*")):
+        if path.is_file() and "__pycache__" not in path.parts and path.suffix != ".pyc":
+            h.update(str(path.relative_to(root)).encode() + b"\0" + path.read_bytes() + b"\0")
+    return h.hexdigest()
+
+
+class DiskCache:
+    """Results on disk, ``folder/kind/key``: ``key(*parts)`` hashes the parts with the package's
+    digest; ``path(kind, key, make)`` returns the entry, made by ``make(target)`` when missing
+    (one maker per key across processes, under a lock)."""
+
+    def __init__(self, folder: Path, package: Path | None = None):
+        import gpsaccel
+
+        self.folder = folder
+        self.package = package or Path(gpsaccel.__file__).resolve().parent  # default: imported
+        self._digest: str | None = None
+
+    @property
+    def package_digest(self) -> str:
+        if self._digest is None:
+            self._digest = _package_digest(self.package)
+        return self._digest
+
+    def key(self, *parts: bytes | str) -> str:
+        import hashlib
+
+        h = hashlib.sha256(self.package_digest.encode())
+        for part in parts:
+            h.update(b"\0" + (part if isinstance(part, bytes) else part.encode()))
+        return h.hexdigest()[:32]
+
+    def path(self, kind: str, key: str, make) -> Path:
+        """The cached entry ``folder/kind/key`` (a file or folder), made by ``make(target)`` under
+        the key's lock when it is missing; a failed ``make`` leaves nothing behind."""
+        import fcntl
+        import os
+        import tempfile
+
+        where = self.folder / kind
+        where.mkdir(parents=True, exist_ok=True)
+        final = where / key
+        with open(where / f"{key}.lock", "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)  # another worker making it: wait for it
+            if not final.exists():
+                with tempfile.TemporaryDirectory(dir=where, prefix=f".{key}-") as tmp:
+                    made = Path(tmp) / "entry"
+                    make(made)
+                    os.replace(made, final)
+            fcntl.flock(lock, fcntl.LOCK_UN)
+        return final
+
+
+@pytest.fixture(scope="session")
+def disk_cache(tmp_path_factory) -> DiskCache:
+    """The cache of expensive results; with GPSACCEL_TEST_CACHE=off, a folder of this session."""
+    import os
+
+    setting = os.environ.get("GPSACCEL_TEST_CACHE", "")
+    if setting.lower() in ("off", "0", "no"):  # once per worker and run
+        return DiskCache(tmp_path_factory.getbasetemp() / "gpsaccel-cache")
+    return DiskCache(Path(setting) if setting else _ROOT / ".pytest_cache" / "gpsaccel")
+
+
+@pytest.fixture(scope="session")
+def executed_lesson(disk_cache):
+    """``executed_lesson(path, runs=None, timeout=600)``: the notebook at ``path`` executed top to
+    bottom by :func:`gpsaccel.lessons.execute` (a fresh kernel, in its own folder), as a new
+    ``NotebookNode`` each call.  Executed once per notebook content, package source, library
+    versions and ``runs``; a notebook whose cell raises is not cached (the error propagates)."""
+    import nbformat
+
+    from gpsaccel.lessons import execute  # the real one, even where a test patches it
+
+    def run(path, runs: int | None = None, timeout: int = 600):
+        path = Path(path).resolve()
+        key = disk_cache.key("lesson", path.name, path.read_bytes(), repr(runs))
+
+        def make(target: Path) -> None:
+            nb = execute(path, timeout=timeout, runs=runs)
+            nbformat.write(nb, str(target))
+
+        return nbformat.read(str(disk_cache.path("lessons", key, make)), as_version=4)
+
+    return run
+
+
+@pytest.fixture(scope="session")
+def lesson_02_html(disk_cache):
+    """``gpsaccel lessons --html DIR --only 02 --runs 10`` run once, as a user runs it (its own
+    process): ``(DIR, returncode, stdout, stderr)``; DIR holds 02-error-model.html and
+    index.html.  Cached like :func:`executed_lesson` (the lesson's bytes, the package); a run
+    that fails is not cached: the fixture fails with its stderr."""
+    import os
+    import subprocess
+    import sys
+
+    from gpsaccel.lessons import solutions_dir
+
+    argv = ["lessons", "--only", "02", "--runs", "10"]
+    key = disk_cache.key("cli", *argv, (solutions_dir() / "02-error-model.ipynb").read_bytes())
+
+    def make(target: Path) -> None:
+        target.mkdir()
+        proc = subprocess.run([sys.executable, "-m", "gpsaccel", *argv, "--html", str(target / "html")],
+                              capture_output=True, text=True, timeout=900,
+                              env=dict(os.environ, MPLBACKEND="Agg"))
+        assert proc.returncode == 0, f"gpsaccel {' '.join(argv)} --html: exit " \
+            f"{proc.returncode}\n{proc.stdout[-2000:]}\n{proc.stderr[-3000:]}"
+        (target / "returncode").write_text(str(proc.returncode))
+        (target / "stdout").write_text(proc.stdout)
+        (target / "stderr").write_text(proc.stderr)
+
+    entry = disk_cache.path("cli", key, make)
+    return (entry / "html", int((entry / "returncode").read_text()),
+            (entry / "stdout").read_text(), (entry / "stderr").read_text())

@@ -1,17 +1,24 @@
-"""``gpsaccel lessons``: executes the lessons and renders them as HTML with their figures."""
+"""``gpsaccel lessons``: executes the lessons and renders them as HTML with their figures.
+
+One real run renders lesson 02 (conftest's ``lesson_02_html``, shared with the browser test);
+the run without ``--html`` executes through conftest's ``executed_lesson`` (shared with
+tests/test_lessons.py)."""
 
 from __future__ import annotations
+
+import pytest
 
 from gpsaccel.cli import main
 
 
-def test_lessons_html_renders_a_lesson_with_its_figures(tmp_path, capsys):
-    assert main(["lessons", "--html", str(tmp_path), "--only", "02", "--runs", "10"]) == 0
-    html = (tmp_path / "02-error-model.html").read_text(encoding="utf-8")
+def test_lessons_html_renders_a_lesson_with_its_figures(lesson_02_html):
+    out_dir, returncode, out, err = lesson_02_html
+    assert returncode == 0, err
+    html = (out_dir / "02-error-model.html").read_text(encoding="utf-8")
     assert "image/png" in html and "Deriving" in html
     # the solutions version, as on the docs site: solutions there, collapsed
     assert "Solution (click to reveal)" in html and "exercise 02.3: right" in html
-    assert "1 lessons executed" in capsys.readouterr().out
+    assert "1 lessons executed" in out
 
 
 def test_lessons_refuses_an_unknown_lesson_and_a_tiny_ensemble(capsys):
@@ -21,12 +28,29 @@ def test_lessons_refuses_an_unknown_lesson_and_a_tiny_ensemble(capsys):
     assert "argument --runs: must be an integer >= 2" in capsys.readouterr().err
 
 
-def test_lessons_kernel_does_not_warn_about_tcp(tmp_path, capfd):
+def test_lessons_kernel_does_not_warn_about_tcp(lesson_02_html):
     """The kernel talks over private Unix sockets: no "running over TCP without encryption"."""
-    assert main(["lessons", "--only", "02", "--runs", "10"]) == 0
-    out, err = capfd.readouterr()
+    _, returncode, out, err = lesson_02_html
+    assert returncode == 0, err
     assert "without encryption" not in out + err
     assert "1 lessons executed" in out
+
+
+@pytest.mark.slow  # executes a lesson unless conftest's cache holds it
+def test_lessons_without_html_executes_the_student_version(monkeypatch, executed_lesson, capsys):
+    """Without --html the student version is executed, at the ensemble --runs asks for."""
+    from gpsaccel import lessons
+
+    calls = []
+
+    def execute(path, timeout=600, runs=None):
+        calls.append((path, runs))
+        return executed_lesson(path, runs=runs, timeout=timeout)
+
+    monkeypatch.setattr(lessons, "execute", execute)
+    assert main(["lessons", "--only", "02", "--runs", "20"]) == 0  # test_lessons.py's ensemble
+    assert calls == [(lessons.lessons_dir() / "02-error-model.ipynb", 20)]
+    assert "1 lessons executed" in capsys.readouterr().out
 
 
 def test_names_the_lessons_type_are_reachable_after_import_gpsaccel():

@@ -69,14 +69,15 @@ def _browser() -> str | None:
     return None
 
 
-def test_rendered_lesson_and_index_in_a_headless_browser(tmp_path):
-    """Render lesson 02 and the index, load them in headless Chromium, read back the DOM."""
+def test_rendered_lesson_and_index_in_a_headless_browser(lesson_02_html):
+    """Lesson 02 and the index as ``gpsaccel lessons --html`` renders them (conftest's
+    ``lesson_02_html``: the solutions version at 10 runs), loaded in headless Chromium: read
+    back the DOM."""
     browser = _browser()
     if browser is None:
         pytest.skip("no Chromium/Chrome installed (apt-get install chromium)")
-    from gpsaccel.lessons import render_html
-
-    render_html([lessons_dir() / "solutions" / "02-error-model.ipynb"], tmp_path, runs=10)
+    tmp_path, returncode, _, err = lesson_02_html
+    assert returncode == 0, err
     for page, must in [("02-error-model.html", ["Deriving", "<img", "Solution (click to reveal)"]),
                        ("index.html", ["02-error-model.html", "Report 004"])]:
         dom = subprocess.run(

@@ -1,7 +1,9 @@
 """The lessons: one master each (lessons/masters/), released as a student version (lessons/) without
 any solution and a solutions version (lessons/solutions/); both are exactly what the release step
 writes, so they cannot drift from the master.  The masters run (as their solutions version, at a
-small ensemble) with ✓ under every self-check; the student versions run with no answer printed."""
+small ensemble) with ✓ under every self-check; the student versions run with no answer printed.
+Each is executed once per content (conftest's ``executed_lesson``: a changed lesson or package
+executes again)."""
 
 from __future__ import annotations
 
@@ -233,8 +235,8 @@ def _outputs(cell) -> str:
 
 
 @pytest.mark.parametrize("master", MASTERS, ids=IDS)
-def test_solutions_version_runs_with_a_tick_under_every_self_check(master):
-    nb = L.execute(L.lessons_dir() / "solutions" / master.name, timeout=600, runs=SMALL_RUNS)
+def test_solutions_version_runs_with_a_tick_under_every_self_check(master, executed_lesson):
+    nb = executed_lesson(L.lessons_dir() / "solutions" / master.name, runs=SMALL_RUNS)
     for c in _tagged(nb, L.CHECK):
         out = _outputs(c)
         assert out.startswith("✓") and "\n" == out[-1] and out.count("\n") == 1, \
@@ -242,8 +244,8 @@ def test_solutions_version_runs_with_a_tick_under_every_self_check(master):
 
 
 @pytest.mark.parametrize("master", MASTERS, ids=IDS)
-def test_student_version_runs_and_shows_no_answer(master):
-    nb = L.execute(L.lessons_dir() / master.name, timeout=600, runs=SMALL_RUNS)
+def test_student_version_runs_and_shows_no_answer(master, executed_lesson):
+    nb = executed_lesson(L.lessons_dir() / master.name, runs=SMALL_RUNS)
     for c in nb.cells:
         out = _outputs(c)
         assert "<function" not in out, f"{master.name}: a stray repr {out[:80]!r}"

@@ -76,3 +76,30 @@ def kill_pids(pids) -> None:
 @pytest.fixture(scope="session")
 def notebook():
     return write_variant
+
+
+@pytest.fixture(scope="session")
+def otter_assigned(disk_cache):
+    """``otter_assigned(name, run_tests=False)``: the folder :func:`generate` (``otter assign``)
+    wrote for homework ``name`` (``student/``, ``autograder/``, ``NAME-autograder.zip``), run once
+    per content of the master's folder, package source and library versions (conftest's
+    ``disk_cache``; otter assign takes 10-40 CPU s).  Read it, do not write into it."""
+    from gpsaccel.assignments.generate import Generated, generate
+
+    skip = {"dist", "__pycache__", ".ipynb_checkpoints"}
+
+    def assigned(name: str, run_tests: bool = False) -> Generated:
+        master = master_notebook(name)
+        parts = [name, repr(run_tests)]
+        for path in sorted(master.parent.rglob("*")):
+            rel = path.relative_to(master.parent)
+            if path.is_file() and not skip & set(rel.parts) and path.suffix != ".zip" \
+                    and path.name != "kalman_filter.py":  # what generate copies
+                parts += [str(rel), path.read_bytes()]
+        key = disk_cache.key("otter-assign", *parts)
+        out = disk_cache.path("otter-assign", key,
+                              lambda target: generate(name, target, run_tests=run_tests))
+        return Generated(out / "student" / master.name, out / f"{name}-autograder.zip",
+                         out / "autograder" / master.name, out)
+
+    return assigned
