@@ -13,23 +13,27 @@ import numpy as np
 from gpsaccel.check.report import Report, as_array
 
 
-def call(report: Report, what: str, func: object, *args: object) -> object | None:
+def call(report: Report, what: str, func: object, *args: object, part: str = "") -> object | None:
     """``func(*args)``, or None with a finding (not defined, not callable, raised, returned
-    nothing)."""
+    nothing) about ``what`` (of ``part``: partial credit)."""
     if func is None or func is Ellipsis:
-        report.add("not-defined", f"{what} is not defined yet (or still `...`).")
+        report.add("not-defined", text="{where} is not defined yet (or still `...`).",
+                   where=what, part=part)
         return None
     if not callable(func):
-        report.add("not-defined", f"{what} must be a function; it is a {type(func).__name__}.")
+        report.add("not-defined", text="{where} must be a function; it is a {type}.", where=what,
+                   observed={"type": type(func).__name__}, part=part)
         return None
     try:
         out = func(*args)
     except Exception as exc:  # noqa: BLE001 - the student's code may raise anything
         tb = traceback.format_exception_only(type(exc), exc)[-1].strip()
-        report.add("exception", f"{what} raised {tb}")
+        report.add("exception", text="{where} raised {error}", where=what,
+                   observed={"error": tb}, part=part)
         return None
     if out is None:
-        report.add("returns-none", f"{what} returned None: end it with a return statement.")
+        report.add("returns-none", text="{where} returned None: end it with a return "
+                   "statement.", where=what, part=part)
     return out
 
 

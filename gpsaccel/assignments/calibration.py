@@ -62,69 +62,92 @@ def nees_reference(x_true: np.ndarray, x_hat: np.ndarray, P: np.ndarray, k: int 
     return eps, (float(lo), float(hi))
 
 
-def _number(report: Report, name: str, value: object) -> float | None:
+def _number(report: Report, name: str, value: object, part: str = "") -> float | None:
     try:
         out = float(np.asarray(value, dtype=float).reshape(()))
     except (TypeError, ValueError):
-        report.add("not-a-number", f"{name} must be one number; got {type(value).__name__} "
-                   f"{str(value)[:80]}.")
+        report.add("not-a-number", text="{where} must be one number; got {type} {value}.",
+                   where=name, observed={"type": type(value).__name__,
+                                         "value": str(value)[:80]}, part=part)
         return None
     if not math.isfinite(out):
-        report.add("not-a-number", f"{name} = {out}: it must be a finite number.")
+        report.add("not-a-number", text="{where} = {value}: it must be a finite number.",
+                   where=name, observed={"value": out}, part=part)
         return None
     return out
 
 
+#: The parts of question 3 (partial credit): the average NEES and its bounds.
+NEES_PARTS = ("average_nees", "nees_bounds")
+
+
 def nees_answer(nees_30: object, nees_bounds: object, N: int, x_true: np.ndarray,
                 x_hat: np.ndarray, P: np.ndarray) -> Report:
-    """Check ``nees_30`` and ``nees_bounds = (r1, r2)`` against the ensemble; never raises."""
+    """Check ``nees_30`` and ``nees_bounds = (r1, r2)`` against the ensemble; never raises.
+    Each finding names its part (:data:`NEES_PARTS`); the reference ε̄ and bounds are its
+    expected values (the instructor's), never in the student's text."""
     report = Report("question 3: NEES at 30 s")
     eps, (lo, hi) = nees_reference(x_true, x_hat, P)
     n = x_true.shape[-1]
-    value = _number(report, "nees_30", nees_30)
+    avg, bnd = NEES_PARTS
+    value = _number(report, "nees_30", nees_30, avg)
     if value is not None and not math.isclose(value, eps, rel_tol=RTOL):
         e = x_true[:, -1] - x_hat[:, -1]
         with_P = float(np.mean(np.einsum("ri,rij,rj->r", e, P[:, -1], e)))
         sd = np.sqrt(np.diagonal(P[:, -1], axis1=1, axis2=2))
+        mine = {"value": value, "N": N, "n": n}
         if math.isclose(value, N * eps, rel_tol=RTOL):
-            report.add("nees-sum", f"nees_30 = {value:.6g} is the sum over the {N} runs, "
-                       f"N·ε̄; the ensemble average is ε̄ = {eps:.6g}.")
+            text = ("nees_30 = {value:.6g} is the sum over the {N} runs, N·ε̄; the question asks "
+                    "for the ensemble average ε̄.")
+            code = "nees-sum"
         elif math.isclose(value, with_P, rel_tol=RTOL):
-            report.add("nees-not-inverted", f"nees_30 = {value:.6g} is eᵀ P e; the NEES weighs "
-                       f"the error by the inverse covariance, eᵀ P⁻¹ e (np.linalg.solve(P, e)).")
+            text = ("nees_30 = {value:.6g} is eᵀ P e; the NEES weighs the error by the inverse "
+                    "covariance, eᵀ P⁻¹ e (np.linalg.solve(P, e)).")
+            code = "nees-not-inverted"
         elif math.isclose(value, float(np.mean(np.sum((e / sd) ** 2, axis=1))), rel_tol=RTOL):
-            report.add("nees-diagonal", f"nees_30 = {value:.6g} uses only the variances "
-                       f"(Σ eᵢ²/Pᵢᵢ); the NEES is eᵀ P⁻¹ e with the whole P (its correlations).")
+            text = ("nees_30 = {value:.6g} uses only the variances (Σ eᵢ²/Pᵢᵢ); the NEES is "
+                    "eᵀ P⁻¹ e with the whole P (its correlations).")
+            code = "nees-diagonal"
         elif math.isclose(value, eps / n, rel_tol=RTOL):
-            report.add("nees-per-state", f"nees_30 = {value:.6g} is divided by the {n} states; "
-                       f"the NEES is eᵀ P⁻¹ e, of mean {n} for a consistent filter.")
+            text = ("nees_30 = {value:.6g} is divided by the {n} states; the NEES is eᵀ P⁻¹ e, "
+                    "of mean {n} for a consistent filter.")
+            code = "nees-per-state"
         else:
-            report.add("nees-value", f"nees_30 = {value:.6g}; the ensemble-average NEES at "
-                       f"t = 30 s (last GPS time) is ε̄ = {eps:.4g} (within {RTOL:g}). Use "
-                       f"e = x_true[:, -1] − x_hat[:, -1] and P[:, -1].")
+            text = ("nees_30 = {value:.6g} is not the ensemble-average NEES at t = 30 s (the "
+                    "last GPS time). Use e = x_true[:, -1] − x_hat[:, -1] and P[:, -1], and "
+                    "average eᵀ P⁻¹ e over the runs.")
+            code = "nees-value"
+        report.add(code, text=text, where="nees_30", observed=mine, expected={"ε̄": eps},
+                   part=avg)
     try:
         bounds = [float(b) for b in np.asarray(nees_bounds, dtype=float).reshape(-1)]
     except (TypeError, ValueError):
         bounds = []
     if len(bounds) != 2:
-        report.add("nees-bounds", f"nees_bounds must be two numbers (r1, r2); got "
-                   f"{str(nees_bounds)[:80]}.")
+        report.add("nees-bounds", text="nees_bounds must be two numbers (r1, r2); got "
+                   "{value}.", where="nees_bounds",
+                   observed={"value": str(nees_bounds)[:80]}, part=bnd)
     elif not all(math.isclose(b, w, rel_tol=1e-4) for b, w in zip(bounds, (lo, hi), strict=True)):
-        r1, r2 = bounds
         one = stats.chi2.ppf([0.025, 0.975], n)
+        mine = {"r1": bounds[0], "r2": bounds[1], "n": n, "N": N}
         if all(math.isclose(b, w, rel_tol=1e-4) for b, w in zip(bounds, one, strict=True)):
-            report.add("nees-bounds-one-run", f"nees_bounds = ({r1:.4g}, {r2:.4g}) are the 95 % "
-                       f"bounds of a single run's NEES, χ²({n}). The average of N = {N} runs "
-                       f"is much tighter: N·ε̄ ~ χ²({n}·N), so r = χ²⁻¹_{{{n * N}}}(0.025, 0.975)"
-                       f" / N = ({lo:.4g}, {hi:.4g}).")
+            report.add("nees-bounds-one-run", text="nees_bounds = ({r1:.4g}, {r2:.4g}) are the "
+                       "95 % bounds of a single run's NEES, χ²({n}). The average of N = {N} runs "
+                       "is much tighter: N·ε̄ ~ χ²({n}·N), so divide the χ² quantiles of n·N "
+                       "degrees of freedom by N.", where="nees_bounds", observed=mine,
+                       expected={"bounds": (lo, hi)}, part=bnd)
         else:
-            report.add("nees-bounds", f"nees_bounds = ({r1:.4g}, {r2:.4g}); N·ε̄ ~ χ²({n}·N) "
-                       f"with N = {N}, so the two-sided 95 % bounds are ({lo:.4g}, {hi:.4g}).")
+            report.add("nees-bounds", text="nees_bounds = ({r1:.4g}, {r2:.4g}) are not the "
+                       "two-sided 95 % bounds of the average: N·ε̄ ~ χ²({n}·N) with N = {N}.",
+                       where="nees_bounds", observed=mine, expected={"bounds": (lo, hi)},
+                       part=bnd)
     if report.passed:
         inside = lo <= eps <= hi
-        report.add("ok", f"ε̄(30 s) = {eps:.4g}, bounds ({lo:.4g}, {hi:.4g}): "
-                   + ("inside, the filter is consistent at 30 s." if inside else
-                      "outside (it happens 5 % of the time for a consistent filter)."), "note")
+        report.add("ok", severity="note", text="ε̄(30 s) = {eps:.4g}, bounds ({lo:.4g}, "
+                   "{hi:.4g}): {verdict}", observed={  # both right: the student's own numbers
+                       "eps": eps, "lo": lo, "hi": hi, "verdict": "inside, the filter is "
+                       "consistent at 30 s." if inside else "outside (it happens 5 % of the time "
+                       "for a consistent filter)."})
     report.sort()
     return report
 

@@ -75,7 +75,8 @@ def jacobians(jacobian_A: object, jacobian_B: object, jacobian_C: object, seed: 
         Report("Jacobians A, B, C")
     report.subject = "question 1: Jacobians A, B, C"
     for k in missing:
-        report.add("not-defined", f"jacobian_{k} is not defined yet (or still `...`).")
+        report.add("not-defined", text="{where} is not defined yet (or still `...`).",
+                   where=f"jacobian_{k}", part=k)
     report.sort()
     return report
 
@@ -128,8 +129,9 @@ def dt_linearization(func: object, seed: int = 0, n_random: int = 5,
         if out is None:
             return report
         if not isinstance(out, (tuple, list)) or len(out) != 3:
-            report.add("return-value", f"dt_linearization must return three matrices (F, G, H);"
-                       f" it returned a {type(out).__name__}.")
+            report.add("return-value", text="dt_linearization must return three matrices "
+                       "(F, G, H); it returned a {type}.", where="dt_linearization",
+                       observed={"type": type(out).__name__})
             return report
         for name, v, shape in zip("FGH", out, ((6, 6), (6, 4), (5, 6)), strict=True):
             arr = array(report, name, v, shape)
@@ -160,22 +162,24 @@ def dt_linearization(func: object, seed: int = 0, n_random: int = 5,
         if own is not None:
             want = eye + dt * own if name == "F" else dt * own if name == "G" else own
             if _close(mats[name], want):
-                report.add("uses-own-jacobian", f"{name} is {form} with your own "
-                           f"jacobian_{base}: right here (question 1 grades jacobian_{base}).",
-                           "note")
+                report.add("uses-own-jacobian", severity="note", text="{where} is {form} with "
+                           "your own jacobian_{base}: right here (question 1 grades "
+                           "jacobian_{base}).", where=name, observed={"form": form, "base": base})
                 continue
         if name == "G":
             A_ = np.stack([true_A(x, u) for x, u in zip(X, U, strict=True)])
             B_ = np.stack([true_B(x, u, model.L) for x, u in zip(X, U, strict=True)])
             zoh = (dt * eye + dt**2 / 2 * A_) @ B_  # A² = 0: ∫₀^ΔT e^{Aτ} dτ = ΔT I + ΔT²A/2
             if _close(mats[name], zoh):
-                report.add("zero-order-hold", "Your G is the exact zero-order-hold "
-                           "∫₀^ΔT e^{Aτ} dτ B = (ΔT·I + ΔT²·A/2) B. It is a better discretization"
-                           ", but the question asks for the course's Euler form G = ΔT·B.")
+                report.add("zero-order-hold", text="Your G is the exact zero-order-hold "
+                           "∫₀^ΔT e^{{Aτ}} dτ B = (ΔT·I + ΔT²·A/2) B. It is a better "
+                           "discretization, but the question asks for the course's Euler form "
+                           "G = ΔT·B.", where="G")
                 continue
         report.findings.extend(sub.findings)
     if report.passed:
-        report.add("ok", "F = I + ΔT·A, G = ΔT·B and H = C at every state checked.", "note")
+        report.add("ok", severity="note", text="F = I + ΔT·A, G = ΔT·B and H = C at every "
+                   "state checked.")
     report.sort()
     return report
 
@@ -263,8 +267,8 @@ def ekf(func: object, y: np.ndarray, x0: np.ndarray | None = None, P0: np.ndarra
         report.sort()
         return report
     if not isinstance(out, (tuple, list)) or len(out) != 2:
-        report.add("return-value", f"ekf must return a pair (x_hat, P); it returned a "
-                   f"{type(out).__name__}.")
+        report.add("return-value", text="ekf must return a pair (x_hat, P); it returned a "
+                   "{type}.", where="ekf", observed={"type": type(out).__name__})
         return report
     x = array(report, "x_hat", out[0], (n, 6))
     P = array(report, "P", out[1], (n, 6, 6))
@@ -274,22 +278,25 @@ def ekf(func: object, y: np.ndarray, x0: np.ndarray | None = None, P0: np.ndarra
     dx, dP, first = _distances(x, P, x_ref, P_ref)
     report.details.update({"dx_sigma": dx, "dP_sigma2": dP})
     if first < 0:
-        report.add("matches-reference", f"x̂ and P match the course EKF on {label} to "
-                   f"{EKF_TOL:g} σ (largest distances {dx:.2g} σ, {dP:.2g} σσ).", "note")
+        report.add("matches-reference", severity="note", text="x̂ and P match the course EKF "
+                   "on {where} to {tol:g} σ (largest distances {dx:.2g} σ, {dP:.2g} σσ).",
+                   where=label, observed={"tol": EKF_TOL, "dx": dx, "dP": dP})
         return report
     for code, what in EKF_MISTAKES.items():
         xm, Pm = _ref(y, x0, P0, Q, R, code)
         if _distances(x, P, xm, Pm)[2] < 0:
-            report.add(code, f"Your EKF matches the course EKF with one mistake: {what}. "
-                       + _EKF_HINTS[code])
+            report.add(code, text="Your EKF matches the course EKF with one mistake: {what}. "
+                       "{hint}", where=label, observed={"what": what, "hint": _EKF_HINTS[code]})
             return report
     t = model.t
-    report.add("ekf-mismatch", f"Your EKF differs from the course EKF from t = {t[first]:g} s "
-               f"(step {first}) on: x̂ by up to {dx:.3g} σ, P by up to {dP:.3g} σσ, and matches "
-               f"none of the typical mistakes ({', '.join(EKF_MISTAKES)}). "
-               + ("Row 0 must be (x0, P0): nothing is measured at t = 0. " if first == 0 else "")
-               + "Check the prediction (x̄ = model.step(x̂), M = F P Fᵀ + Q with "
-               "F = I + ΔT·A(x̂)) and the update (H = C(x̄), only the rows of y that are not NaN).")
+    report.add("ekf-mismatch", text="Your EKF differs from the course EKF from {where} on: x̂ "
+               "by up to {dx:.3g} σ, P by up to {dP:.3g} σσ, and matches none of the typical "
+               "mistakes ({codes}). {row0}Check the prediction (x̄ = model.step(x̂), M = F P Fᵀ + "
+               "Q with F = I + ΔT·A(x̂)) and the update (H = C(x̄), only the rows of y that are "
+               "not NaN).", where=f"t = {t[first]:g} s (step {first})", observed={
+                   "dx": dx, "dP": dP, "codes": ", ".join(EKF_MISTAKES),
+                   "row0": "Row 0 must be (x0, P0): nothing is measured at t = 0. "
+                   if first == 0 else ""})
     return report
 
 

@@ -40,6 +40,7 @@ The class (:func:`grade`):
 
 from __future__ import annotations
 
+import ast
 import csv
 import io
 import json
@@ -171,12 +172,49 @@ def unusable(name: str, student: str, file: str, status: str, message: str) -> G
     return g
 
 
+#: The longest cell read as a candidate otter cell (its init, ``grader.check``: one line each).
+_OTTER_CELL_CHARS = 2000
+
+
+def _otter_call(node: ast.stmt) -> bool:
+    """``import otter``, ``grader = otter.Notebook(...)`` or ``grader.<method>(...)`` with
+    constant arguments (check, check_all, export, ...)."""
+    if isinstance(node, ast.Import):
+        return all(a.name == "otter" and a.asname is None for a in node.names)
+    value = node.value if isinstance(node, (ast.Assign, ast.Expr)) else None
+    if isinstance(node, ast.Assign) and not (
+            len(node.targets) == 1 and isinstance(node.targets[0], ast.Name)
+            and node.targets[0].id == "grader"):
+        return False
+    if not isinstance(value, ast.Call) or not isinstance(value.func, ast.Attribute):
+        return False
+    owner = value.func.value
+    args = [*value.args, *(k.value for k in value.keywords)]
+    return (isinstance(owner, ast.Name) and owner.id == ("otter" if isinstance(node, ast.Assign)
+                                                         else "grader")
+            and all(isinstance(a, ast.Constant) for a in args))
+
+
+def is_otter_cell(source: str) -> bool:
+    """True for a cell of otter's own (its init cell, a ``grader.check("q1")`` cell): every
+    statement is one of :func:`_otter_call`'s.  The grader checks the answers itself, so these
+    cells are not run (they would only fail: no otter, no ``grader``, no tests in the box)."""
+    if len(source) > _OTTER_CELL_CHARS or "otter" not in source and "grader" not in source:
+        return False
+    try:
+        tree = ast.parse(source)
+    except (SyntaxError, ValueError, RecursionError, MemoryError):
+        return False
+    return bool(tree.body) and all(_otter_call(node) for node in tree.body)
+
+
 def _prepare(nb: nbm.Notebook, variant: dict) -> nbm.Notebook:
-    """The cells to run: the variant cell replaced by the student's, data-only cells left out."""
+    """The cells to run: the variant cell replaced by the student's, data-only cells and otter's
+    own cells (:func:`is_otter_cell`) left out."""
     cells = [nbm.Cell(0, f"VARIANT = {variant!r}")]
     for cell in nb.cells:
         first = cell.source.lstrip().split("\n", 1)[0].strip().lower()
-        if first.startswith(SKIP_MARK):
+        if first.startswith(SKIP_MARK) or is_otter_cell(cell.source):
             continue
         if first.startswith(VARIANT_MARK):
             cells.append(nbm.Cell(cell.number, f"VARIANT = {variant!r}"))
@@ -283,12 +321,12 @@ def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
             reports[q.name] = _grade_file(q, nb, draws[q.name], timeout)
         elif any(x.status == "not-run" for x in answers[a:b]):
             rep = Report(q.name)
-            rep.add("not-run", "Not graded: the notebook stopped before this question "
+            rep.add("not-run", text="Not graded: the notebook stopped before this question "
                     "(see above).")
             reports[q.name] = rep
         else:
             reports[q.name] = _safe_grade(q, draws[q.name], answers[a:b])
-    scores = {q.name: float(q.points) if reports[q.name].passed else 0.0 for q in qs}
+    scores = {q.name: q.score(reports[q.name]) for q in qs}
     codes = {k: r.codes for k, r in reports.items()}
     g = Grade(student, file, scores, possible, status, "", codes, time.perf_counter() - t0)
     g.feedback = _feedback_text(g, notes, reports, variant)
@@ -301,8 +339,9 @@ def _safe_grade(q: Question, draw: Draw, answers: list[Answer]) -> Report:
         return q.grade(draw, answers)
     except Exception as exc:  # noqa: BLE001 - a bug of the grader: this question only
         rep = Report(q.name)
-        rep.add("grader-error", f"The grader failed on this question ({type(exc).__name__}); "
-                "tell your instructor.")
+        rep.add("grader-error", f"{type(exc).__name__}: {exc}", text="The grader failed on "
+                "this question ({type}); tell your instructor.",
+                observed={"type": type(exc).__name__})
         return rep
 
 
@@ -311,8 +350,9 @@ def _grade_file(q: Question, nb: nbm.Notebook, draw: Draw, timeout: float) -> Re
     found = nb.writefile(q.file)
     if found is None:
         rep = Report(q.name)
-        rep.add("no-file", f"The notebook has no cell `%%writefile {q.file}`: the question asks "
-                f"for the function in that file (keep the cell's first line as it is).")
+        rep.add("no-file", text="The notebook has no cell `%%writefile {file}`: the question "
+                "asks for the function in that file (keep the cell's first line as it is).",
+                observed={"file": q.file})
         return rep
     with tempfile.TemporaryDirectory(prefix="gpsaccel-file-") as tmp:
         path = Path(tmp) / q.file
@@ -321,45 +361,18 @@ def _grade_file(q: Question, nb: nbm.Notebook, draw: Draw, timeout: float) -> Re
             return q.grade_file(path, draw, timeout)
         except Exception as exc:  # noqa: BLE001 - a bug of the grader: this question only
             rep = Report(q.name)
-            rep.add("grader-error", f"The grader failed on this question "
-                    f"({type(exc).__name__}); tell your instructor.")
+            rep.add("grader-error", f"{type(exc).__name__}: {exc}", text="The grader failed on "
+                    "this question ({type}); tell your instructor.",
+                    observed={"type": type(exc).__name__})
             return rep
 
 
 # --------------------------------------------------------------------------------- feedback
-_NUMBER = re.compile(r"(?<![\w₀-₉.])[-+−]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?(?![\w.])")
-_KEEP = re.compile(r"(t\s*=\s*|step\s+|cell\s+|run\s+|case\s+|row\s+|column\s+|shape\s*\(?)$",
-                   re.IGNORECASE)
-_EXPECTED = re.compile(r"\b(should be|expected|the right value is|instead of|"
-                       r"the ensemble average is|the right one is)\s+"
-                       r"(?:\[[^\n]*?\]+|\([^)\n]*\)|[^\s,;]+)", re.IGNORECASE)
-
-
-def redact(text: str) -> str:
-    """A finding's text without the expected values: every number that is not a location (a
-    time, a step, a cell, a shape) becomes "…", and whatever follows "should be"/"expected"
-    is dropped."""
-    # whatever follows "should be"/"expected" is dropped (a value or a formula: the answer); after
-    # "instead of" only a value is: a name there ("instead of Φ") is the mistake itself
-    def drop(m: re.Match) -> str:
-        kept = m.group(1).lower() == "instead of" and not re.search(r"\d", m.group(0)[len(m.group(1)):])
-        return m.group(0) if kept else m.group(1) + " …"
-
-    text = _EXPECTED.sub(drop, text)
-
-    def repl(m: re.Match) -> str:
-        before = text[max(0, m.start() - 12):m.start()]
-        after = text[m.end():m.end() + 3]
-        if _KEEP.search(before) or re.match(r"\s*s\b", after) or re.match(r"\s*[×x,)]", after) \
-                and re.search(r"\(\s*[\d, ]*$", before):
-            return m.group(0)
-        return "…"
-
-    return _NUMBER.sub(repl, text)
-
-
 def _feedback_text(g: Grade, notes: list[str], reports: dict[str, Report],
                    variant: dict) -> str:
+    """The student's feedback: the notes about their notebook (its own cells' errors, where it
+    stopped) and, per question, the student's projection of each finding
+    (:meth:`gpsaccel.check.report.Finding.for_student`: no expected value reaches this text)."""
     lines = [f"{g.student}: {g.total:g} / {g.max_total:g} points ({g.status})"]
     if variant:
         lines.append("Your variant: " + ", ".join(f"{k} = {v}" for k, v in variant.items()))
@@ -372,10 +385,10 @@ def _feedback_text(g: Grade, notes: list[str], reports: dict[str, Report],
         lines.append(f"{q}: {g.scores.get(q, 0):g} / {points:g}")
         rep = reports.get(q)
         seen = set()
-        for f in rep.findings if rep else []:
+        for f in rep.for_student().findings if rep else []:
             if f.severity == "note" and f.code not in ("uses-own-jacobian",):
                 continue
-            text = f"{f.code}: {redact(f.message.splitlines()[0])}"
+            text = f"{f.code}: {f.message.splitlines()[0]}"
             if text in seen:
                 continue  # each failure once
             seen.add(text)

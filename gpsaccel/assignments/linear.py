@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from gpsaccel.assignments._answers import array
+from gpsaccel.check.findings import mistake_finding
 from gpsaccel.check.report import Report
 from gpsaccel.kalman.epochs import (
     LinearCatalogue,
@@ -98,14 +99,18 @@ def matrices_answer(model: LinearModel, given: dict[str, object],
         combo = explanations(model, k, a)
         if combo:
             for m in combo:
-                report.add(m.code, f"{k}: {m.message}")
+                mistake_finding(report, m, f"{k}: ", where=k, part=k)
             continue
         bad = [_elem(k, tuple(int(i) for i in idx)) for idx in np.argwhere(~ok)]
         verb = "differs" if len(bad) == 1 else "differ"
-        report.add("matrix-value", f"{k}: {', '.join(bad[:6])}{' ...' if len(bad) > 6 else ''}"
-                   f" {verb} from the model's (wrong at {len(bad)} of {ok.size} elements). "
-                   f"Check it against the model's equations and your variant's numbers.")
+        report.add("matrix-value", text="{where}: {elements} {verb} from the model's (wrong at "
+                   "{n_bad} of {n} elements). Check it against the model's equations and your "
+                   "variant's numbers.", where=k, part=k, observed={
+                       "elements": ", ".join(bad[:6]) + (" ..." if len(bad) > 6 else ""),
+                       "verb": verb, "n_bad": len(bad), "n": ok.size},
+                   expected={k: right[k]})
     if report.passed:
-        report.add("ok", f"{', '.join(MATRICES)} are the model's (to {RTOL:g} relative).", "note")
+        report.add("ok", severity="note", text="{names} are the model's (to {rtol:g} "
+                   "relative).", observed={"names": ", ".join(MATRICES), "rtol": RTOL})
     report.sort()
     return report

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import hashlib
 import hmac
+import math
 import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -133,18 +134,21 @@ def _give(a: Answer, pick: int | None, r: Read, name: str) -> object:
     raise StudentError(a.message or f"{name} could not be called ({a.status})")
 
 
-def value(report: Report, name: str, a: Answer) -> np.ndarray | None:
-    """The variable ``name`` the box read, or None with a finding (not defined, wrong shape)."""
+def value(report: Report, name: str, a: Answer, part: str = "") -> np.ndarray | None:
+    """The variable ``name`` the box read, or None with a finding (not defined, wrong shape),
+    of ``part`` (partial credit)."""
     if a.status == "ok":
         return a.values[0]
     if a.status in ("not-defined", "not-run"):
-        report.add("not-defined", f"{name} is not defined (or still `...`) after the notebook "
-                   f"has run.")
+        report.add("not-defined", text="{where} is not defined (or still `...`) after the "
+                   "notebook has run.", where=name, part=part)
     elif a.status == "shape":
-        report.add("shape", f"{name} has shape {a.shape}; see the question for its shape.")
+        report.add("shape", text="{where} has shape {shape}; see the question for its shape.",
+                   where=name, observed={"shape": a.shape}, part=part)
     else:
-        report.add("not-a-matrix", f"{name} must be numbers; np.array({name}, dtype=float) "
-                   f"fails ({a.message}).")
+        report.add("not-a-matrix", text="{where} must be numbers; np.array({where}, "
+                   "dtype=float) fails ({error}).", where=name, observed={"error": a.message},
+                   part=part)
     return None
 
 
@@ -153,6 +157,9 @@ class Question:
     """One graded question of a homework.
 
     name, points : as in the master's ``# BEGIN QUESTION`` cell.
+    parts : (part, points) for a question with separately gradable parts (two functions, several
+        matrices): its :meth:`score` gives each part's share when the findings of the report
+        (:attr:`gpsaccel.check.report.Finding.part`) concern that part only.
     reads : the reads for a draw (empty for a file question).
     grade : the report from the draw and the answers (run outside the box, after it is empty).
     file : a question graded from the file the notebook writes with ``%%writefile FILE`` (its
@@ -166,6 +173,26 @@ class Question:
     grade: Callable[[Draw, list[Answer]], Report] | None = None
     file: str | None = None
     grade_file: Callable[..., Report] | None = None
+    parts: tuple[tuple[str, float], ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.parts and not math.isclose(sum(p for _, p in self.parts), self.points):
+            raise ValueError(f"parts of {self.name} must add up to its {self.points:g} points, "
+                             f"got {self.parts}")
+        if len({n for n, _ in self.parts}) != len(self.parts):
+            raise ValueError(f"parts of {self.name} must have distinct names, got {self.parts}")
+
+    def score(self, report: Report) -> float:
+        """The points ``report`` earns: all of them when it passes; with :attr:`parts`, the
+        points of every part without an error, unless an error concerns the whole question
+        (a finding without a part, or of a part not declared)."""
+        if report.passed:
+            return float(self.points)
+        failed = report.failed_parts()
+        names = {n for n, _ in self.parts}
+        if not self.parts or not failed <= names:
+            return 0.0
+        return float(sum(p for n, p in self.parts if n not in failed))
 
 
 def variant_number(secret: bytes, assignment: str, student: str) -> int:

@@ -42,6 +42,7 @@ from gpsaccel import registry
 from gpsaccel import sandbox as sb
 from gpsaccel._atomic import write_text
 from gpsaccel.check.problems import submission
+from gpsaccel.check.report import Report
 
 #: Seconds a check's process may take beyond the student's time limit (simulating the data,
 #: comparing, diagnosing) before it is killed as a checker error.
@@ -95,9 +96,16 @@ def find_submissions(paths: Iterable[str | os.PathLike]) -> tuple[list[Path], li
 
 def _check_one(path: str, n_runs: int | None, seed: int, timeout: float,
                **options: Any) -> dict:
-    report = submission(path, n_runs=n_runs, seed=seed, timeout=timeout, **options)
-    out = report.to_dict()
-    out["text"] = str(report)
+    return student_result(submission(path, n_runs=n_runs, seed=seed, timeout=timeout,
+                                     **options))
+
+
+def student_result(report: Report) -> dict:
+    """What ``gpsaccel check`` prints and writes of one report: the student's projection
+    (:meth:`~gpsaccel.check.report.Report.for_student`), its JSON and its table's text."""
+    student = report.for_student()
+    out = student.to_dict()
+    out["text"] = str(student)
     return out
 
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 
 from gpsaccel import sandbox as sb
-from gpsaccel.check.report import Report
+from gpsaccel.check.report import Report, used
 
 #: Characters of the student's printed output kept in a finding.
 OUTPUT_KEEP = 1500
@@ -168,19 +168,27 @@ def box_findings(report: Report, box: sb.BoxResult, calls: Sequence[sb.Call],
     report.details["sandbox"] = box.backend
     report.details["sandbox_limits"] = box.limit_backend  # cgroup2, cgroup1 or rlimit
     if box.output_bytes > OUTPUT_WARN and box.failure != "output-limit":
-        report.add("prints-a-lot", text["prints-a-lot"].format(**f), "warning")
+        _add(report, "prints-a-lot", text["prints-a-lot"], f, "warning")
     if box.killed:
         report.details["processes_killed"] = box.killed
-        report.add("left-processes", text["left-processes"].format(**f), "warning")
+        _add(report, "left-processes", text["left-processes"], f, "warning")
     if box.failure is None:
         returned_notes(report, box.returned or {}, text)
         return True
     failure = box.failure
     f.update(_runner_fields(failure, problem, outputs, f, text))
     key = failure if failure in text else "runner"
-    report.add((renames or {}).get(failure, failure if key != "runner" else "runner"),
-               text[key].format(**f))
+    _add(report, (renames or {}).get(failure, failure if key != "runner" else "runner"),
+         text[key], f)
     return False
+
+
+def _add(report: Report, code: str, template: str, fields: Mapping[str, object],
+         severity: str = "error") -> None:
+    """A finding whose student text is ``template``: every field here is the student's own
+    (their output, traceback, what they returned) or the check's limits, never an answer."""
+    report.add(code, severity=severity, text=template, observed=used(template, fields),
+               where=str(fields.get("label", "")))
 
 
 def _runner_fields(failure: str, problem: dict, outputs: Sequence[sb.Output],
@@ -229,7 +237,24 @@ def returned_notes(report: Report, returned: Mapping[str, Mapping], text: Mappin
     for name, desc in returned.items():
         typ = str(desc.get("type", ""))
         if typ in ("builtins.list", "builtins.tuple"):
-            report.add("returns-list", text["returns-list"].format(
-                name=name, type=typ.split(".")[-1]), "note")
+            report.add("returns-list", severity="note", text=text["returns-list"], where=name,
+                       observed={"name": name, "type": typ.split(".")[-1]})
         elif typ == "numpy.matrix":
-            report.add("returns-list", text["returns-matrix"].format(name=name), "note")
+            report.add("returns-list", severity="note", text=text["returns-matrix"], where=name,
+                       observed={"name": name})
+
+
+def mistake_finding(report: Report, mistake: object, prefix: str = "", where: str = "",
+                    severity: str = "error", part: str = "", **observed: object) -> None:
+    """A catalogue entry the student's output matches, as a finding: the student reads the
+    code's wording (:data:`gpsaccel.check.wording.STUDENT`) and the entry's variant (what their
+    filter does); the entry's message, which may quote the problem's right numbers, is the
+    instructor's.  ``prefix`` (e.g. the function's name) leads both."""
+    from gpsaccel.check.wording import STUDENT, UNWORDED
+
+    code, variant = mistake.code, mistake.variant  # type: ignore[attr-defined]
+    template = STUDENT.get(code, UNWORDED.replace("{code}", code))
+    report.add(code, f"{prefix}{mistake.message}", severity,  # type: ignore[attr-defined]
+               text="{prefix}" + template + " Your output matches a filter that makes this "
+               "mistake ({variant}).", where=where,
+               observed={"prefix": prefix, "variant": variant, **observed}, part=part)

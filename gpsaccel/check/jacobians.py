@@ -132,7 +132,8 @@ def _call(report: Report, name: str, fn: Callable[..., object], args: tuple, sha
         out = fn(*args)
     except Exception as exc:  # noqa: BLE001 - the student's function may raise anything
         tb = "".join(traceback.format_exception_only(type(exc), exc)).strip()
-        report.add("exception", f"{what} raised {tb} at x = {np.round(args[0], 4).tolist()}.")
+        report.add("exception", text="{where} raised {error} at x = {x}.", where=what,
+                   observed={"error": tb, "x": np.round(args[0], 4).tolist()})
         return None
     near = np.hypot(x[3] - x[0], x[4] - x[1]) < 0.1
     return as_array(report, what, out, shape, _RETURNED, x=np.round(x, 6).tolist(),
@@ -152,9 +153,11 @@ def _evaluate(report: Report, name: str, fn: object, X: np.ndarray, U: np.ndarra
               display: str | None = None) -> np.ndarray | None:
     display = display or name
     if not callable(fn):
-        report.add("not-callable", f"{display} must be a function {ARGS[name].replace(name, display, 1)} "
-                   f"returning the matrix at a state; got a {type(fn).__name__}. "
-                   f"(To check matrices at one state, use check.dt_model.)")
+        report.add("not-callable", text="{where} must be a function {signature} returning the "
+                   "matrix at a state; got a {type}. (To check matrices at one state, use "
+                   "check.dt_model.)", where=display, observed={
+                       "signature": ARGS[name].replace(name, display, 1),
+                       "type": type(fn).__name__})
         return None
     shape = SHAPES[name]
     out = np.empty((len(X),) + shape)
@@ -234,6 +237,8 @@ def _matrix_finding(report: Report, code: str, name: str, actual: np.ndarray,
     per_state = bad.reshape(len(X), -1).sum(axis=1)
     s = int(np.argmax(per_state))  # the state where most elements are wrong: show values there
     groups: dict[str, list[str]] = {}
+    mine: dict[str, list[str]] = {}
+    right: dict[str, str] = {}
     for idx in elems[:MAX_LISTED]:
         states = np.flatnonzero(bad[:, idx[0], idx[1]])
         k = s if bad[s][idx] else int(states[0])
@@ -245,15 +250,21 @@ def _matrix_finding(report: Report, code: str, name: str, actual: np.ndarray,
         groups.setdefault(cause, []).append(
             f"{_elem(display, *idx)} = {actual[k][idx]:.6g}, should be {want}{where} (wrong at "
             f"{states.size} of {len(X)} states)")
-    parts = [f"At {labels[s]} (x = {np.round(X[s], 4).tolist()}):"]
-    for cause, items in groups.items():
-        parts.append("; ".join(items) + (f". Likely cause: {cause}." if cause else "."))
+        mine.setdefault(cause, []).append(  # the student's value and where: no reference
+            f"{_elem(display, *idx)} = {actual[k][idx]:.6g}{where} is wrong (at {states.size} "
+            f"of {len(X)} states)")
+        right[f"{_elem(display, *idx)}{where}"] = want
+    head = f"At {labels[s]} (x = {np.round(X[s], 4).tolist()}):"
     more = len(elems) - MAX_LISTED
-    if more > 0:
-        parts.append(f"And {more} more elements.")
-    if unit_hint:
-        parts.append(unit_hint)
-    report.add(code, " ".join(parts))
+    tail = ([f"And {more} more elements."] if more > 0 else []) + ([unit_hint] if unit_hint
+                                                                   else [])
+
+    def text(items_by_cause: dict[str, list[str]]) -> str:
+        return " ".join([head] + ["; ".join(items) + (f". Likely cause: {c}." if c else ".")
+                                  for c, items in items_by_cause.items()] + tail)
+
+    report.add(code, text(groups), text="{said}", where=display, part=display,
+               observed={"said": text(mine)}, expected=right)
     return False
 
 
@@ -265,16 +276,18 @@ def _whole_matrix_causes(report: Report, name: str, actual: np.ndarray, expected
     if name == "A":
         eye = np.eye(6)
         if _close(actual, eye + dt * expected, rtol):
-            report.add(code, f"Your A is F = I + ΔT·A (ΔT = {dt:g} s), the DT transition; A is "
-                       f"the continuous-time Jacobian ∂f/∂x, without I and without ΔT "
-                       f"(A₁₃ = −vg·sin θg). Check F with check.dt_model.")
+            report.add(code, "(A₁₃ = −vg·sin θg)", text="Your A is F = I + ΔT·A (ΔT = {dt:g} "
+                       "s), the DT transition; A is the continuous-time Jacobian ∂f/∂x, without "
+                       "I and without ΔT. Check F with check.dt_model.", where="A",
+                       observed={"dt": dt})
             return True
         if _close(actual, dt * expected, rtol):
-            report.add(code, f"Your A is ΔT·A (ΔT = {dt:g} s); A is the continuous-time Jacobian "
-                       f"∂f/∂x, not multiplied by ΔT.")
+            report.add(code, text="Your A is ΔT·A (ΔT = {dt:g} s); A is the continuous-time "
+                       "Jacobian ∂f/∂x, not multiplied by ΔT.", where="A", observed={"dt": dt})
             return True
     if name == "B" and _close(actual, dt * expected, rtol):
-        report.add(code, f"Your B is G = ΔT·B (ΔT = {dt:g} s); B is the continuous-time ∂f/∂u.")
+        report.add(code, text="Your B is G = ΔT·B (ΔT = {dt:g} s); B is the continuous-time "
+                   "∂f/∂u.", where="B", observed={"dt": dt})
         return True
     return False
 
@@ -309,18 +322,20 @@ def jacobians(A: Callable | None = None, B: Callable | None = None, C: Callable 
         if fn is None:
             continue
         checked.append(name)
-        got = _evaluate(report, name, fn, X, U)
-        if got is None:
-            continue
-        want = _expected(name, X, U, model)
-        if not _whole_matrix_causes(report, name, got, want, model, rtol):
-            _matrix_finding(report, f"jacobian-{name}", name, got, want, X, labels, rtol)
+        mine = Report(name)  # this matrix's findings, its part (partial credit)
+        got = _evaluate(mine, name, fn, X, U)
+        if got is not None:
+            want = _expected(name, X, U, model)
+            if not _whole_matrix_causes(mine, name, got, want, model, rtol):
+                _matrix_finding(mine, f"jacobian-{name}", name, got, want, X, labels, rtol)
+        report.findings += mine.tag(name).findings
     if not checked:
         raise ValueError("pass at least one of A, B, C (the student's Jacobian functions)")
     if report.passed:
-        report.add("jacobians-right", f"{', '.join(checked)} agree with the analytic Jacobians "
-                   f"at all {len(X)} states (headings at ±π, bearings at ±π, vehicles 1 cm "
-                   f"apart included), to {rtol:g} relative.", "note")
+        report.add("jacobians-right", severity="note", text="{names} agree with the analytic "
+                   "Jacobians at all {n} states (headings at ±π, bearings at ±π, vehicles 1 cm "
+                   "apart included), to {rtol:g} relative.", observed={
+                       "names": ", ".join(checked), "n": len(X), "rtol": rtol})
     report.sort()
     report.seconds = time.perf_counter() - t0
     return report
@@ -387,8 +402,9 @@ def dt_model(F: object = None, G: object = None, H: object = None, Omega: object
         given = [DT_RIGHT[k] for k, v in (("F", F), ("G", G), ("H", H), ("Omega", Omega),
                                           ("Q", Q)) if v is not None]
         where = f"at all {len(X)} states" if len(X) > 1 else "at the given state"
-        report.add("dt-model-right", f"{', '.join(given)} {where} (ΔT = {model.dt:g} s), to "
-                   f"{rtol:g} relative.", "note")
+        report.add("dt-model-right", severity="note", text="{names} {where} (ΔT = {dt:g} s), "
+                   "to {rtol:g} relative.", observed={"names": ", ".join(given), "where": where,
+                                                      "dt": model.dt, "rtol": rtol})
     report.sort()
     report.seconds = time.perf_counter() - t0
     return report
@@ -466,7 +482,9 @@ def _check_dt_matrix(report: Report, name: str, value: object, X: np.ndarray, U:
         return
     for slip, why in form.slips:
         if _close(got, slip(J, dt), rtol):
-            report.add("dt-linearization", f"Your {why.format(dt=dt)}.")
+            # the student reads what their matrix is (before ";"), not the right form after it
+            report.add("dt-linearization", f"Your {why.format(dt=dt)}.", text="Your {what}.",
+                       where=name, part=name, observed={"what": why.split(";")[0].format(dt=dt)})
             return
     _matrix_finding(report, "dt-linearization", name, got, want, X, labels, rtol,
                     formulas=form.formulas(), unit_hint=form.hint.format(dt=dt))
@@ -476,10 +494,12 @@ def _matrix(report: Report, name: str, value: object, n: int) -> np.ndarray | No
     try:
         arr = np.array(value, dtype=float)
     except (TypeError, ValueError) as exc:
-        report.add("not-a-matrix", f"{name} must be an array of numbers; {exc}")
+        report.add("not-a-matrix", text="{where} must be an array of numbers; {error}",
+                   where=name, observed={"error": str(exc)})
         return None
     if arr.shape != (n, n) or not np.isfinite(arr).all():
-        report.add("shape", f"{name} must be a finite {n} x {n} matrix, got shape {arr.shape}.")
+        report.add("shape", text="{where} must be a finite {n} x {n} matrix, got shape {shape}.",
+                   where=name, observed={"n": n, "shape": arr.shape})
         return None
     return arr
 
@@ -490,25 +510,27 @@ def _check_noise(report: Report, Omega: object, Q: object, model: CoopModel, rto
         Om = _matrix(report, "Omega", Omega, 6)
         if Om is not None and not _close(Om[None], np.eye(6)[None], rtol):
             if _close(Om[None], dt * np.eye(6)[None], rtol):
-                report.add("omega-dt-gamma", f"Ω = ΔT·Γ = {dt:g}·I: the course's Qtrue is "
-                           f"already the covariance of the noise added per DT step "
-                           f"(x_{{k+1}} = F x_k + G u_k + w_k, w_k ~ N(0, Qtrue)), so Ω = I. "
-                           f"Ω = ΔT·Γ belongs to a continuous-time noise intensity; here it "
-                           f"shrinks Q by ΔT² = {dt**2:g}.")
+                report.add("omega-dt-gamma", text="Your Ω = ΔT·Γ = {dt:g}·I: the course's Qtrue "
+                           "is already the covariance of the noise added per DT step "
+                           "(x_{{k+1}} = F x_k + G u_k + w_k, w_k ~ N(0, Qtrue)). Ω = ΔT·Γ "
+                           "belongs to a continuous-time noise intensity; here it shrinks Q by "
+                           "ΔT² = {dt2:g}.", where="Ω", observed={"dt": dt, "dt2": dt**2},
+                           expected={"Ω": "I"})
             else:
-                report.add("omega-dt-gamma", f"Ω should be the identity (the course's Qtrue is "
-                           f"the per-step DT covariance); yours has diagonal "
-                           f"{np.round(np.diag(Om), 6).tolist()}.")
+                report.add("omega-dt-gamma", text="Your Ω is wrong (the course's Qtrue is the "
+                           "per-step DT covariance); yours has diagonal {diag}.", where="Ω",
+                           observed={"diag": np.round(np.diag(Om), 6).tolist()},
+                           expected={"Ω": "I"})
     if Q is not None:
         Qs = _matrix(report, "Q", Q, 6)
         if Qs is None:
             return
         for scale, what in ((dt, "ΔT·Qtrue"), (dt**2, "ΔT²·Qtrue = Ω Qtrue Ωᵀ with Ω = ΔT·I")):
             if _close(Qs[None], scale * Qt[None], rtol):
-                report.add("omega-dt-gamma", f"Your Q = {what}: the course's Qtrue is already "
-                           f"the covariance of the process noise per DT step of {dt:g} s, "
-                           f"so the filter's Q is Qtrue (or a tuned multiple of it), not scaled "
-                           f"by ΔT.")
+                report.add("omega-dt-gamma", text="Your Q = {what}: the course's Qtrue is "
+                           "already the covariance of the process noise per DT step of {dt:g} s, "
+                           "so the filter's Q is not scaled by ΔT.", where="Q",
+                           observed={"what": what, "dt": dt})
                 return
 
 

@@ -40,8 +40,9 @@ from numpy.typing import ArrayLike
 
 from gpsaccel import _validation as _v
 from gpsaccel._feedback import describe_miss
+from gpsaccel.check.findings import mistake_finding
 from gpsaccel.check.problems import Argument, Function, Problem
-from gpsaccel.check.report import Report
+from gpsaccel.check.report import Report, used
 from gpsaccel.kalman.consistency import (
     chi2_bounds,
     covariance_distance,
@@ -100,8 +101,9 @@ FINDINGS: dict[str, str] = {
                      "steps; the tolerance is {tol:g}. This is not a wrong M0, H or V: use "
                      "float64 throughout (no .astype(np.float32), z as given) and check again — "
                      "at float32 precision a small mistake could hide.",
-    "p-scaled": "Your P is the optimal P multiplied by {c:.6g} at every time{sym}. {x_note} M0, "
-                "H and V are not the problem: look at the line that symmetrises or scales P.",
+    "p-scaled": "Your P is the optimal P multiplied by one same factor at every time{sym}. "
+                "{x_note} M0, H and V are not the problem: look at the line that symmetrises or "
+                "scales P.",
     "epoch-shift": "Your outputs are shifted by one epoch, {where} (every row but the {end} "
                    "matches the optimal filter shifted). Store x̂ and P of time t_k in row k, "
                    "right after the update with z[k].",
@@ -268,6 +270,15 @@ class LinearProblem(Problem):
     def text(self, key: str, **fields: object) -> str:
         return {**FINDINGS, **self.messages}[key].format(**fields)
 
+    def add(self, report: Report, code: str, severity: str = "error", *,
+            expected: dict | None = None, **fields: object) -> None:
+        """A finding worded by the template of ``code``: every field here is the student's
+        (their output's distances, times, rows) or the check's; ``expected`` (the optimal
+        filter's numbers) goes to the instructor only."""
+        template = {**FINDINGS, **self.messages}[code]
+        report.add(code, severity=severity, text=template, observed=used(template, fields),
+                   expected=expected, where=str(fields.get("where", "")))
+
     # -------------------------------------------------------------------- the contract
     def contract(self, n_meas: int, meaning: str = "") -> tuple[Function, ...]:
         """The one function ``kalman_filter(z) -> (x_hat, P)`` for this problem's sizes."""
@@ -303,8 +314,7 @@ class LinearProblem(Problem):
         ans = self.answer(cases)  # the box is empty: now the answer may exist
         P_ok, x_ok = self._comparison(report, ans, x, P)
         if P_ok and x_ok:
-            report.add("matches-optimal", self.text("matches-optimal", tol=self.tol,
-                                                    n_runs=x.shape[0]), "note")
+            self.add(report, "matches-optimal", "note", tol=self.tol, n_runs=x.shape[0])
         elif not self.output_mistake(report, cases, ans, x, P, returned):
             self._diagnosis(report, cases, ans, x, P)
         if "low-precision" not in report.codes:  # float32's P is not symmetric to 1e-9
@@ -324,10 +334,10 @@ class LinearProblem(Problem):
             if bad.any():
                 runs = np.flatnonzero(bad.reshape(bad.shape[0], -1).any(axis=1))
                 first = np.argwhere(bad[runs[0]])[0]
-                report.add("nan-output", self.text(
-                    "nan-output", name=name, what="NaN" if np.isnan(arr).any() else "inf",
-                    bad_runs=runs.size, n_runs=arr.shape[0], run=runs[0], t=self.t[first[0]],
-                    row=first[0]))
+                self.add(report, "nan-output", name=name,
+                         what="NaN" if np.isnan(arr).any() else "inf", bad_runs=runs.size,
+                         n_runs=arr.shape[0], run=int(runs[0]), t=float(self.t[first[0]]),
+                         row=int(first[0]))
                 return False
         return True
 
@@ -349,8 +359,7 @@ class LinearProblem(Problem):
             f"  max |ΔP|/(σσ) = {dP.max():.3g}  at {self._where(iP, 'P')}\n"
             f"  max |Δx̂|/σ   = {dx.max():.3g}  at {self._where(ix, 'x')}")
         if spread > tol:
-            report.add("p-depends-on-data", self.text("p-depends-on-data", spread=spread),
-                       "warning")
+            self.add(report, "p-depends-on-data", "warning", spread=float(spread))
         return bool(dP.max() <= tol), bool(dx.max() <= tol)
 
     # --------------------------------------------------------- mistakes in what is returned
@@ -366,7 +375,8 @@ class LinearProblem(Problem):
             found = check(cases, ans, x, P, dx, dP, returned)
             if found is not None:
                 code, fields = found
-                report.add(code, self.text(code, tol=tol, t_last=t[-1], **fields))
+                self.add(report, code, expected=fields.pop("expected", None), tol=tol,
+                         t_last=float(t[-1]), **fields)
                 if code == "state-between-calls":
                     report.findings = [f for f in report.findings
                                        if f.code != "p-depends-on-data"]
@@ -407,7 +417,7 @@ class LinearProblem(Problem):
                       else f"Your x̂ differs too (by up to {dx.max():.3g} σ): the scaled P also "
                            f"feeds your gain.")
             sym = " — P + Pᵀ without the /2 when symmetrising" if abs(c - 2) < 1e-6 else ""
-            return "p-scaled", {"c": c, "x_note": x_note, "sym": sym}
+            return "p-scaled", {"expected": {"factor": c}, "x_note": x_note, "sym": sym}
         return None
 
     def _shifted(self, cases, ans, x, P, dx, dP, returned):
@@ -456,20 +466,20 @@ class LinearProblem(Problem):
             found = diag.covariance + diag.mean
             report.details["matched"] = [{"code": m.code, "variant": m.variant} for m in found]
             for m in found:
-                report.add(m.code, m.message)
+                mistake_finding(report, m)
             report.tables.append(f"catalogue: on every run your (x̂, P) match, to {tol:g} σ, "
                                  f"the filter that makes\n" + "\n".join(f"  {m}" for m in found))
             return
         if diag.covariance is not None:  # P recognised, x̂ not
             for m in diag.covariance:
-                report.add(m.code, m.message)
+                mistake_finding(report, m)
             xm = self.catalogue().build(diag.covariance).apply(cases.z)[0]
             dx = np.abs(x - xm) / ans.sd
             i = np.unravel_index(int(np.argmax(dx)), dx.shape)
             lead = ("Your P is the optimal one, so your model (Φ, Q, H, V, M0) is right, but"
                     if not diag.covariance else f"Your P matches {names(diag.covariance)}, and")
-            report.add("gain-or-residual", self.text("gain-or-residual", lead=lead, dx=dx.max(),
-                                                     where=self._where(i, "x"), step=self.step))
+            self.add(report, "gain-or-residual", lead=lead, dx=float(dx.max()),
+                     where=self._where(i, "x"), step=self.step)
             report.details["matched"] = [{"code": m.code, "variant": m.variant}
                                          for m in diag.covariance]
             return
@@ -485,9 +495,10 @@ class LinearProblem(Problem):
         # where and how, never the optimal filter's value (the answer itself)
         miss = describe_miss(float(P[r, first, a, b]), float(ans.P_ref[first, a, b]), typed=False)
         depart = f" Your output first departs at t = {t[first]:g} s: P{a + 1}{b + 1} {miss}."
-        report.add("p-mismatch", self.text("p-mismatch", d=float(dP.max()), hint=hint,
-                                           where=where, depart=depart,
-                                           matrices=self.text("p-mismatch.matrices")))
+        self.add(report, "p-mismatch", d=float(dP.max()), hint=hint, where=where, depart=depart,
+                 matrices=self.text("p-mismatch.matrices"),
+                 expected={f"P{a + 1}{b + 1} at t = {t[first]:g} s": float(
+                     ans.P_ref[first, a, b])})
         report.details["matched"] = []
 
     # ------------------------------------------------------------------ the information
@@ -502,10 +513,12 @@ class LinearProblem(Problem):
         bad = ~sym | (eig_min <= 0)
         if bad.any():
             times = np.flatnonzero(bad.any(axis=0))
-            report.add("p-not-positive-definite", f"Your P is not a covariance at {times.size} "
-                       f"times (first t = {t[times[0]]:g} s): it is not symmetric positive "
-                       f"definite, so NEES cannot be formed. A Joseph update, or symmetrising "
-                       f"P = (P + Pᵀ)/2, keeps it one.", "warning")
+            report.add("p-not-positive-definite", severity="warning", text="Your P is not a "
+                       "covariance at {n} times (first t = {t:g} s): it is not symmetric "
+                       "positive definite, so NEES cannot be formed. A Joseph update, or "
+                       "symmetrising P = (P + Pᵀ)/2, keeps it one.",
+                       where=f"t = {t[times[0]]:g} s",
+                       observed={"n": times.size, "t": float(t[times[0]])})
             return
         var = np.diagonal(P, axis1=-2, axis2=-1)
         z_mean = z_sample_mean(e.mean(axis=0), var.mean(axis=0), N)
@@ -537,21 +550,25 @@ class LinearProblem(Problem):
             + ", ".join(f"{s} {r:.3g}" for s, r in zip(states, ratio, strict=True)))
         i_mean = np.unravel_index(int(np.nanargmax(np.abs(z_mean))), z_mean.shape)
         i_nees = int(np.nanargmax(np.abs(z_nees)))
-        for v, what in (
-                (v_mean, f"Your errors do not average to zero: at {v_mean.where} the mean error "
-                         f"over {N} runs is {e.mean(axis=0)[i_mean]:.3g}, {v_mean.max_abs_z:.3g} "
-                         f"times its standard error √(P/N)"),
-                (v_nees, f"Your P does not describe your actual errors: at {v_nees.where} the "
-                         f"average NEES over {N} runs is {eps[i_nees]:.4g}, outside its 95% "
-                         f"bounds [{lo:.3f}, {hi:.3f}] (|z| = {v_nees.max_abs_z:.3g})")):
+        texts = (
+            (v_mean, "Your errors do not average to zero: at {where} the mean error over {N} runs "
+                     "is {value:.3g}, {z:.3g} times its standard error √(P/N)",
+             float(e.mean(axis=0)[i_mean]), {}),
+            (v_nees, "Your P does not describe your actual errors: at {where} the average NEES "
+                     "over {N} runs is {value:.4g}, outside its 95% bounds (|z| = {z:.3g})",
+             float(eps[i_nees]), {"nees_bounds": (float(lo), float(hi))}))
+        for v, what, value, bounds in texts:
             if not v.passed:
-                report.add("inconsistent", f"{what}; the test fails beyond |z| = "
-                           f"{v.threshold:.3g} (family-wise false-alarm rate {alpha:g} over "
-                           f"{v.n_tests} tests). This is what the mistake does to the "
-                           f"estimates.", "warning")
+                report.add("inconsistent", severity="warning", text=what + "; the test fails "
+                           "beyond |z| = {bound:.3g} (family-wise false-alarm rate {alpha:g} "
+                           "over {n_tests} tests). This is what the mistake does to the "
+                           "estimates.", where=v.where, observed={
+                               "N": N, "value": value, "z": v.max_abs_z, "bound": v.threshold,
+                               "alpha": alpha, "n_tests": v.n_tests}, expected=bounds)
         if v_mean.passed and v_nees.passed:
-            report.add("consistent", f"Over {N} runs your errors average to zero and match your "
-                       f"P (mean-error and NEES tests at family-wise α = {alpha:g}).", "note")
+            report.add("consistent", severity="note", text="Over {N} runs your errors average "
+                       "to zero and match your P (mean-error and NEES tests at family-wise "
+                       "α = {alpha:g}).", observed={"N": N, "alpha": alpha})
 
 
 # ================================================================== any model, by an instructor

@@ -54,8 +54,10 @@ def _shape(report: Report, name: str, arr: np.ndarray, want: tuple[int, ...],
         return arr
     if arr.shape in also:
         return arr.reshape(want)
-    report.add("shape", f"{name} has shape {arr.shape}; it must be {' x '.join(map(str, want))}: "
-               f"{meaning}.")
+    # the shape asked for is the question's (public), not an answer
+    report.add("shape", text="{name} has shape {shape}; it must be {want}: {meaning}.",
+               where=name, observed={"name": name, "shape": arr.shape,
+                                     "want": " x ".join(map(str, want)), "meaning": meaning})
     return None
 
 
@@ -69,17 +71,40 @@ def _same(actual: np.ndarray, expected: np.ndarray) -> bool:
     return not _wrong_elements(actual, expected)
 
 
+def _add(report: Report, code: str, text: str, message: str, where: str = "",
+         expected: dict | None = None, **observed: object) -> None:
+    """A finding of this check: ``text`` (the student's, filled from ``observed``: their own
+    elements) and ``message`` (the instructor's, which quotes the right values too)."""
+    report.add(code, message, text=text, where=where, observed=observed, expected=expected)
+
+
+#: matrix -> what the student reads about its wrong elements (no value of the right matrix).
+_ELEMENT_ADVICE = {
+    "Φ": "Compare each with its formula in terms of Δt (state [δp, δv, b]).",
+    "Γ": "Γ carries one accelerometer sample's noise w into [δp, δv, b].",
+    "H": "H = [I₂ 0]: GPS measures δp and δv, not the bias.",
+    "V": "V = diag(σ_p², σ_v²): the two GPS noises are independent.",
+    "M0": "M0 = diag(M_p, M_v, M_b): p0, v0 and b are independent a priori.",
+    "Q": "Q is the noise the accelerometer adds over one step of your filter.",
+}
+
+
 def _element_finding(report: Report, code: str, name: str, actual: np.ndarray,
                      expected: np.ndarray, formulas: dict[tuple[int, ...], str], hint: str = ""
                      ) -> None:
-    parts = []
+    parts, labels, right, mine = [], [], {}, []
     for idx in _wrong_elements(actual, expected):
         label = _elem(name, *idx) if len(idx) == 2 else _elem(name, idx[0])
         formula = formulas.get(idx, "")
         value = f"{expected[idx]:.6g}"
         want = f"{formula} = {value}" if formula and formula != value else value
         parts.append(f"{label} = {actual[idx]:.6g}, should be {want}")
-    report.add(code, "; ".join(parts) + "." + (f" {hint}" if hint else ""))
+        labels.append(label)
+        mine.append(f"{label} = {actual[idx]:.6g}")
+        right[label] = want
+    _add(report, code, "Wrong: {values}. {advice}",
+         "; ".join(parts) + "." + (f" {hint}" if hint else ""), where=", ".join(labels),
+         expected=right, values=", ".join(mine), advice=_ELEMENT_ADVICE.get(name, ""))
 
 
 def _check_phi(report: Report, Phi: np.ndarray, dt: float, model: CalibrationModel) -> None:
@@ -90,29 +115,35 @@ def _check_phi(report: Report, Phi: np.ndarray, dt: float, model: CalibrationMod
         (0, 1): "Δt", (0, 2): "−Δt²/2", (1, 2): "−Δt", (0, 0): "1", (1, 1): "1", (2, 2): "1",
         (1, 0): "0", (2, 0): "0", (2, 1): "0"}
     if _same(Phi, phi(dt, +1.0)):
-        report.add("phi-sign", f"Φ₁₃ = {Phi[0, 2]:.6g} has the wrong sign: the bias enters "
-                   f"position as −Δt²/2 = {-dt**2 / 2:.6g}. Likely cause: the accelerometer reads "
-                   f"a + b, so δp = p − p_c loses b·Δt²/2 per step (report 001 prints +½Δt²).")
+        _add(report, "phi-sign", "Φ₁₃ = {phi13:.6g} has the wrong sign. Likely cause: the "
+             "accelerometer reads a + b, so δp = p − p_c loses b·Δt²/2 per step (report 001 "
+             "prints +½Δt²).", f"Φ₁₃ = {Phi[0, 2]:.6g} has the wrong sign: the bias enters "
+             f"position as −Δt²/2 = {-dt**2 / 2:.6g}.", where="Φ₁₃",
+             expected={"Φ₁₃": -dt**2 / 2}, phi13=float(Phi[0, 2]))
         return
     if _close(Phi[1, 2], dt, dt) and all(
             _close(float(Phi[idx]), float(want[idx]), 1.0) for idx in np.ndindex(3, 3) if idx[1] != 2):
         flipped = "Φ₁₃ and Φ₂₃ have" if _close(Phi[0, 2], dt**2 / 2, dt**2) else "Φ₂₃ has"
-        report.add("phi-sign", f"{flipped} the wrong sign: the bias enters velocity as −Δt = "
-                   f"{-dt:.6g} and position as −Δt²/2 = {-dt**2 / 2:.6g}. Likely cause: "
-                   f"a_c = a + b + w, so the integrated accelerometer runs ahead of the truth "
-                   f"by the bias.")
+        _add(report, "phi-sign", "{flipped} the wrong sign. Likely cause: a_c = a + b + w, so "
+             "the integrated accelerometer runs ahead of the truth by the bias.",
+             f"{flipped} the wrong sign: the bias enters velocity as −Δt = {-dt:.6g} and "
+             f"position as −Δt²/2 = {-dt**2 / 2:.6g}.", where=flipped.rsplit(" ", 1)[0],
+             expected={"Φ₂₃": -dt, "Φ₁₃": -dt**2 / 2}, flipped=flipped)
         return
     other = float(Phi[0, 1])
     for step in (model.dt, model.gps_interval, model.gps_interval / 10):
         if not _close(step, dt, dt) and _close(other, step, step):
             for sign in (-1.0, 1.0):
                 if _same(Phi, phi(step, sign)):
-                    report.add("phi-interval", f"Your Φ is built with Δt = {step:g} s (Φ₁₂ = "
-                               f"{other:g}) but is checked for Δt = {dt:g} s. The accelerometer "
-                               f"step is {model.dt:g} s; a filter that steps only at GPS times "
-                               f"uses Δt = {model.gps_interval:g} s (pass dt={model.gps_interval:g}"
-                               f" to check it that way)."
-                               + (" Φ₁₃ also has the wrong sign (phi-sign)." if sign > 0 else ""))
+                    also = " Φ₁₃ also has the wrong sign (phi-sign)." if sign > 0 else ""
+                    # the step the student used is theirs (Φ₁₂); the one checked is the answer
+                    _add(report, "phi-interval", "Your Φ is built with Δt = {used:g} s (Φ₁₂ = "
+                         "{used:g}), not the step it is checked for: the accelerometer step "
+                         "(or, for a filter that steps only at GPS times, the GPS interval: "
+                         "pass that dt to check it that way).{also}",
+                         f"Your Φ is built with Δt = {step:g} s but is checked for Δt = "
+                         f"{dt:g} s.{also}", where="Φ", expected={"Δt": dt}, used=step,
+                         also=also)
                     return
     _element_finding(report, "phi-element", "Φ", Phi, want, formulas,
                      f"(Δt = {dt:g} s; state [δp, δv, b].)")
@@ -123,20 +154,34 @@ def _check_gamma(report: Report, G: np.ndarray, dt: float, model: CalibrationMod
     if _same(G, want):
         return
     if _same(G, -want):
-        report.add("gamma-sign", f"Γ = +[Δt²/2, Δt, 0]ᵀ; it is −[Δt²/2, Δt, 0]ᵀ = "
-                   f"[{want[0, 0]:.6g}, {want[1, 0]:.6g}, 0]ᵀ: the accelerometer noise w enters "
-                   f"a_c = a + b + w, so δv = v − v_c decreases by w·Δt (report 001 drops the "
-                   f"minus sign). The filter itself does not change (only Γ W Γᵀ enters it), "
-                   f"but a truth simulated with this Γ does.")
+        _add(report, "gamma-sign", "Your Γ has the wrong sign: the accelerometer noise w enters "
+             "a_c = a + b + w, so δv = v − v_c decreases by w·Δt (report 001 drops the minus "
+             "sign). The filter itself does not change (only Γ W Γᵀ enters it), but a truth "
+             "simulated with this Γ does.", f"Γ has the wrong sign; it is "
+             f"[{want[0, 0]:.6g}, {want[1, 0]:.6g}, 0]ᵀ.", where="Γ",
+             expected={"Γ": want[:, 0].tolist()})
         return
     for step in (model.dt, model.gps_interval, model.gps_interval / 10):
         if not _close(step, dt, dt) and (_same(G, gamma(step)) or _same(G, -gamma(step))):
-            report.add("gamma-interval", f"Your Γ is built with Δt = {step:g} s (Γ₂ = "
-                       f"{G[1, 0]:g}) but is checked for Δt = {dt:g} s. Γ carries one "
-                       f"accelerometer sample's noise: Δt = {model.dt:g} s.")
+            _add(report, "gamma-interval", "Your Γ is built with Δt = {used:g} s (Γ₂ = "
+                 "{g2:g}); Γ carries one accelerometer sample's noise.",
+                 f"Your Γ is built with Δt = {step:g} s but is checked for Δt = {dt:g} s.",
+                 where="Γ", expected={"Δt": model.dt}, used=step, g2=float(G[1, 0]))
             return
     _element_finding(report, "gamma-element", "Γ", G[:, 0], want[:, 0],
                      {(0,): "−Δt²/2", (1,): "−Δt", (2,): "0"}, f"(Δt = {dt:g} s.)")
+
+
+def _variance_slip(report: Report, code: str, e: str, a: float, right: float, what: str,
+                   message: str) -> None:
+    """A variance element ``e`` = ``a`` recognised as the slip ``what`` (the student's value
+    and the kind of slip; the right value goes to the instructor)."""
+    _add(report, code, "{e} = {a:g}: {what}.", message, where=e, expected={e: right}, e=e, a=a,
+         what=what)
+
+
+_SIGMA = "this is the standard deviation; a covariance holds variances σ²"
+_SQUARED = "the variance was squared again; a covariance holds σ²"
 
 
 def _check_V(report: Report, V: np.ndarray, model: CalibrationModel) -> None:
@@ -151,20 +196,19 @@ def _check_V(report: Report, V: np.ndarray, model: CalibrationModel) -> None:
         if _close(a, right, right):
             continue
         e = _elem("V", k, k)
+        full = f"{e} = {a:g}; {e} = σ² = {right:g} {var} (σ = {sd[k]:g} {unit})."
         if _close(a, sd[k], sd[k]):
-            report.add("std-as-variance", f"{e} = {a:g} is the standard deviation σ = "
-                       f"{sd[k]:g} {unit}; V holds variances: {e} = σ² = {right:g} {var}. "
-                       f"(Report 003 uses 0.04 as the velocity-noise variance.)")
+            _variance_slip(report, "std-as-variance", e, a, right, _SIGMA + " (report 003 uses "
+                           "0.04 as the velocity-noise variance)", full)
         elif _close(a, right**2, right**2):
-            report.add("std-as-variance", f"{e} = {a:g} = ({right:g})²: the variance was squared "
-                       f"again; {e} = σ² = ({sd[k]:g} {unit})² = {right:g} {var}.")
+            _variance_slip(report, "std-as-variance", e, a, right, _SQUARED, full)
         elif k == 1 and _close(a, (10 * sd[k]) ** 2, (10 * sd[k]) ** 2):
-            report.add("units", f"{e} = {a:g} = ({10 * sd[k]:g} m/s)²: 4 cm/s is {sd[k]:g} m/s, "
-                       f"not {10 * sd[k]:g} (a comment of report 000 makes the same slip). "
-                       f"{e} = {right:g} (m/s)².")
+            _variance_slip(report, "units", e, a, right, f"that is ({math.sqrt(a):g} m/s)², a "
+                           f"slip of a factor 10 in the standard deviation: 4 cm/s in m/s (a "
+                           f"comment of report 000 makes the same slip)", full)
         elif k == 1 and _close(a, (100 * sd[k]) ** 2, (100 * sd[k]) ** 2):
-            report.add("units", f"{e} = {a:g} is (4 cm/s)² in cm²/s²; the state is in m and m/s, "
-                       f"so {e} = ({sd[k]:g} m/s)² = {right:g} (m/s)².")
+            _variance_slip(report, "units", e, a, right, "this is (4 cm/s)² in cm²/s²; the "
+                           "state is in m and m/s", full)
     rest = V.copy()
     np.fill_diagonal(rest, np.diag(want))
     if len(report.findings) == findings_before or not _same(rest, want):
@@ -179,19 +223,17 @@ def _check_W(report: Report, W: np.ndarray, model: CalibrationModel) -> None:
     if _close(a, right, right):
         return
     sd = math.sqrt(right)
+    full = f"W = {a:g}; W = σ_w² = {right:g} (m/s²)² (σ_w = {sd:g} m/s²)."
     if _close(a, sd, sd):
-        report.add("std-as-variance", f"W = {a:g} is the standard deviation σ_w = {sd:g} m/s²; "
-                   f"W is the variance σ_w² = {right:g} (m/s²)².")
+        _variance_slip(report, "std-as-variance", "W", a, right, _SIGMA, full)
     elif _close(a, right**2, right**2):
-        report.add("std-as-variance", f"W = {a:g} = ({right:g})²: the variance was squared again; "
-                   f"W = σ_w² = ({sd:g} m/s²)² = {right:g} (m/s²)².")
+        _variance_slip(report, "std-as-variance", "W", a, right, _SQUARED, full)
     elif _close(a, float(model.V[1, 1]), float(model.V[1, 1])):
-        report.add("w-value", f"W = {a:g} is the GPS velocity-noise variance V₂₂; the "
-                   f"accelerometer noise variance is W = {right:g} (m/s²)² (report 001 writes "
-                   f"0.0016).")
+        _variance_slip(report, "w-value", "W", a, right, "this is the GPS velocity-noise "
+                       "variance V₂₂, not the accelerometer's (report 001 writes 0.0016)", full)
     else:
-        report.add("w-value", f"W = {a:g}; the accelerometer white-noise variance is "
-                   f"W = {right:g} (m/s²)² (σ_w = {sd:g} m/s²).")
+        _variance_slip(report, "w-value", "W", a, right, "this is not the accelerometer's "
+                       "white-noise variance", full)
 
 
 def _check_M0(report: Report, M0: np.ndarray, model: CalibrationModel) -> None:
@@ -201,13 +243,13 @@ def _check_M0(report: Report, M0: np.ndarray, model: CalibrationModel) -> None:
     swapped = want.copy()
     swapped[[0, 1], [0, 1]] = want[[1, 0], [1, 0]]
     if _same(M0, swapped):
-        report.add("m0-order", f"M0 = diag({M0[0, 0]:g}, {M0[1, 1]:g}, {M0[2, 2]:g}) has position "
-                   f"and velocity swapped: the state is [δp, δv, b], so M0 = diag({want[0, 0]:g} "
-                   f"m², {want[1, 1]:g} (m/s)², {want[2, 2]:g} (m/s²)²) (report 001 writes it "
-                   f"swapped).")
+        _add(report, "m0-order", "M0 = diag({d}) has position and velocity swapped: the state "
+             "is [δp, δv, b] (report 001 writes it swapped).", f"M0 has position and velocity "
+             f"swapped: M0 = diag({want[0, 0]:g} m², {want[1, 1]:g} (m/s)², {want[2, 2]:g} "
+             f"(m/s²)²).", where="M0", expected={"M0": np.diag(want).tolist()},
+             d=", ".join(f"{M0[k, k]:g}" for k in range(3)))
         return
     before = len(report.findings)
-    units = STATE_UNITS
     var_units = tuple(u if "/" not in u else f"({u})" for u in STATE_UNITS)
     var_units = tuple(u + "²" for u in var_units)
     for k in range(3):
@@ -215,16 +257,15 @@ def _check_M0(report: Report, M0: np.ndarray, model: CalibrationModel) -> None:
         if _close(a, right, right):
             continue
         e, sd = _elem("M0", k, k), math.sqrt(right)
+        full = f"{e} = {a:g}; {e} = σ² = {right:g} {var_units[k]} (σ = {sd:g} {STATE_UNITS[k]})."
         if _close(a, sd, sd):
-            report.add("std-as-variance", f"{e} = {a:g} is the standard deviation σ = {sd:g} "
-                       f"{units[k]}; M0 holds variances: {e} = σ² = {right:g} {var_units[k]}"
-                       + (" (report 003 puts σ_p = 10 into M0)." if k == 0 else "."))
+            _variance_slip(report, "std-as-variance", e, a, right, _SIGMA + (
+                " (report 003 puts σ_p = 10 into M0)" if k == 0 else ""), full)
         elif _close(a, right**2, right**2):
-            report.add("std-as-variance", f"{e} = {a:g} = ({right:g})²: the variance was squared "
-                       f"again; {e} = σ² = {right:g} {var_units[k]}.")
+            _variance_slip(report, "std-as-variance", e, a, right, _SQUARED, full)
         elif k == 1 and _close(a, model.v0_mean, model.v0_mean):
-            report.add("m0-element", f"{e} = {a:g} is the prior mean v̄0 = {model.v0_mean:g} m/s, "
-                       f"not a variance; {e} = {right:g} (m/s)².")
+            _variance_slip(report, "m0-element", e, a, right, "this is the prior mean v̄0, not "
+                           "a variance", full)
     rest = M0.copy()
     np.fill_diagonal(rest, np.diag(want))
     if len(report.findings) == before or not _same(rest, want):
@@ -245,21 +286,25 @@ def _check_Q(report: Report, Q: np.ndarray, dt: float, model: CalibrationModel) 
         return
     n, T = model.gps_every, model.gps_interval
     if _same(Q, per_interval):
-        report.add("process-noise-interval", f"Q = Γ(T) W Γ(T)ᵀ with T = {T:g} s. Stepping once "
-                   f"over T with Φ(T) is exact for the mean, but the noise of {n} accelerometer "
-                   f"samples adds up as Σ_(j<{n}) Φʲ Γ W Γᵀ Φʲᵀ: Q₂₂ should be "
-                   f"{n}·Δt²·W = {summed[1, 1]:.4g}, not T²·W = {per_interval[1, 1]:.4g} "
-                   f"(report 003 makes this mistake).")
+        _add(report, "process-noise-interval", "Your Q = Γ(T) W Γ(T)ᵀ with T the GPS interval. "
+             "Stepping once over T with Φ(T) is exact for the mean, but the noise of every "
+             "accelerometer sample in T adds up as Σ_(j<n) Φʲ Γ W Γᵀ Φʲᵀ (report 003 makes "
+             "this mistake).", f"Q = Γ(T) W Γ(T)ᵀ with T = {T:g} s: Q₂₂ should be "
+             f"{n}·Δt²·W = {summed[1, 1]:.4g}, not T²·W = {per_interval[1, 1]:.4g}.",
+             where="Q", expected={"Q₂₂": float(summed[1, 1])})
         return
     if step_is_gps and _same(Q, one):
-        report.add("q-element", f"Q = Γ W Γᵀ of one accelerometer step ({model.dt:g} s), but your "
-                   f"filter steps once per GPS interval: it must add the noise of {n} steps, "
-                   f"Σ_(j<{n}) Φʲ Γ W Γᵀ Φʲᵀ (Q₂₂ = {summed[1, 1]:.4g}).")
+        _add(report, "q-element", "Your Q = Γ W Γᵀ of one accelerometer step, but your filter "
+             "steps once per GPS interval: it must add the noise of every accelerometer step "
+             "in it, Σ_(j<n) Φʲ Γ W Γᵀ Φʲᵀ.", f"Q is one accelerometer step's; it must add "
+             f"{n} steps (Q₂₂ = {summed[1, 1]:.4g}).", where="Q",
+             expected={"Q₂₂": float(summed[1, 1])})
         return
     if not step_is_gps and _same(Q, summed):
-        report.add("q-element", f"Q is the {n}-step process noise of a GPS-rate filter; checked "
-                   f"for Δt = {dt:g} s it should be Γ W Γᵀ. Pass dt={T:g} if your filter steps "
-                   f"only at GPS times.")
+        _add(report, "q-element", "Your Q is the process noise of a GPS-rate filter; checked "
+             "for the accelerometer step it should be Γ W Γᵀ. Pass the GPS interval as dt if "
+             "your filter steps only at GPS times.", f"Q is the {n}-step process noise; "
+             f"checked for Δt = {dt:g} s it should be Γ W Γᵀ.", where="Q")
         return
     _element_finding(report, "q-element", "Q", Q, want, {},
                      f"Q = {f'Σ_(j<{n}) Φʲ Γ W Γᵀ Φʲᵀ' if step_is_gps else 'Γ W Γᵀ'} with "
@@ -288,7 +333,7 @@ def model_matrices(Phi: object = None, Gamma: object = None, H: object = None, V
     given = {k: v for k, v in (("Phi", Phi), ("Gamma", Gamma), ("H", H), ("V", V), ("W", W),
                                ("M0", M0), ("Q", Q)) if v is not None}
     if not given:
-        report.add("nothing-to-check", "No matrix was passed: call model_matrices(Phi=..., "
+        report.add("nothing-to-check", text="No matrix was passed: call model_matrices(Phi=..., "
                    "Gamma=..., H=..., V=..., W=..., M0=...) with the ones you use.")
     step = _step(report, dt, model)
     step_is_gps = math.isclose(step, model.gps_interval, rel_tol=1e-9)
@@ -315,7 +360,9 @@ def model_matrices(Phi: object = None, Gamma: object = None, H: object = None, V
     report.details = {"dt": step, "checked": sorted(arrays)}
     if report.passed:
         report.add("ok", f"{', '.join(sorted(arrays))}: every element matches the problem "
-                   f"(Δt = {step:g} s, relative tolerance {RTOL:g}).", "note")
+                   f"(Δt = {step:g} s, relative tolerance {RTOL:g}).", "note",
+                   text="{names}: every element matches the problem (relative tolerance "
+                   "{rtol:g}).", observed={"names": ", ".join(sorted(arrays)), "rtol": RTOL})
     report.sort()
     report.seconds = time.perf_counter() - t0
     return report
@@ -330,10 +377,12 @@ def _step(report: Report, dt: float, model: CalibrationModel) -> float:
         step = float("nan")
     valid = (model.dt, model.gps_interval)
     if not any(math.isclose(step, s, rel_tol=1e-9) for s in valid):
-        report.add("dt", f"dt = {dt!r}: the accelerometer interval is Δt = {model.dt:g} s "
-                   f"({1 / model.dt:g} Hz); a filter that steps only at GPS times uses the GPS "
-                   f"interval {model.gps_interval:g} s (report 001 writes 0.02 s). Checking "
-                   f"against Δt = {model.dt:g} s.")
+        _add(report, "dt", "dt = {dt}: it must be the accelerometer interval Δt, or the GPS "
+             "interval for a filter that steps only at GPS times (report 001 writes 0.02 s for "
+             "0.2 s). Checking against the accelerometer interval.", f"dt = {dt!r}: the "
+             f"accelerometer interval is Δt = {model.dt:g} s ({1 / model.dt:g} Hz); the GPS "
+             f"interval {model.gps_interval:g} s.", where="dt",
+             expected={"dt": (model.dt, model.gps_interval)}, dt=repr(dt)[:40])
         step = model.dt
     return step
 
@@ -346,10 +395,12 @@ def _check_arrays(report: Report, arrays: dict[str, np.ndarray], step: float, st
     if "Gamma" in arrays:
         _check_gamma(report, arrays["Gamma"], step, model)
         if step_is_gps and "Q" not in arrays and _same(arrays["Gamma"], gamma(step)):
-            report.add("process-noise-interval", f"Γ is built with the GPS interval "
-                       f"{step:g} s: Γ W Γᵀ is then not the noise of the {model.gps_every} "
-                       f"accelerometer samples in that interval (their sum Σ_(j<"
-                       f"{model.gps_every}) Φʲ Γ W Γᵀ Φʲᵀ is). Pass the Q you use to check it.")
+            _add(report, "process-noise-interval", "Γ is built with the GPS interval {step:g} s: "
+                 "Γ W Γᵀ is then not the noise of the accelerometer samples in that interval "
+                 "(their sum Σ_(j<n) Φʲ Γ W Γᵀ Φʲᵀ is). Pass the Q you use to check it.",
+                 f"Γ is built with the GPS interval {step:g} s; Q is the sum over "
+                 f"{model.gps_every} samples.", where="Γ", expected={"n": model.gps_every},
+                 step=step)
     if "H" in arrays and not _same(arrays["H"], model.H):
         _element_finding(report, "h-element", "H", arrays["H"], model.H, {},
                          "H = [I₂ 0]: GPS measures δp and δv, not the bias.")
@@ -358,7 +409,8 @@ def _check_arrays(report: Report, arrays: dict[str, np.ndarray], step: float, st
             if name in ("V", "M0"):
                 a = arrays[name]
                 if not np.allclose(a, a.T, rtol=RTOL, atol=0):
-                    report.add("not-symmetric", f"{name} is not symmetric: {a.tolist()}.")
+                    report.add("not-symmetric", text="{name} is not symmetric: {values}.",
+                               where=name, observed={"name": name, "values": a.tolist()})
             check(report, arrays[name], model)
     if "Q" in arrays:
         _check_Q(report, arrays["Q"], step, model)

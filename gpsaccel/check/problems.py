@@ -42,8 +42,9 @@ import numpy as np
 
 from gpsaccel import _validation as _v
 from gpsaccel import sandbox as sb
-from gpsaccel.check.findings import MESSAGES, box_findings
+from gpsaccel.check.findings import MESSAGES, box_findings, mistake_finding
 from gpsaccel.check.report import Report
+from gpsaccel.check.wording import STUDENT
 from gpsaccel.kalman import consistency
 from gpsaccel.sandbox import Call, Output, defines
 
@@ -172,7 +173,8 @@ class Problem:
         try:
             sub = self._submission(path)
         except sb.SubmissionError as exc:
-            report.add(self.renames.get(exc.code, exc.code), str(exc))
+            report.add(self.renames.get(exc.code, exc.code), text="{error}",
+                       observed={"error": str(exc)})  # about the student's own files
             report.seconds = time.perf_counter() - t0
             return report
         if sub.files != (sub.entry,):
@@ -185,8 +187,9 @@ class Problem:
             present = [self.functions[0]]
         elif self.required == "all" and missing:
             names = " and ".join(f.signature for f in missing)
-            report.add("no-function", f"Your file does not define {names} at top level "
-                       f"(read without running it). " + self.describe().split("\n", 1)[1])
+            report.add("no-function", text="Your file does not define {names} at top level "
+                       "(read without running it). {contract}", observed={
+                           "names": names, "contract": self.describe().split("\n", 1)[1]})
             report.seconds = time.perf_counter() - t0
             return report
         cases = self.cases(n_runs, seed)
@@ -248,8 +251,9 @@ class Problem:
                          for r in again.results]
         for name in sorted(column):
             o = next(o for o in outs if o.name == name)
-            report.add("filterpy-column", MESSAGES["filterpy-column"].format(
-                name=name, shape=tuple(o.shape) + (1,), wanted=tuple(o.shape)), "note")
+            report.add("filterpy-column", severity="note", text=MESSAGES["filterpy-column"],
+                       where=name, observed={"name": name, "shape": tuple(o.shape) + (1,),
+                                             "wanted": tuple(o.shape)})
         return again
 
 
@@ -276,10 +280,12 @@ def _nan_finding(report: Report, fname: str, name: str, arr: np.ndarray, t: np.n
         return False
     runs = np.flatnonzero(bad.reshape(bad.shape[0], -1).any(axis=1))
     first = np.argwhere(bad[runs[0]])[0]
-    report.add("nan-output", f"{fname}: {name} contains NaN or inf in {runs.size} of "
-               f"{arr.shape[0]} runs; in {labels[runs[0]]} first at t = {t[first[0]]:g} s "
-               f"(row {first[0]}). Likely causes: an array from np.empty never filled at that "
-               f"row, a division by zero, an inverse of a singular matrix.")
+    report.add("nan-output", text="{fname}: {name} contains NaN or inf in {bad} of {n} runs; "
+               "in {where} first at t = {t:g} s (row {row}). Likely causes: an array from "
+               "np.empty never filled at that row, a division by zero, an inverse of a "
+               "singular matrix.", where=labels[runs[0]], observed={
+                   "fname": fname, "name": name, "bad": runs.size, "n": arr.shape[0],
+                   "t": float(t[first[0]]), "row": int(first[0])})
     return True
 
 
@@ -293,13 +299,14 @@ def _distances(x: np.ndarray, P: np.ndarray, x_ref: np.ndarray, P_ref: np.ndarra
 
 def _first_departure(dx: np.ndarray, dP: np.ndarray, tol_x: float, tol_P: float, t: np.ndarray,
                      states: list[str], labels: list[str], x: np.ndarray, x_ref: np.ndarray,
-                     sd: np.ndarray) -> str:
-    """Where the output first leaves the reference (earliest time over runs)."""
+                     sd: np.ndarray) -> tuple[str, str]:
+    """Where the output first leaves the reference (earliest time over runs): the student's
+    account (the place and their value) and the instructor's (the reference value too)."""
     bad_x = (dx > tol_x).any(axis=(0, 2))
     bad_P = (dP > tol_P).any(axis=(0, 2, 3))
     kx = int(np.argmax(bad_x)) if bad_x.any() else None
     kP = int(np.argmax(bad_P)) if bad_P.any() else None
-    parts = []
+    parts, ref = [], ""
     if kP is not None:
         i, j = np.unravel_index(int(np.argmax(dP[:, kP].max(axis=0))), dP.shape[-2:])
         parts.append(f"P first departs at t = {t[kP]:g} s (row {kP}), element P{i + 1}{j + 1}"
@@ -307,9 +314,9 @@ def _first_departure(dx: np.ndarray, dP: np.ndarray, tol_x: float, tol_P: float,
     if kx is not None:
         r, s = np.unravel_index(int(np.argmax(dx[:, kx])), dx[:, kx].shape)
         parts.append(f"x̂ first departs at t = {t[kx]:g} s (row {kx}) in {labels[r]}: "
-                     f"{states[s]} = {x[r, kx, s]:.6g}, the reference gives "
-                     f"{x_ref[r, kx, s]:.6g} (σ = {sd[r, kx, s]:.3g})")
-    return "; ".join(parts)
+                     f"{states[s]} = {x[r, kx, s]:.6g}")
+        ref = f", the reference gives {x_ref[r, kx, s]:.6g} (σ = {sd[r, kx, s]:.3g})"
+    return "; ".join(parts), "; ".join(parts) + ref
 
 
 def _nearest(candidates: Sequence[tuple[Any, np.ndarray, np.ndarray]], x: np.ndarray,
@@ -451,20 +458,22 @@ class CoopProblem(Problem):
         heading = cm.heading_range(x)
         if heading > np.pi + 1e-6:
             m = next(m for m in cm.catalogue(self.model, kind) if m.code == "no-state-wrap")
-            report.add("no-state-wrap", f"{fname}: {m.message} (largest |heading| returned: "
-                       f"{heading:.3g} rad).")
+            mistake_finding(report, m, f"{fname}: ", heading=f"{heading:.3g} rad")
         asym = float(np.abs(P - np.swapaxes(P, -1, -2)).max(axis=(0, 1)).max()
                      / np.abs(np.diagonal(P, axis1=-2, axis2=-1)).max())
         if asym > 1e-10:
             m = next(m for m in cm.catalogue(self.model, kind) if m.code == "p-not-symmetric")
-            report.add("p-not-symmetric", f"{fname}: your P is not symmetric (|P − Pᵀ| up to "
-                       f"{asym:.2g} of the largest variance). {m.message}", "note")
+            report.add("p-not-symmetric", f"{fname}: your P is not symmetric. {m.message}",
+                       "note", text="{fname}: your P is not symmetric (|P − Pᵀ| up to {asym:.2g} "
+                       "of the largest variance). " + STUDENT["p-not-symmetric"],
+                       observed={"fname": fname, "asym": asym})
         if dx.max() <= tol_x and dP.max() <= tol_P:
-            report.add("matches-reference", f"{fname}: x̂ and P match the reference "
-                       f"{kind.upper()} to {tol_x:g} σ / {tol_P:g} σσ on all "
-                       f"{len(results)} logs" + (" (the headings modulo 2π)"
-                                                  if heading > np.pi + 1e-6 else "") + ".",
-                       "note")
+            report.add("matches-reference", severity="note", text="{fname}: x̂ and P match the "
+                       "reference {kind} to {tol_x:g} σ / {tol_P:g} σσ on all {n} logs{mod}.",
+                       observed={"fname": fname, "kind": kind.upper(), "tol_x": tol_x,
+                                 "tol_P": tol_P, "n": len(results),
+                                 "mod": " (the headings modulo 2π)"
+                                 if heading > np.pi + 1e-6 else ""})
         else:
             cands = []
             for m in cm.catalogue(self.model, kind):
@@ -476,11 +485,10 @@ class CoopProblem(Problem):
                               cm.wrapped_difference)
             if found and found[1] <= 1.0:
                 m = found[0]
-                report.add(m.code, f"{fname}: {m.message} (your output matches the filter that "
-                           f"makes this mistake, variant “{m.variant}”, on every log.)")
+                mistake_finding(report, m, f"{fname}: ")
                 report.details[kind]["matched"] = {"code": m.code, "variant": m.variant}
             else:
-                where = _first_departure(dx, dP, tol_x, tol_P, t, states, list(cases.labels),
+                where, full = _first_departure(dx, dP, tol_x, tol_P, t, states, list(cases.labels),
                                          x, ref.x_hat, sd)
                 hint = ""
                 if found and found[1] <= 10.0:
@@ -488,9 +496,14 @@ class CoopProblem(Problem):
                             f"{found[1]:.2g}× the tolerance of your output; look there first.")
                 else:
                     hint = " No catalogued mistake matches."
-                report.add("filter-mismatch", f"{fname}: your x̂, P differ from the reference "
-                           f"{kind.upper()} given the same Q and R (by up to {dx.max():.3g} σ in "
-                           f"x̂ and {dP.max():.3g} σσ in P).{hint} {where}.")
+                report.add("filter-mismatch", text="{fname}: your x̂, P differ from the "
+                           "reference {kind} given the same Q and R (by up to {dx:.3g} σ in x̂ "
+                           "and {dP:.3g} σσ in P).{hint} {where}.", where=where, observed={
+                               "fname": fname, "kind": kind.upper(), "dx": float(dx.max()),
+                               "dP": float(dP.max()), "hint": hint},
+                           message=f"{fname}: your x̂, P differ from the reference {kind.upper()} "
+                           f"(by up to {dx.max():.3g} σ in x̂ and {dP.max():.3g} σσ in P).{hint} "
+                           f"{full}.")
         self._consistency(report, cases, kind, x, P)
 
     def _consistency(self, report: Report, cases: CoopCases, kind: str, x: np.ndarray,
@@ -512,21 +525,24 @@ class CoopProblem(Problem):
             r = measurement_residual(cases.y[:N, 1:], h(x_bar))
             nis = consistency.nis(r, S).mean(axis=0)
         except np.linalg.LinAlgError:
-            report.add("p-not-positive-definite", f"{kind}: P is not positive definite at some "
-                       f"step, so NEES cannot be formed.", "warning")
+            report.add("p-not-positive-definite", severity="warning", text="{kind}: P is not "
+                       "positive definite at some step, so NEES cannot be formed.",
+                       observed={"kind": kind})
             return
         b6, b5 = consistency.chi2_bounds(6, N), consistency.chi2_bounds(5, N)
         f6, f5 = consistency.fraction_inside(nees, b6), consistency.fraction_inside(nis, b5)
         report.details[kind].update({"nees_fraction_inside_95": f6, "nis_fraction_inside_95": f5,
                                      "nees_mean": float(nees.mean()),
                                      "nis_mean": float(nis.mean())})
-        report.add("nees-nis", f"{kind}: information on the Q passed to your filter, not part of "
-                   f"the verdict. Over {N} truth runs the average NEES is inside its 95 % χ² "
-                   f"bounds [{b6[0]:.2f}, {b6[1]:.2f}] at {100 * f6:.0f} % of the steps (mean "
-                   f"{nees.mean():.3g}, expected 6) and the average NIS (from your x̂, P through "
-                   f"the model's prediction) inside [{b5[0]:.2f}, {b5[1]:.2f}] at "
-                   f"{100 * f5:.0f} % (mean {nis.mean():.3g}, expected 5); about 95 % is what a "
-                   f"well-tuned Q gives.", "note")
+        report.add("nees-nis", severity="note", text="{kind}: information on the Q passed "
+                   "to your filter, not part of the verdict. Over {N} truth runs the average NEES "
+                   "is inside its 95 % χ² bounds at {f6:.0f} % of the steps (mean {nees:.3g}) "
+                   "and the average NIS (from your x̂, P through the model's prediction) inside "
+                   "its bounds at {f5:.0f} % (mean {nis:.3g}); about 95 % is what a well-tuned "
+                   "Q gives.", observed={"kind": kind, "N": N, "f6": 100 * f6, "f5": 100 * f5,
+                                         "nees": float(nees.mean()), "nis": float(nis.mean())},
+                   expected={"nees_bounds": tuple(map(float, b6)),
+                             "nis_bounds": tuple(map(float, b5))})
 
 
 @lru_cache(maxsize=4)
@@ -628,9 +644,9 @@ class ShipProblem(Problem):
                              f"(units of the optimal σ, tolerance {tol:g}):\n"
                              f"  max |Δx̂|/σ = {dx.max():.3g}   max |ΔP|/(σσ) = {dP.max():.3g}")
         if dx.max() <= tol and dP.max() <= tol:
-            report.add("matches-optimal", f"x̂ and P match the optimal multirate filter to "
-                       f"{tol:g} σ on all {len(results)} voyages (the dropout voyage included).",
-                       "note")
+            report.add("matches-optimal", severity="note", text="x̂ and P match the optimal "
+                       "multirate filter to {tol:g} σ on all {n} voyages (the dropout voyage "
+                       "included).", observed={"tol": tol, "n": len(results)})
         else:
             cands = []
             for v in variants[1:]:
@@ -641,15 +657,18 @@ class ShipProblem(Problem):
                 (v, Ptv) = found[0]
                 self._variant_findings(report, v, Ptv, P_ref)
             else:
-                where = _first_departure(dx, dP, tol, tol, t, [s for s, _ in STATES], labels,
-                                         x, x_ref, sd)
+                where, full = _first_departure(dx, dP, tol, tol, t, [s for s, _ in STATES],
+                                               labels, x, x_ref, sd)
                 hint = " No catalogued mistake matches."
                 if found and found[1] <= 10.0:
                     hint = (f" The nearest known mistake is {found[0][0]}, within "
                             f"{found[1]:.2g}× the tolerance; look there first.")
                 report.add("filter-mismatch", f"Your x̂, P differ from the optimal multirate "
                            f"filter (by up to {dx.max():.3g} σ in x̂ and {dP.max():.3g} σσ in "
-                           f"P).{hint} {where}.")
+                           f"P).{hint} {full}.", text="Your x̂, P differ from the optimal "
+                           "multirate filter (by up to {dx:.3g} σ in x̂ and {dP:.3g} σσ in P)."
+                           "{hint} {where}.", where=where, observed={
+                               "dx": float(dx.max()), "dP": float(dP.max()), "hint": hint})
         self._consistency(report, cases, x, P)
 
     def _variant_findings(self, report: Report, v, P_true: np.ndarray, P_ref: np.ndarray) -> None:
@@ -662,8 +681,9 @@ class ShipProblem(Problem):
         cost = (f"its true error σ exceeds the optimal by up to {100 * ex.max():.3g} % "
                 f"({STATES[worst[2]][0]} at t = {self.model.t[worst[1] + 1]:g} s), "
                 f"{100 * ex.mean():.2g} % on average")
-        for code in v.codes:
-            report.add(code, sm.MESSAGES[code].format(cost=cost))
+        for code in v.codes:  # the cost is the student's own filter's (its true error)
+            report.add(code, sm.MESSAGES[code].format(cost=cost),
+                       text=STUDENT[code] + " Cost: {cost}.", observed={"cost": cost})
 
     def _consistency(self, report: Report, cases: ShipCases, x: np.ndarray,
                      P: np.ndarray) -> None:
@@ -672,16 +692,18 @@ class ShipProblem(Problem):
         try:
             nees = consistency.nees(e, P[:R, 1:]).mean(axis=0)
         except np.linalg.LinAlgError:
-            report.add("p-not-positive-definite", "P is not positive definite at some step, so "
-                       "NEES cannot be formed.", "warning")
+            report.add("p-not-positive-definite", severity="warning", text="P is not positive "
+                       "definite at some step, so NEES cannot be formed.")
             return
         b = consistency.chi2_bounds(9, R)
         f = consistency.fraction_inside(nees, b)
         report.details["ship"]["nees_fraction_inside_95"] = f
-        report.add("nees", f"Information, not the verdict: over {R} voyages the average NEES "
-                   f"(your x̂ and P against the truth) is inside its 95 % χ² bounds "
-                   f"[{b[0]:.2f}, {b[1]:.2f}] at {100 * f:.0f} % of the steps (mean "
-                   f"{nees.mean():.3g}, expected 9).", "note")
+        report.add("nees", severity="note", text="Information, not the verdict: over {R} "
+                   "voyages the average NEES (your x̂ and P against the truth) is inside its "
+                   "95 % χ² bounds at {inside:.0f} % of the steps (mean {mean:.3g}; about 95 % "
+                   "is what a consistent filter gives).", observed={
+                       "R": R, "inside": 100 * f, "mean": float(nees.mean())},
+                   expected={"bounds": (float(b[0]), float(b[1]))})
 
 
 @lru_cache(maxsize=4)

@@ -1,43 +1,202 @@
-"""What a checker returns: findings with stable codes, a pass/fail verdict and a readable text.
+"""What a checker returns: findings as data, a pass/fail verdict, and two renderers.
 
-A :class:`Finding` is one thing the checker noticed.  Its ``code`` is stable (tests, graders and
-the instructor's table key on it); its ``message`` is written for the student: what is wrong, what
-it should be, the likely cause.  ``severity`` is ``"error"`` (the check fails), ``"warning"``
-(worth reading, the check still passes) or ``"note"`` (information, e.g. the statistics of a
-correct filter).  A :class:`Report` passes when it holds no error.
+A :class:`Finding` is one thing the checker noticed, as data: a stable ``code`` (tests, graders and
+the instructor's table key on it), ``where`` it shows (an element such as Φ₁₃, a time, a run),
+``observed`` (the student's own values: what their code returned, printed or raised, and the
+limits of the check) and ``expected`` (what it should have been), in separate fields.  Its
+student text is a template (``text``, with ``{fields}``) that is formatted with ``where`` and
+``observed`` only; ``detail`` is the instructor's prose, which may quote expected values
+(``message`` is the instructor's whole text).
+
+Two renderers, so that feedback never hands out an answer *by construction*:
+
+* the student's (:meth:`Finding.for_student`, :meth:`Report.for_student`, ``str(report)``,
+  :meth:`Report.to_dict`): it works on a :class:`StudentFinding`, a projection that has no
+  ``expected`` and no ``detail`` field, so nothing it prints can come from them;
+* the instructor's (:meth:`Finding.for_instructor`, :meth:`Report.instructor_text`,
+  ``to_dict(instructor=True)``), which shows the expected values too.
+
+A finding made the old way (``add(code, message)``, prose only) keeps its prose for the
+instructor; its student text is the code's template from :data:`gpsaccel.check.wording.STUDENT`
+(or a plain sentence naming the code), never the prose.  No regular expression scrubs any text.
+
+``severity`` is ``"error"`` (the check fails), ``"warning"`` (worth reading, the check still
+passes) or ``"note"`` (information, e.g. the statistics of a correct filter).  A :class:`Report`
+passes when it holds no error.  ``part`` names the part of a question a finding is about (partial
+credit, :class:`gpsaccel.assignments.questions.Question`); "" concerns the whole question.
 """
 
 from __future__ import annotations
 
+import string
 import textwrap
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
+
+from gpsaccel.check.wording import STUDENT, UNWORDED
 
 SEVERITIES = ("error", "warning", "note")
 
 
-@dataclass(frozen=True)
-class Finding:
-    """One observation of a checker.
+def _jsonable(value: object) -> Any:
+    """A JSON-serialisable copy of an observed value (arrays as lists, numpy scalars as numbers)."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, Mapping):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    return str(value)
 
-    code : stable identifier, e.g. ``"phi-sign"``, ``"timeout"``, ``"nees"``.
-    message : for the student: which element or result is wrong, what it should be, the likely
-        cause.
-    severity : ``"error"`` fails the check, ``"warning"`` and ``"note"`` do not.
+
+def fill(template: str, where: str, observed: Mapping[str, object]) -> str:
+    """``template`` formatted with ``where`` and the ``observed`` fields only, or "" when it
+    names any other field (an expected value, a typo): the caller then falls back to the code's
+    own wording, never to anything else."""
+    fields = {"where": where, **observed}
+    try:
+        return string.Formatter().vformat(template, (), fields)
+    except (KeyError, IndexError, ValueError, TypeError, AttributeError):
+        return ""
+
+
+def used(template: str, fields: Mapping[str, object]) -> dict[str, object]:
+    """The entries of ``fields`` that ``template`` names (what a finding keeps as observed)."""
+    names = {name.split(".")[0].split("[")[0]
+             for _, name, _, _ in string.Formatter().parse(template) if name}
+    return {k: v for k, v in fields.items() if k in names}
+
+
+@dataclass(frozen=True)
+class StudentFinding:
+    """What a student may see of a finding: no ``expected`` field, no instructor prose.
+
+    message : the student text (the template filled with ``where`` and ``observed``).
     """
 
     code: str
     message: str
+    severity: str
+    where: str = ""
+    observed: Mapping[str, object] = field(default_factory=dict)
+    part: str = ""
+
+    def __str__(self) -> str:
+        return f"[{self.severity}] {self.code}: {self.message}"
+
+    def to_dict(self) -> dict:
+        return {"code": self.code, "severity": self.severity, "message": self.message,
+                "where": self.where, "observed": _jsonable(self.observed), "part": self.part}
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One observation of a checker (module docstring).
+
+    code : stable identifier, e.g. ``"phi-sign"``, ``"timeout"``, ``"nees"``.
+    detail : the instructor's prose (may quote expected values); "" when ``text`` says it all.
+    severity : ``"error"`` fails the check, ``"warning"`` and ``"note"`` do not.
+    text : the student template ({where} and the observed fields); "" for the code's own.
+    where, observed, expected, part : see the module docstring.
+    """
+
+    code: str
+    detail: str = ""
     severity: str = "error"
+    text: str = ""
+    where: str = ""
+    observed: Mapping[str, object] = field(default_factory=dict)
+    expected: Mapping[str, object] = field(default_factory=dict)
+    part: str = ""
 
     def __post_init__(self) -> None:
         if self.severity not in SEVERITIES:
             raise ValueError(f"severity must be one of {SEVERITIES}, got {self.severity!r}")
 
+    def for_student(self) -> StudentFinding:
+        """The student's projection: the template filled from ``where`` and ``observed`` only."""
+        template = self.text or STUDENT.get(self.code, "")
+        text = fill(template, self.where, self.observed) if template else ""
+        if not text:
+            text = fill(STUDENT.get(self.code, ""), self.where, self.observed) or \
+                UNWORDED.format(code=self.code)
+        return StudentFinding(self.code, text, self.severity, self.where, dict(self.observed),
+                              self.part)
+
+    def for_instructor(self) -> str:
+        """The instructor's text: the student's text, the instructor's prose and the expected
+        values."""
+        text = self.for_student().message if self.text else ""
+        if self.detail:
+            text += (" — for the instructor: " if text else "") + self.detail
+        if self.expected:
+            text += " [expected: " + ", ".join(f"{k} = {_short(v)}"
+                                              for k, v in self.expected.items()) + "]"
+        return text
+
+    @property
+    def message(self) -> str:
+        """The instructor's whole text (:meth:`for_instructor`); a student reads
+        :meth:`for_student`."""
+        return self.for_instructor()
+
     def __str__(self) -> str:
-        return f"[{self.severity}] {self.code}: {self.message}"
+        return str(self.for_student())
+
+
+def _short(value: object) -> str:
+    if isinstance(value, (float, np.floating)):
+        return f"{float(value):.6g}"
+    if isinstance(value, np.ndarray):
+        return np.array2string(value, precision=6, max_line_width=200)
+    return str(value)
+
+
+def render(subject: str, passed: bool, codes: list[str], lines: list[str],
+           tables: list[str]) -> str:
+    """The readable text of a report (one renderer for both audiences; each passes its lines)."""
+    head = f"{subject}: {'PASSED' if passed else 'FAILED'}"
+    if codes:
+        head += f" ({', '.join(codes)})"
+    out = [head]
+    for line in lines:
+        first, *rest = line.split("\n")  # later lines (a traceback) are kept as they are
+        out.append(textwrap.fill(first, width=100, initial_indent="  - ",
+                                 subsequent_indent="    ", break_on_hyphens=False))
+        out.extend("      " + x for x in rest)
+    for table in tables:
+        out.append("")
+        out.append(textwrap.indent(table, "  "))
+    return "\n".join(out)
+
+
+@dataclass
+class StudentReport:
+    """What a student may see of a report (:meth:`Report.for_student`)."""
+
+    subject: str
+    passed: bool
+    codes: list[str]
+    findings: list[StudentFinding]
+    details: dict
+    tables: list[str]
+    seconds: float
+
+    def to_dict(self) -> dict:
+        return {"subject": self.subject, "passed": self.passed, "codes": self.codes,
+                "findings": [f.to_dict() for f in self.findings], "details": self.details,
+                "seconds": round(self.seconds, 3)}
+
+    def __str__(self) -> str:
+        return render(self.subject, self.passed, self.codes,
+                      [str(f) for f in self.findings], self.tables)
 
 
 @dataclass
@@ -46,8 +205,10 @@ class Report:
 
     subject : what was checked (a file name, "model matrices").
     findings : every finding, errors first.
-    details : the numbers behind the findings (JSON-serialisable), e.g. distances in units of σ.
-    tables : preformatted text blocks shown under the findings (comparison, consistency).
+    details : the numbers behind the findings (JSON-serialisable), e.g. distances in units of σ;
+        never an expected value (students see them).
+    tables : preformatted text blocks shown under the findings (comparison, consistency);
+        students see them: never an expected value.
     seconds : wall-clock time of the check (s).
     """
 
@@ -67,35 +228,57 @@ class Report:
         """Codes of the error findings, in order, without repeats."""
         return list(dict.fromkeys(f.code for f in self.findings if f.severity == "error"))
 
-    def add(self, code: str, message: str, severity: str = "error") -> Finding:
-        finding = Finding(code, message, severity)
+    def failed_parts(self) -> set[str]:
+        """The parts with an error ("" : an error about the whole question)."""
+        return {f.part for f in self.findings if f.severity == "error"}
+
+    def add(self, code: str, message: str = "", severity: str = "error", *, text: str = "",
+            where: str = "", observed: Mapping[str, object] | None = None,
+            expected: Mapping[str, object] | None = None, part: str = "") -> Finding:
+        """Add a finding (module docstring): ``text`` is the student template (``where`` and
+        ``observed`` fill it), ``message`` the instructor's prose, ``expected`` what the
+        answer should have been (the instructor's only)."""
+        finding = Finding(code, message, severity, text, where, dict(observed or {}),
+                          dict(expected or {}), part)
         self.findings.append(finding)
         return finding
+
+    def tag(self, part: str) -> Report:
+        """Every finding without a part becomes ``part``'s (a sub-check of one part)."""
+        self.findings = [f if f.part else Finding(f.code, f.detail, f.severity, f.text, f.where,
+                                                  f.observed, f.expected, part)
+                         for f in self.findings]
+        return self
 
     def sort(self) -> None:
         """Errors first, then warnings, then notes (stable within each)."""
         self.findings.sort(key=lambda f: SEVERITIES.index(f.severity))
 
-    def to_dict(self) -> dict:
-        """A JSON-serialisable summary (what ``gpsaccel check --json`` writes)."""
-        return {"subject": self.subject, "passed": self.passed, "codes": self.codes,
-                "findings": [asdict(f) for f in self.findings], "details": self.details,
-                "seconds": round(self.seconds, 3)}
+    def for_student(self) -> StudentReport:
+        """The student's projection of the report (no expected value, no instructor prose)."""
+        return StudentReport(self.subject, self.passed, self.codes,
+                             [f.for_student() for f in self.findings], dict(self.details),
+                             list(self.tables), self.seconds)
+
+    def to_dict(self, instructor: bool = False) -> dict:
+        """A JSON-serialisable summary: the student's (what ``gpsaccel check --json`` writes),
+        or with ``instructor`` the expected values and the instructor's prose too."""
+        out = self.for_student().to_dict()
+        if instructor:
+            for d, f in zip(out["findings"], self.findings, strict=True):
+                d["instructor"] = f.for_instructor()
+                d["expected"] = _jsonable(f.expected)
+        return out
+
+    def instructor_text(self) -> str:
+        """The instructor's readable report (expected values shown)."""
+        return render(self.subject, self.passed, self.codes,
+                      [f"[{f.severity}] {f.code}: {f.for_instructor()}" for f in self.findings],
+                      self.tables)
 
     def __str__(self) -> str:
-        head = f"{self.subject}: {'PASSED' if self.passed else 'FAILED'}"
-        if self.codes:
-            head += f" ({', '.join(self.codes)})"
-        lines = [head]
-        for f in self.findings:
-            first, *rest = str(f).split("\n")  # later lines (a traceback) are kept as they are
-            lines.append(textwrap.fill(first, width=100, initial_indent="  - ",
-                                       subsequent_indent="    ", break_on_hyphens=False))
-            lines.extend("      " + line for line in rest)
-        for table in self.tables:
-            lines.append("")
-            lines.append(textwrap.indent(table, "  "))
-        return "\n".join(lines)
+        """The student's readable report (what a test cell and ``gpsaccel check`` print)."""
+        return str(self.for_student())
 
 
 #: The wording of :func:`as_array`'s findings (code -> template); a caller rewords any entry.
@@ -121,14 +304,18 @@ def as_array(report: Report, name: str, value: object, shape: tuple[int, ...] | 
     try:
         arr = np.array(value, dtype=float)
     except (TypeError, ValueError) as exc:
-        report.add("not-a-matrix", words["not-a-matrix"].format(error=exc, **fields))
+        report.add("not-a-matrix", text=words["not-a-matrix"], where=name,
+                   observed={"error": str(exc), **fields})
         return None
     if shape is not None and arr.shape != shape:
-        report.add("shape", words["shape"].format(
-            shape=arr.shape, want=shape, want_x=" x ".join(map(str, shape)),
-            transposed=" (it looks transposed)" if arr.shape == shape[::-1] else "", **fields))
+        # the shape asked for is the contract's, stated in the question: not an answer
+        report.add("shape", text=words["shape"], where=name, observed={
+            "shape": arr.shape, "want": shape, "want_x": " x ".join(map(str, shape)),
+            "transposed": " (it looks transposed)" if arr.shape == shape[::-1] else "",
+            **fields})
         return None
     if not np.isfinite(arr).all():
-        report.add("not-finite", words["not-finite"].format(values=arr.tolist(), **fields))
+        report.add("not-finite", text=words["not-finite"], where=name,
+                   observed={"values": arr.tolist(), **fields})
         return None
     return arr

@@ -60,7 +60,7 @@ def test_each_mistake_is_named(changes, code, words):
     report = check.model_matrices(**_with(**changes))
     assert not report.passed
     assert code in report.codes, report
-    text = " ".join(f.message for f in report.findings if f.code == code)
+    text = " ".join(f.for_instructor() for f in report.findings if f.code == code)
     for w in words:
         assert w in text, (w, text)
 

@@ -18,7 +18,8 @@ N_RUNS = 8
 
 SHARPER = [
     ("mutant_float32.py", "low-precision", ["float32", "not a wrong M0"]),
-    ("mutant_p_scaled.py", "p-scaled", ["multiplied by 2", "without the /2", "x̂ is right"]),
+    ("mutant_p_scaled.py", "p-scaled", ["same factor", "without the /2", "x̂ is right",
+                                        "factor = 2"]),
     ("mutant_epoch_shift.py", "epoch-shift", ["one GPS time late"]),
     ("mutant_last_update_missing.py", "last-update-missing", ["t = 30 s", "z[150]"]),
     ("mutant_aliased_output.py", "aliased-output", ["same array object", "copy"]),
@@ -49,9 +50,12 @@ def test_first_update_skipped_keeps_its_wording_when_z0_was_unused():
 
 def test_nearest_mistake_hint_only_when_close(tmp_path):
     far = check.submission(HERE / "mutant_diagonal_q.py", n_runs=N_RUNS)
-    msg = next(f.message for f in far.findings if f.code == "p-mismatch")
+    found = next(f for f in far.findings if f.code == "p-mismatch")
+    msg = found.for_student().message
     assert "No catalogued mistake matches" in msg and "first departs at t = 3.2 s" in msg
     # where and how it departs, never the optimal filter's value: no number but times and sizes
+    # (the instructor's text has it)
+    assert "expected: P31 at t = 3.2 s = " in found.for_instructor()
     depart = msg[msg.index("first departs"):]
     assert re.search(r"P\d\d (is |has |should |about |a few |10–50 |slightly )", depart), depart
     assert "optimal filter's is" not in msg and not re.search(r"\d\.\d{3,}", depart), depart

@@ -46,11 +46,30 @@ def _q1_grade(draw, answers) -> Report:
     from gpsaccel.check import model_matrices
 
     report = Report("question 1: model matrices")
-    given = {name: value(report, name, a) for name, a in zip(_MATRICES, answers, strict=True)}
-    if not report.passed:
+    given = {name: value(report, name, a, name)
+             for name, a in zip(_MATRICES, answers, strict=True)}
+    if all(v is None for v in given.values()):
         return report
     rate = draw.variant["rate_hz"]
-    return model_matrices(**given, dt=1.0 / rate, model=rate_model(rate))
+    checked = model_matrices(**{k: v for k, v in given.items() if v is not None},
+                             dt=1.0 / rate, model=rate_model(rate))
+    checked.findings = report.findings + [_matrix_part(f) for f in checked.findings]
+    checked.sort()
+    return checked
+
+
+#: The first symbol of a finding's place (Φ₁₃, V₂₂, M0) -> the matrix it is about (q1's part).
+_SYMBOLS = {"Φ": "Phi", "P": "Phi", "Γ": "Gamma", "G": "Gamma", "H": "H", "V": "V", "W": "W",
+            "M": "M0"}
+
+
+def _matrix_part(f):
+    """The finding about one matrix as that matrix's part (partial credit); one the checker
+    places nowhere (dt, ok) stays the whole question's."""
+    from dataclasses import replace
+
+    part = _SYMBOLS.get(f.where[:1], "") if f.where else ""
+    return replace(f, part=part) if part and not f.part else f
 
 
 def _q2_grade(path, draw, timeout: float) -> Report:
@@ -83,16 +102,23 @@ def _q3_grade(draw, answers) -> Report:
     out = {}
     for name, args in (("average_nees", (x_true, x_hat, P)), ("nees_bounds", (np.array(N),))):
         fn = replay(reads, answers, name)
-        out[name] = call(report, f"{name}(...)", fn, *args)
-    if not report.passed:
-        return report
-    return nees_answer(out["average_nees"], out["nees_bounds"], N, x_true, x_hat, P)
+        out[name] = call(report, f"{name}(...)", fn, *args, part=name)
+    if report.passed:
+        return nees_answer(out["average_nees"], out["nees_bounds"], N, x_true, x_hat, P)
+    # one function failed to answer: the other is still checked, for its own part
+    both = nees_answer(out["average_nees"], out["nees_bounds"], N, x_true, x_hat, P)
+    report.findings += [f for f in both.findings
+                        if f.part not in report.failed_parts() and f.severity == "error"]
+    report.sort()
+    return report
 
 
 def graded_questions():
     """The calibration homework's graded questions (:mod:`gpsaccel.assignments.questions`)."""
     from gpsaccel.assignments.questions import Question
 
-    return (Question("q1", 3, _q1_reads, _q1_grade),
+    return (Question("q1", 3, _q1_reads, _q1_grade,
+                     parts=tuple((name, 0.5) for name in _MATRICES)),
             Question("q2", 4, file="kalman_filter.py", grade_file=_q2_grade),
-            Question("q3", 3, _q3_reads, _q3_grade))
+            Question("q3", 3, _q3_reads, _q3_grade,
+                     parts=(("average_nees", 1.5), ("nees_bounds", 1.5))))

@@ -102,5 +102,6 @@ def graded_questions():
     """The coop homework's graded questions (:mod:`gpsaccel.assignments.questions`)."""
     from gpsaccel.assignments.questions import Question
 
-    return (Question("q1", 3, _q1_reads, _q1_grade), Question("q2", 2, _q2_reads, _q2_grade),
+    return (Question("q1", 3, _q1_reads, _q1_grade, parts=(("A", 1), ("B", 1), ("C", 1))),
+            Question("q2", 2, _q2_reads, _q2_grade),
             Question("q3", 5, _q3_reads, _q3_grade))
