@@ -44,6 +44,7 @@ from gpsaccel.check.findings import mistake_finding
 from gpsaccel.check.problems import Argument, Function, Problem
 from gpsaccel.check.report import Report, used
 from gpsaccel.kalman.consistency import (
+    Verdict,
     chi2_bounds,
     covariance_distance,
     format_verdicts,
@@ -550,7 +551,7 @@ class LinearProblem(Problem):
             + ", ".join(f"{s} {r:.3g}" for s, r in zip(states, ratio, strict=True)))
         i_mean = np.unravel_index(int(np.nanargmax(np.abs(z_mean))), z_mean.shape)
         i_nees = int(np.nanargmax(np.abs(z_nees)))
-        texts = (
+        texts: tuple[tuple[Verdict, str, float, dict], ...] = (
             (v_mean, "Your errors do not average to zero: at {where} the mean error over {N} runs "
                      "is {value:.3g}, {z:.3g} times its standard error √(P/N)",
              float(e.mean(axis=0)[i_mean]), {}),
