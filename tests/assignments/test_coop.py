@@ -48,7 +48,7 @@ def test_solution_full_marks_blank_zero(graded):
 
 def test_mistakes_lose_exactly_their_questions_and_name_the_codes(graded):
     a = graded["wrong C, no wrap"]
-    assert a.scores == {"q1": 0.0, "q2": 2.0, "q3": 0.0}, a.feedback
+    assert a.scores == {"q1": 2.0, "q2": 2.0, "q3": 0.0}, a.feedback  # C is one of q1's parts
     assert a.codes["q1"] == ["jacobian-C"] and a.codes["q3"] == ["no-angle-wrap"]
     b = graded["F without I"]
     assert b.scores == {"q1": 3.0, "q2": 0.0, "q3": 5.0} and b.codes["q2"] == ["dt-linearization"]
@@ -56,7 +56,7 @@ def test_mistakes_lose_exactly_their_questions_and_name_the_codes(graded):
 
 def test_one_wrong_B_element_costs_only_the_jacobian_question(graded):
     g = graded["one wrong B"]
-    assert g.scores == {"q1": 0.0, "q2": 2.0, "q3": 5.0}, g.feedback
+    assert g.scores == {"q1": 2.0, "q2": 2.0, "q3": 5.0}, g.feedback  # A and C are right
     assert g.codes["q1"] == ["jacobian-B"] and "B₃₂" in g.feedback
 
 

@@ -97,8 +97,10 @@ def test_each_ingredient_mistake_is_named_with_the_catalogues_code():
         assert all(f.message.split(":")[0] in wrong for f in report.findings
                    if f.severity == "error")
     slip = {**right, "Phi": np.array([[1.0, 2 * dt], [0.0, 1.0]])}
-    msg = matrices_answer(model, slip).findings[0].message
+    found = matrices_answer(model, slip).findings[0]
+    msg = found.for_student().message  # the instructor's text has the right matrix
     assert "Φ₁₂ differs" in msg and f"{dt:g}" not in msg.split("differs")[1]
+    assert f"{dt:g}" in found.for_instructor()
 
 
 def test_the_homework_is_registered_where_it_is_defined():
