@@ -135,14 +135,11 @@ def shape_hints(got: tuple[int, ...], want: tuple[int, ...], name: str, every: i
                                     want_rows=want[0])]
 
 
-def box_findings(report: Report, box: sb.BoxResult, calls: Sequence[sb.Call],
-                 limits: sb.Limits, messages: Mapping[str, str] | None = None,
-                 labels: Sequence[str] | None = None, renames: Mapping[str, str] | None = None,
-                 **fields: object) -> bool:
-    """Add the findings about the box itself; True when every call returned (there are results
-    to compare).  ``messages`` overrides :data:`MESSAGES` per code, ``labels[i]`` names call i's
-    case, ``renames`` maps a failure to the code reported, ``fields`` fill the templates."""
-    text = {**MESSAGES, **(messages or {})}
+def _box_fields(box: sb.BoxResult, calls: Sequence[sb.Call], limits: sb.Limits,
+                labels: Sequence[str] | None, fields: Mapping[str, object]
+                ) -> tuple[Sequence[sb.Output], dict[str, object]]:
+    """The outputs of the call the box stopped at, and the fields of the box's templates: the
+    student's own output, traceback and counts, and the check's limits, never an answer."""
     problem = box.problem or {}
     i = problem.get("call")
     call = calls[i] if isinstance(i, int) and 0 <= i < len(calls) else (calls[0] if calls else None)
@@ -165,6 +162,19 @@ def box_findings(report: Report, box: sb.BoxResult, calls: Sequence[sb.Call],
                                                                "second per call",
         **fields,
     }
+    return outputs, f
+
+
+def box_findings(report: Report, box: sb.BoxResult, calls: Sequence[sb.Call],
+                 limits: sb.Limits, messages: Mapping[str, str] | None = None,
+                 labels: Sequence[str] | None = None, renames: Mapping[str, str] | None = None,
+                 **fields: object) -> bool:
+    """Add the findings about the box itself; True when every call returned (there are results
+    to compare).  ``messages`` overrides :data:`MESSAGES` per code, ``labels[i]`` names call i's
+    case, ``renames`` maps a failure to the code reported, ``fields`` fill the templates."""
+    text = {**MESSAGES, **(messages or {})}
+    problem = box.problem or {}
+    outputs, f = _box_fields(box, calls, limits, labels, fields)
     report.details["sandbox"] = box.backend
     report.details["sandbox_limits"] = box.limit_backend  # cgroup2, cgroup1 or rlimit
     if box.output_bytes > OUTPUT_WARN and box.failure != "output-limit":
