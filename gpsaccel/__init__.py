@@ -10,15 +10,20 @@ The calibration core (reports 000, 001, 003)::
     print(mc.consistency())                         # each statistic against its sampling error
 """
 
+from typing import TYPE_CHECKING
+
+from gpsaccel import _lazy
 from gpsaccel._version import __version__ as __version__  # the one place it is written
-from gpsaccel.calibration.model import CalibrationModel
-from gpsaccel.calibration.montecarlo import MonteCarloResult, monte_carlo
-from gpsaccel.calibration.simulation import Realization, simulate
-from gpsaccel.coop.model import CoopModel
-from gpsaccel.kalman.multirate import MultirateResult, run_multirate
-from gpsaccel.kalman.schedule import Schedule
-from gpsaccel.kalman.update import NumericalWarning
-from gpsaccel.ship.model import ShipModel
+
+if TYPE_CHECKING:  # the names below, for mypy and editors; at run time they load on first use
+    from gpsaccel.calibration.model import CalibrationModel
+    from gpsaccel.calibration.montecarlo import MonteCarloResult, monte_carlo
+    from gpsaccel.calibration.simulation import Realization, simulate
+    from gpsaccel.coop.model import CoopModel
+    from gpsaccel.kalman.multirate import MultirateResult, run_multirate
+    from gpsaccel.kalman.schedule import Schedule
+    from gpsaccel.kalman.update import NumericalWarning
+    from gpsaccel.ship.model import ShipModel
 
 __all__ = [
     "CalibrationModel",
@@ -34,14 +39,20 @@ __all__ = [
     "simulate",
 ]
 
-#: Sub-packages reachable as attributes after a bare ``import gpsaccel`` (a lesson's
-#: ``gpsaccel.check.model_matrices(...)`` typed as given), imported on first use.
-_LAZY = ("calibration", "check", "coop", "figures", "kalman", "lessons", "plots", "ship")
-
-
-def __getattr__(name: str):
-    if name in _LAZY:
-        import importlib
-
-        return importlib.import_module(f"gpsaccel.{name}")
-    raise AttributeError(f"module 'gpsaccel' has no attribute {name!r}")
+# ``import gpsaccel`` imports nothing else (no numpy, filterpy, scipy or matplotlib; every CLI
+# call, test worker and sandbox box pays for this line): each name above, and each sub-package
+# (a lesson's ``gpsaccel.check.model_matrices(...)`` after a bare ``import gpsaccel``), is
+# imported when first read (:mod:`gpsaccel._lazy`).
+__getattr__, __dir__ = _lazy.attach(
+    __name__,
+    submodules=("calibration", "check", "coop", "figures", "kalman", "lessons", "plots", "ship"),
+    attributes={
+        "calibration.model": ("CalibrationModel",),
+        "calibration.montecarlo": ("MonteCarloResult", "monte_carlo"),
+        "calibration.simulation": ("Realization", "simulate"),
+        "coop.model": ("CoopModel",),
+        "kalman.multirate": ("MultirateResult", "run_multirate"),
+        "kalman.schedule": ("Schedule",),
+        "kalman.update": ("NumericalWarning",),
+        "ship.model": ("ShipModel",),
+    })

@@ -31,21 +31,44 @@ SLOW: tuple[str, ...] = (
 )
 
 
+@pytest.hookimpl(tryfirst=True)  # before -k and -m deselect: every collected item is marked
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    used: set[str] = set()
-    files = set()
+    mark_slow(items, SLOW)
+
+
+def mark_slow(items: list[pytest.Item], slow: tuple[str, ...]) -> None:
+    """Mark the items that an entry of ``slow`` names; UsageError for an entry that names no test.
+
+    An entry is stale when its file was collected but defines no test it names (the test was
+    renamed: it would then run in every "not slow" run, as 30 lesson notebooks did on 3.13).  That
+    is read from the module itself, not from the items, which are only the selected ones under
+    ``pytest file::test``: a slow test run on its own, or ``-k``, must not make its neighbours'
+    entries look stale.
+    """
+    modules: dict[str, object] = {}
     for item in items:
         node = item.nodeid.replace("\\", "/")
-        files.add(node.split("::")[0])
-        hits = {prefix for prefix in SLOW if node.startswith(prefix)}
-        if hits:
+        if any(node.startswith(prefix) for prefix in slow):
             item.add_marker(pytest.mark.slow)
-            used |= hits
-    # an entry whose file was collected but that marks nothing names a test that was renamed: the
-    # renamed test would then run in every "not slow" run (it did: 30 lesson notebooks on 3.13)
-    stale = [p for p in SLOW if p not in used and p.split("::")[0] in files and "::" in p]
+        module = item.getparent(pytest.Module)
+        if module is not None:
+            modules.setdefault(node.split("::")[0], module.obj)
+    stale = [p for p in slow if "::" in p and p.split("::")[0] in modules
+             and not _defines(modules[p.split("::")[0]], p.split("::")[1:])]
     if stale:
         raise pytest.UsageError(f"tests/conftest.py SLOW names tests that do not exist: {stale}")
+
+
+def _defines(obj: object, parts: list[str]) -> bool:
+    """Whether ``obj`` (a test module) defines a test whose node id starts with ``::``.join(parts):
+    classes by exact name, then a function whose name (or ``name[parameters]``) starts so."""
+    for part in parts[:-1]:
+        obj = getattr(obj, part, None)
+        if obj is None:
+            return False
+    last = parts[-1]
+    return any(name.startswith(last) or last.startswith(name + "[")
+               for name in dir(obj) if name.startswith("test") or name.startswith("Test"))
 
 
 # ---------------------------------------------------------------------------- shared, cached work

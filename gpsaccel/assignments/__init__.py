@@ -17,8 +17,19 @@ notebook and otter's autograder zip for students' ``grader.check`` and Gradescop
 the sandbox, every score computed outside it (:mod:`~gpsaccel.assignments.grading`).
 """
 
-from gpsaccel.assignments.generate import Generated, generate, master_notebook, questions
-from gpsaccel.assignments.grading import Grade, grade, grade_notebook
+from typing import TYPE_CHECKING
+
+from gpsaccel import _lazy
+
+if TYPE_CHECKING:  # for mypy and editors; at run time each name loads on first use (_lazy)
+    from gpsaccel.assignments.generate import Generated, generate, master_notebook, questions
+    from gpsaccel.assignments.grading import Grade, grade, grade_notebook
 
 __all__ = ["Generated", "Grade", "generate", "grade", "grade_notebook",
            "master_notebook", "questions"]
+
+# the homework modules (``gpsaccel.assignments.calibration``, read by the registry) import this
+# package first: it must not import otter's generator or the grader for that.
+__getattr__, __dir__ = _lazy.attach(
+    __name__, attributes={"generate": ("Generated", "generate", "master_notebook", "questions"),
+                          "grading": ("Grade", "grade", "grade_notebook")})

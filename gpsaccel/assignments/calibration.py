@@ -17,7 +17,6 @@ import math
 from functools import lru_cache
 
 import numpy as np
-from scipy import stats
 
 from gpsaccel import registry
 from gpsaccel.check.report import Report
@@ -58,6 +57,8 @@ def nees_reference(x_true: np.ndarray, x_hat: np.ndarray, P: np.ndarray, k: int 
     N, n = x_true.shape[0], x_true.shape[-1]
     e = x_true[:, k] - x_hat[:, k]
     eps = float(np.mean(np.einsum("ri,ri->r", e, np.linalg.solve(P[:, k], e[..., None])[..., 0])))
+    from scipy import stats  # here: the registry imports this module to list the homework
+
     lo, hi = stats.chi2.ppf([0.025, 0.975], n * N) / N
     return eps, (float(lo), float(hi))
 
@@ -128,6 +129,8 @@ def nees_answer(nees_30: object, nees_bounds: object, N: int, x_true: np.ndarray
                    "{value}.", where="nees_bounds",
                    observed={"value": str(nees_bounds)[:80]}, part=bnd)
     elif not all(math.isclose(b, w, rel_tol=1e-4) for b, w in zip(bounds, (lo, hi), strict=True)):
+        from scipy import stats
+
         one = stats.chi2.ppf([0.025, 0.975], n)
         mine = {"r1": bounds[0], "r2": bounds[1], "n": n, "N": N}
         if all(math.isclose(b, w, rel_tol=1e-4) for b, w in zip(bounds, one, strict=True)):

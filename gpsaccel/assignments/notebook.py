@@ -205,6 +205,28 @@ def get_ipython():
     return _gpsaccel_shell
 
 
+def _gpsaccel_otter():
+    """What ``import otter`` finds in the box: a Notebook whose checks do nothing.  otter's init
+    and ``grader.check`` cells are for the student's kernel (the grade is computed outside the
+    box); the real otter would cost 1.5-4.5 CPU s per notebook (IPython, nbformat, jsonschema)."""
+    import sys, types
+
+    class Notebook:
+        def __init__(self, *args, **kwargs):
+            pass
+
+        def __getattr__(self, name):
+            return lambda *args, **kwargs: None
+
+    otter = types.ModuleType("otter")
+    otter.Notebook = Notebook
+    sys.modules["otter"] = otter
+
+
+_gpsaccel_otter()
+del _gpsaccel_otter
+
+
 def _gpsaccel_text(text):
     import numpy as np
     data = str(text).encode("utf-8", "replace")[:_G_MESSAGE_BYTES]

@@ -17,21 +17,35 @@
 * :mod:`~gpsaccel.calibration.errata`: the reports' mistakes and their exact cost.
 """
 
-from gpsaccel.calibration import (
-    compare,
-    errata,
-    exact,
-    forms,
-    mistakes,
-    model,
-    montecarlo,
-    reports,
-    simulation,
-)
-from gpsaccel.calibration.model import CalibrationModel
-from gpsaccel.calibration.montecarlo import MonteCarloResult, monte_carlo
-from gpsaccel.calibration.simulation import Realization, simulate
+from typing import TYPE_CHECKING
+
+from gpsaccel import _lazy
+
+if TYPE_CHECKING:  # for mypy and editors; at run time each name loads on first use (_lazy)
+    from gpsaccel.calibration import (
+        compare,
+        errata,
+        exact,
+        forms,
+        mistakes,
+        model,
+        montecarlo,
+        reports,
+        simulation,
+    )
+    from gpsaccel.calibration.model import CalibrationModel
+    from gpsaccel.calibration.montecarlo import MonteCarloResult, monte_carlo
+    from gpsaccel.calibration.simulation import Realization, simulate
 
 __all__ = ["CalibrationModel", "MonteCarloResult", "Realization", "compare", "errata", "exact",
            "forms", "mistakes", "model", "monte_carlo", "montecarlo", "reports", "simulate",
            "simulation"]
+
+# ``from gpsaccel.calibration.model import CalibrationModel`` imports this package first: it must
+# not import compare (mpmath), errata or filterpy's forms for that.
+__getattr__, __dir__ = _lazy.attach(
+    __name__,
+    submodules=("compare", "errata", "exact", "forms", "mistakes", "model", "montecarlo",
+                "reports", "simulation"),
+    attributes={"model": ("CalibrationModel",), "montecarlo": ("MonteCarloResult", "monte_carlo"),
+                "simulation": ("Realization", "simulate")})

@@ -47,13 +47,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from filterpy.kalman import KalmanFilter
 
 from gpsaccel import _validation as _v
 from gpsaccel.kalman.schedule import Schedule
+
+if TYPE_CHECKING:  # filterpy pulls in scipy.stats (0.6 CPU s): imported where a filter is made
+    from filterpy.kalman import KalmanFilter
 
 #: Report 000's angular frequency of the true acceleration (rad/s), used when neither
 #: ``omega`` nor ``frequency_hz`` is given.
@@ -217,6 +219,8 @@ class CalibrationModel:
 
     def kalman_filter(self) -> KalmanFilter:
         """A filterpy ``KalmanFilter`` for one accelerometer step: F = Φ, Q = ΓWΓᵀ, H, R = V, P = M0."""
+        from filterpy.kalman import KalmanFilter
+
         kf = KalmanFilter(dim_x=3, dim_z=2)
         kf.F = self.Phi
         kf.Q = self.Q

@@ -25,13 +25,18 @@ a portable basic box, with limits), whose generic interface (named functions, nu
 declared outputs) every problem uses through :meth:`Problem.check`.
 """
 
-from gpsaccel.calibration.mistakes import codes
-from gpsaccel.check.jacobians import assert_dt_model, assert_jacobians, dt_model, jacobians
-from gpsaccel.check.linear import TOLERANCE, LinearProblem
-from gpsaccel.check.matrices import assert_model_matrices, model_matrices
-from gpsaccel.check.problems import Problem, assert_submission, submission
-from gpsaccel.check.report import Finding, Report
-from gpsaccel.check.student_filter import StudentFilterError, student_filter
+from typing import TYPE_CHECKING
+
+from gpsaccel import _lazy
+
+if TYPE_CHECKING:  # for mypy and editors; at run time each name loads on first use (_lazy)
+    from gpsaccel.calibration.mistakes import codes
+    from gpsaccel.check.jacobians import assert_dt_model, assert_jacobians, dt_model, jacobians
+    from gpsaccel.check.linear import TOLERANCE, LinearProblem
+    from gpsaccel.check.matrices import assert_model_matrices, model_matrices
+    from gpsaccel.check.problems import Problem, assert_submission, submission
+    from gpsaccel.check.report import Finding, Report
+    from gpsaccel.check.student_filter import StudentFilterError, student_filter
 
 __all__ = [
     "TOLERANCE",
@@ -51,3 +56,17 @@ __all__ = [
     "student_filter",
     "submission",
 ]
+
+# ``gpsaccel.check.sandbox`` or ``.report`` (the grader, the CLI) import this package first: it
+# must not import every problem and its filters for that.
+__getattr__, __dir__ = _lazy.attach(
+    __name__,
+    attributes={
+        "gpsaccel.calibration.mistakes": ("codes",),
+        "jacobians": ("assert_dt_model", "assert_jacobians", "dt_model", "jacobians"),
+        "linear": ("TOLERANCE", "LinearProblem"),
+        "matrices": ("assert_model_matrices", "model_matrices"),
+        "problems": ("Problem", "assert_submission", "submission"),
+        "report": ("Finding", "Report"),
+        "student_filter": ("StudentFilterError", "student_filter"),
+    })

@@ -6,7 +6,18 @@
 * :mod:`~gpsaccel.coop.montecarlo`: the NEES/NIS truth-model tests and the Q tuning.
 """
 
-from gpsaccel.coop import filters, mistakes, model, montecarlo
-from gpsaccel.coop.model import CoopModel
+from typing import TYPE_CHECKING
+
+from gpsaccel import _lazy
+
+if TYPE_CHECKING:  # for mypy and editors; at run time each name loads on first use (_lazy)
+    from gpsaccel.coop import filters, mistakes, model, montecarlo
+    from gpsaccel.coop.model import CoopModel
 
 __all__ = ["CoopModel", "filters", "mistakes", "model", "montecarlo"]
+
+# a notebook's ``from gpsaccel.coop.model import course_ydata`` imports this package first: it
+# must not import the filters (filterpy, scipy.stats) for that.
+__getattr__, __dir__ = _lazy.attach(
+    __name__, submodules=("filters", "mistakes", "model", "montecarlo"),
+    attributes={"model": ("CoopModel",)})

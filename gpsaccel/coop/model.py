@@ -61,7 +61,6 @@ from dataclasses import dataclass, field
 from importlib import resources
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from gpsaccel import _validation as _v
 
@@ -358,6 +357,8 @@ class CoopModel:
         """
         x_start = self.x0 if x_start is None else _v.finite_array("x_start", x_start,
                                                                    (N_STATES,))
+        from scipy.integrate import solve_ivp  # here, not at import (0.3 CPU s): gpsaccel._lazy
+
         u = self.u0
         sol = solve_ivp(lambda _t, x: f(x, u, self.L), (0.0, self.t[-1]), x_start,
                         method="DOP853", t_eval=self.t, rtol=rtol, atol=atol)

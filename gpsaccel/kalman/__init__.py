@@ -12,8 +12,20 @@
 This package imports no system (calibration, ship, coop) and nothing above it.
 """
 
-from gpsaccel.kalman.information import InformationFilter
-from gpsaccel.kalman.multirate import MultirateResult, run_multirate
-from gpsaccel.kalman.schedule import Schedule
+from typing import TYPE_CHECKING
+
+from gpsaccel import _lazy
+
+if TYPE_CHECKING:  # for mypy and editors; at run time each name loads on first use (_lazy)
+    from gpsaccel.kalman.information import InformationFilter
+    from gpsaccel.kalman.multirate import MultirateResult, run_multirate
+    from gpsaccel.kalman.schedule import Schedule
 
 __all__ = ["InformationFilter", "MultirateResult", "Schedule", "run_multirate"]
+
+# every system imports ``gpsaccel.kalman.schedule``, which imports this package first: it must not
+# import scipy.linalg (the information form) for that.
+__getattr__, __dir__ = _lazy.attach(
+    __name__, attributes={"information": ("InformationFilter",),
+                          "multirate": ("MultirateResult", "run_multirate"),
+                          "schedule": ("Schedule",)})

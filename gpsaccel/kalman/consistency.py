@@ -20,7 +20,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
 
 from gpsaccel import _validation as _v
 
@@ -34,6 +33,8 @@ def chi2_bounds(dof: int, n_runs: int = 1, alpha: float = 0.05) -> tuple[float, 
     n_runs = _v.integer("n_runs", n_runs, minimum=1)
     alpha = _v.probability("alpha", alpha)
     k = n_runs * dof
+    from scipy import stats  # here, not at import: scipy.stats costs 0.5 CPU s (see _lazy)
+
     return (float(stats.chi2.ppf(alpha / 2, k) / n_runs),
             float(stats.chi2.ppf(1 - alpha / 2, k) / n_runs))
 
@@ -115,6 +116,8 @@ def z_threshold(alpha: float, n_tests: int) -> float:
     """
     alpha = _v.probability("alpha", alpha)
     n_tests = _v.integer("n_tests", n_tests, minimum=1)
+    from scipy import stats
+
     return float(stats.norm.isf(alpha / (2 * n_tests)))
 
 
@@ -198,6 +201,8 @@ def z_from_chi2(x: np.ndarray, dof: np.ndarray | int) -> np.ndarray:
     """
     x = np.asarray(x, dtype=float)
     dof = np.asarray(dof, dtype=float)
+    from scipy import stats
+
     upper = x > stats.chi2.median(dof)
     with np.errstate(divide="ignore", invalid="ignore"):
         z = np.where(upper, stats.norm.isf(stats.chi2.sf(x, dof)),

@@ -28,14 +28,16 @@ import itertools
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
-from filterpy.kalman import KalmanFilter
 
 from gpsaccel import _validation as _v
 from gpsaccel.kalman.schedule import Schedule
 from gpsaccel.kalman.update import epoch_transition, gain, joseph_update
+
+if TYPE_CHECKING:  # filterpy pulls in scipy.stats (0.6 CPU s): imported where a filter is made
+    from filterpy.kalman import KalmanFilter
 
 
 # ------------------------------------------------------------------------------ the epoch filter
@@ -285,6 +287,8 @@ class LinearModel:
 
     def kalman_filter(self) -> KalmanFilter:
         """A filterpy ``KalmanFilter`` for one step: F = Φ, Q = Γ W Γᵀ, H, R = V, x = x0, P = M0."""
+        from filterpy.kalman import KalmanFilter
+
         kf = KalmanFilter(dim_x=self.dim_x, dim_z=self.dim_z)
         kf.F, kf.Q, kf.H = self.Phi.copy(), self.Q, self.H.copy()
         kf.R, kf.P = self.V.copy(), self.M0.copy()

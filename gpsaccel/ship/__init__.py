@@ -8,7 +8,19 @@
 * :mod:`~gpsaccel.ship.comparison`: the four multirate filters compared by Monte Carlo.
 """
 
-from gpsaccel.ship import comparison, mistakes, model, plan, simulation, zeroed_gain
-from gpsaccel.ship.model import ShipModel
+from typing import TYPE_CHECKING
+
+from gpsaccel import _lazy
+
+if TYPE_CHECKING:  # for mypy and editors; at run time each name loads on first use (_lazy)
+    from gpsaccel.ship import comparison, mistakes, model, plan, simulation, zeroed_gain
+    from gpsaccel.ship.model import ShipModel
 
 __all__ = ["ShipModel", "comparison", "mistakes", "model", "plan", "simulation", "zeroed_gain"]
+
+# a notebook's ``from gpsaccel.ship.simulation import simulate_ship`` imports this package first:
+# it must not import the comparison and the mistakes' filters for that.
+__getattr__, __dir__ = _lazy.attach(
+    __name__,
+    submodules=("comparison", "mistakes", "model", "plan", "simulation", "zeroed_gain"),
+    attributes={"model": ("ShipModel",)})

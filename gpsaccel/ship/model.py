@@ -73,14 +73,16 @@ The course-notation / filterpy mapping is that of :mod:`gpsaccel.calibration.mod
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from filterpy.kalman import KalmanFilter
 
 from gpsaccel import _validation as _v
 from gpsaccel.kalman.schedule import Schedule
 from gpsaccel.ship.plan import nominal_plan
+
+if TYPE_CHECKING:  # filterpy pulls in scipy.stats (0.6 CPU s): imported where a filter is made
+    from filterpy.kalman import KalmanFilter
 
 #: Names and units of the 9 ship states, in order.
 STATES = (("x", "m"), ("ẋ", "m/s"), ("ẍ", "m/s²"), ("y", "m"), ("ẏ", "m/s"), ("ÿ", "m/s²"),
@@ -284,6 +286,8 @@ class ShipModel:
 
     def kalman_filter(self) -> KalmanFilter:
         """filterpy ``KalmanFilter``: F = Φ, B, Q = ΓWΓᵀ, H, R = V, P = M0 (with the wind prior)."""
+        from filterpy.kalman import KalmanFilter
+
         n = self.dim_x
         kf = KalmanFilter(dim_x=n, dim_z=9, dim_u=3)
         kf.F = self.Phi

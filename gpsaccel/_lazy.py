@@ -1,0 +1,60 @@
+"""A package's public names imported on first use (PEP 562), so importing it costs nothing.
+
+``import gpsaccel`` used to import every system, and with them filterpy, scipy.stats and mpmath
+(1.3–2.5 CPU s), paid by every CLI call, every test worker and every sandbox box.  A package's
+``__init__`` now lists where each public name lives and lets :func:`attach` import it when it is
+first read (``gpsaccel.CalibrationModel``, ``from gpsaccel.check import submission``)::
+
+    __getattr__, __dir__ = _lazy.attach(__name__, submodules=("model",),
+                                        attributes={"model": ("CalibrationModel",)})
+
+The same names are imported under ``typing.TYPE_CHECKING`` in that ``__init__`` for mypy and
+editors; tests/test_lazy_imports.py checks that both lists agree and that every name resolves.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import sys
+from collections.abc import Callable, Iterable, Mapping
+from typing import Any
+
+
+def attach(package: str, submodules: Iterable[str] = (),
+           attributes: Mapping[str, Iterable[str]] | None = None,
+           ) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
+    """``(__getattr__, __dir__)`` for ``package``: ``submodules`` (names relative to it, or
+    absolute ``gpsaccel.…``) are imported when read, as is any other sub-module of ``package``
+    (listed or not); ``attributes[module]`` are names read from ``module`` (relative or absolute)
+    when first asked for.  A resolved name is stored in the package's namespace, so the hook
+    runs once per name."""
+    where: dict[str, tuple[str, str | None]] = {}
+    for name in submodules:
+        where[name.rsplit(".", 1)[-1]] = (_absolute(package, name), None)
+    for module, names in (attributes or {}).items():
+        for name in names:
+            where[name] = (_absolute(package, module), name)
+
+    def __getattr__(name: str) -> Any:
+        if name not in where:
+            # any other sub-module, as the eager package made them reachable (``check.sandbox``
+            # after ``from gpsaccel import check``)
+            if name.startswith("__") or "." in name \
+                    or importlib.util.find_spec(f"{package}.{name}") is None:
+                raise AttributeError(f"module {package!r} has no attribute {name!r}")
+            where[name] = (f"{package}.{name}", None)
+        module_name, attribute = where[name]
+        module = importlib.import_module(module_name)
+        value = module if attribute is None else getattr(module, attribute)
+        setattr(sys.modules[package], name, value)
+        return value
+
+    def __dir__() -> list[str]:
+        return sorted(set(vars(sys.modules[package])) | set(where))
+
+    return __getattr__, __dir__
+
+
+def _absolute(package: str, name: str) -> str:
+    return name if name.startswith("gpsaccel.") or name == "gpsaccel" else f"{package}.{name}"
