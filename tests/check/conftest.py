@@ -41,6 +41,21 @@ def alive(pids: set[int]) -> set[int]:
     return pids & marked_pids()
 
 
+#: A hang guard, not an expected duration: how long a liveness test waits for an event that comes
+#: within seconds when the code works (a loaded shared machine has taken minutes).  The Ctrl-C and
+#: timeout tests fail by the event never coming, never by a clock.
+HANG = 600.0
+
+
+def wait_gone(pids: set[int], limit: float = HANG) -> set[int]:
+    """Wait until none of ``pids`` is a live marked process (a killed process takes a moment to
+    go, longer under load); those still alive after ``limit`` s (they spin forever: never gone)."""
+    give_up = time.monotonic() + limit
+    while alive(pids) and time.monotonic() < give_up:
+        time.sleep(0.05)
+    return alive(pids)
+
+
 class Watch:
     """Collect, every 10 ms in a thread, the PIDs of every marked process that appears."""
 
@@ -96,4 +111,4 @@ def hostile():
     """Paths and helpers of the hostile tests."""
     return SimpleNamespace(DIR=HOSTILE, SUBMISSIONS=SUBMISSIONS, MARKER=MARKER,
                            marked_pids=marked_pids, alive=alive, Watch=Watch,
-                           env=env_with_package)
+                           env=env_with_package, HANG=HANG, wait_gone=wait_gone)
