@@ -1,0 +1,98 @@
+"""What the test suite costs, per folder: CPU of pytest and every process it started (children
+included: xdist workers, kernels, boxes, otter), wall time, and what ran.
+
+One pytest per folder of ``tests/`` (the top-level test files together as ``tests/*.py``), one after
+the other, so a folder's figure is its own.  Not part of ``make bench``: it runs the suite, which
+the machine may share (benchmarks/run.py leaves it out).  Examples::
+
+    python benchmarks/suite_cost.py                       # every folder, as `make test` would
+    python benchmarks/suite_cost.py tests/kalman -m "not slow"
+    python benchmarks/suite_cost.py -n 2 --out docs/benchmarks/suite_cost.txt
+
+The table is Markdown; ``--out`` also writes it to a file under a line naming the date, Python and
+load (the load is printed at the start and at the end: CPU seconds are what to compare).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import platform
+import re
+import sys
+from pathlib import Path
+
+import _cpu
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def groups(paths: list[str]) -> list[tuple[str, list[str]]]:
+    """(label, pytest arguments) per folder; every folder of tests/ and its top-level files when
+    ``paths`` is empty."""
+    if paths:
+        return [(p, [p]) for p in paths]
+    tests = ROOT / "tests"
+    out = []
+    top = sorted(str(p.relative_to(ROOT)) for p in tests.glob("test_*.py"))
+    if top:
+        out.append(("tests/*.py", top))
+    for folder in sorted(p for p in tests.iterdir() if p.is_dir()):
+        if any(folder.rglob("test_*.py")):
+            rel = str(folder.relative_to(ROOT))
+            out.append((rel + "/", [rel]))
+    return out
+
+
+def outcome(stdout: str) -> str:
+    """pytest's closing counts ("12 passed, 1 skipped"), or its last line."""
+    lines = [line for line in stdout.strip().splitlines() if line.strip()]
+    for line in reversed(lines):
+        found = re.findall(r"(\d+) (passed|failed|skipped|deselected|errors?|xfailed|xpassed)",
+                           line)
+        if found:
+            return ", ".join(f"{n} {what}" for n, what in found)
+    return lines[-1][:80] if lines else ""
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("paths", nargs="*", help="folders or files (default: every folder)")
+    parser.add_argument("-m", dest="marks", default=None, help="pytest's -m (e.g. 'not slow')")
+    parser.add_argument("-n", dest="workers", default=None,
+                        help="pytest-xdist workers per folder (default: none, serial)")
+    parser.add_argument("--out", type=Path, default=None, help="also write the table here")
+    args = parser.parse_args(argv)
+    start = _cpu.load()
+    print(f"start: {start}", flush=True)
+    lines = ["| folder | tests | CPU s | wall s | exit |", "|---|---|---|---|---|"]
+    total_cpu = total_wall = 0.0
+    failed = False
+    for label, targets in groups(args.paths):
+        cmd = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *targets]
+        if args.marks:
+            cmd += ["-m", args.marks]
+        if args.workers:
+            cmd += ["-n", args.workers]
+        s = _cpu.run(cmd, cwd=str(ROOT))
+        total_cpu += s.cpu
+        total_wall += s.wall
+        failed |= s.returncode not in (0, 5)  # 5: nothing selected in that folder
+        lines.append(f"| {label} | {outcome(s.stdout)} | {s.cpu:.1f} | {s.wall:.1f} | "
+                     f"{s.returncode} |")
+        print(lines[-1], flush=True)
+    lines.append(f"| total | | {total_cpu:.1f} | {total_wall:.1f} | |")
+    end = _cpu.load()
+    what = (f"`python benchmarks/suite_cost.py {' '.join(argv if argv is not None else sys.argv[1:])}`"
+            f", {datetime.date.today().isoformat()}, Python {platform.python_version()}; "
+            f"start: {start}; end: {end}; CPU = user + system of pytest and its children")
+    text = what + "\n\n" + "\n".join(lines) + "\n"
+    print("\n" + text)
+    if args.out is not None:
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(text, encoding="utf-8")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
