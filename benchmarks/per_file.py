@@ -2,10 +2,13 @@
 CPU (the command and every box and worker, children included) and wall, side by side with an
 earlier version.
 
-* ``gpsaccel check FILE --workers 1`` on a correct calibration filter, at the problem's default
-  number of runs and at 2 runs (the floor: start-up, one box, the reference);
-* ``gpsaccel grade DIR --jobs 1`` on a class of one: the student version of a homework notebook as
-  handed out (otter's init and check cells included, no answers), so the floor of a notebook.
+* ``gpsaccel check DIR --workers 1`` on copies of a correct calibration filter, at the problem's
+  default number of runs and at 2 runs (the floor: one box and the reference per file);
+* ``gpsaccel grade DIR --jobs 1`` on copies of a homework notebook's student version as handed out
+  (otter's init and check cells included, no answers): the floor of a notebook.
+
+Each runs on a class of 1 and of 3; the "one more file" rows are the difference per file (what a
+class pays per student, the command's start-up and the summary paid once).
 
 ``--before DIR`` runs the same commands on the checkout in DIR (its ``gpsaccel/`` first on
 ``PYTHONPATH``, this environment's packages; e.g. ``git worktree add --detach DIR main``).  Both
@@ -29,22 +32,35 @@ SUBMISSION = ROOT / "tests" / "submissions" / "correct_joseph.py"
 STUDENT = ROOT / "gpsaccel" / "assignments" / "student"
 
 
-def _cases(tmp: Path) -> list[tuple[str, list[str]]]:
-    cases = [
-        ("check 1 file (default runs)", ["check", str(SUBMISSION), "--seed", "0", "--workers", "1"]),
-        ("check 1 file (--runs 2)", ["check", str(SUBMISSION), "--seed", "0", "--workers", "1",
-                                     "--runs", "2"]),
-    ]
+#: Class sizes run: the difference between the two, per file, is what one more file costs (the
+#: command's start-up, the summary figure and the like are paid once per class).
+SIZES = (1, 3)
+
+
+def _cases(tmp: Path) -> list[tuple[str, int, list[str]]]:
+    """(kind, files, command arguments) for each kind of file at each class size."""
+    cases = []
+    for n in SIZES:
+        folder = tmp / f"check-{n}"
+        folder.mkdir()
+        for i in range(n):
+            shutil.copy(SUBMISSION, folder / f"student{i}.py")
+        cases.append(("check (default runs)", n,
+                      ["check", str(folder), "--seed", "0", "--workers", "1"]))
+        cases.append(("check (--runs 2)", n,
+                      ["check", str(folder), "--seed", "0", "--workers", "1", "--runs", "2"]))
     for name in ("calibration", "coop"):
         notebook = STUDENT / name / f"{name}.ipynb"
         if not notebook.exists():
             continue
-        folder = tmp / f"class-{name}"
-        folder.mkdir()
-        shutil.copy(notebook, folder / "alice.ipynb")
-        cases.append((f"grade 1 notebook ({name}, as handed out)",
-                      ["grade", str(folder), "--assignment", name, "--jobs", "1", "--seed", "0",
-                       "--out", str(tmp / f"grades-{name}")]))
+        for n in SIZES:
+            folder = tmp / f"class-{name}-{n}"
+            folder.mkdir()
+            for i in range(n):
+                shutil.copy(notebook, folder / f"student{i}.ipynb")
+            cases.append((f"grade ({name} notebook as handed out)", n,
+                          ["grade", str(folder), "--assignment", name, "--jobs", "1", "--seed",
+                           "0", "--out", str(tmp / f"grades-{name}-{n}")]))
     return cases
 
 
@@ -59,17 +75,25 @@ def main(argv: list[str] | None = None) -> None:
         roots = {"before": Path(args.before).resolve(), "now": ROOT}
     print(f"start: {_cpu.load()}")
     rows: list[tuple[str, dict[str, tuple[float, float]]]] = []
+    medians: dict[tuple[str, int], dict[str, tuple[float, float]]] = {}
     with tempfile.TemporaryDirectory() as tmp:
-        for name, cmd in _cases(Path(tmp)):
+        for kind, n, cmd in _cases(Path(tmp)):
             samples: dict[str, list[_cpu.Sample]] = {v: [] for v in roots}
             for _ in range(args.repeats):
                 for version, root in roots.items():
                     env = dict(os.environ, PYTHONPATH=str(root), MPLBACKEND="Agg")
                     s = _cpu.run([sys.executable, "-m", "gpsaccel.cli", *cmd], env=env, cwd=tmp)
                     if s.returncode not in (0, 1):  # 1: check's "not all passed"
-                        raise SystemExit(f"{version}: {name} failed ({s.returncode}):\n{s.stdout}")
+                        raise SystemExit(f"{version}: {kind} failed ({s.returncode}):\n{s.stdout}")
                     samples[version].append(s)
-            rows.append((name, {v: _cpu.median(s) for v, s in samples.items()}))
+            medians[kind, n] = {v: _cpu.median(s) for v, s in samples.items()}
+            rows.append((f"{kind}, class of {n}", medians[kind, n]))
+    small, large = SIZES
+    for kind in dict.fromkeys(k for k, _ in medians):
+        a, b = medians[kind, small], medians[kind, large]
+        rows.append((f"{kind}: one more file", {
+            v: ((b[v][0] - a[v][0]) / (large - small), (b[v][1] - a[v][1]) / (large - small))
+            for v in roots}))
     print(f"end: {_cpu.load()}; medians of {args.repeats}, CPU = user + system, children "
           f"included\n")
     print(_cpu.table(rows, list(roots)))
