@@ -38,7 +38,7 @@ def attach(package: str, submodules: Iterable[str] = (),
 
     def __getattr__(name: str) -> Any:
         if name not in where:
-            # any other sub-module, as the eager package made them reachable (``check.sandbox``
+            # any other sub-module, as the eager package made them reachable (``check.batch``
             # after ``from gpsaccel import check``)
             if name.startswith("__") or "." in name \
                     or importlib.util.find_spec(f"{package}.{name}") is None:

@@ -65,6 +65,7 @@ def test_import_gpsaccel_loads_nothing_heavy_not_even_numpy():
     "from gpsaccel.calibration.simulation import simulate",
     "from gpsaccel import check",
     "import gpsaccel.check.report",
+    "from gpsaccel import sandbox",
 ], ids=lambda code: code.replace(" ", "_")[-60:])
 def test_the_front_door_and_the_first_names_load_no_heavy_module(code):
     assert set(loaded_after(f"try:\n    {code}\nexcept SystemExit:\n    pass")) <= {"numpy"}
@@ -108,7 +109,8 @@ def test_every_public_name_resolves_and_is_what_mypy_sees(package):
 def test_sub_modules_stay_reachable_as_attributes_and_star_import_works():
     import gpsaccel
 
-    assert gpsaccel.check.sandbox.__name__ == "gpsaccel.check.sandbox"
+    assert gpsaccel.check.batch.__name__ == "gpsaccel.check.batch"
+    assert gpsaccel.sandbox.__name__ == "gpsaccel.sandbox"
     assert gpsaccel.kalman.consistency.chi2_bounds(2)[0] > 0
     namespace: dict = {}
     exec("from gpsaccel.check import *", namespace)
@@ -120,7 +122,7 @@ def test_sub_modules_stay_reachable_as_attributes_and_star_import_works():
 def test_a_checker_box_loads_only_numpy_before_the_students_file(tmp_path):
     """The checker's runner imports the standard library and numpy, then the student's file: a
     submission that reports what is loaded when it is imported sees nothing heavy."""
-    from gpsaccel.check import sandbox as sb
+    from gpsaccel import sandbox as sb
 
     (tmp_path / "probe.py").write_text(
         "import sys\n"
@@ -137,9 +139,9 @@ def test_a_notebook_box_loads_only_what_the_students_cells_import(tmp_path):
     """The grader's box: the prelude imports nothing heavy, ``import gpsaccel`` and the models
     load neither filterpy nor scipy.stats, and otter's init and check cells find a stand-in
     instead of otter (IPython, nbformat, jsonschema: 1.5–4.5 CPU s per notebook)."""
+    from gpsaccel import sandbox as sb
     from gpsaccel.assignments import notebook as nbm
     from gpsaccel.assignments.grading import _calls
-    from gpsaccel.check import sandbox as sb
 
     probe = ("import sys\n"
              f"print('LOADED', sorted({{m.split('.')[0] for m in sys.modules}} & set({HEAVY!r})))")

@@ -57,8 +57,8 @@ __all__ = [
     "submission",
 ]
 
-# ``gpsaccel.check.sandbox`` or ``.report`` (the grader, the CLI) import this package first: it
-# must not import every problem and its filters for that.
+# ``gpsaccel.check.report`` or ``.batch`` (the grader, the CLI) import this package first: it must
+# not import every problem and its filters for that.
 __getattr__, __dir__ = _lazy.attach(
     __name__,
     attributes={
