@@ -69,6 +69,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--before", metavar="DIR", default=None,
                         help="a checkout of an earlier version (its gpsaccel/ is imported)")
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--only", default="", help="only the cases whose kind contains this")
     args = parser.parse_args(argv)
     roots = {"now": ROOT}
     if args.before:
@@ -78,6 +79,8 @@ def main(argv: list[str] | None = None) -> None:
     medians: dict[tuple[str, int], dict[str, tuple[float, float]]] = {}
     with tempfile.TemporaryDirectory() as tmp:
         for kind, n, cmd in _cases(Path(tmp)):
+            if args.only not in kind:
+                continue
             samples: dict[str, list[_cpu.Sample]] = {v: [] for v in roots}
             for _ in range(args.repeats):
                 for version, root in roots.items():
