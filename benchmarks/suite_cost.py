@@ -19,6 +19,7 @@ import argparse
 import datetime
 import platform
 import re
+import shlex
 import sys
 from pathlib import Path
 
@@ -83,7 +84,7 @@ def main(argv: list[str] | None = None) -> int:
         print(lines[-1], flush=True)
     lines.append(f"| total | | {total_cpu:.1f} | {total_wall:.1f} | |")
     end = _cpu.load()
-    what = (f"`python benchmarks/suite_cost.py {' '.join(argv if argv is not None else sys.argv[1:])}`"
+    what = (f"`python benchmarks/suite_cost.py {shlex.join(argv if argv is not None else sys.argv[1:])}`"
             f", {datetime.date.today().isoformat()}, Python {platform.python_version()}; "
             f"start: {start}; end: {end}; CPU = user + system of pytest and its children")
     text = what + "\n\n" + "\n".join(lines) + "\n"
