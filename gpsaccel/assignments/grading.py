@@ -476,8 +476,13 @@ def warm(name: str) -> None:
     questions_of(name)
     nbm.transform("%time x = 1\n!true")
     from gpsaccel import registry
+    from gpsaccel.check.batch import warm as warm_check
 
     registry.problems()
+    # what the questions' references import on first use, since `import gpsaccel` imports
+    # nothing: scipy.stats and filterpy (the check's warm-up), scipy.integrate (CoopModel's truth)
+    warm_check(registry.assignment(name).problem or "calibration")
+    import scipy.integrate  # noqa: F401
 
 
 def _graded_item(item: tuple[Entry, Path, dict]) -> dict:
