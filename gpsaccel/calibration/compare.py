@@ -41,6 +41,8 @@ independent of units, and 6.3·10² on the report's numbers.  Rounding in P = (I
 
 from __future__ import annotations
 
+import concurrent.futures as cf
+import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -176,32 +178,76 @@ def sweep_model(kind: str, factor: float, base: CalibrationModel | None = None
 
 
 def sweep(kind: str, factors: Sequence[float] | None = None, forms: Sequence[str] | None = None,
-          seed: int = 0, truth: str = "error-model", digits: int = DIGITS) -> Sweep:
+          seed: int = 0, truth: str = "error-model", digits: int = DIGITS,
+          executor: object = None, progress: bool = False) -> Sweep:
     """Run ``forms`` (default: all built-in) against the exact answer at each sweep point.
 
     kind : ``"prior"`` (M0 × factor, data from the report's model) or ``"gps"`` (V × factor, data
         simulated with that V).  factors : default :data:`DEFAULT_FACTORS` ``[kind]``.
     seed : one seed for every point (the same noise draws, scaled).
+    executor : where the points run (:func:`gpsaccel.executors.resolve_executor`: None in this
+        process, ``"processes"``, an Executor, ...).  Each point is computed whole by one worker
+        with the same code, so the numbers do not depend on it; only the wall time does (a point
+        is ~1 s of CPU, most of it the forms' 6000 predictions, one by one, as the lesson measures
+        their rounding).
+    progress : a tqdm.auto bar over the points (a lesson's long cell shows progress).
     """
+    from gpsaccel.executors import resolve_executor
+
     kind = _v.choice("kind", kind, SWEEPS)
     seed = _v.integer("seed", seed, minimum=0)  # None would draw a sweep nobody can redraw
     truth = _v.choice("truth", truth, TRUTHS)
     points = DEFAULT_FACTORS[kind] if factors is None else np.asarray(factors, dtype=float)
     forms = tuple(FORMS) if forms is None else tuple(_v.choice("forms", f, FORMS) for f in forms)
-    kappa, cond_P, floor = [], [], []
-    errs: dict[str, list[Errors]] = {f: [] for f in forms}
-    problems: dict[str, list[str | None]] = {f: [] for f in forms}
-    for factor in points:
-        model, data_model = sweep_model(kind, factor)
-        z = simulate(data_model, np.random.default_rng(seed), truth).z
-        exact = exact_filter(model, z, digits)
-        kappa.append(update_condition_number(model, exact))
-        cond_P.append(exact.condition_number())
-        floor.append(_core.floor(exact))
-        for name in forms:
-            row = _core.run_one(name, form_filter(name, model), z, exact, 1, "")
-            errs[name].append(row.errors or Errors(np.inf, np.inf, np.inf, -np.inf))
-            problems[name].append(row.problem)
-    return Sweep(kind, seed, points, np.array(kappa), np.array(cond_P), tuple(floor),
-                 {f: tuple(v) for f, v in errs.items()},
-                 {f: tuple(v) for f, v in problems.items()})
+    for factor in points:  # a bad factor is refused here, before any worker starts
+        sweep_model(kind, factor)
+    resolved = resolve_executor(executor)  # ValueError naming ``executor`` for anything else
+    with resolved as ex, _progress_bar(progress, len(points), f"sweep '{kind}'") as bar:
+        futures = [ex.submit(_sweep_point, kind, float(f), forms, seed, truth, digits)
+                   for f in points]
+        for future in cf.as_completed(futures):
+            future.result()  # a worker's exception surfaces here, at once
+            bar.update(1)
+        results = [future.result() for future in futures]  # in the order of the points
+    errs = {name: tuple(r.errors[name] for r in results) for name in forms}
+    problems = {name: tuple(r.problems[name] for r in results) for name in forms}
+    return Sweep(kind, seed, points, np.array([r.kappa for r in results]),
+                 np.array([r.cond_P for r in results]), tuple(r.floor for r in results),
+                 errs, problems)
+
+
+@dataclass(frozen=True)
+class _Point:
+    """One sweep point's results (what a worker sends back)."""
+
+    kappa: float
+    cond_P: float
+    floor: Errors
+    errors: dict[str, Errors]
+    problems: dict[str, str | None]
+
+
+def _sweep_point(kind: str, factor: float, forms: tuple[str, ...], seed: int, truth: str,
+                 digits: int) -> _Point:
+    """The exact answer and every form at one sweep point.  Module-level and picklable: this is
+    what an executor runs."""
+    model, data_model = sweep_model(kind, factor)
+    z = simulate(data_model, np.random.default_rng(seed), truth).z
+    exact = exact_filter(model, z, digits)
+    errs: dict[str, Errors] = {}
+    problems: dict[str, str | None] = {}
+    for name in forms:
+        row = _core.run_one(name, form_filter(name, model), z, exact, 1, "")
+        errs[name] = row.errors or Errors(np.inf, np.inf, np.inf, -np.inf)
+        problems[name] = row.problem
+    return _Point(update_condition_number(model, exact), exact.condition_number(),
+                  _core.floor(exact), errs, problems)
+
+
+def _progress_bar(progress: bool, total: int, desc: str):
+    """tqdm.auto's bar (the notebook bar in a Jupyter kernel; nothing on a pipe or a log)."""
+    from tqdm.auto import tqdm
+
+    quiet = not progress or sys.stderr is None
+    return tqdm(total=total, desc=desc, unit="point", disable=True if quiet else None,
+                leave=False)
