@@ -177,3 +177,23 @@ def test_sweep_figure_has_a_column_per_sweep(prior, gps):
     assert all(ax.get_yscale() == "log" for ax in axes)
     lo, hi = axes[0].get_ylim()
     assert hi > prior.dP("standard").max() and lo < min(e.dP_rel for e in prior.floor)
+
+
+def test_sweep_on_a_process_pool_is_bit_identical(gps):
+    """Each point is computed whole by one worker: the numbers do not depend on where it ran."""
+    from gpsaccel.executors import resolve_executor
+
+    with resolve_executor("processes", max_workers=2) as pool:
+        pooled = sweep("gps", factors=[1.0, 1e-6, 1e-12], executor=pool)
+    np.testing.assert_array_equal(pooled.kappa, gps.kappa)
+    np.testing.assert_array_equal(pooled.cond_P, gps.cond_P)
+    assert pooled.floor == gps.floor
+    assert pooled.errors == gps.errors and pooled.problems == gps.problems
+    assert str(pooled) == str(gps)
+
+
+def test_sweep_refuses_a_bad_executor_or_factor_before_running():
+    with pytest.raises(ValueError, match="executor"):
+        sweep("gps", factors=[1.0], executor="no-such-pool")
+    with pytest.raises(ValueError, match="factor"):
+        sweep("gps", factors=[1.0, -1.0], executor="processes")
