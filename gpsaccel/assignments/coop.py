@@ -15,41 +15,44 @@ EKF (question 3).  The student's ``ekf(y, x0, P0, Q, R) -> (x_hat, P)`` against 
 (:func:`gpsaccel.coop.filters.run_ekf`): predict with the exact step φ_ΔT (``model.step``) and
 M = F P Fᵀ + Q with F = I + ΔT·A(x̂), update with the rows of y that are not NaN, H = C(x̄), the
 bearing residuals wrapped.  Distances are in units of the reference σ = √diag P_ref; both must be
-within 1e-6.  A failing filter is matched against the typical mistakes (:data:`EKF_MISTAKES`,
-under the checker's codes), each a variant of a small reference EKF written here
-(:func:`reference_ekf`).
+within 1e-6.  A failing filter is matched against the typical mistakes (:data:`EKF_MISTAKES`):
+entries of the coop catalogue (:func:`gpsaccel.coop.mistakes.catalogue`), run by the package's
+one EKF with that entry's ingredients, so no second reference filter lives here.
 """
 
 from __future__ import annotations
 
 from functools import lru_cache
-
 from typing import Any
 
 import numpy as np
 
-from gpsaccel.assignments._answers import array, assert_report, call
 from gpsaccel import registry
+from gpsaccel.assignments._answers import array, assert_report, call
 from gpsaccel.check.report import Report
 from gpsaccel.coop.model import (
     CoopModel,
-    measurement_residual,
     state_residual,
-    wrap_state,
 )
 
-__all__ = ["assert_report", "dt_linearization", "ekf", "jacobians", "reference_ekf"]
+__all__ = ["assert_report", "dt_linearization", "ekf", "jacobians"]
 
 #: Distance (units of the reference σ) within which the EKF's x̂ and P count as equal.
 EKF_TOL = 1e-6
 
-#: The EKF mistakes recognised (code -> what it is), in the order they are tried.
-EKF_MISTAKES = {
-    "no-angle-wrap": "the bearing residuals y − h(x̄) are not wrapped to [−π, π)",
-    "euler-propagation": "x̄ = x̂ + ΔT·f(x̂) (one Euler step) instead of the exact step",
-    "jacobian-point": "H = C(x̂ₖ₋₁) evaluated at the previous estimate instead of x̄ₖ",
-    "returns-a-priori": "the filter returns x̄, M (before the update) instead of x̂, P",
-}
+#: The EKF mistakes recognised, as (code, variant) of the coop catalogue, in the order tried.
+EKF_MISTAKES = (("no-angle-wrap", "residual y − h(x̄) not wrapped"),
+                ("euler-propagation", "one Euler step per sample"),
+                ("jacobian-point", "H at the previous posterior x̂_k"),
+                ("returns-a-priori", "x̄ and M returned"))
+
+
+def ekf_mistakes() -> tuple:
+    """The catalogue entries (:class:`gpsaccel.coop.mistakes.Mistake`) of :data:`EKF_MISTAKES`."""
+    from gpsaccel.coop.mistakes import catalogue
+
+    entries = {(m.code, m.variant): m for m in catalogue(kind="ekf")}
+    return tuple(entries[key] for key in EKF_MISTAKES)
 
 
 # ------------------------------------------------------------------ Jacobians, DT model
@@ -185,60 +188,24 @@ def dt_linearization(func: object, seed: int = 0, n_random: int = 5,
 
 
 # ------------------------------------------------------------------------------------ EKF
-def reference_ekf(model: CoopModel, y: np.ndarray, x0: np.ndarray, P0: np.ndarray,
-                  Q: np.ndarray, R: np.ndarray, mistake: str | None = None
-                  ) -> tuple[np.ndarray, np.ndarray]:
-    """The course EKF (module docstring), or with one of :data:`EKF_MISTAKES` made.
-
-    Returns (x̂ (K+1, 6), P (K+1, 6, 6)); row 0 is (x0, P0).  Equal to
-    :func:`gpsaccel.coop.filters.run_ekf` (tests), written out so that each mistake is one switch.
-    """
-    from gpsaccel.coop.model import f, h, jacobian_A, jacobian_C
-
-    n = model.n_steps + 1
-    xs, Ps = np.empty((n, 6)), np.empty((n, 6, 6))
-    x, P = np.array(x0, dtype=float), np.array(P0, dtype=float)
-    xs[0], Ps[0] = x, P
-    for k in range(1, n):
-        F = np.eye(6) + model.dt * jacobian_A(x, model.u0)
-        x_prev = x
-        if mistake == "euler-propagation":
-            x = wrap_state(x + model.dt * f(x, model.u0, model.L))
-        else:
-            x = model.step(x)
-        M = F @ P @ F.T + Q
-        m = np.isfinite(y[k])
-        if mistake == "returns-a-priori":
-            xs[k], Ps[k] = x, M
-        if m.any():
-            Hk = jacobian_C(x_prev if mistake == "jacobian-point" else x)[m]
-            r = (y[k] - h(x))[m] if mistake == "no-angle-wrap" else \
-                measurement_residual(y[k], h(x))[m]
-            Rm = R[np.ix_(m, m)]
-            S = Hk @ M @ Hk.T + Rm
-            K = np.linalg.solve(S, Hk @ M).T
-            x = wrap_state(x + K @ r)
-            A = np.eye(6) - K @ Hk
-            P = A @ M @ A.T + K @ Rm @ K.T
-        else:
-            P = M
-        if mistake != "returns-a-priori":
-            xs[k], Ps[k] = x, P
-    return xs, Ps
-
-
-@lru_cache(maxsize=4)
-def _reference(y_bytes: bytes, shape: tuple[int, ...], mistake: str | None,
+@lru_cache(maxsize=8)
+def _reference(y_bytes: bytes, shape: tuple[int, ...], variant: tuple[str, str] | None,
                x0: bytes, P0: bytes, Q: bytes, R: bytes) -> tuple[np.ndarray, np.ndarray]:
+    from gpsaccel.coop.filters import run_ekf
+    from gpsaccel.coop.mistakes import ingredients
+
     def arr(b, s):
         return np.frombuffer(b, dtype=float).reshape(s)
-    return reference_ekf(CoopModel(), arr(y_bytes, shape), arr(x0, (6,)), arr(P0, (6, 6)),
-                         arr(Q, (6, 6)), arr(R, (5, 5)), mistake)
+    mistakes = () if variant is None else tuple(m for m in ekf_mistakes()
+                                                if (m.code, m.variant) == variant)
+    res = run_ekf(CoopModel(), arr(y_bytes, shape), arr(Q, (6, 6)), arr(R, (5, 5)),
+                  arr(x0, (6,)), arr(P0, (6, 6)), ingredients=ingredients(mistakes))
+    return res.x_hat, res.P
 
 
-def _ref(y, x0, P0, Q, R, mistake=None):
+def _ref(y, x0, P0, Q, R, variant=None):
     c = [np.ascontiguousarray(a, dtype=float) for a in (y, x0, P0, Q, R)]
-    return _reference(c[0].tobytes(), c[0].shape, mistake, *(a.tobytes() for a in c[1:]))
+    return _reference(c[0].tobytes(), c[0].shape, variant, *(a.tobytes() for a in c[1:]))
 
 
 def _distances(x, P, x_ref, P_ref) -> tuple[float, float, int]:
@@ -282,11 +249,11 @@ def ekf(func: object, y: np.ndarray, x0: np.ndarray | None = None, P0: np.ndarra
                    "on {where} to {tol:g} σ (largest distances {dx:.2g} σ, {dP:.2g} σσ).",
                    where=label, observed={"tol": EKF_TOL, "dx": dx, "dP": dP})
         return report
-    for code, what in EKF_MISTAKES.items():
-        xm, Pm = _ref(y, x0, P0, Q, R, code)
+    for m in ekf_mistakes():
+        xm, Pm = _ref(y, x0, P0, Q, R, (m.code, m.variant))
         if _distances(x, P, xm, Pm)[2] < 0:
-            report.add(code, text="Your EKF matches the course EKF with one mistake: {what}. "
-                       "{hint}", where=label, observed={"what": what, "hint": _EKF_HINTS[code]})
+            report.add(m.code, text="Your EKF matches the course EKF with one mistake: {what} "
+                       "{hint}", where=label, observed={"what": m.message, "hint": m.hint})
             return report
     t = model.t
     report.add("ekf-mismatch", text="Your EKF differs from the course EKF from {where} on: x̂ "
@@ -294,22 +261,10 @@ def ekf(func: object, y: np.ndarray, x0: np.ndarray | None = None, P0: np.ndarra
                "mistakes ({codes}). {row0}Check the prediction (x̄ = model.step(x̂), M = F P Fᵀ + "
                "Q with F = I + ΔT·A(x̂)) and the update (H = C(x̄), only the rows of y that are "
                "not NaN).", where=f"t = {t[first]:g} s (step {first})", observed={
-                   "dx": dx, "dP": dP, "codes": ", ".join(EKF_MISTAKES),
+                   "dx": dx, "dP": dP, "codes": ", ".join(c for c, _ in EKF_MISTAKES),
                    "row0": "Row 0 must be (x0, P0): nothing is measured at t = 0. "
                    if first == 0 else ""})
     return report
-
-
-_EKF_HINTS = {
-    "no-angle-wrap": "The course log's bearings jump between −π and π: an unwrapped "
-    "residual of almost 2π then drags the estimate away. Wrap the bearing rows (0 and 2) of "
-    "y − h(x̄) with (r + π) % 2π − π.",
-    "euler-propagation": "Predict the state with the exact solution over ΔT (model.step(x)); the "
-    "Euler step is only the linearization used for F.",
-    "jacobian-point": "The measurement Jacobian belongs to the point the measurement is "
-    "predicted from: H = C(x̄ₖ) after the prediction.",
-    "returns-a-priori": "Store x̂ and P after the update at each step.",
-}
 
 
 # the homework, for `gpsaccel assignment` / `gpsaccel grade` (its master: assignments/coop/)

@@ -477,7 +477,7 @@ class CoopProblem(Problem):
         else:
             cands = []
             for m in cm.catalogue(self.model, kind):
-                if m.code in ("no-state-wrap", "p-not-symmetric"):
+                if m.code in ("no-state-wrap", "p-not-symmetric") or not m.checker:
                     continue
                 o = self._reference(cases, kind, (m,))
                 cands.append((m, o.x_hat, o.P))

@@ -1,33 +1,34 @@
-r"""Nonlinear filters for cooperative localization (report 002): LKF, EKF, UKF on filterpy.
+r"""Nonlinear filters for cooperative localization (report 002): LKF, EKF, UKF, written once.
 
 All three run on a model with f, h and their Jacobians (:class:`gpsaccel.coop.model.CoopModel`)
-over a measurement log y (K+1, 5) whose row k is taken at t_k = k·ΔT (row 0 is NaN in the course's
-log: no update at t = 0).  Each step k → k+1 predicts, then updates with y_{k+1}.  A NaN component
-means "not measured": it is left out of the update (its row of H and row/column of R dropped) and of
-the NIS; an all-NaN row skips the update (x̂ = x̄, P = M).
+over measurement logs y (N, K+1, 5) at once (a leading run axis: a Monte Carlo set is one call),
+row k taken at t_k = k·ΔT (row 0 is NaN in the course's log: no update at t = 0).  Each step
+k → k+1 predicts, then updates with y_{k+1}.  A NaN component means "not measured": it is left out
+of the update (its row of H and row/column of R dropped) and of the NIS; an all-NaN row skips the
+update (x̂ = x̄, P = M).  Runs whose rows miss different components are updated in groups.
 
-Linearized KF (LKF, the assignment's perturbation form about the nominal x*_k from solve_ivp)::
+One loop (:func:`run_batch`) on Stone Soup's pattern (``predictor/kalman.py``,
+``updater/kalman.py``): a predictor and an updater, and one hook, *where the filter is
+linearised*.  :class:`_Linearised` is the EKF and the LKF:
 
-    δx̄_{k+1} = F_k δx̂_k  (+ G_k δu_k, δu = 0),    M_{k+1} = F_k P_k F_kᵀ + Q,   F_k = I + ΔT·A(x*_k, u*)
-    H = C(x*_{k+1}),   r = wrap(y_{k+1} − h(x*_{k+1}) − H δx̄_{k+1}),   S = H M Hᵀ + R
-    K = M Hᵀ S⁻¹,      δx̂ = δx̄ + K r,   P = (I − KH) M (I − KH)ᵀ + K R Kᵀ,   x̂ = wrap(x* + δx̂)
+    EKF (about the estimate)   x̄ = wrap(φ_ΔT(x̂, u)),  M = F P Fᵀ + Q,  F = I + ΔT·A(x̂, u)
+                               H = C(x̄),  r = wrap(y − h(x̄)),  S = H M Hᵀ + R,  K = M Hᵀ S⁻¹
+                               x̂ = wrap(x̄ + K r),  P = (I − KH) M (I − KH)ᵀ + K R Kᵀ
+    LKF (about the nominal x*) the perturbation δx = x − x*:  δx̄ = F_k δx̂,  F_k = I + ΔT·A(x*_k),
+                               H = C(x*_j),  r = wrap(y − h(x*_j) − H δx̄),  x̂ = wrap(x* + δx̂)
 
-The LKF's P and K do not depend on the data.  The report's "LKF" re-linearized about the estimate
-(an EKF); this one does not, which is why it fails once the truth wanders from x* (lesson 10).
+The LKF's P and K do not depend on the data (one covariance sequence serves every run); the
+report's "LKF" re-linearized about the estimate (an EKF), which is why it fails once the truth
+wanders from x* (lesson 10).  :class:`_Unscented` is the UKF (Merwe sigma points, α = 1, β = 2,
+κ = 0: 13 points at ±√6·σ, W0 = 0 for the mean; angles through wrapped differences and
+:func:`angle_mean`; the points redrawn after the prediction as filterpy's ``UnscentedKalmanFilter``
+does).  Everything else (the loop, NaN rows, outputs) they share.
 
-Extended KF (EKF, filterpy's ``ExtendedKalmanFilter`` with the state prediction overridden)::
-
-    x̄ = wrap(φ_ΔT(x̂, u)),   M = F P Fᵀ + Q,   F = I + ΔT·A(x̂, u)
-    H = C(x̄),   r = wrap(y − h(x̄)),   S = H M Hᵀ + R,   x̂ = wrap(x̄ + K r),   P Joseph form
-
-Unscented KF (UKF, filterpy's ``UnscentedKalmanFilter`` with ``MerweScaledSigmaPoints``, α = 1,
-β = 2, κ = 0: 13 points at ±√6·σ, W0 = 0 for the mean): angles enter through ``residual_x``,
-``residual_z`` (wrapped differences) and the mean functions (:func:`angle_mean`, a weighted mean of
-differences from the first sigma point, which is exact for linear quantities and wrap-safe).
-
-``run_lkf`` / ``run_ekf`` / ``run_ukf`` run one log through filterpy objects.  For Monte Carlo,
-:func:`run_batch` runs the same equations vectorised over runs with numpy (a test checks it against
-the filterpy objects to 1e-10); use it when the truth has no partly-missing rows.
+A student's filter, right or wrong, is this loop with other :class:`Ingredients` (the catalogue
+of :mod:`gpsaccel.coop.mistakes` is a list of such changes).  S⁻¹ is formed by inversion and
+K = (M Hᵀ) S⁻¹, filterpy's order of operations: the tests check every filter against filterpy's
+``KalmanFilter``, ``ExtendedKalmanFilter`` and ``UnscentedKalmanFilter`` to 1e-10.
+``run_lkf`` / ``run_ekf`` / ``run_ukf`` are the same loop on one log.
 
 Process noise: ``Q`` defaults to the tuned :data:`TUNED_Q` of each filter (how each was found is
 documented there); ``R`` defaults to Rtrue; x̂_0 = x0 and P_0 = P0 of the model.
@@ -35,16 +36,9 @@ documented there); ``R`` defaults to Rtrue; x̂_0 = x0 and P_0 = P0 of the model
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from filterpy.kalman import (
-    ExtendedKalmanFilter,
-    KalmanFilter,
-    MerweScaledSigmaPoints,
-    UnscentedKalmanFilter,
-)
 
 from gpsaccel import _validation as _v
 from gpsaccel.coop.model import (
@@ -53,12 +47,13 @@ from gpsaccel.coop.model import (
     N_MEAS,
     N_STATES,
     CoopModel,
+    f,
     h,
+    h_unwrapped,
     measurement_residual,
     propagate,
     state_residual,
     wrap_angle,
-    wrap_measurement,
     wrap_state,
 )
 from gpsaccel.kalman import consistency
@@ -143,6 +138,48 @@ class FilterResult:
         return consistency.nis(self.r, self.S)
 
 
+# --------------------------------------------------------------------------- the ingredients
+@dataclass(frozen=True)
+class Ingredients:
+    """The choices made in the loop of the module docstring (the defaults are the right ones).
+
+    A student's EKF or LKF is one choice of these; each catalogued mistake changes one or two
+    (:mod:`gpsaccel.coop.mistakes`).
+
+    wrap_residual : "yes"; "difference" leaves y − h(x̄) unwrapped; "none" also leaves h's bearing
+        unwrapped (atan2(Δη, Δξ) − θ as computed).
+    wrap_state : wrap the headings of x̄ and x̂ to [−π, π).
+    F_form : "I+dtA", "A" or "dtA".
+    F_point : where the EKF evaluates A: "posterior" x̂_k (right), "prior" x̄_j, "nominal" x*_k.
+    H_point : where the EKF evaluates C: "prior" x̄_j (right), "posterior" x̂_k, "nominal" x*_j.
+    q_scale : Q is multiplied by this (1; 0 drops it; ΔT).
+    r_sqrt : R replaced by its elementwise square root (standard deviations as variances).
+    shift : "none"; "measurement" updates at t_j with y_k (the update before the prediction);
+        "output" returns row j = the estimate of row j − 1 (row 0 twice).
+    joseph : the Joseph update (True) or P = (I − KH) M (False).
+    propagation : "exact" (closed form, or any ODE solver at its default tolerances) or "euler"
+        (one Euler step x + ΔT·f(x, u) per sample; for the LKF, an Euler nominal).
+    relinearize : an "LKF" that linearizes about its own estimate, not the nominal: an EKF.
+    output : "posterior" returns x̂, P; "prior" returns x̄, M (the estimate before the update).
+    """
+
+    wrap_residual: str = "yes"
+    wrap_state: bool = True
+    F_form: str = "I+dtA"
+    F_point: str = "posterior"
+    H_point: str = "prior"
+    q_scale: float = 1.0
+    r_sqrt: bool = False
+    shift: str = "none"
+    joseph: bool = True
+    propagation: str = "exact"
+    relinearize: bool = False
+    output: str = "posterior"
+
+
+RIGHT = Ingredients()
+
+
 # --------------------------------------------------------------------------- helpers
 def angle_mean(points: np.ndarray, weights: np.ndarray, angles: tuple[int, ...]) -> np.ndarray:
     """Weighted mean of points (..., m, d) with wrap-safe angle components ``angles``.
@@ -159,22 +196,15 @@ def angle_mean(points: np.ndarray, weights: np.ndarray, angles: tuple[int, ...])
     return mean
 
 
-def _subset_residual(mask: np.ndarray) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-    """measurement_residual restricted to the measured components ``mask``."""
-    if mask.all():
-        return measurement_residual
-
-    def residual(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        full = np.zeros(N_MEAS)
-        full[mask] = np.asarray(a, dtype=float) - np.asarray(b, dtype=float)
-        return wrap_measurement(full)[mask]
-
-    return residual
+def _tr(a: np.ndarray) -> np.ndarray:
+    return np.swapaxes(a, -1, -2)
 
 
-def _subset_angles(mask: np.ndarray) -> tuple[int, ...]:
-    pos = np.cumsum(mask) - 1
-    return tuple(int(pos[i]) for i in ANGLE_MEASUREMENTS if mask[i])
+def _add_gain(x: np.ndarray, K: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """x + K r for runs x (N, n), r (N, p); K (n, p) shared or (N, n, p) per run."""
+    if K.ndim == 2:
+        return x + r @ K.T
+    return x + np.einsum("nij,nj->ni", K, r)
 
 
 def _check(model: CoopModel, y: object, Q: object, R: object, x0: object, P0: object,
@@ -190,100 +220,15 @@ def _check(model: CoopModel, y: object, Q: object, R: object, x0: object, P0: ob
     return y, Q, R, x0, P0
 
 
-def _empty(model: CoopModel, lead: tuple[int, ...] = ()) -> dict[str, np.ndarray]:
-    K1 = model.n_steps + 1
-    return {"x_bar": np.empty(lead + (K1, 6)), "M": np.empty(lead + (K1, 6, 6)),
-            "x_hat": np.empty(lead + (K1, 6)), "P": np.empty(lead + (K1, 6, 6)),
-            "r": np.full(lead + (K1, 5), np.nan), "S": np.full(lead + (K1, 5, 5), np.nan)}
-
-
-# --------------------------------------------------------------------------- single-run filters
-def run_lkf(model: CoopModel, y: np.ndarray, Q: np.ndarray | None = None,
-            R: np.ndarray | None = None, x0: np.ndarray | None = None,
-            P0: np.ndarray | None = None, nominal: np.ndarray | None = None) -> FilterResult:
-    """Linearized KF about the nominal (filterpy ``KalmanFilter`` on the perturbation δx).
-
-    ``nominal`` (K+1, 6) defaults to :meth:`CoopModel.nominal`; x̂_0 = x0 means δx̂_0 = x0 − x*_0.
-    """
-    y, Q, R, x0, P0 = _check(model, y, Q, R, x0, P0, "lkf")
-    xn = model.nominal() if nominal is None else model._trajectory("nominal", nominal)
-    Fs, Hs, yn = model.F(xn), model.C(xn), h(xn)
-    kf = KalmanFilter(dim_x=N_STATES, dim_z=N_MEAS)
-    kf.x = state_residual(x0, xn[0])
-    kf.P = P0.copy()
-    kf.Q = Q
-    out = _empty(model)
-    out["x_bar"][0] = out["x_hat"][0] = wrap_state(xn[0] + kf.x)
-    out["M"][0] = out["P"][0] = kf.P
-    for k in range(model.n_steps):
-        kf.F = Fs[k]
-        kf.predict()
-        j = k + 1
-        out["x_bar"][j] = wrap_state(xn[j] + kf.x)
-        out["M"][j] = kf.P
-        m = np.isfinite(y[j])
-        if m.any():
-            H = Hs[j][m]
-            r = measurement_residual(y[j], yn[j] + Hs[j] @ kf.x)[m]
-            # filterpy forms z − H δx̄; hand it z = H δx̄ + r so its residual is the wrapped r
-            kf.update(H @ kf.x + r, R=R[np.ix_(m, m)], H=H)
-            out["r"][j, m] = kf.y
-            out["S"][j] = Hs[j] @ kf.P_prior @ Hs[j].T + R
-        out["x_hat"][j] = wrap_state(xn[j] + kf.x)
-        out["P"][j] = kf.P
-    return FilterResult("lkf", model.t, **out)
-
-
-class _CoopEKF(ExtendedKalmanFilter):
-    """filterpy's EKF with the state prediction replaced by the exact nonlinear step."""
-
-    x: np.ndarray
-
-    def __init__(self, model: CoopModel) -> None:
-        super().__init__(dim_x=N_STATES, dim_z=N_MEAS)
-        self.model = model
-
-    def predict_x(self, u=0) -> None:
-        self.x = self.model.step(self.x)
-
-
-def run_ekf(model: CoopModel, y: np.ndarray, Q: np.ndarray | None = None,
-            R: np.ndarray | None = None, x0: np.ndarray | None = None,
-            P0: np.ndarray | None = None) -> FilterResult:
-    """Extended KF (filterpy ``ExtendedKalmanFilter``, Jacobians recomputed every step)."""
-    y, Q, R, x0, P0 = _check(model, y, Q, R, x0, P0, "ekf")
-    ekf = _CoopEKF(model)
-    ekf.x = x0.copy()
-    ekf.P = P0.copy()
-    ekf.Q = Q
-    out = _empty(model)
-    out["x_bar"][0] = out["x_hat"][0] = x0
-    out["M"][0] = out["P"][0] = P0
-    for k in range(model.n_steps):
-        ekf.F = model.F(ekf.x)
-        ekf.predict()
-        j = k + 1
-        out["x_bar"][j], out["M"][j] = ekf.x, ekf.P
-        m = np.isfinite(y[j])
-        if m.any():
-            ekf.update(y[j][m], lambda x, m=m: model.C(x)[m], lambda x, m=m: h(x)[m],
-                       R=R[np.ix_(m, m)], residual=_subset_residual(m))
-            ekf.x = wrap_state(ekf.x)
-            Hf = model.C(out["x_bar"][j])
-            out["r"][j, m] = ekf.y
-            out["S"][j] = Hf @ out["M"][j] @ Hf.T + R
-        out["x_hat"][j], out["P"][j] = ekf.x, ekf.P
-    return FilterResult("ekf", model.t, **out)
-
-
-def ukf_points(alpha: float = UKF_ALPHA, beta: float = UKF_BETA,
-               kappa: float = UKF_KAPPA) -> MerweScaledSigmaPoints:
+def ukf_points(alpha: float = UKF_ALPHA, beta: float = UKF_BETA, kappa: float = UKF_KAPPA):
     """filterpy's Merwe sigma points for the 6 states, sigma points built with wrapped angles.
 
     0 < α ≤ 1 (the spread of the points; α = 0 divides by zero in the weights, a negative α
     mirrors them), β ≥ 0 (prior knowledge of the distribution, 2 for a Gaussian) and n + κ > 0
     (otherwise the points' covariance n + λ = α²(n + κ) is not positive), all finite.
     """
+    from filterpy.kalman import MerweScaledSigmaPoints
+
     alpha = _v.finite_float("alpha", alpha)
     if not 0.0 < alpha <= 1.0:
         raise ValueError(f"alpha must be in (0, 1] (the sigma points' spread), got {alpha!r}")
@@ -298,136 +243,98 @@ def ukf_points(alpha: float = UKF_ALPHA, beta: float = UKF_BETA,
                                   subtract=state_residual)
 
 
-def run_ukf(model: CoopModel, y: np.ndarray, Q: np.ndarray | None = None,
-            R: np.ndarray | None = None, x0: np.ndarray | None = None,
-            P0: np.ndarray | None = None, alpha: float = UKF_ALPHA, beta: float = UKF_BETA,
-            kappa: float = UKF_KAPPA) -> FilterResult:
-    """Unscented KF (filterpy ``UnscentedKalmanFilter``), angle-aware means and residuals."""
-    y, Q, R, x0, P0 = _check(model, y, Q, R, x0, P0, "ukf")
-    ukf = UnscentedKalmanFilter(
-        dim_x=N_STATES, dim_z=N_MEAS, dt=model.dt, hx=h,
-        fx=lambda x, dt: wrap_state(propagate(x, model.u0, dt, model.L)),
-        points=ukf_points(alpha, beta, kappa),
-        x_mean_fn=lambda s, w: angle_mean(s, w, ANGLE_STATES),
-        z_mean_fn=lambda s, w: angle_mean(s, w, ANGLE_MEASUREMENTS),
-        residual_x=state_residual, residual_z=measurement_residual)
-    ukf.x = x0.copy()
-    ukf.P = P0.copy()
-    ukf.Q = Q
-    ukf.R = R
-    out = _empty(model)
-    out["x_bar"][0] = out["x_hat"][0] = x0
-    out["M"][0] = out["P"][0] = P0
+def euler_nominal(model: CoopModel) -> np.ndarray:
+    """The nominal trajectory (K+1, 6) by Euler steps from x0 (headings wrapped)."""
+    x = np.empty((model.n_steps + 1, N_STATES))
+    x[0] = model.x0
     for k in range(model.n_steps):
-        ukf.predict()
-        j = k + 1
-        out["x_bar"][j], out["M"][j] = ukf.x, ukf.P
-        m = np.isfinite(y[j])
-        if m.all():
-            ukf.update(y[j])
-        elif m.any():
-            full = (ukf.residual_z, ukf.z_mean)
-            ukf.residual_z = _subset_residual(m)
-            ang = _subset_angles(m)
-            ukf.z_mean = lambda s, w, ang=ang: angle_mean(s, w, ang)
-            try:
-                ukf.update(y[j][m], R=R[np.ix_(m, m)], hx=lambda x, m=m: h(x)[m])
-            finally:
-                ukf.residual_z, ukf.z_mean = full
-        if m.any():
-            ukf.x = wrap_state(ukf.x)
-            out["r"][j, m] = ukf.y
-            if m.all():
-                out["S"][j] = ukf.S
-            else:
-                out["S"][j][np.ix_(m, m)] = ukf.S
-        out["x_hat"][j], out["P"][j] = ukf.x, ukf.P
-    return FilterResult("ukf", model.t, **out)
+        x[k + 1] = wrap_state(x[k] + model.dt * f(x[k], model.u0, model.L))
+    return x
 
 
-RUNNERS = {"lkf": run_lkf, "ekf": run_ekf, "ukf": run_ukf}
+# --------------------------------------------------------------------------- predictor/updater
+class _Linearised:
+    """The EKF and the LKF: predict and update of a filter linearised at a point (the hook).
 
-
-def run_filter(method: str, model: CoopModel, y: np.ndarray, Q: np.ndarray | None = None,
-               **kwargs) -> FilterResult:
-    """``run_lkf`` / ``run_ekf`` / ``run_ukf`` by name."""
-    return RUNNERS[_v.choice("method", method, METHODS)](model, y, Q, **kwargs)
-
-
-# --------------------------------------------------------------------------- vectorised over runs
-def run_batch(method: str, model: CoopModel, y: np.ndarray, Q: np.ndarray | None = None,
-              R: np.ndarray | None = None, x0: np.ndarray | None = None,
-              P0: np.ndarray | None = None, nominal: np.ndarray | None = None) -> FilterResult:
-    """The same filter as ``run_<method>`` on N logs y (N, K+1, 5) at once, vectorised with numpy.
-
-    Same equations, same order of operations (Joseph update, S⁻¹ by inversion, the UKF's sigma
-    points redrawn after the prediction as filterpy does).  A row of y must be wholly NaN or
-    wholly finite across all runs (the Monte Carlo case); otherwise use the single-run filters.
+    The EKF linearises about its own estimate (F at x̂_k, H at x̄_j, the mean through the exact
+    step); the LKF about the nominal x*, carrying the perturbation δx = x − x* as its state.
     """
-    method = _v.choice("method", method, METHODS)
-    if np.ndim(y) == 3 and np.shape(y)[0] == 0:
-        raise ValueError("y holds no run (shape (0, ...)): run_batch needs at least one log")
-    y, Q, R, x0, P0 = _check(model, y, Q, R, x0, P0, method, batch=True)
-    nan = np.isnan(y)
-    rows = nan.all(axis=(0, 2))
-    if (nan.any(axis=(0, 2)) != rows).any():
-        raise ValueError("y: in run_batch a row (time step) must be all NaN or all finite over "
-                         "every run; use run_ekf/run_lkf/run_ukf for partly missing rows")
-    N = y.shape[0]
-    out = _empty(model, (N,))
-    x = np.broadcast_to(x0, (N, 6)).copy()
-    P = np.broadcast_to(P0, (N, 6, 6)).copy()
-    out["x_bar"][:, 0] = out["x_hat"][:, 0] = x
-    out["M"][:, 0] = out["P"][:, 0] = P
-    step = {"lkf": _batch_lkf, "ekf": _batch_ekf, "ukf": _batch_ukf}[method]
-    step(model, y, rows, Q, R, x, P, out, nominal)
-    return FilterResult(method, model.t, **out)
 
+    def __init__(self, model: CoopModel, g: Ingredients, kind: str,
+                 nominal: np.ndarray | None) -> None:
+        self.model, self.g, self.lkf = model, g, kind == "lkf"
+        if nominal is None and (self.lkf or "nominal" in (g.F_point, g.H_point)):
+            nominal = euler_nominal(model) if g.propagation == "euler" else model.nominal()
+        self.xn = nominal
+        self.I = np.eye(N_STATES)
+        if self.lkf:  # linearised once, about x*: F_k, H_k, h(x*_k) for every step
+            xn = np.asarray(nominal)
+            self.Fs, self.Hs = self.F_of(model.A(xn)), model.C(xn)
+            self.yn, self.yn_raw = h(xn), h_unwrapped(xn)
 
-def _tr(a: np.ndarray) -> np.ndarray:
-    return np.swapaxes(a, -1, -2)
+    def F_of(self, A: np.ndarray) -> np.ndarray:
+        if self.g.F_form == "I+dtA":
+            return self.I + self.model.dt * A
+        return A if self.g.F_form == "A" else self.model.dt * A
 
+    def wrap(self, x: np.ndarray) -> np.ndarray:
+        return wrap_state(x) if self.g.wrap_state else np.array(x, dtype=float)
 
-def _batch_lkf(model, y, skip, Q, R, x, P, out, nominal):
-    xn = model.nominal() if nominal is None else model._trajectory("nominal", nominal)
-    Fs, Hs, yn = model.F(xn), model.C(xn), h(xn)
-    dx = state_residual(x, xn[0])
-    P = P[0]  # the LKF's covariance does not depend on the data: one sequence for all runs
-    for k in range(model.n_steps):
-        j = k + 1
-        dx = dx @ Fs[k].T
-        M = Fs[k] @ P @ Fs[k].T + Q
-        out["x_bar"][:, j] = wrap_state(xn[j] + dx)
-        out["M"][:, j] = M
-        if skip[j]:
-            P = M
+    def start(self, x0: np.ndarray) -> np.ndarray:
+        """The filter's state at step 0: x̂_0 (EKF) or δx̂_0 = x̂_0 − x*_0 (LKF)."""
+        return state_residual(x0, self.xn[0]) if self.lkf else x0
+
+    def estimate(self, j: int, s: np.ndarray) -> np.ndarray:
+        """The state estimate x at step j from the filter's state s."""
+        return self.wrap(self.xn[j] + s) if self.lkf else s
+
+    def predict(self, k: int, s: np.ndarray, P: np.ndarray, Q: np.ndarray):
+        """(s̄, M) at step k + 1 from (s, P) at step k."""
+        if self.lkf:
+            F = self.Fs[k]
+            return s @ F.T, F @ P @ _tr(F) + Q
+        g, model = self.g, self.model
+        self.x_prev = s
+        if g.F_point == "posterior":
+            F = self.F_of(model.A(s))
+        if g.propagation == "euler":
+            x = self.wrap(s + model.dt * f(s, model.u0, model.L))
         else:
-            H = Hs[j]
-            r = measurement_residual(y[:, j], yn[j] + dx @ H.T)
-            K, S = gain(M, H, R, inverse=True)             # K = M Hᵀ S⁻¹, as filterpy
-            dx = dx + r @ K.T
-            P = joseph_update(M, K, H, R)
-            out["r"][:, j] = r
-            out["S"][:, j] = S
-        out["x_hat"][:, j] = wrap_state(xn[j] + dx)
-        out["P"][:, j] = P
+            x = self.wrap(propagate(s, model.u0, model.dt, model.L))
+        if g.F_point == "prior":
+            F = self.F_of(model.A(x))
+        elif g.F_point == "nominal":
+            F = self.F_of(model.A(self.xn[k]))
+        return x, F @ P @ _tr(F) + Q
 
+    def _observe(self, j: int, s: np.ndarray, runs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(H, ŷ wrapped, ŷ as computed) at step j for the runs ``runs`` of the filter's state."""
+        if self.lkf:
+            H = self.Hs[j]
+            d = s @ H.T
+            return H, self.yn[j] + d, self.yn_raw[j] + d
+        point = self.g.H_point
+        xH = s if point == "prior" else self.x_prev[runs] if point == "posterior" else self.xn[j]
+        return self.model.C(xH), h(s), h_unwrapped(s)
 
-def _batch_ekf(model, y, skip, Q, R, x, P, out, nominal):
-    for k in range(model.n_steps):
-        j = k + 1
-        F = model.F(x)
-        x = model.step(x)
-        P = F @ P @ _tr(F) + Q
-        out["x_bar"][:, j], out["M"][:, j] = x, P
-        if not skip[j]:
-            H = model.C(x)
-            r = measurement_residual(y[:, j], h(x))
-            K, S = gain(P, H, R, inverse=True)             # K = M Hᵀ S⁻¹, as filterpy
-            x = wrap_state(x + np.einsum("nij,nj->ni", K, r))
-            P = joseph_update(P, K, H, R)
-            out["r"][:, j], out["S"][:, j] = r, S
-        out["x_hat"][:, j], out["P"][:, j] = x, P
+    def update(self, j: int, s: np.ndarray, M: np.ndarray, y: np.ndarray, m: np.ndarray,
+               R: np.ndarray, runs=slice(None)):
+        """(ŝ, P, r, S) from (s̄, M) and the measured components ``m`` of y (N, 5)."""
+        g = self.g
+        H, yhat, yraw = self._observe(j, s, runs)
+        if g.wrap_residual == "yes":
+            r = measurement_residual(y, yhat)
+        else:
+            r = y - (yhat if g.wrap_residual == "difference" else yraw)
+        if not m.all():
+            H, r, R = H[..., m, :], r[:, m], R[np.ix_(m, m)]
+        K, S = gain(M, H, R, inverse=True)              # K = M Hᵀ S⁻¹, as filterpy
+        if self.lkf:
+            s = _add_gain(s, K, r)
+        else:
+            s = self.wrap(_add_gain(s, K, r))
+        P = joseph_update(M, K, H, R) if g.joseph else (self.I - K @ H) @ M
+        return s, P, r, S
 
 
 def _sigma_points(x, P, lam):
@@ -438,28 +345,185 @@ def _sigma_points(x, P, lam):
                            wrap_state(x[:, None, :] - U)], axis=1)
 
 
-def _batch_ukf(model, y, skip, Q, R, x, P, out, nominal):
-    pts = ukf_points()
-    Wm, Wc = pts.Wm, pts.Wc
-    lam = UKF_ALPHA**2 * (N_STATES + UKF_KAPPA) - N_STATES
-    for k in range(model.n_steps):
-        j = k + 1
-        sig = wrap_state(propagate(_sigma_points(x, P, lam), model.u0, model.dt, model.L))
-        x = angle_mean(sig, Wm, ANGLE_STATES)
+class _Unscented:
+    """The UKF's predict and update (sigma points instead of a linearisation point)."""
+
+    def __init__(self, model: CoopModel, alpha: float, beta: float, kappa: float) -> None:
+        pts = ukf_points(alpha, beta, kappa)
+        self.model, self.Wm, self.Wc = model, pts.Wm, pts.Wc
+        self.lam = alpha**2 * (N_STATES + kappa) - N_STATES
+
+    def start(self, x0: np.ndarray) -> np.ndarray:
+        return x0
+
+    def estimate(self, j: int, s: np.ndarray) -> np.ndarray:
+        return s
+
+    def predict(self, k: int, x: np.ndarray, P: np.ndarray, Q: np.ndarray):
+        m = self.model
+        sig = wrap_state(propagate(_sigma_points(x, P, self.lam), m.u0, m.dt, m.L))
+        x = angle_mean(sig, self.Wm, ANGLE_STATES)
         d = state_residual(sig, x[:, None, :])
-        P = np.einsum("m,nmi,nmj->nij", Wc, d, d) + Q
-        out["x_bar"][:, j], out["M"][:, j] = x, P
-        if not skip[j]:
-            sig = _sigma_points(x, P, lam)
-            zs = h(sig)
-            zp = angle_mean(zs, Wm, ANGLE_MEASUREMENTS)
-            dz = measurement_residual(zs, zp[:, None, :])
-            S = np.einsum("m,nmi,nmj->nij", Wc, dz, dz) + R
-            dx = state_residual(sig, x[:, None, :])
-            Pxz = np.einsum("m,nmi,nmj->nij", Wc, dx, dz)
-            K = cross_gain(Pxz, S, inverse=True)           # K = Pxz S⁻¹, as filterpy
-            r = measurement_residual(y[:, j], zp)
-            x = wrap_state(x + np.einsum("nij,nj->ni", K, r))
-            P = P - K @ S @ _tr(K)
-            out["r"][:, j], out["S"][:, j] = r, S
-        out["x_hat"][:, j], out["P"][:, j] = x, P
+        return x, np.einsum("m,nmi,nmj->nij", self.Wc, d, d) + Q
+
+    def update(self, j: int, x: np.ndarray, M: np.ndarray, y: np.ndarray, m: np.ndarray,
+               R: np.ndarray, runs=slice(None)):
+        Wc = self.Wc
+        sig = _sigma_points(x, M, self.lam)
+        zs = h(sig)
+        zp = angle_mean(zs, self.Wm, ANGLE_MEASUREMENTS)   # componentwise: a subset is a subset
+        dz = measurement_residual(zs, zp[:, None, :])
+        r = measurement_residual(y, zp)
+        if not m.all():
+            dz, r, R = dz[..., m], r[:, m], R[np.ix_(m, m)]
+        S = np.einsum("m,nmi,nmj->nij", Wc, dz, dz) + R
+        dx = state_residual(sig, x[:, None, :])
+        Pxz = np.einsum("m,nmi,nmj->nij", Wc, dx, dz)
+        K = cross_gain(Pxz, S, inverse=True)           # K = Pxz S⁻¹, as filterpy
+        x = wrap_state(x + np.einsum("nij,nj->ni", K, r))
+        return x, M - K @ S @ _tr(K), r, S
+
+
+# --------------------------------------------------------------------------- the one loop
+def _groups(finite: np.ndarray):
+    """[(runs, measured components)] of one row: runs (a slice or indices) sharing a pattern."""
+    first = finite[0]
+    if (finite == first).all():
+        return [(slice(None), first)] if first.any() else []
+    pats, inv = np.unique(finite, axis=0, return_inverse=True)
+    return [(np.flatnonzero(inv.ravel() == i), p) for i, p in enumerate(pats) if p.any()]
+
+
+def _full_S(flt, j: int, s: np.ndarray, M: np.ndarray, R: np.ndarray, runs) -> np.ndarray:
+    """S of all five components (a partly measured row reports it whole, as filterpy's EKF)."""
+    H = flt._observe(j, s, runs)[0]
+    return H @ M @ _tr(H) + R
+
+
+def _store_update(out, j, runs, m, r, S, full_S) -> None:
+    if isinstance(runs, slice) and m.all():
+        out["r"][:, j], out["S"][:, j] = r, S
+        return
+    n = r.shape[0]
+    rr = np.full((n, N_MEAS), np.nan)
+    rr[:, m] = r
+    out["r"][runs, j] = rr
+    if full_S is None:  # the UKF reports S on the measured components only
+        full_S = np.full((n, N_MEAS, N_MEAS), np.nan)
+        full_S[:, m[:, None] & m[None, :]] = S.reshape(n, -1)
+    out["S"][runs, j] = full_S
+
+
+def run_batch(method: str, model: CoopModel, y: np.ndarray, Q: np.ndarray | None = None,
+              R: np.ndarray | None = None, x0: np.ndarray | None = None,
+              P0: np.ndarray | None = None, nominal: np.ndarray | None = None,
+              ingredients: Ingredients = RIGHT, alpha: float = UKF_ALPHA,
+              beta: float = UKF_BETA, kappa: float = UKF_KAPPA) -> FilterResult:
+    """Filter ``method`` ('lkf', 'ekf', 'ukf') on N logs y (N, K+1, 5) at once (module docstring).
+
+    ``ingredients`` makes it a student's filter (EKF and LKF; :mod:`gpsaccel.coop.mistakes`);
+    ``alpha``, ``beta``, ``kappa`` are the UKF's sigma-point parameters (:func:`ukf_points`).
+    """
+    method = _v.choice("method", method, METHODS)
+    if np.ndim(y) == 3 and np.shape(y)[0] == 0:
+        raise ValueError("y holds no run (shape (0, ...)): run_batch needs at least one log")
+    y, Q, R, x0, P0 = _check(model, y, Q, R, x0, P0, method, batch=True)
+    g = ingredients
+    Q = Q * g.q_scale if g.q_scale != 1.0 else Q
+    R = np.sqrt(R) if g.r_sqrt else R
+    if method == "ukf":
+        flt: _Linearised | _Unscented = _Unscented(model, alpha, beta, kappa)
+    else:
+        if nominal is not None:
+            nominal = model._trajectory("nominal", nominal)
+        flt = _Linearised(model, g, "ekf" if g.relinearize else method, nominal)
+    out = _loop(flt, model, y, Q, R, x0, P0, g, shared_P=method == "lkf" and not g.relinearize)
+    if g.output == "prior":
+        out["x_hat"], out["P"] = out["x_bar"].copy(), out["M"].copy()
+    if g.shift == "output":
+        for key in ("x_hat", "P"):
+            out[key][:, 1:] = out[key][:, :-1].copy()
+    return FilterResult(method, model.t, **out)
+
+
+def _loop(flt, model, y, Q, R, x0, P0, g, shared_P: bool) -> dict[str, np.ndarray]:
+    """Predict, then update with the measured components, at every step: the only loop."""
+    N, K1 = y.shape[0], y.shape[1]
+    out = {"x_bar": np.empty((N, K1, 6)), "M": np.empty((N, K1, 6, 6)),
+           "x_hat": np.empty((N, K1, 6)), "P": np.empty((N, K1, 6, 6)),
+           "r": np.full((N, K1, 5), np.nan), "S": np.full((N, K1, 5, 5), np.nan)}
+    x = np.broadcast_to(x0, (N, 6)).copy()
+    # the LKF's covariance does not depend on the data: one sequence for all runs
+    P = P0.copy() if shared_P else np.broadcast_to(P0, (N, 6, 6)).copy()
+    out["x_bar"][:, 0] = out["x_hat"][:, 0] = x
+    out["M"][:, 0] = out["P"][:, 0] = P
+    finite = np.isfinite(y)
+    s = flt.start(x)
+    for k in range(K1 - 1):
+        j = k + 1
+        row = k if g.shift == "measurement" else j
+        s, P = flt.predict(k, s, P, Q)
+        out["x_bar"][:, j], out["M"][:, j] = flt.estimate(j, s), P
+        groups = _groups(finite[:, row])
+        if len(groups) > 1 or groups and not isinstance(groups[0][0], slice):
+            s = s.copy()
+            P = np.broadcast_to(P, (N, 6, 6)).copy()   # different rows: different covariances
+        for runs, m in groups:
+            full = isinstance(runs, slice)
+            M = P if full else P[runs]
+            sg, Pg, r, S = flt.update(j, s if full else s[runs], M, y[runs, row], m, R, runs)
+            full_S = None
+            if not m.all() and isinstance(flt, _Linearised):
+                full_S = _full_S(flt, j, s if full else s[runs], M, R, runs)
+            if full:
+                s, P = sg, Pg
+            else:
+                s[runs], P[runs] = sg, Pg
+            _store_update(out, j, runs, m, r, S, full_S)
+        out["x_hat"][:, j], out["P"][:, j] = flt.estimate(j, s), P
+    return out
+
+
+def _one(method: str, model: CoopModel, y: np.ndarray, Q, R, x0, P0, **kwargs) -> FilterResult:
+    """``run_batch`` on the one log y (K+1, 5), the run axis dropped."""
+    if not isinstance(model, CoopModel):
+        raise ValueError(f"model must be a CoopModel, got {type(model).__name__}")
+    y = _v.finite_array("y", y, (model.n_steps + 1, N_MEAS), allow_nan=True)
+    res = run_batch(method, model, y[None], Q, R, x0, P0, **kwargs)
+    return FilterResult(method, res.t, *(getattr(res, k)[0] for k in
+                                         ("x_bar", "M", "x_hat", "P", "r", "S")))
+
+
+def run_lkf(model: CoopModel, y: np.ndarray, Q: np.ndarray | None = None,
+            R: np.ndarray | None = None, x0: np.ndarray | None = None,
+            P0: np.ndarray | None = None, nominal: np.ndarray | None = None,
+            ingredients: Ingredients = RIGHT) -> FilterResult:
+    """The linearized KF about the nominal on one log (``nominal`` (K+1, 6) defaults to
+    :meth:`CoopModel.nominal`; x̂_0 = x0 means δx̂_0 = x0 − x*_0)."""
+    return _one("lkf", model, y, Q, R, x0, P0, nominal=nominal, ingredients=ingredients)
+
+
+def run_ekf(model: CoopModel, y: np.ndarray, Q: np.ndarray | None = None,
+            R: np.ndarray | None = None, x0: np.ndarray | None = None,
+            P0: np.ndarray | None = None, ingredients: Ingredients = RIGHT) -> FilterResult:
+    """The extended KF (Jacobians at the estimate, recomputed every step) on one log
+    (``ingredients``: a student's EKF, :mod:`gpsaccel.coop.mistakes`)."""
+    return _one("ekf", model, y, Q, R, x0, P0, ingredients=ingredients)
+
+
+def run_ukf(model: CoopModel, y: np.ndarray, Q: np.ndarray | None = None,
+            R: np.ndarray | None = None, x0: np.ndarray | None = None,
+            P0: np.ndarray | None = None, alpha: float = UKF_ALPHA, beta: float = UKF_BETA,
+            kappa: float = UKF_KAPPA) -> FilterResult:
+    """The unscented KF (angle-aware means and residuals) on one log."""
+    return _one("ukf", model, y, Q, R, x0, P0, alpha=alpha, beta=beta, kappa=kappa)
+
+
+RUNNERS = {"lkf": run_lkf, "ekf": run_ekf, "ukf": run_ukf}
+
+
+def run_filter(method: str, model: CoopModel, y: np.ndarray, Q: np.ndarray | None = None,
+               **kwargs) -> FilterResult:
+    """``run_lkf`` / ``run_ekf`` / ``run_ukf`` by name."""
+    return RUNNERS[_v.choice("method", method, METHODS)](model, y, Q, **kwargs)
+

@@ -30,66 +30,26 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from gpsaccel.coop.model import (
-    ANGLE_STATES,
-    N_MEAS,
-    N_STATES,
-    CoopModel,
-    f,
-    h,
-    h_unwrapped,
-    measurement_residual,
-    propagate,
-    state_residual,
-    wrap_angle,
-    wrap_state,
-)
+from gpsaccel.coop.filters import FilterResult, Ingredients, euler_nominal, run_batch
+from gpsaccel.coop.model import ANGLE_STATES, CoopModel, wrap_angle
 from gpsaccel.kalman import epochs
-from gpsaccel.kalman.update import gain, joseph_update
 
 KINDS = ("ekf", "lkf")
 
-
-@dataclass(frozen=True)
-class Ingredients:
-    """The choices a student makes in the loop of the module docstring (defaults: right).
-
-    wrap_residual : "yes"; "difference" leaves y − h(x̄) unwrapped; "none" also leaves h's bearing
-        unwrapped (atan2(Δη, Δξ) − θ as computed).
-    wrap_state : wrap the headings of x̄ and x̂ to [−π, π).
-    F_form : "I+dtA", "A" or "dtA".
-    F_point : where the EKF evaluates A: "posterior" x̂_k (right), "prior" x̄_j, "nominal" x*_k.
-    H_point : where the EKF evaluates C: "prior" x̄_j (right), "posterior" x̂_k, "nominal" x*_j.
-    q_scale : Q is multiplied by this (1; 0 drops it; ΔT).
-    r_sqrt : R replaced by its elementwise square root (standard deviations as variances).
-    shift : "none"; "measurement" updates at t_j with y_k (the update before the prediction);
-        "output" returns row j = the estimate of row j − 1 (row 0 twice).
-    joseph : the Joseph update (True) or P = (I − KH) M (False).
-    propagation : "exact" (closed form, or any ODE solver at its default tolerances) or "euler"
-        (one Euler step x + ΔT·f(x, u) per sample; for the LKF, an Euler nominal).
-    relinearize : an "LKF" that linearizes about its own estimate, not the nominal: an EKF.
-    """
-
-    wrap_residual: str = "yes"
-    wrap_state: bool = True
-    F_form: str = "I+dtA"
-    F_point: str = "posterior"
-    H_point: str = "prior"
-    q_scale: float = 1.0
-    r_sqrt: bool = False
-    shift: str = "none"
-    joseph: bool = True
-    propagation: str = "exact"
-    relinearize: bool = False
+__all__ = ["KINDS", "Ingredients", "Mistake", "catalogue", "codes", "euler_nominal",
+           "heading_range", "ingredients", "run", "wrapped_difference"]
 
 
 @dataclass(frozen=True)
 class Mistake(epochs.Mistake):
-    """One entry of the catalogue, the core's entry (code, variant, message, the ingredients it
-    changes: :class:`gpsaccel.kalman.epochs.Mistake`) and the filters it applies to."""
+    """One entry of the catalogue, the core's entry (code, variant, message, hint, the
+    ingredients it changes: :class:`gpsaccel.kalman.epochs.Mistake`) and the filters it applies
+    to.  ``checker``: False for an entry only the homework tries (its question asks for x̂ and
+    P, so returning x̄ and M is a mistake there; the checker's contract names the outputs)."""
 
     kinds: tuple[str, ...] = KINDS
     informational: bool = False
+    checker: bool = True
 
     def __str__(self) -> str:
         return f"{self.code} ({self.variant})"
@@ -153,29 +113,33 @@ def catalogue(model: CoopModel | None = None, kind: str = "ekf") -> tuple[Mistak
     out += [
         Mistake("jacobian-point", "F at the prior x̄_(k+1)",
                 "Your F = I + ΔT·A is evaluated at the predicted state x̄_(k+1); it linearizes the "
-                "step from x̂_k, so A(x̂_k, u).", (("F_point", "prior"),), ("ekf",)),
+                "step from x̂_k, so A(x̂_k, u).", (("F_point", "prior"),), kinds=("ekf",)),
         Mistake("jacobian-point", "H at the previous posterior x̂_k",
                 "Your H = C is evaluated at x̂_k, the previous estimate; the measurement at "
                 "t_(k+1) is predicted from x̄_(k+1), so H = C(x̄_(k+1)).",
-                (("H_point", "posterior"),), ("ekf",)),
+                (("H_point", "posterior"),), kinds=("ekf",)),
         Mistake("jacobian-point", "F and H at the nominal",
                 "Your F and H are evaluated on the nominal trajectory x* (an LKF's Jacobians) "
                 "while the mean follows the estimate; an EKF linearizes about its own estimate: "
                 "F = I + ΔT·A(x̂_k), H = C(x̄_(k+1)).",
-                (("F_point", "nominal"), ("H_point", "nominal")), ("ekf",)),
+                (("F_point", "nominal"), ("H_point", "nominal")), kinds=("ekf",)),
         Mistake("jacobian-point", "LKF linearized about the estimate",
                 "Your LKF evaluates F and H at its own estimate x̂ (and propagates x̂ itself): "
                 "that is an EKF, as report 002's \"LKF\" is. The LKF linearizes once, about the "
                 "nominal trajectory x* of the noiseless model: F_k = I + ΔT·A(x*_k), "
                 "H_k = C(x*_k), and filters the perturbation δx = x − x*.",
-                (("relinearize", True),), ("lkf",)),
+                (("relinearize", True),), kinds=("lkf",)),
+        Mistake("returns-a-priori", "x̄ and M returned",
+                "Your filter returns x̄ and M, the estimate before the update, instead of x̂ "
+                "and P.", (("output", "prior"),), kinds=("ekf",), hint="Store x̂ and P after the "
+                "update at each step.", checker=False),
     ]
     return tuple(m for m in out if kind in m.kinds)
 
 
 def codes(kind: str = "ekf") -> tuple[str, ...]:
-    """The catalogue's codes for ``kind``, in order."""
-    return tuple(dict.fromkeys(m.code for m in catalogue(kind=kind)))
+    """The checker's codes for ``kind``, in order."""
+    return tuple(dict.fromkeys(m.code for m in catalogue(kind=kind) if m.checker))
 
 
 def ingredients(mistakes: tuple[Mistake, ...] = ()) -> Ingredients:
@@ -186,124 +150,14 @@ def ingredients(mistakes: tuple[Mistake, ...] = ()) -> Ingredients:
     return g
 
 
-def _tr(a: np.ndarray) -> np.ndarray:
-    return np.swapaxes(a, -1, -2)
-
-
-def _residual(y: np.ndarray, yhat_wrapped: np.ndarray, yhat_raw: np.ndarray,
-              g: Ingredients) -> np.ndarray:
-    if g.wrap_residual == "yes":
-        return measurement_residual(y, yhat_wrapped)
-    if g.wrap_residual == "difference":
-        return y - yhat_wrapped
-    return y - yhat_raw
-
-
-@dataclass
-class Output:
-    """What a (possibly mistaken) filter returns: x̂ (N, K+1, 6), P (N, K+1, 6, 6), and its
-    residuals r (N, K+1, 5) and their covariances S (N, K+1, 5, 5) (row 0 NaN)."""
-
-    x_hat: np.ndarray
-    P: np.ndarray
-    r: np.ndarray
-    S: np.ndarray
-
-
 def run(model: CoopModel, y: np.ndarray, Q: np.ndarray, R: np.ndarray, kind: str = "ekf",
         mistakes: tuple[Mistake, ...] = (), nominal: np.ndarray | None = None,
-        x0: np.ndarray | None = None, P0: np.ndarray | None = None) -> Output:
-    """Run the ``kind`` filter that makes ``mistakes`` on logs y (N, K+1, 5) with Q and R.
-
-    Rows of y must be wholly NaN or wholly finite over all runs (the checker's simulated logs and
-    the course log are).  x̂_0 = x0, P_0 = P0 of the model unless given.
-    """
+        x0: np.ndarray | None = None, P0: np.ndarray | None = None) -> FilterResult:
+    """The ``kind`` filter that makes ``mistakes`` on logs y (N, K+1, 5): the one filter of
+    :func:`gpsaccel.coop.filters.run_batch` with the mistakes' ingredients."""
     if kind not in KINDS:
         raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
-    g = ingredients(mistakes)
-    if kind == "lkf" and g.relinearize:
-        kind = "ekf"
-    y = np.asarray(y, dtype=float)
-    N, K1 = y.shape[0], y.shape[1]
-    skip = np.isnan(y).all(axis=(0, 2))
-    Q = np.asarray(Q, dtype=float) * g.q_scale
-    R = np.sqrt(np.asarray(R, dtype=float)) if g.r_sqrt else np.asarray(R, dtype=float)
-    x0 = model.x0 if x0 is None else np.asarray(x0, dtype=float)
-    P0 = model.P0 if P0 is None else np.asarray(P0, dtype=float)
-    if nominal is None and (kind == "lkf" or "nominal" in (g.F_point, g.H_point)):
-        nominal = euler_nominal(model) if g.propagation == "euler" else model.nominal()
-    xn: np.ndarray = np.empty((0, N_STATES)) if nominal is None else nominal  # EKF: unused
-    wrap_x = wrap_state if g.wrap_state else (lambda v: np.array(v, dtype=float))
-    I = np.eye(N_STATES)
-
-    def F_of(A: np.ndarray) -> np.ndarray:
-        return {"I+dtA": I + model.dt * A, "A": A, "dtA": model.dt * A}[g.F_form]
-
-    def update_cov(M, K, H):
-        return joseph_update(M, K, H, R) if g.joseph else (I - K @ H) @ M
-
-    x_hat = np.empty((N, K1, N_STATES))
-    P_out = np.empty((N, K1, N_STATES, N_STATES))
-    r_out = np.full((N, K1, N_MEAS), np.nan)
-    S_out = np.full((N, K1, N_MEAS, N_MEAS), np.nan)
-    x = np.broadcast_to(x0, (N, N_STATES)).copy()
-    P = np.broadcast_to(P0, (N, N_STATES, N_STATES)).copy()
-    x_hat[:, 0], P_out[:, 0] = x, P
-    if kind == "lkf":
-        dx = state_residual(x, xn[0])
-        Fs, Hs, yn_w = F_of(model.A(xn)), model.C(xn), h(xn)
-        yn_raw = h_unwrapped(xn)
-    for k in range(K1 - 1):
-        j = k + 1
-        m_row = k if g.shift == "measurement" else j
-        if kind == "ekf":
-            if g.F_point == "posterior":
-                F = F_of(model.A(x))
-            x_prev = x
-            x = wrap_x(_propagate(model, x, g.propagation))
-            if g.F_point == "prior":
-                F = F_of(model.A(x))
-            elif g.F_point == "nominal":
-                F = F_of(model.A(xn[k]))
-            P = F @ P @ _tr(F) + Q
-            if not skip[m_row]:
-                xH = {"prior": x, "posterior": x_prev, "nominal": None}[g.H_point]
-                H = model.C(xn[j]) if xH is None else model.C(xH)
-                r = _residual(y[:, m_row], h(x), h_unwrapped(x), g)
-                K, S = gain(P, H, R)                    # K = P Hᵀ (H P Hᵀ + R)⁻¹
-                x = wrap_x(x + np.einsum("nij,nj->ni", K, r))
-                P = update_cov(P, K, H)
-                r_out[:, j], S_out[:, j] = r, S
-        else:
-            dx = dx @ Fs[k].T
-            P = Fs[k] @ P @ _tr(Fs[k]) + Q
-            if not skip[m_row]:
-                H = Hs[j]
-                r = _residual(y[:, m_row], yn_w[j] + dx @ H.T, yn_raw[j] + dx @ H.T, g)
-                K, S = gain(P, H, R)                    # K = P Hᵀ (H P Hᵀ + R)⁻¹
-                dx = dx + np.einsum("nij,nj->ni", K, r)
-                P = update_cov(P, K, H)
-                r_out[:, j], S_out[:, j] = r, S
-            x = wrap_x(xn[j] + dx)
-        x_hat[:, j], P_out[:, j] = x, P
-    if g.shift == "output":
-        x_hat[:, 1:], P_out[:, 1:] = x_hat[:, :-1].copy(), P_out[:, :-1].copy()
-    return Output(x_hat, P_out, r_out, S_out)
-
-
-def _propagate(model: CoopModel, x: np.ndarray, how: str = "exact") -> np.ndarray:
-    if how == "euler":
-        return x + model.dt * f(x, model.u0, model.L)
-    return propagate(x, model.u0, model.dt, model.L)
-
-
-def euler_nominal(model: CoopModel) -> np.ndarray:
-    """The nominal trajectory (K+1, 6) by Euler steps from x0 (headings wrapped)."""
-    x = np.empty((model.n_steps + 1, N_STATES))
-    x[0] = model.x0
-    for k in range(model.n_steps):
-        x[k + 1] = wrap_state(x[k] + model.dt * f(x[k], model.u0, model.L))
-    return x
+    return run_batch(kind, model, y, Q, R, x0, P0, nominal, ingredients(mistakes))
 
 
 def heading_range(x_hat: np.ndarray) -> float:

@@ -149,12 +149,17 @@ class Mistake:
     variant : which form of the mistake (``"V[2,2] = 0.04"``); a code can have several.
     message : what is wrong, what it should be and the likely cause, for the student.
     changes : the ingredients it changes, ``(field, value)`` or ``(field, (row, col), value)``.
+    hint : where to look, said only when the evidence is this mistake (may be empty).
+
+    Every system's catalogue (calibration, ship, coop, any linear model) is a tuple of these:
+    the checker, the lessons and the homework read the same entries.
     """
 
     code: str
     variant: str
     message: str
     changes: tuple[tuple, ...]
+    hint: str = ""
 
     @property
     def touches(self) -> frozenset:
