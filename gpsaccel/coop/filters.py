@@ -213,7 +213,15 @@ def _check(model: CoopModel, y: object, Q: object, R: object, x0: object, P0: ob
         raise ValueError(f"model must be a CoopModel, got {type(model).__name__}")
     shape = (None, model.n_steps + 1, N_MEAS) if batch else (model.n_steps + 1, N_MEAS)
     y = _v.finite_array("y", y, shape, allow_nan=True)
-    Q = tuned_q(method, model) if Q is None else _v.spd_matrix("Q", Q, N_STATES)
+    if batch and Q is not None and np.ndim(Q) == 3:  # one Q per run (a tuning grid at once)
+        Q = np.asarray(Q, dtype=float)
+        if Q.shape != (y.shape[0], N_STATES, N_STATES):
+            raise ValueError(f"Q must be (6, 6) or one (6, 6) per run ({y.shape[0]}, 6, 6), "
+                             f"got {Q.shape}")
+        for q in np.unique(Q, axis=0):
+            _v.spd_matrix("Q", q, N_STATES)
+    else:
+        Q = tuned_q(method, model) if Q is None else _v.spd_matrix("Q", Q, N_STATES)
     R = model.Rtrue if R is None else _v.spd_matrix("R", R, N_MEAS)
     x0 = model.x0 if x0 is None else _v.finite_array("x0", x0, (N_STATES,))
     P0 = model.P0 if P0 is None else _v.spd_matrix("P0", P0, N_STATES)
@@ -315,7 +323,7 @@ class _Linearised:
             return H, self.yn[j] + d, self.yn_raw[j] + d
         point = self.g.H_point
         xH = s if point == "prior" else self.x_prev[runs] if point == "posterior" else self.xn[j]
-        return self.model.C(xH), h(s), h_unwrapped(s)
+        return self.model.C(xH), h(s), (h_unwrapped(s) if self.g.wrap_residual == "none" else None)
 
     def update(self, j: int, s: np.ndarray, M: np.ndarray, y: np.ndarray, m: np.ndarray,
                R: np.ndarray, runs=slice(None)):
@@ -421,8 +429,10 @@ def run_batch(method: str, model: CoopModel, y: np.ndarray, Q: np.ndarray | None
               beta: float = UKF_BETA, kappa: float = UKF_KAPPA) -> FilterResult:
     """Filter ``method`` ('lkf', 'ekf', 'ukf') on N logs y (N, K+1, 5) at once (module docstring).
 
-    ``ingredients`` makes it a student's filter (EKF and LKF; :mod:`gpsaccel.coop.mistakes`);
-    ``alpha``, ``beta``, ``kappa`` are the UKF's sigma-point parameters (:func:`ukf_points`).
+    ``Q`` (6, 6), or (N, 6, 6) one per run (a tuning grid in one call: each run's arithmetic is
+    that of its own call, bit for bit).  ``ingredients`` makes it a student's filter (EKF and
+    LKF; :mod:`gpsaccel.coop.mistakes`); ``alpha``, ``beta``, ``kappa`` are the UKF's
+    sigma-point parameters (:func:`ukf_points`).
     """
     method = _v.choice("method", method, METHODS)
     if np.ndim(y) == 3 and np.shape(y)[0] == 0:
@@ -458,13 +468,14 @@ def _loop(flt, model, y, Q, R, x0, P0, g, shared_P: bool) -> dict[str, np.ndarra
     out["x_bar"][:, 0] = out["x_hat"][:, 0] = x
     out["M"][:, 0] = out["P"][:, 0] = P
     finite = np.isfinite(y)
+    rows = [_groups(finite[:, i]) for i in range(K1)]
     s = flt.start(x)
     for k in range(K1 - 1):
         j = k + 1
-        row = k if g.shift == "measurement" else j
         s, P = flt.predict(k, s, P, Q)
         out["x_bar"][:, j], out["M"][:, j] = flt.estimate(j, s), P
-        groups = _groups(finite[:, row])
+        row = k if g.shift == "measurement" else j
+        groups = rows[row]
         if len(groups) > 1 or groups and not isinstance(groups[0][0], slice):
             s = s.copy()
             P = np.broadcast_to(P, (N, 6, 6)).copy()   # different rows: different covariances

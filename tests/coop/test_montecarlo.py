@@ -62,3 +62,20 @@ def test_bad_arguments_name_themselves():
         consistency_test(MODEL, "ekf", n_runs=2, alpha=1.5)
     with pytest.raises(ValueError, match="grid must hold 3 lists"):
         tune_q(MODEL, "ekf", grid=((1.0,), (1.0,)))
+
+
+def test_sets_and_candidates_filtered_together_equal_each_alone():
+    # repeated_sets / tune_q stack their sets (one Q per run) into one filter call: every
+    # number is that of the set's own call, bit for bit
+    from gpsaccel.coop import montecarlo as mc
+    from gpsaccel.coop.filters import scaled_q
+    from gpsaccel.coop.model import CoopModel
+
+    model = CoopModel(duration=5.0)
+    truths = [mc.truth_runs(model, 4, s) for s in mc.set_seeds(3, 2)]
+    Qs = [model.Qtrue, scaled_q(model.Qtrue, 2.0, 1.5, 1.0)]
+    together = mc._tests(model, "ekf", [(Q, tr) for Q in Qs for tr in truths], 0.05)
+    alone = [mc.consistency_test(model, "ekf", Q, truth=tr) for Q in Qs for tr in truths]
+    for a, b in zip(together, alone, strict=True):
+        np.testing.assert_array_equal(a.nees_mean, b.nees_mean)
+        np.testing.assert_array_equal(a.nis_mean, b.nis_mean)
