@@ -20,12 +20,13 @@ from functools import lru_cache
 
 import numpy as np
 
-from gpsaccel.assignments._answers import array, assert_report, call
 from gpsaccel import registry
+from gpsaccel.assignments._answers import array, assert_report, call
 from gpsaccel.check.report import Report
 from gpsaccel.ship.model import GPS_ROWS, ShipModel
 
-__all__ = ["assert_report", "cost_answer", "optimal_update", "update_answer", "zeroed_update"]
+__all__ = ["assert_report", "cost_answer", "optimal_update", "update_answer", "update_mistakes",
+           "zeroed_update"]
 
 #: Distance (units of the reference σ) within which x̂ and P count as equal.
 TOL = 1e-6
@@ -38,52 +39,26 @@ RTOL = 2e-5
 
 
 def optimal_update(x_bar, M, z, H, V):
-    """The update with the rows of z that are finite (module docstring); (x̂, P)."""
-    rows = np.flatnonzero(np.isfinite(z))
-    if rows.size == 0:
-        return x_bar.copy(), M.copy()
-    Hr, Vr = H[rows], V[np.ix_(rows, rows)]
-    K = np.linalg.solve(Hr @ M @ Hr.T + Vr, Hr @ M).T
-    A = np.eye(M.shape[0]) - K @ Hr
-    return x_bar + K @ (z[rows] - Hr @ x_bar), A @ M @ A.T + K @ Vr @ K.T
+    """The update with the rows of z that are finite (module docstring); (x̂, P).  The ship's
+    one update (:func:`gpsaccel.ship.mistakes.update`)."""
+    from gpsaccel.ship.mistakes import update
+
+    return update(x_bar, M, z, H, V)
 
 
 def zeroed_update(x_bar, M, z, H, V, short_form: bool = False):
     """Report 004's update: full gain, columns of the missing rows zeroed; (x̂, P)."""
-    miss = ~np.isfinite(z)
-    K = np.linalg.solve(H @ M @ H.T + V, H @ M).T
-    K[:, miss] = 0.0
-    r = np.where(miss, 0.0, z - H @ x_bar)
-    A = np.eye(M.shape[0]) - K @ H
-    P = A @ M if short_form else A @ M @ A.T + K @ V @ K.T
-    return x_bar + K @ r, P
+    from gpsaccel.ship.mistakes import update
+
+    codes = ("zeroed-gain", "report-covariance") if short_form else ("zeroed-gain",)
+    return update(x_bar, M, z, H, V, tuple(m for m in update_mistakes() if m.code == codes[-1]))
 
 
-def missing_as_zero(x_bar, M, z, H, V):
-    """The slip of using every row, with NaN replaced by 0."""
-    return optimal_update(x_bar, M, np.nan_to_num(z, nan=0.0), H, V)
+def update_mistakes() -> tuple:
+    """The mistakes question 1 names: the ship's :func:`gpsaccel.ship.mistakes.update_catalogue`."""
+    from gpsaccel.ship.mistakes import update_catalogue
 
-
-MISTAKES = {
-    "zeroed-gain": (lambda *a: zeroed_update(*a),
-                    "the full gain M Hᵀ (H M Hᵀ + V)⁻¹ with the columns of the missing rows set "
-                    "to zero (report 004's BD(:,1,n) = 0)"),
-    "report-covariance": (lambda x_bar, M, z, H, V: zeroed_update(x_bar, M, z, H, V,
-                                                                  short_form=True),
-                               "report 004's zeroed gain with P = (I − K H) M"),
-    "missing-as-zero": (missing_as_zero, "the missing rows used as measurements of 0"),
-}
-
-_HINTS = {
-    "zeroed-gain": "The kept columns of the full gain were computed as if the missing rows would "
-    "also correct the estimate, so they under-weight what did arrive. Use only the rows r that "
-    "arrived: K_r = M H_rᵀ (H_r M H_rᵀ + V_r)⁻¹.",
-    "report-covariance": "Besides the zeroed gain (use K_r = M H_rᵀ (H_r M H_rᵀ + V_r)⁻¹ "
-    "with the rows r that arrived), P = (I − K H) M holds only for the optimal gain: with any "
-    "other it is not even symmetric. The Joseph form holds for every gain.",
-    "missing-as-zero": "A NaN means the row did not arrive: leave it out (H_r, V_r, z_r), do not "
-    "replace it with 0.",
-}
+    return update_catalogue()
 
 
 @lru_cache(maxsize=1)
@@ -130,6 +105,8 @@ def _matches(x, P, x_ref, P_ref) -> tuple[bool, float, float]:
 
 def update_answer(update: object, seed: int = 0) -> Report:
     """Check ``update(x_bar, M, z, H, V) -> (x_hat, P)`` on :func:`cases`; never raises."""
+    from gpsaccel.ship.mistakes import update as ship_update
+
     report = Report("question 1: the multirate update")
     for label, args in cases(seed):
         out = call(report, "update(x_bar, M, z, H, V)", update, *(a.copy() for a in args))
@@ -147,11 +124,11 @@ def update_answer(update: object, seed: int = 0) -> Report:
         ok, dx, dP = _matches(x, P, x_ref, P_ref)
         if ok:
             continue
-        for code, (fun, what) in MISTAKES.items():
-            xm, Pm = fun(*args)
+        for m in update_mistakes():
+            xm, Pm = ship_update(*args, (m,))
             if _matches(x, P, xm, Pm)[0]:
-                report.add(code, text="Case “{where}”: your update is {what}. {hint}",
-                           where=label, observed={"what": what, "hint": _HINTS[code]})
+                report.add(m.code, text="Case “{where}”: your update is {what}. {hint}",
+                           where=label, observed={"what": m.message, "hint": m.hint})
                 break
         else:
             report.add("update-mismatch", text="Case “{where}”: x̂ differs from the update "

@@ -83,6 +83,43 @@ def joseph_update(M: np.ndarray, K: np.ndarray, H: np.ndarray, V: np.ndarray) ->
     return A @ M @ _T(A) + K @ V @ _T(K)
 
 
+def partial_update(x_bar: np.ndarray, M: np.ndarray, z: np.ndarray, H: np.ndarray,
+                   V: np.ndarray, rows: np.ndarray, K: np.ndarray | None = None,
+                   zeroed: bool = False, short_form: bool = False
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(x̂, P, K): the update with the components ``rows`` of z that arrived; the only one.
+
+    x̄ (..., n) (one run or many sharing M), M (n, n), z (..., p), H (p, n), V (p, p).  The gain
+    K (n, p) has zero columns for the components that did not arrive:
+
+    * optimal (default): K_r = M H_rᵀ (H_r M H_rᵀ + V_r)⁻¹ with the rows r that arrived;
+    * ``zeroed``: the full gain M Hᵀ (H M Hᵀ + V)⁻¹ as if every component had arrived, its
+      columns of the missing ones set to zero (report 004's filter: near-optimal, not optimal);
+    * ``K`` given: that gain (e.g. another filter's).
+
+    x̂ = x̄ + K r with r = z − H x̄ on the rows that arrived and 0 elsewhere.  P is the Joseph form,
+    the covariance of any gain, or with ``short_form`` (I − K H) M, which holds for the optimal
+    gain only (the report's).  Nothing arrived: x̂ = x̄, P = M, K = 0 (in Joseph form).
+    """
+    rows = np.asarray(rows, dtype=int)
+    p, n = H.shape
+    if K is None:
+        K = np.zeros((n, p))
+        if rows.size and zeroed:
+            K[:, rows] = gain(M, H, V)[0][:, rows]          # (the solve keeps a non-symmetric M)
+        elif rows.size:
+            K[:, rows] = gain(M, H[rows], V[np.ix_(rows, rows)])[0]
+    r = np.zeros(np.shape(x_bar)[:-1] + (p,))
+    if np.ndim(x_bar) == 1:                                  # one run: matrix @ vector
+        r[rows] = z[rows] - H[rows] @ x_bar
+        x_hat = x_bar + K @ r
+    else:                                                    # runs in rows
+        r[..., rows] = z[..., rows] - x_bar @ H[rows].T
+        x_hat = x_bar + r @ K.T
+    P = (np.eye(n) - K @ H) @ M if short_form else joseph_update(M, K, H, V)
+    return x_hat, P, K
+
+
 def epoch_transition(Phi: np.ndarray, Q: np.ndarray, steps: int) -> tuple[np.ndarray, np.ndarray]:
     """(Φⁿ, Σ_{j<n} Φʲ Q Φʲᵀ): mean transition and process noise of n = ``steps`` fast steps.
 

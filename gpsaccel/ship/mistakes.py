@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gpsaccel.kalman.epochs import Mistake
-from gpsaccel.kalman.update import gain, joseph_update
+from gpsaccel.kalman.update import joseph_update, partial_update
 from gpsaccel.ship.model import ShipModel
 from gpsaccel.ship.plan import driving_input
 
@@ -72,6 +72,54 @@ class Variant:
 
     def __str__(self) -> str:
         return " + ".join(self.codes) or "optimal"
+
+
+#: The homework's question 1 (one update, :func:`update`): the mistakes it names, in the order
+#: tried; ``missing-as-zero`` is the homework's own (the checker's filter gets NaN rows, whose
+#: zero-filled use it names as a mismatch).
+UPDATE_CODES = ("zeroed-gain", "report-covariance", "missing-as-zero")
+
+#: code -> (what the update is, the hint) for the homework's one-update question.
+UPDATE_MESSAGES: dict[str, tuple[str, str]] = {
+    "zeroed-gain": ("the full gain M Hᵀ (H M Hᵀ + V)⁻¹ with the columns of the missing rows set "
+                    "to zero (report 004's BD(:,1,n) = 0)",
+                    "The kept columns of the full gain were computed as if the missing rows "
+                    "would also correct the estimate, so they under-weight what did arrive. Use "
+                    "only the rows r that arrived: K_r = M H_rᵀ (H_r M H_rᵀ + V_r)⁻¹."),
+    "report-covariance": ("report 004's zeroed gain with P = (I − K H) M",
+                          "Besides the zeroed gain (use K_r = M H_rᵀ (H_r M H_rᵀ + V_r)⁻¹ with "
+                          "the rows r that arrived), P = (I − K H) M holds only for the optimal "
+                          "gain: with any other it is not even symmetric. The Joseph form holds "
+                          "for every gain."),
+    "missing-as-zero": ("the missing rows used as measurements of 0",
+                        "A NaN means the row did not arrive: leave it out (H_r, V_r, z_r), do "
+                        "not replace it with 0."),
+}
+
+
+def update_catalogue() -> tuple[Mistake, ...]:
+    """The homework's one-update mistakes as catalogue entries: changes of :func:`update`'s
+    ingredients (the :class:`Variant` switches, plus ``missing_as_zero``)."""
+    changes = {"zeroed-gain": (("zeroed", True),),
+               "report-covariance": (("zeroed", True), ("report_covariance", True)),
+               "missing-as-zero": (("missing_as_zero", True),)}
+    return tuple(Mistake(code, UPDATE_MESSAGES[code][0], UPDATE_MESSAGES[code][0],
+                         changes[code], hint=UPDATE_MESSAGES[code][1]) for code in UPDATE_CODES)
+
+
+def update(x_bar: np.ndarray, M: np.ndarray, z: np.ndarray, H: np.ndarray, V: np.ndarray,
+           mistakes: tuple[Mistake, ...] = ()) -> tuple[np.ndarray, np.ndarray]:
+    """(x̂, P): one update with the rows of z that are finite (NaN = did not arrive), the
+    optimal one (:func:`gpsaccel.kalman.update.partial_update`) or the one making ``mistakes``."""
+    g = dict(c for m in mistakes for c in m.changes)
+    if g.get("missing_as_zero"):
+        z = np.nan_to_num(z, nan=0.0)
+    rows = np.flatnonzero(np.isfinite(z))
+    if rows.size == 0 and not g.get("zeroed"):
+        return x_bar.copy(), M.copy()
+    x, P, _ = partial_update(x_bar, M, z, H, V, rows, zeroed=bool(g.get("zeroed")),
+                             short_form=bool(g.get("report_covariance")))
+    return x, P
 
 
 def catalogue() -> tuple[Mistake, ...]:
@@ -135,7 +183,6 @@ def run(model: ShipModel, z: np.ndarray, u: np.ndarray | None = None,
     u = driving_input(model) if u is None else np.asarray(u, dtype=float)
     Phi, Q, H, V, B = model.Phi, model.Q, model.H, model.V, model.B
     n = Phi.shape[0]
-    I = np.eye(n)
     if variant.monorate_gain and mono_K is None:
         mono_K = monorate_gains(model)
     x = np.broadcast_to(model.x0, (R, n)).copy()
@@ -154,16 +201,10 @@ def run(model: ShipModel, z: np.ndarray, u: np.ndarray | None = None,
         rows = np.flatnonzero(avail[j])
         K = np.zeros((n, p))
         if rows.size:
-            if mono_K is not None and variant.monorate_gain and rows.size == p:
-                K = mono_K[j]
-            elif variant.zeroed:  # K = M Hᵀ S⁻¹ with all rows, then the missing ones zeroed
-                K[:, rows] = gain(C, H, V)[0][:, rows]   # (gain's solve keeps a non-symmetric M)
-            else:  # the rows that arrived: K = M H_aᵀ (H_a M H_aᵀ + V_aa)⁻¹
-                K[:, rows] = gain(C, H[rows], V[np.ix_(rows, rows)])[0]
-            r = np.zeros((R, p))
-            r[:, rows] = z[:, j, rows] - x @ H[rows].T
-            x = x + r @ K.T
-            C = (I - K @ H) @ C if variant.report_covariance else joseph_update(C, K, H, V)
+            given = mono_K[j] if mono_K is not None and variant.monorate_gain and \
+                rows.size == p else None
+            x, C, K = partial_update(x, C, z[:, j], H, V, rows, given, variant.zeroed,
+                                     variant.report_covariance)
             Ct = joseph_update(Ct, K, H, V)                 # the true covariance of any gain
         K_all[j] = K
         x_hat[:, j], P[j], P_true[j] = x, C, Ct

@@ -45,7 +45,7 @@ import numpy as np
 from gpsaccel import _validation as _v
 from gpsaccel.kalman.multirate import LinearGaussianModel, MultirateResult, check_inputs, run_multirate
 from gpsaccel.kalman.schedule import Schedule
-from gpsaccel.kalman.update import epoch_transition, gain, joseph_update
+from gpsaccel.kalman.update import epoch_transition, gain, joseph_update, partial_update
 
 COVARIANCES = ("joseph", "report")
 
@@ -110,18 +110,12 @@ class ZeroedGainUpdate:
         x, C = kf.x[:, 0], kf.P
         K_full, _ = gain(C, H, V)
         self.K_full.append(K_full)
-        K = np.zeros_like(K_full)
+        given = None
         if self.full_epoch_gains is not None and rows.size == p:
-            K = self.full_epoch_gains[i].copy()
-        else:
-            K[:, rows] = K_full[:, rows]
-        r = np.zeros(p)
-        r[rows] = z[rows] - H[rows] @ x
-        kf.x = (x + K @ r).reshape(-1, 1)
-        if self.covariance == "joseph":
-            kf.P = joseph_update(C, K, H, V)
-        else:
-            kf.P = (np.eye(C.shape[0]) - K @ H) @ C  # the report's short form, not symmetrised
+            given = self.full_epoch_gains[i].copy()
+        x, kf.P, K = partial_update(x, C, z, H, V, rows, given, zeroed=True,
+                                    short_form=self.covariance == "report")
+        kf.x = x.reshape(-1, 1)
         self.C_actual = joseph_update(self.C_actual, K, H, V)
         self.P_actual[i] = self.C_actual
         return K
