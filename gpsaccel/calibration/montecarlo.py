@@ -102,7 +102,8 @@ from gpsaccel.kalman.consistency import (
     z_sample_covariance,
     z_sample_mean,
 )
-from gpsaccel.kalman.update import CovarianceGuard, epoch_transition, gain, joseph_update
+from gpsaccel.kalman.epochs import gain_recursion
+from gpsaccel.kalman.update import CovarianceGuard, epoch_transition
 
 #: Runs per random block: one ``SeedSequence`` child each, and the largest array pass.
 BLOCK_RUNS = 1000
@@ -198,28 +199,22 @@ def plan(model: CalibrationModel, truth: str = "error-model", max_lag: int = DEF
         raise ValueError(f"full_residual_matrix must be True or False, got {full_residual_matrix!r}")
     H, V = model.H, model.V
     Phi_N, Q_N = gps_interval_noise(model)
-    M = np.empty((n, 3, 3))
-    K = np.empty((n, 3, 2))
-    P = np.empty((n, 3, 3))
-    S = np.empty((n, 2, 2))
+    # K = M Hᵀ S⁻¹ with S⁻¹ as filterpy forms it; P unsymmetrised (the Joseph form's own)
+    K, M, P, S = gain_recursion(Phi_N, Q_N, H, V, model.M0, n, inverse=True, symmetrise=False)
     X = np.empty((n, 3, 3))
     Xhat = np.empty((n, 3, 3))
-    Mi, Xi, Cbar = model.M0.copy(), model.M0.copy(), np.zeros((3, 3))
+    Xi, Cbar = model.M0.copy(), np.zeros((3, 3))
     for i in range(n):
         if i > 0:
-            Mi = Phi_N @ P[i - 1] @ Phi_N.T + Q_N
             Xi = Phi_N @ X[i - 1] @ Phi_N.T + Q_N
             Cbar = Phi_N @ Xhat[i - 1] @ Phi_N.T
-        M[i], X[i] = Mi, Xi
-        K[i], S[i] = gain(Mi, H, V, inverse=True)  # K = M Hᵀ S⁻¹, S⁻¹ as filterpy forms it
-        P[i] = joseph_update(Mi, K[i], H, V)
+        X[i] = Xi
         Xhat[i] = Cbar + K[i] @ S[i] @ K[i].T
     guard = CovarianceGuard(
         "monte_carlo", "The ensemble engine runs the covariance (Joseph) form; its statistics "
         "are measured against this P. Check the filter with run_multirate(..., "
         "method=\"information\") on this model (README: which form when).")
-    for i in range(n):
-        guard.check(i, float(model.t_gps[i]), M=M[i], P=P[i])
+    guard.check_stack(model.t_gps, M=M, P=P)
     guard.warn(stacklevel=4)
     LQ = np.zeros((3, 3))
     LQ[:2, :2] = np.linalg.cholesky(Q_N[:2, :2])  # Q_N has no bias part: Γ's third entry is 0

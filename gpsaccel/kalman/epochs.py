@@ -107,31 +107,44 @@ def batch_gains(filters: Sequence[EpochFilter]) -> tuple[np.ndarray, np.ndarray,
     (:func:`gpsaccel.kalman.update.joseph_update`) keeps P symmetric and positive definite even
     for badly scaled mistakes.
     """
-    C, n_gps = len(filters), filters[0].n_gps
-    F = np.stack([f.F for f in filters])
-    Qe = np.stack([f.Qe for f in filters])
-    H = np.stack([f.H for f in filters])
-    V = np.stack([f.V for f in filters])
-    M0 = np.stack([f.M0 for f in filters])
+    n_gps = filters[0].n_gps
     skip = {(i, kind): np.array([_skips(f, i, n_gps, kind) for f in filters])
             for i in {0, n_gps - 1} for kind in ("P", "x")}
-    n, p = F.shape[-1], H.shape[-2]
-    K = np.zeros((C, n_gps, n, p))
-    M = np.empty((C, n_gps, n, n))
-    P = np.empty((C, n_gps, n, n))
+    K, M, P, _ = gain_recursion(*(np.stack([getattr(f, a) for f in filters])
+                                  for a in ("F", "Qe", "H", "V", "M0")), n_gps, skip=skip)
+    return K, M, P
+
+
+def gain_recursion(F: np.ndarray, Qe: np.ndarray, H: np.ndarray, V: np.ndarray, M0: np.ndarray,
+                   n_gps: int, inverse: bool = False, symmetrise: bool = True,
+                   skip: dict | None = None
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(K, M, P, S) of the epoch recursion (module docstring) for n_gps epochs: the one loop.
+
+    The matrices may carry leading axes (a stack of filters, ``batch_gains``), or none (one
+    filter, the calibration ensemble's plan).  ``inverse``: S⁻¹ formed as filterpy does
+    (:func:`gpsaccel.kalman.update.gain`).  ``symmetrise``: P ← (P + Pᵀ)/2 after each update.
+    ``skip``: {(epoch, "P" or "x"): (C,) bool} the filters that skip that update at that epoch.
+    """
+    lead, (n, p) = F.shape[:-2], (F.shape[-1], H.shape[-2])
+    K = np.zeros(lead + (n_gps, n, p))
+    M = np.empty(lead + (n_gps, n, n))
+    P = np.empty(lead + (n_gps, n, n))
+    S = np.empty(lead + (n_gps, p, p))
     Ft = np.swapaxes(F, -1, -2)
+    skip = skip or {}
     for i in range(n_gps):
-        Mi = M0 if i == 0 else F @ P[:, i - 1] @ Ft + Qe      # M_i = F P_{i−1} Fᵀ + Q_e
-        M[:, i] = Mi
-        Ki, _ = gain(Mi, H, V)                                 # K_i = M Hᵀ (H M Hᵀ + V)⁻¹
+        Mi = M0 if i == 0 else F @ P[..., i - 1, :, :] @ Ft + Qe    # M_i = F P_{i−1} Fᵀ + Q_e
+        M[..., i, :, :] = Mi
+        Ki, S[..., i, :, :] = gain(Mi, H, V, inverse=inverse)    # K_i = M Hᵀ (H M Hᵀ + V)⁻¹
         Kp = Ki
         if (i, "P") in skip:
             Kp = np.where(skip[i, "P"][:, None, None], 0.0, Ki)   # P_i = M_i
             Ki = np.where(skip[i, "x"][:, None, None], 0.0, Ki)   # and x̂_i = x̄_i
         Pi = joseph_update(Mi, Kp, H, V)
-        K[:, i] = Ki
-        P[:, i] = (Pi + np.swapaxes(Pi, -1, -2)) / 2
-    return K, M, P
+        K[..., i, :, :] = Ki
+        P[..., i, :, :] = (Pi + np.swapaxes(Pi, -1, -2)) / 2 if symmetrise else Pi
+    return K, M, P, S
 
 
 def _skips(f: EpochFilter, i: int, n_gps: int, kind: str) -> bool:

@@ -196,6 +196,23 @@ def covariance_defect(A: np.ndarray) -> str | None:
     return None
 
 
+def _sound_stack(A: np.ndarray) -> bool:
+    """True if every matrix of A (..., n, n) passes :func:`covariance_defect` (vectorised)."""
+    if not np.all(np.isfinite(A)):
+        return False
+    d = np.diagonal(A, axis1=-2, axis2=-1)
+    if np.any(d <= 0.0):
+        return False
+    At = np.swapaxes(A, -1, -2)
+    if np.max(np.abs(A - At) / np.sqrt(d[..., :, None] * d[..., None, :])) > SYMMETRY_RTOL:
+        return False
+    try:
+        np.linalg.cholesky((A + At) / 2)
+    except np.linalg.LinAlgError:
+        return False
+    return True
+
+
 class CovarianceGuard:
     """Checks a run's covariances epoch by epoch; :meth:`warn` reports the first failure once.
 
@@ -224,6 +241,15 @@ class CovarianceGuard:
                     self.first = (i, t, name, defect)
                 return False
         return True
+
+    def check_stack(self, t: np.ndarray, **stacks: np.ndarray) -> None:
+        """:meth:`check` for every epoch i of stacks (n_epochs, n, n) at times ``t``, the sound
+        case decided at once over the whole stack (the epoch-by-epoch walk only when it fails)."""
+        if all(_sound_stack(A) for A in stacks.values()):
+            self.epochs += len(t)
+            return
+        for i in range(len(t)):
+            self.check(i, float(t[i]), **{name: A[i] for name, A in stacks.items()})
 
     def warn(self, stacklevel: int = 3) -> None:
         """One :class:`NumericalWarning` if any epoch failed (none otherwise)."""
