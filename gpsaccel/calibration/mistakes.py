@@ -45,6 +45,7 @@ from gpsaccel.kalman.epochs import (  # noqa: F401 - the recursion and the entry
     batch_gains,
     combinations,
     predict_before_first_update,
+    state_orders,
     with_changes,
 )
 
@@ -57,9 +58,10 @@ class Ingredients:
     gamma_dt, W : one-step process noise Q = Γ(gamma_dt) W Γ(gamma_dt)ᵀ.
     steps : one-step predictions between GPS updates (40; 1 when stepping over the GPS interval).
     H, V, M0, x0 : measurement matrix, GPS noise, prior covariance and mean.
+    sign23 : Φ₂₃ = sign23·phi_dt.
     mean_propagated : False is the mean-not-propagated mistake (x̄_k = x̂_{k−1}).
-    output, skip_first : see :class:`EpochFilter`; predict_first : see
-    :class:`~gpsaccel.kalman.epochs.LinearIngredients`.
+    output, skip_first : see :class:`EpochFilter`; predict_first, update_P, update_every_step :
+    see :class:`~gpsaccel.kalman.epochs.LinearIngredients`.
     """
 
     phi_dt: float
@@ -76,6 +78,9 @@ class Ingredients:
     output: str = "posterior"
     skip_first: bool | str = False
     predict_first: bool = False
+    sign23: float = -1.0
+    update_P: bool = True
+    update_every_step: bool = False
 
     @classmethod
     def correct(cls, model: CalibrationModel) -> Ingredients:
@@ -85,11 +90,12 @@ class Ingredients:
     def epoch_filter(self) -> EpochFilter:
         """The generic ingredients (:class:`gpsaccel.kalman.epochs.LinearIngredients`) of
         Φ(phi_dt) with its Φ₁₃ sign, Γ(gamma_dt) and W: the one epoch recursion of the core."""
-        return LinearIngredients(phi(self.phi_dt, self.sign13), gamma(self.gamma_dt),
-                                 np.array([[self.W]]), self.steps, self.H, self.V, self.M0,
-                                 self.x0, self.n_gps, self.mean_propagated, self.output,
-                                 self.skip_first,
-                                 predict_first=self.predict_first).epoch_filter()
+        return LinearIngredients(phi(self.phi_dt, self.sign13, self.sign23),
+                                 gamma(self.gamma_dt), np.array([[self.W]]), self.steps, self.H,
+                                 self.V, self.M0, self.x0, self.n_gps, self.mean_propagated,
+                                 self.output, self.skip_first, predict_first=self.predict_first,
+                                 update_P=self.update_P,
+                                 update_every_step=self.update_every_step).epoch_filter()
 
     def with_changes(self, changes: tuple[tuple, ...]) -> Ingredients:
         """Apply ``(field, value)`` or ``(field, (row, col), value)`` changes (see :class:`Mistake`)."""
@@ -149,6 +155,21 @@ MESSAGES: dict[str, str] = {
                        "report 003 mixes them up the same way.",
     "std-as-variance.sigma": "a standard deviation used where a variance belongs",
     "std-as-variance.squared": "a variance squared again, as if it were a standard deviation",
+    "covariance-update-skipped.never": "Your P is never updated: at every GPS time it is the a "
+                                       "priori M, though your x̂ is updated with the gain "
+                                       "K = M Hᵀ (H M Hᵀ + V)⁻¹ (so its σ only grows). The "
+                                       "update of P is missing after each GPS update: "
+                                       "P = (I − K H) M (I − K H)ᵀ + K V Kᵀ.",
+    "update-every-step": "Your filter updates at every accelerometer step ({n} per GPS "
+                         "interval), reusing the last GPS fix between fixes; the GPS reports at "
+                         "{gps_hz:g} Hz, so only the steps with a new fix update (the others "
+                         "only propagate).",
+    "phi-sign.both": "Φ₁₃ and Φ₂₃ both have the wrong sign: the bias enters as if the "
+                     "accelerometer read a − b. It reads a + b, so the integrated solution runs "
+                     "ahead by the bias: −Δt²/2 in position and −Δt in velocity.",
+    "state-order": "Your H is written for the state order [{order}]; the state is [δp, δv, b] "
+                   "(Φ, M0 and your outputs follow it), so your H takes the GPS position for "
+                   "{wrong}. Write H's columns in the state's order.",
 }
 
 
@@ -189,6 +210,31 @@ def _model_mistakes(model: CalibrationModel, f: dict[str, float]) -> tuple[Mista
     out.insert(5, predict_before_first_update(LINEAR_MESSAGES["predict-before-first-update"]
                                               .format(measurement="GPS fix", every=f["n"],
                                                       step="accelerometer step")))
+    return tuple(out) + _structural_mistakes(model, f)
+
+
+def _structural_mistakes(model: CalibrationModel, f: dict[str, float]) -> tuple[Mistake, ...]:
+    """The generic catalogue's structural entries (:func:`gpsaccel.kalman.epochs
+    .structural_mistakes`: P never updated, an update at every step, H for another state order)
+    on this model, in its wording; Φ's sign as its own ``sign13``/``sign23`` ingredients."""
+    names = ("δp", "δv", "b")
+    out = [Mistake("covariance-update-skipped", "P never updated",
+                   MESSAGES["covariance-update-skipped.never"], (("update_P", False),)),
+           Mistake("update-every-step", "updated at every accelerometer step",
+                   MESSAGES["update-every-step"].format(**f), (("update_every_step", True),),
+                   alone=True),
+           Mistake("phi-sign", "Φ₁₃ = +Δt²/2 and Φ₂₃ = +Δt", MESSAGES["phi-sign.both"],
+                   (("sign13", 1.0), ("sign23", 1.0)))]
+    H = np.asarray(model.H, dtype=float)
+    for order in state_orders(3):
+        used = H[:, list(order)]
+        if np.array_equal(used, H):
+            continue
+        wrong = names[int(np.argmax(used[0]))]
+        out.append(Mistake("state-order", f"H for [{', '.join(names[i] for i in order)}]",
+                           MESSAGES["state-order"].format(
+                               order=", ".join(names[i] for i in order), wrong=wrong),
+                           (("H", used),)))
     return tuple(out)
 
 

@@ -67,16 +67,17 @@ STATE_NAMES = ("δp", "δv", "b")
 STATE_UNITS = ("m", "m/s", "m/s²")
 
 
-def phi(dt: float, sign13: float = -1.0) -> np.ndarray:
+def phi(dt: float, sign13: float = -1.0, sign23: float = -1.0) -> np.ndarray:
     """Transition Φ(Δt) of [δp, δv, b] over Δt (s)::
 
         Φ(Δt) = [[1, Δt, −Δt²/2],
                  [0, 1,  −Δt   ],
                  [0, 0,   1    ]]
 
-    ``sign13=+1`` writes Φ₁₃ = +Δt²/2, report 001's slip (the checker's ``phi-sign``).
+    ``sign13=+1`` writes Φ₁₃ = +Δt²/2, report 001's slip (the checker's ``phi-sign``);
+    ``sign23=+1`` writes Φ₂₃ = +Δt (with both, the bias enters as if the accelerometer read a − b).
     """
-    return np.array([[1.0, dt, sign13 * dt**2 / 2], [0.0, 1.0, -dt], [0.0, 0.0, 1.0]])
+    return np.array([[1.0, dt, sign13 * dt**2 / 2], [0.0, 1.0, sign23 * dt], [0.0, 0.0, 1.0]])
 
 
 def gamma(dt: float) -> np.ndarray:

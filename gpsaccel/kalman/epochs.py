@@ -52,6 +52,11 @@ class EpochFilter:
     output : ``"posterior"`` returns (x̂, P); ``"prior"`` returns (x̄, M) (returns-a-priori).
     skip_first, skip_last : True skips the update at the first (last) epoch; ``"covariance"``
         updates the mean there but leaves P = M (so every later gain follows the skipped P).
+    update_P : False never updates P (P_i = M_i at every epoch; the gains K_i = M_i Hᵀ S⁻¹ still
+        update the mean): covariance-update-skipped everywhere.
+    fast : None, or (Φ, Q, n) of one propagation step when the filter updates at *every* step
+        (n per epoch interval) with the last measurement it has, z_{i−1}, until z_i arrives
+        (update-every-step); A, F, Qe are then unused between epochs.
     """
 
     A: np.ndarray
@@ -65,12 +70,37 @@ class EpochFilter:
     output: str = "posterior"
     skip_first: bool | str = False
     skip_last: bool | str = False
+    update_P: bool = True
+    fast: tuple | None = None
 
     @cached_property
     def gains(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(K, M, P): gains (n_gps, n, p), a priori and a posteriori covariances (n_gps, n, n)."""
         K, M, P = batch_gains([self])
         return K[0], M[0], P[0]
+
+    @cached_property
+    def fast_gains(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(K, M, P, K_between) of a filter that updates at every step (``fast``): the epochs'
+        K, M, P as :attr:`gains`, and K_between (n_gps, n − 1, n, p) the gains of the updates
+        between epoch i − 1 and epoch i (row 0 unused)."""
+        Phi, Q, steps = self.fast
+        n_gps, (p, n) = self.n_gps, self.H.shape
+        K, M, P = np.zeros((n_gps, n, p)), np.empty((n_gps, n, n)), np.empty((n_gps, n, n))
+        Kb = np.zeros((n_gps, max(steps - 1, 0), n, p))
+        C = self.M0
+        for i in range(n_gps):
+            for s in range(steps if i else 0):
+                C = Phi @ C @ Phi.T + Q                          # one step: M = Φ P Φᵀ + Q
+                if s < steps - 1:                                # an update with z_{i−1}
+                    Kb[i, s] = gain(C, self.H, self.V)[0]
+                    C = joseph_update(C, Kb[i, s], self.H, self.V)
+            M[i] = C
+            K[i] = gain(C, self.H, self.V)[0]
+            C = joseph_update(C, K[i], self.H, self.V)
+            P[i] = (C + C.T) / 2
+            C = P[i]
+        return K, M, P, Kb
 
     @property
     def P_out(self) -> np.ndarray:
@@ -89,8 +119,11 @@ class EpochFilter:
         x_bar = np.empty((n_runs, self.n_gps, n))
         x_hat = np.empty_like(x_bar)
         xb = np.broadcast_to(np.asarray(self.x0, dtype=float), (n_runs, n))
+        Kb = self.fast_gains[3] if self.fast is not None else None
         for i in range(self.n_gps):
-            if i:
+            if i and Kb is not None:
+                xb = self._between(x_hat[:, i - 1], z[:, i - 1], Kb[i])
+            elif i:
                 xb = x_hat[:, i - 1] @ self.A.T
             x_bar[:, i] = xb
             r = z[:, i] - xb @ self.H.T                       # r_i = z_i − H x̄_i
@@ -98,6 +131,14 @@ class EpochFilter:
         if self.output == "prior":
             return x_bar, M
         return x_hat, P
+
+    def _between(self, x: np.ndarray, z: np.ndarray, Kb: np.ndarray) -> np.ndarray:
+        """x̄_i of a filter that updates at every step with z_{i−1} (``fast``), from x̂_{i−1}."""
+        Phi = self.fast[0]
+        for K in Kb:
+            x = x @ Phi.T
+            x = x + (z - x @ self.H.T) @ K.T
+        return x @ Phi.T
 
 
 def batch_gains(filters: Sequence[EpochFilter]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -110,14 +151,19 @@ def batch_gains(filters: Sequence[EpochFilter]) -> tuple[np.ndarray, np.ndarray,
     n_gps = filters[0].n_gps
     skip = {(i, kind): np.array([_skips(f, i, n_gps, kind) for f in filters])
             for i in {0, n_gps - 1} for kind in ("P", "x")}
+    hold = np.array([not f.update_P for f in filters])
     K, M, P, _ = gain_recursion(*(np.stack([getattr(f, a) for f in filters])
-                                  for a in ("F", "Qe", "H", "V", "M0")), n_gps, skip=skip)
+                                  for a in ("F", "Qe", "H", "V", "M0")), n_gps, skip=skip,
+                                hold=hold if hold.any() else None)
+    for c, f in enumerate(filters):
+        if f.fast is not None:                        # updates between the epochs: its own loop
+            K[c], M[c], P[c] = f.fast_gains[:3]
     return K, M, P
 
 
 def gain_recursion(F: np.ndarray, Qe: np.ndarray, H: np.ndarray, V: np.ndarray, M0: np.ndarray,
                    n_gps: int, inverse: bool = False, symmetrise: bool = True,
-                   skip: dict | None = None
+                   skip: dict | None = None, hold: np.ndarray | None = None
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(K, M, P, S) of the epoch recursion (module docstring) for n_gps epochs: the one loop.
 
@@ -125,6 +171,7 @@ def gain_recursion(F: np.ndarray, Qe: np.ndarray, H: np.ndarray, V: np.ndarray, 
     filter, the calibration ensemble's plan).  ``inverse``: S⁻¹ formed as filterpy does
     (:func:`gpsaccel.kalman.update.gain`).  ``symmetrise``: P ← (P + Pᵀ)/2 after each update.
     ``skip``: {(epoch, "P" or "x"): (C,) bool} the filters that skip that update at that epoch.
+    ``hold``: (C,) bool, the filters whose P is never updated (P_i = M_i at every epoch).
     """
     lead, (n, p) = F.shape[:-2], (F.shape[-1], H.shape[-2])
     K = np.zeros(lead + (n_gps, n, p))
@@ -141,6 +188,8 @@ def gain_recursion(F: np.ndarray, Qe: np.ndarray, H: np.ndarray, V: np.ndarray, 
         if (i, "P") in skip:
             Kp = np.where(skip[i, "P"][:, None, None], 0.0, Ki)   # P_i = M_i
             Ki = np.where(skip[i, "x"][:, None, None], 0.0, Ki)   # and x̂_i = x̄_i
+        if hold is not None:
+            Kp = np.where(hold[:, None, None], 0.0, Kp)          # P never updated
         Pi = joseph_update(Mi, Kp, H, V)
         K[..., i, :, :] = Ki
         P[..., i, :, :] = (Pi + np.swapaxes(Pi, -1, -2)) / 2 if symmetrise else Pi
@@ -163,6 +212,8 @@ class Mistake:
     message : what is wrong, what it should be and the likely cause, for the student.
     changes : the ingredients it changes, ``(field, value)`` or ``(field, (row, col), value)``.
     hint : where to look, said only when the evidence is this mistake (may be empty).
+    alone : True for an entry matched only on its own, never combined with others (its filter
+        has its own loop: update-every-step).
 
     Every system's catalogue (calibration, ship, coop, any linear model) is a tuple of these:
     the checker, the lessons and the homework read the same entries.
@@ -173,6 +224,7 @@ class Mistake:
     message: str
     changes: tuple[tuple, ...]
     hint: str = ""
+    alone: bool = False
 
     @property
     def touches(self) -> frozenset:
@@ -186,6 +238,8 @@ class Mistake:
 def combinations(mistakes: Sequence[Mistake], size: int) -> Iterator[tuple[Mistake, ...]]:
     """All ``size``-tuples of ``mistakes`` that touch disjoint ingredients (so they can co-occur)."""
     for combo in itertools.combinations(mistakes, size):
+        if size > 1 and any(m.alone for m in combo):
+            continue
         touched = [m.touches for m in combo]
         if all(a.isdisjoint(b) for a, b in itertools.combinations(touched, 2)):
             yield combo
@@ -363,6 +417,8 @@ class LinearIngredients:
     skip_first: bool | str = False
     skip_last: bool | str = False
     predict_first: bool = False
+    update_P: bool = True
+    update_every_step: bool = False
 
     @classmethod
     def correct(cls, model: LinearModel) -> LinearIngredients:
@@ -376,8 +432,9 @@ class LinearIngredients:
         x0, M0 = self.x0, self.M0
         if self.predict_first:                                 # one propagation before z_0:
             x0, M0 = A @ x0, F @ M0 @ F.T + Qe                 # x̄_0 = A x0, M_0 = F M0 Fᵀ + Q_e
+        fast = (self.Phi, Q, self.steps) if self.update_every_step else None
         return EpochFilter(A, F, Qe, self.H, self.V, x0, M0, self.n_epochs,
-                           self.output, self.skip_first, self.skip_last)
+                           self.output, self.skip_first, self.skip_last, self.update_P, fast)
 
 
 #: The generic catalogue's wording: code -> message template (fields named in each).
@@ -422,7 +479,94 @@ LINEAR_MESSAGES: dict[str, str] = {
     "mean-not-propagated": "Your covariance is propagated between measurements but your "
                            "estimate is not: the residual uses x̂ₖ₋₁ where it should use "
                            "x̄ₖ = Φ^{every} x̂ₖ₋₁.",
+    "covariance-update-skipped.never": "Your P is never updated: at every epoch it is the a "
+                                       "priori M, though your x̂ is updated with the gain "
+                                       "K = M Hᵀ (H M Hᵀ + V)⁻¹. The update of P is missing: "
+                                       "P = (I − K H) M (I − K H)ᵀ + K V Kᵀ after each update "
+                                       "of x̂.",
+    "update-every-step": "Your filter updates at every {step} ({every} per measurement "
+                         "interval), reusing the last measurement between arrivals; a "
+                         "measurement arrives every {interval:g} s, so only those {step}s "
+                         "update (the others only propagate).",
+    "phi-sign": "Your Φ has {entries} with the wrong sign; the propagation is otherwise right. "
+                "Check how each state enters the others.",
+    "state-order": "Your H is written for the state order [{order}]; the problem's state is "
+                   "[{states}], and Φ, M0 and your outputs follow it. Write H's columns in the "
+                   "problem's order.",
 }
+
+_SUB = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
+
+
+def phi_sign_variants(Phi: np.ndarray) -> list[tuple[str, np.ndarray]]:
+    """(variant, Φ with signs flipped): each off-diagonal entry alone, and every off-diagonal
+    entry of a column that has several (one state entering the others with the wrong sign)."""
+    Phi = np.asarray(Phi, dtype=float)
+    n = Phi.shape[0]
+    out = []
+    for a, b in itertools.product(range(n), repeat=2):
+        if a != b and Phi[a, b] != 0.0:
+            flipped = Phi.copy()
+            flipped[a, b] = -Phi[a, b]
+            out.append((f"Φ{a + 1}{b + 1}".translate(_SUB), flipped))
+    for b in range(n):
+        rows = [a for a in range(n) if a != b and Phi[a, b] != 0.0]
+        if len(rows) > 1:
+            flipped = Phi.copy()
+            flipped[rows, b] = -Phi[rows, b]
+            out.append((" and ".join(f"Φ{a + 1}{b + 1}".translate(_SUB) for a in rows), flipped))
+    off = [(a, b) for a, b in itertools.product(range(n), repeat=2) if a != b and Phi[a, b] != 0]
+    if len(off) > 1 and all(np.count_nonzero(Phi[:, b]) <= 2 for _, b in off):
+        # every coupling flipped (e.g. −Δt in x and in y), unless a column variant covers it
+        flipped = Phi.copy()
+        for a, b in off:
+            flipped[a, b] = -Phi[a, b]
+        out.append((" and ".join(f"Φ{a + 1}{b + 1}".translate(_SUB) for a, b in off), flipped))
+    return out
+
+
+def state_orders(n: int) -> list[tuple[int, ...]]:
+    """Other orders a student may write the state in: the interleaved and blocked orders of
+    pairs ([x, vx, y, vy] ↔ [x, y, vx, vy]) for an even n ≥ 4, else neighbours swapped."""
+    if n >= 4 and n % 2 == 0:
+        k = n // 2
+        blocked = tuple(range(0, n, 2)) + tuple(range(1, n, 2))
+        interleaved = tuple(i for pair in zip(range(k), range(k, n), strict=True)
+                            for i in pair)
+        return [blocked, interleaved]
+    return [tuple(list(range(a)) + [a + 1, a] + list(range(a + 2, n))) for a in range(n - 1)]
+
+
+def structural_mistakes(Phi: np.ndarray, H: np.ndarray, states: Sequence[str], every: int,
+                        text, step: str = "propagation step", dt: float = 1.0
+                        ) -> list[Mistake]:
+    """The entries every linear filter can get wrong in its structure: P never updated, an
+    update at every step, Φ's signs, H for another state order.  ``text(key, **fields)`` words
+    them (a system's own wording or :data:`LINEAR_MESSAGES`); Φ and H are changed as ``Phi``
+    and ``H`` ingredients."""
+    out = [Mistake("covariance-update-skipped", "P never updated",
+                   text("covariance-update-skipped.never"), (("update_P", False),))]
+    if every > 1:
+        out.append(Mistake("update-every-step", f"updated at every {step}",
+                           text("update-every-step", step=step, every=every,
+                                interval=every * dt), (("update_every_step", True),),
+                           alone=True))
+    for variant, flipped in phi_sign_variants(Phi):
+        n_flip = variant.count("Φ")
+        entries = variant if n_flip == 1 else f"{n_flip} entries ({variant})"
+        out.append(Mistake("phi-sign", f"{variant} sign flipped", text("phi-sign",
+                                                                       entries=entries),
+                           (("Phi", flipped),)))
+    H = np.asarray(H, dtype=float)
+    for order in state_orders(H.shape[1]):
+        used = H[:, list(order)]
+        if np.array_equal(used, H):
+            continue  # H does not see the difference
+        names = ", ".join(states[i] for i in order)
+        out.append(Mistake("state-order", f"H for [{names}]",
+                           text("state-order", order=names, states=", ".join(states)),
+                           (("H", used),)))
+    return out
 
 
 def predict_before_first_update(message: str) -> Mistake:
@@ -487,6 +631,7 @@ class LinearCatalogue:
                                self._text("missing-propagation", steps=steps, every=m.every,
                                           dt=m.dt, interval=m.every * m.dt),
                                (("steps", steps),)))
+        out += structural_mistakes(m.Phi, m.H, m.states, m.every, self._text, dt=m.dt)
         return tuple(out)
 
     def _std_as_variance(self) -> list[Mistake]:

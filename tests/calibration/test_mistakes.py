@@ -44,6 +44,14 @@ class _PlusPhi(CalibrationModel):
         return cat.phi(self.dt, +1.0)
 
 
+class _PlusBoth(CalibrationModel):
+    """Φ₁₃ = +Δt²/2 and Φ₂₃ = +Δt (the bias as if the accelerometer read a − b)."""
+
+    @property
+    def Phi(self):
+        return cat.phi(self.dt, +1.0, +1.0)
+
+
 class _TotalX0(CalibrationModel):
     @property
     def x0(self):
@@ -54,7 +62,7 @@ def _model_for(mistake: cat.Mistake) -> CalibrationModel | None:
     """The same mistake expressed as a CalibrationModel, where the model can express it."""
     c = mistake.changes
     if mistake.code == "phi-sign":
-        return _PlusPhi()
+        return _PlusBoth() if ("sign23", 1.0) in c else _PlusPhi()
     if mistake.code == "x0-total-state":
         return _TotalX0()
     if mistake.code in ("m0-order", "std-as-variance", "w-value"):

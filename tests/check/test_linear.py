@@ -74,7 +74,8 @@ def test_the_catalogue_has_every_generic_code():
     codes = set(TRACKER.codes())
     recognised = {"update-skipped", "mean-update-skipped", "epoch-shift", "p-scaled",
                   "low-precision"}  # recognised in what is returned, before the catalogue
-    assert codes | recognised == set(GENERIC)
+    gaps = {"update-every-step", "phi-sign", "state-order"}  # tests/check/test_catalogue_gaps.py
+    assert codes | recognised == set(GENERIC) | gaps
 
 
 def test_a_problem_is_registered_where_it_is_defined():
