@@ -475,36 +475,48 @@ class CoopProblem(Problem):
                                  "mod": " (the headings modulo 2π)"
                                  if heading > np.pi + 1e-6 else ""})
         else:
-            cands = []
-            for m in cm.catalogue(self.model, kind):
-                if m.code in ("no-state-wrap", "p-not-symmetric") or not m.checker:
-                    continue
-                o = self._reference(cases, kind, (m,))
-                cands.append((m, o.x_hat, o.P))
-            found = _nearest(cands, x, P, ref.x_hat, ref.P, tol_x, tol_P,
-                              cm.wrapped_difference)
-            if found and found[1] <= 1.0:
-                m = found[0]
-                mistake_finding(report, m, f"{fname}: ")
-                report.details[kind]["matched"] = {"code": m.code, "variant": m.variant}
-            else:
-                where, full = _first_departure(dx, dP, tol_x, tol_P, t, states, list(cases.labels),
-                                         x, ref.x_hat, sd)
-                hint = ""
-                if found and found[1] <= 10.0:
-                    hint = (f" The nearest known mistake is {found[0]}, within "
-                            f"{found[1]:.2g}× the tolerance of your output; look there first.")
-                else:
-                    hint = " No catalogued mistake matches."
-                report.add("filter-mismatch", text="{fname}: your x̂, P differ from the "
-                           "reference {kind} given the same Q and R (by up to {dx:.3g} σ in x̂ "
-                           "and {dP:.3g} σσ in P).{hint} {where}.", where=where, observed={
-                               "fname": fname, "kind": kind.upper(), "dx": float(dx.max()),
-                               "dP": float(dP.max()), "hint": hint},
-                           message=f"{fname}: your x̂, P differ from the reference {kind.upper()} "
-                           f"(by up to {dx.max():.3g} σ in x̂ and {dP.max():.3g} σσ in P).{hint} "
-                           f"{full}.")
+            where = _first_departure(dx, dP, tol_x, tol_P, t, states, list(cases.labels),
+                                     x, ref.x_hat, sd)
+            self._match_catalogue(report, cases, kind, x, P, ref, (dx, dP), where)
         self._consistency(report, cases, kind, x, P)
+
+    def _match_catalogue(self, report: Report, cases: CoopCases, kind: str, x: np.ndarray,
+                         P: np.ndarray, ref, dist: tuple[np.ndarray, np.ndarray],
+                         where: tuple[str, str]) -> None:
+        """A failing filter against each catalogue entry: its code, or a mismatch with the
+        nearest entry as a hint when it is within 10× the tolerance.  ``where``: the first
+        departure, the student's account and the instructor's (:func:`_first_departure`)."""
+        from gpsaccel.coop import mistakes as cm
+
+        fname = kind
+        tol_x, tol_P = self.TOL[kind]
+        cands = []
+        for m in cm.catalogue(self.model, kind):
+            if m.code in ("no-state-wrap", "p-not-symmetric") or not m.checker:
+                continue
+            o = self._reference(cases, kind, (m,))
+            cands.append((m, o.x_hat, o.P))
+        found = _nearest(cands, x, P, ref.x_hat, ref.P, tol_x, tol_P, cm.wrapped_difference)
+        if found and found[1] <= 1.0:
+            m = found[0]
+            mistake_finding(report, m, f"{fname}: ")
+            report.details[kind]["matched"] = {"code": m.code, "variant": m.variant}
+            return
+        if found and found[1] <= 10.0:
+            hint = (f" The nearest known mistake is {found[0]}, within "
+                    f"{found[1]:.2g}× the tolerance of your output; look there first.")
+        else:
+            hint = " No catalogued mistake matches."
+        dx, dP = dist
+        student, full = where
+        report.add("filter-mismatch", text="{fname}: your x̂, P differ from the "
+                   "reference {kind} given the same Q and R (by up to {dx:.3g} σ in x̂ "
+                   "and {dP:.3g} σσ in P).{hint} {where}.", where=student, observed={
+                       "fname": fname, "kind": kind.upper(), "dx": float(dx.max()),
+                       "dP": float(dP.max()), "hint": hint},
+                   message=f"{fname}: your x̂, P differ from the reference {kind.upper()} "
+                   f"(by up to {dx.max():.3g} σ in x̂ and {dP.max():.3g} σσ in P).{hint} "
+                   f"{full}.")
 
     def _consistency(self, report: Report, cases: CoopCases, kind: str, x: np.ndarray,
                      P: np.ndarray) -> None:
