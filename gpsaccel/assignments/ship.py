@@ -125,7 +125,8 @@ def update_answer(update: object, seed: int = 0) -> Report:
         if ok:
             continue
         for m in update_mistakes():
-            xm, Pm = ship_update(*args, (m,))
+            x_bar, M, z, H, V = args
+            xm, Pm = ship_update(x_bar, M, z, H, V, (m,))
             if _matches(x, P, xm, Pm)[0]:
                 report.add(m.code, text="Case “{where}”: your update is {what}. {hint}",
                            where=label, observed={"what": m.message, "hint": m.hint})

@@ -36,7 +36,9 @@ documented there); ``R`` defaults to Rtrue; x̂_0 = x0 and P_0 = P0 of the model
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -207,7 +209,7 @@ def _add_gain(x: np.ndarray, K: np.ndarray, r: np.ndarray) -> np.ndarray:
     return x + np.einsum("nij,nj->ni", K, r)
 
 
-def _check(model: CoopModel, y: object, Q: object, R: object, x0: object, P0: object,
+def _check(model: CoopModel, y: object, Q: Any, R: object, x0: object, P0: object,
            method: str, batch: bool = False):
     if not isinstance(model, CoopModel):
         raise ValueError(f"model must be a CoopModel, got {type(model).__name__}")
@@ -273,7 +275,7 @@ class _Linearised:
         self.model, self.g, self.lkf = model, g, kind == "lkf"
         if nominal is None and (self.lkf or "nominal" in (g.F_point, g.H_point)):
             nominal = euler_nominal(model) if g.propagation == "euler" else model.nominal()
-        self.xn = nominal
+        self.xn: np.ndarray = np.empty((0, N_STATES)) if nominal is None else nominal
         self.I = np.eye(N_STATES)
         if self.lkf:  # linearised once, about x*: F_k, H_k, h(x*_k) for every step
             xn = np.asarray(nominal)
@@ -315,7 +317,8 @@ class _Linearised:
             F = self.F_of(model.A(self.xn[k]))
         return x, F @ P @ _tr(F) + Q
 
-    def _observe(self, j: int, s: np.ndarray, runs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _observe(self, j: int, s: np.ndarray, runs
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """(H, ŷ wrapped, ŷ as computed) at step j for the runs ``runs`` of the filter's state."""
         if self.lkf:
             H = self.Hs[j]
@@ -333,6 +336,7 @@ class _Linearised:
         if g.wrap_residual == "yes":
             r = measurement_residual(y, yhat)
         else:
+            assert yraw is not None or g.wrap_residual == "difference"
             r = y - (yhat if g.wrap_residual == "difference" else yraw)
         if not m.all():
             H, r, R = H[..., m, :], r[:, m], R[np.ix_(m, m)]
@@ -530,7 +534,8 @@ def run_ukf(model: CoopModel, y: np.ndarray, Q: np.ndarray | None = None,
     return _one("ukf", model, y, Q, R, x0, P0, alpha=alpha, beta=beta, kappa=kappa)
 
 
-RUNNERS = {"lkf": run_lkf, "ekf": run_ekf, "ukf": run_ukf}
+RUNNERS: dict[str, Callable[..., FilterResult]] = {"lkf": run_lkf, "ekf": run_ekf,
+                                                    "ukf": run_ukf}
 
 
 def run_filter(method: str, model: CoopModel, y: np.ndarray, Q: np.ndarray | None = None,

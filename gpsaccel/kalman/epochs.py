@@ -84,6 +84,7 @@ class EpochFilter:
         """(K, M, P, K_between) of a filter that updates at every step (``fast``): the epochs'
         K, M, P as :attr:`gains`, and K_between (n_gps, n − 1, n, p) the gains of the updates
         between epoch i − 1 and epoch i (row 0 unused)."""
+        assert self.fast is not None, "fast_gains is for a filter that updates at every step"
         Phi, Q, steps = self.fast
         n_gps, (p, n) = self.n_gps, self.H.shape
         K, M, P = np.zeros((n_gps, n, p)), np.empty((n_gps, n, n)), np.empty((n_gps, n, n))
@@ -134,6 +135,7 @@ class EpochFilter:
 
     def _between(self, x: np.ndarray, z: np.ndarray, Kb: np.ndarray) -> np.ndarray:
         """x̄_i of a filter that updates at every step with z_{i−1} (``fast``), from x̂_{i−1}."""
+        assert self.fast is not None
         Phi = self.fast[0]
         for K in Kb:
             x = x @ Phi.T
@@ -152,8 +154,9 @@ def batch_gains(filters: Sequence[EpochFilter]) -> tuple[np.ndarray, np.ndarray,
     skip = {(i, kind): np.array([_skips(f, i, n_gps, kind) for f in filters])
             for i in {0, n_gps - 1} for kind in ("P", "x")}
     hold = np.array([not f.update_P for f in filters])
-    K, M, P, _ = gain_recursion(*(np.stack([getattr(f, a) for f in filters])
-                                  for a in ("F", "Qe", "H", "V", "M0")), n_gps, skip=skip,
+    F, Qe, H, V, M0 = (np.stack([getattr(f, a) for f in filters])
+                       for a in ("F", "Qe", "H", "V", "M0"))
+    K, M, P, _ = gain_recursion(F, Qe, H, V, M0, n_gps, skip=skip,
                                 hold=hold if hold.any() else None)
     for c, f in enumerate(filters):
         if f.fast is not None:                        # updates between the epochs: its own loop
