@@ -106,6 +106,60 @@ def _at_states(report: Report, fn: object, X: np.ndarray, U: np.ndarray, what: s
     return np.stack(out)
 
 
+def _student_matrices(report: Report, func: object, X: np.ndarray, U: np.ndarray,
+                      dt: float) -> dict[str, np.ndarray] | None:
+    """The student's F, G, H stacked over the states (None once a call or a shape fails)."""
+    got: dict[str, list[np.ndarray]] = {"F": [], "G": [], "H": []}
+    for x, u in zip(X, U, strict=True):
+        out = call(report, "dt_linearization(x, u, dt)", func, x.copy(), u.copy(), dt)
+        if out is None:
+            return None
+        if not isinstance(out, (tuple, list)) or len(out) != 3:
+            report.add("return-value", text="dt_linearization must return three matrices "
+                       "(F, G, H); it returned a {type}.", where="dt_linearization",
+                       observed={"type": type(out).__name__})
+            return None
+        for name, v, shape in zip("FGH", out, ((6, 6), (6, 4), (5, 6)), strict=True):
+            arr = array(report, name, v, shape)
+            if arr is None:
+                return None
+            got[name].append(arr)
+    return {k: np.stack(v) for k, v in got.items()}
+
+
+def _explained(report: Report, name: str, base: str, form: str, mat: np.ndarray,
+               X: np.ndarray, U: np.ndarray, fn: object, model: CoopModel) -> bool:
+    """A matrix that fails against the right Jacobian but is the course's form of the student's
+    own Jacobian (a note), or G the exact zero-order hold (named); True when reported."""
+    from gpsaccel.coop.model import jacobian_A as true_A
+    from gpsaccel.coop.model import jacobian_B as true_B
+
+    dt, eye = model.dt, np.eye(6)
+    own = None
+    if fn is not None and fn is not Ellipsis:
+        quiet = Report("own")
+        own = _at_states(quiet, fn, X, U, f"jacobian_{base}", mat.shape[1:] if
+                         base != "A" else (6, 6), needs_u=base != "C")
+    if own is not None:
+        want = eye + dt * own if name == "F" else dt * own if name == "G" else own
+        if _close(mat, want):
+            report.add("uses-own-jacobian", severity="note", text="{where} is {form} with "
+                       "your own jacobian_{base}: right here (question 1 grades "
+                       "jacobian_{base}).", where=name, observed={"form": form, "base": base})
+            return True
+    if name == "G":
+        A_ = np.stack([true_A(x, u) for x, u in zip(X, U, strict=True)])
+        B_ = np.stack([true_B(x, u, model.L) for x, u in zip(X, U, strict=True)])
+        zoh = (dt * eye + dt**2 / 2 * A_) @ B_  # A² = 0: ∫₀^ΔT e^{Aτ} dτ = ΔT I + ΔT²A/2
+        if _close(mat, zoh):
+            report.add("zero-order-hold", text="Your G is the exact zero-order-hold "
+                       "∫₀^ΔT e^{{Aτ}} dτ B = (ΔT·I + ΔT²·A/2) B. It is a better "
+                       "discretization, but the question asks for the course's Euler form "
+                       "G = ΔT·B.", where="G")
+            return True
+    return False
+
+
 def dt_linearization(func: object, seed: int = 0, n_random: int = 5,
                      jacobian_A: object = None, jacobian_B: object = None,
                      jacobian_C: object = None) -> Report:
@@ -119,32 +173,16 @@ def dt_linearization(func: object, seed: int = 0, n_random: int = 5,
     such (the question asks for the Euler form).
     """
     from gpsaccel.check import dt_model
-    from gpsaccel.coop.model import jacobian_A as true_A
-    from gpsaccel.coop.model import jacobian_B as true_B
 
     model = CoopModel()
     dt = model.dt
     X, U = states(seed, n_random)
     report = Report("question 2: DT linearization F, G, H")
-    got: dict[str, list[np.ndarray]] = {"F": [], "G": [], "H": []}
-    for x, u in zip(X, U, strict=True):
-        out = call(report, "dt_linearization(x, u, dt)", func, x.copy(), u.copy(), dt)
-        if out is None:
-            return report
-        if not isinstance(out, (tuple, list)) or len(out) != 3:
-            report.add("return-value", text="dt_linearization must return three matrices "
-                       "(F, G, H); it returned a {type}.", where="dt_linearization",
-                       observed={"type": type(out).__name__})
-            return report
-        for name, v, shape in zip("FGH", out, ((6, 6), (6, 4), (5, 6)), strict=True):
-            arr = array(report, name, v, shape)
-            if arr is None:
-                return report
-            got[name].append(arr)
-    mats = {k: np.stack(v) for k, v in got.items()}
+    mats = _student_matrices(report, func, X, U, dt)
+    if mats is None:
+        return report
     index = {(x.tobytes(), u.tobytes()): i for i, (x, u) in enumerate(zip(X, U, strict=True))}
     own_fns = {"A": jacobian_A, "B": jacobian_B, "C": jacobian_C}
-    eye = np.eye(6)
     for name, (base, form) in DT_FORMS.items():
         def at(x, u=None, _m=mats[name]):
             key = (np.asarray(x, float).tobytes(),
@@ -154,31 +192,9 @@ def dt_linearization(func: object, seed: int = 0, n_random: int = 5,
             return _m[index[key]]
         one: dict[str, Any] = {name: at}
         sub = dt_model(**one, n_random=n_random, seed=seed)
-        if sub.passed:
+        if sub.passed or _explained(report, name, base, form, mats[name], X, U, own_fns[base],
+                                    model):
             continue
-        own = None
-        fn = own_fns[base]
-        if fn is not None and fn is not Ellipsis:
-            quiet = Report("own")
-            own = _at_states(quiet, fn, X, U, f"jacobian_{base}", mats[name].shape[1:] if
-                             base != "A" else (6, 6), needs_u=base != "C")
-        if own is not None:
-            want = eye + dt * own if name == "F" else dt * own if name == "G" else own
-            if _close(mats[name], want):
-                report.add("uses-own-jacobian", severity="note", text="{where} is {form} with "
-                           "your own jacobian_{base}: right here (question 1 grades "
-                           "jacobian_{base}).", where=name, observed={"form": form, "base": base})
-                continue
-        if name == "G":
-            A_ = np.stack([true_A(x, u) for x, u in zip(X, U, strict=True)])
-            B_ = np.stack([true_B(x, u, model.L) for x, u in zip(X, U, strict=True)])
-            zoh = (dt * eye + dt**2 / 2 * A_) @ B_  # A² = 0: ∫₀^ΔT e^{Aτ} dτ = ΔT I + ΔT²A/2
-            if _close(mats[name], zoh):
-                report.add("zero-order-hold", text="Your G is the exact zero-order-hold "
-                           "∫₀^ΔT e^{{Aτ}} dτ B = (ΔT·I + ΔT²·A/2) B. It is a better "
-                           "discretization, but the question asks for the course's Euler form "
-                           "G = ΔT·B.", where="G")
-                continue
         report.findings.extend(sub.findings)
     if report.passed:
         report.add("ok", severity="note", text="F = I + ΔT·A, G = ΔT·B and H = C at every "
