@@ -31,8 +31,14 @@ STUDENT: dict[str, str] = {
     "dt": "The step dt passed to the check is neither the accelerometer interval nor the GPS "
           "interval of the problem.",
     "not-symmetric": "{where} is not symmetric: a covariance matrix always is.",
-    "phi-sign": "A sign of Φ is wrong: look at how the accelerometer bias enters position and "
-                "velocity (the accelerometer reads a + b).",
+    "phi-sign": "A sign of Φ is wrong: look at how each state enters the others (in report "
+                "000, how the accelerometer bias enters position and velocity: the "
+                "accelerometer reads a + b).",
+    "update-every-step": "Your filter updates at every propagation step, reusing the last "
+                         "measurement between arrivals: only the steps where a measurement "
+                         "arrives update, the others only propagate.",
+    "state-order": "Your H is written for another order of the state than the problem's: its "
+                   "columns must follow the problem's state order, as Φ and M0 do.",
     "phi-interval": "Your Φ is built with another time step than the one it is checked for.",
     "phi-element": "Some elements of Φ are wrong ({where}): compare each with its formula in "
                    "terms of Δt.",
