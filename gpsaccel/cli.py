@@ -251,6 +251,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
     import time
 
     from gpsaccel import sandbox
+    from gpsaccel._untrusted import json_safe
     from gpsaccel.check.batch import (
         Interrupted,
         appender,
@@ -306,7 +307,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
     def on_result(result: dict) -> None:
         bar.update()
         if log is not None:
-            log(result)
+            log(json_safe(result))
 
     t0 = time.perf_counter()
     try:
@@ -317,7 +318,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
                                  on_result=on_result, problem=args.problem,
                                  allow_unsafe_basic=args.allow_unsafe_basic)
     except Interrupted as exc:
-        done = [r for r in exc.results if r is not None]
+        done = json_safe([r for r in exc.results if r is not None])
         if args.json is not None:  # first: the terminal may be gone
             write_json(done, args.json, interrupted=True, **settings)
         if done:
@@ -327,6 +328,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
         print("gpsaccel check: interrupted", file=sys.stderr)
         return 130
     seconds = time.perf_counter() - t0
+    results = json_safe(results)  # a name that is not UTF-8 written \xNN, never a crash
     if args.json is not None:  # first: printing can fail (a closed terminal), the file must not
         path = write_json(results, args.json, **settings)
     if args.verbose:

@@ -17,23 +17,29 @@ kalman_filter.py``) is graded from the cell's text, in a box of its own without 
 
 The class (:func:`grade`):
 
-* submissions as an LMS exports them: a folder per student (its name is the student id; the
-  notebook inside in any case of ``.ipynb``) or one notebook per student at the top (its stem is
-  the id); names with spaces; every entry is either graded or reported with why not
-  (``no-notebook``, ``ambiguous``, ``unreadable``), never skipped silently;
+* submissions as an LMS exports them (:mod:`gpsaccel.assignments.submissions`): a folder per
+  student or one notebook per student at the top; every name (any bytes, NFC or NFD, any
+  punctuation or length) gets once a unique printable id that names the student's files; every
+  entry is either graded or reported with why not (``no-notebook``, ``ambiguous``,
+  ``unreadable``, ``file-limit``, ``id-collision``), never skipped silently;
 * each notebook is graded in a forked process of its own (a student who kills it loses only
   their own grade: ``grader-error``), forked from a parent that has imported what grading a
   notebook needs (:func:`warm`); the run is a child subreaper and sweeps what a dead
-  process left; ``grades.csv`` is rewritten (atomically) after every notebook, so a run killed
-  half-way leaves the grades it had;
+  process left; ``grades.csv`` is rewritten (atomically) after every notebook with a row for
+  every student, so a run killed half-way leaves the grades it had; one interrupted (Ctrl-C)
+  leaves ``not-graded`` rows for the rest, records ``interrupted`` and raises
+  KeyboardInterrupt (the command exits 130);
 * output (default: ``<submissions>-grades`` next to the submissions folder, never inside it):
-  ``grades.csv`` (student id, file, one column per question, total, possible, status, seconds,
-  and a first row of the points possible), ``feedback/<id>.txt`` (stale files of an earlier run
-  removed), ``summary.csv`` and ``summary.png`` (per question: mean score, how many students got
-  each mistake code), and ``grading.json`` — the instructor's record: the seed, the sandbox,
+  ``grades.csv`` (student name as shown, id, file, one column per question, total, possible,
+  status, seconds, and a first row of the points possible), ``feedback/<id>.txt`` (stale files
+  of an earlier run removed; student text in it cleaned of control and bidi characters),
+  ``summary.csv`` and ``summary.png`` (per question: mean score, how many students got each
+  mistake code), and ``grading.json`` — the instructor's record: the seed, the sandbox,
   which questions, when.  It holds no answer; keep it from students all the same (with the
   secret it reproduces their data);
-* ``student=ID`` regrades one student with the recorded seed and updates its row;
+* ``student=ID`` regrades one student with the recorded seed: the old row stays until the new
+  one is written, and the regrade is appended to ``grading.json``'s ``regrades`` (the class
+  record is kept);
 * ``dask=...`` sends each notebook to a Dask cluster (same function, same seed: same grades)
   through the same pool and with the same deadline (:func:`gpsaccel.sandbox.run_items`).
 """
@@ -57,6 +63,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gpsaccel import _untrusted
 from gpsaccel._atomic import write_text
 from gpsaccel.assignments import notebook as nbm
 from gpsaccel.assignments.questions import (
@@ -67,6 +74,7 @@ from gpsaccel.assignments.questions import (
     question_seed,
     variant_number,
 )
+from gpsaccel.assignments.submissions import Entry, find_submissions
 from gpsaccel.check.report import Report
 
 #: Wall-clock limit (s) of one notebook's box (every cell and every read), default.
@@ -136,10 +144,12 @@ def student_variant(name: str, student: str, secret: bytes | None) -> dict:
 class Grade:
     """One student's grade (plain data: it crosses process and Dask boundaries).
 
-    student : the id (LMS folder name or notebook stem); file : the notebook graded (relative
-    to the submissions folder), or "" ; scores, possible : question -> points; status : graded,
-    a sandbox failure (timeout, memory-limit, crashed, ...), no-notebook, ambiguous, unreadable
-    or grader-error; codes : question -> mistake codes; feedback : the text for the student.
+    student : the name (LMS folder name or notebook stem) as shown (printable); id : its unique
+    file-safe id (:func:`gpsaccel._untrusted.student_id`); file : the notebook graded (relative
+    to the submissions folder, as found), or "" ; scores, possible : question -> points;
+    status : graded, a sandbox failure (timeout, memory-limit, crashed, ...), no-notebook,
+    ambiguous, unreadable, file-limit, id-collision or grader-error; codes : question ->
+    mistake codes; feedback : the text for the student.
     """
 
     student: str
@@ -150,6 +160,7 @@ class Grade:
     feedback: str = ""
     codes: dict[str, list[str]] = field(default_factory=dict)
     seconds: float = 0.0
+    id: str = ""
 
     @property
     def total(self) -> float:
@@ -164,10 +175,12 @@ def _possible(qs: Sequence[Question]) -> dict[str, float]:
     return {q.name: float(q.points) for q in qs}
 
 
-def unusable(name: str, student: str, file: str, status: str, message: str) -> Grade:
+def unusable(name: str, student: str, file: str, status: str, message: str, sid: str = ""
+             ) -> Grade:
     """The grade of a submission that could not be run (no notebook, several, not a notebook)."""
     possible = _possible(questions_of(name))
-    g = Grade(student, file, {q: 0.0 for q in possible}, possible, status)
+    g = Grade(_untrusted.shown(student), file, {q: 0.0 for q in possible}, possible, status,
+              id=sid or _untrusted.student_id(student))
     g.feedback = _feedback_text(g, [message], {}, {})
     return g
 
@@ -255,17 +268,19 @@ def _stop_message(failure: str, where: str, limits) -> str:
 
 def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
                    secret: bytes | None = None, sandbox: str = "auto",
-                   timeout: float = TIMEOUT, file: str = "") -> Grade:
-    """Grade one notebook (see the module docstring); never raises for what it holds."""
+                   timeout: float = TIMEOUT, file: str = "", sid: str = "") -> Grade:
+    """Grade one notebook (see the module docstring); never raises for what it holds.
+
+    student : the name as found (its bytes key the variant and the data); sid : its id."""
     from gpsaccel import sandbox as sb
 
     t0 = time.perf_counter()
     qs = questions_of(name)
     possible = _possible(qs)
     try:
-        nb = nbm.read(Path(path))
+        nb = nbm.load(path)  # parsed and transformed under limits, in a process of its own
     except nbm.NotebookError as exc:
-        return unusable(name, student, file, "unreadable", str(exc))
+        return unusable(name, student, file, "unreadable", str(exc), sid)
     variant = student_variant(name, student, secret)
     draws = {q.name: Draw(question_seed(seed, name, q.name, student), variant) for q in qs}
     run = _prepare(nb, variant)
@@ -328,7 +343,8 @@ def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
             reports[q.name] = _safe_grade(q, draws[q.name], answers[a:b])
     scores = {q.name: q.score(reports[q.name]) for q in qs}
     codes = {k: r.codes for k, r in reports.items()}
-    g = Grade(student, file, scores, possible, status, "", codes, time.perf_counter() - t0)
+    g = Grade(_untrusted.shown(student), file, scores, possible, status, "", codes,
+              time.perf_counter() - t0, sid or _untrusted.student_id(student))
     g.feedback = _feedback_text(g, notes, reports, variant)
     return g
 
@@ -356,7 +372,7 @@ def _grade_file(q: Question, nb: nbm.Notebook, draw: Draw, timeout: float) -> Re
         return rep
     with tempfile.TemporaryDirectory(prefix="gpsaccel-file-") as tmp:
         path = Path(tmp) / q.file
-        path.write_text(found[1], encoding="utf-8")
+        path.write_text(found[1], encoding="utf-8", errors="replace")  # a lone surrogate too
         try:
             return q.grade_file(path, draw, timeout)
         except Exception as exc:  # noqa: BLE001 - a bug of the grader: this question only
@@ -397,75 +413,28 @@ def _feedback_text(g: Grade, notes: list[str], reports: dict[str, Report],
     return "\n".join(lines)
 
 
-# ------------------------------------------------------------------------- the submissions
-@dataclass(frozen=True)
-class Entry:
-    """One student's submission: the id, the notebook (None: why not in ``problem``)."""
-
-    student: str
-    path: Path | None
-    problem: tuple[str, str] | None = None  # (status, message)
-
-
-def find_submissions(folder: Path, name: str) -> tuple[list[Entry], list[str]]:
-    """Every student of an LMS export (module docstring) and notes on what is not a student."""
-    entries: list[Entry] = []
-    notes: list[str] = []
-    for e in sorted(folder.iterdir(), key=lambda p: p.name.lower()):
-        if e.name.startswith(".") or e.name == "__MACOSX":
-            notes.append(f"{e.name}: skipped (hidden)")
-            continue
-        if e.is_symlink():
-            notes.append(f"{e.name}: skipped (a symbolic link)")
-            continue
-        if e.is_file():
-            if e.suffix.lower() == ".ipynb":
-                entries.append(Entry(e.stem, e))
-            else:
-                notes.append(f"{e.name}: skipped (not a notebook or a student's folder)")
-            continue
-        if not e.is_dir():
-            notes.append(f"{e.name}: skipped (not a file or folder)")
-            continue
-        found = sorted(p for p in e.rglob("*") if p.suffix.lower() == ".ipynb" and p.is_file()
-                       and not p.is_symlink() and ".ipynb_checkpoints" not in p.parts)
-        if len(found) > 1:
-            named = [p for p in found if p.stem.lower() == name.lower()]
-            found = named if len(named) == 1 else found
-        if not found:
-            entries.append(Entry(e.name, None, ("no-notebook", f"No .ipynb file in "
-                                 f"{e.name}/: hand in the homework's notebook.")))
-        elif len(found) > 1:
-            names = ", ".join(str(p.relative_to(e)) for p in found)
-            entries.append(Entry(e.name, None, ("ambiguous", f"Several notebooks in {e.name}/ "
-                                 f"({names}) and none named {name}.ipynb: hand in one.")))
-        else:
-            entries.append(Entry(e.name, found[0]))
-    ids = Counter(x.student for x in entries)
-    for sid, n in ids.items():
-        if n > 1:
-            raise ValueError(f"submissions: {n} entries have the student id {sid!r} (a folder "
-                             f"and a notebook of the same name?); rename one")
-    return entries, notes
-
-
 # ------------------------------------------------------------------------- running a class
+def _file(entry: Entry, folder: Path) -> str:
+    """The notebook's path relative to the submissions (as found: the similarity report opens
+    it again; ``grades.csv`` shows it printable)."""
+    return os.path.relpath(entry.path, folder) if entry.path else ""
+
+
 def _task(entry: Entry, folder: Path, settings: dict) -> dict:
     if entry.path is None:
         assert entry.problem is not None  # an entry without a notebook says why
-        g = unusable(settings["name"], entry.student, "", *entry.problem)
+        g = unusable(settings["name"], entry.student, "", *entry.problem, sid=entry.id)
     else:
         g = grade_notebook(entry.path, settings["name"], entry.student, settings["seed"],
                            settings["secret"], settings["sandbox"], settings["timeout"],
-                           str(entry.path.relative_to(folder)))
+                           _file(entry, folder), entry.id)
     return asdict(g)
 
 
 def _grader_error(entry: Entry, folder: Path, settings: dict, why: str) -> dict:
-    file = str(entry.path.relative_to(folder)) if entry.path else ""
-    return asdict(unusable(settings["name"], entry.student, file, "grader-error",
-                           f"The grader could not finish this notebook ({why}); it was not "
-                           f"graded. Tell your instructor."))
+    return asdict(unusable(settings["name"], entry.student, _file(entry, folder),
+                           "grader-error", f"The grader could not finish this notebook "
+                           f"({why}); it was not graded. Tell your instructor.", entry.id))
 
 
 def warm(name: str) -> None:
@@ -535,11 +504,12 @@ def _cell(value: str) -> str:
 
 
 def _safe_name(name: str) -> str:
-    """A file name that cannot leave the folder."""
-    return (re.sub(r"[^\w.\- ]+", "_", name).strip(" .") or "student")[:120]
+    """A file name that cannot leave the folder, unique to ``name``
+    (:func:`gpsaccel._untrusted.student_id`)."""
+    return _untrusted.student_id(name)
 
 
-HEADER = ("student", "file")
+HEADER = ("student", "id", "file")
 
 
 def write_csv(grades: list[Grade], possible: dict[str, float], path: Path) -> None:
@@ -548,10 +518,11 @@ def write_csv(grades: list[Grade], possible: dict[str, float], path: Path) -> No
     w = csv.writer(buf)
     qs = list(possible)
     w.writerow([*HEADER, *qs, "total", "possible", "status", "seconds"])
-    w.writerow(["Points Possible", "", *(f"{possible[q]:g}" for q in qs),
+    w.writerow(["Points Possible", "", "", *(f"{possible[q]:g}" for q in qs),
                 f"{sum(possible.values()):g}", f"{sum(possible.values()):g}", "", ""])
     for g in grades:
-        w.writerow([_cell(g.student), _cell(g.file), *(f"{g.scores.get(q, 0):g}" for q in qs),
+        w.writerow([_cell(g.student), _cell(g.id), _cell(_untrusted.shown(g.file, 1000)),
+                    *(f"{g.scores.get(q, 0):g}" for q in qs),
                     f"{g.total:g}", f"{g.max_total:g}", g.status, f"{g.seconds:.1f}"])
     write_text(path, buf.getvalue())
 
@@ -648,30 +619,16 @@ def grade(submissions: str | os.PathLike, name: str, out: str | os.PathLike | No
     from gpsaccel import sandbox as sb
 
     folder = Path(submissions)
-    if not folder.is_dir():
-        raise ValueError(f"submissions must be a folder (a student's folder or notebook per "
-                         f"student), got {folder}")
-    if not (isinstance(timeout, (int, float)) and 0 < timeout < math.inf):
-        raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
-    jobs = min(4, os.cpu_count() or 1) if jobs is None else int(jobs)
-    if jobs < 1:
-        raise ValueError(f"jobs must be >= 1, got {jobs}")
-    qs = questions_of(name)
-    possible = _possible(qs)
-    out = Path(out) if out is not None else default_out(folder)
-    if out.resolve().is_relative_to(folder.resolve()):
-        raise ValueError(f"out: {out} is inside the submissions folder; write the grades "
-                         f"elsewhere (a student's files must not share a folder with them)")
+    out, jobs = _checked(folder, out, timeout, jobs)
+    possible = _possible(questions_of(name))
     out.mkdir(parents=True, exist_ok=True)
-    record = out / "grading.json"
-    previous = json.loads(record.read_text(encoding="utf-8")) if record.is_file() else {}
+    log = _Log(out, possible, student, progress)
     entries, notes = find_submissions(folder, name)
-    if student is not None:
-        entries = [e for e in entries if e.student == student]
+    if student is not None:  # by the name as found, its id or as it is shown
+        entries = [e for e in entries if student in (e.student, e.id, e.shown)]
         if not entries:
             raise ValueError(f"student: no submission of {student!r} in {folder}")
-        if seed is None:
-            seed = previous.get("seed")
+        seed = log.previous.get("seed") if seed is None else seed
     if seed is None:
         seed = secrets.randbits(63)
     if not isinstance(seed, int) or seed < 0:
@@ -680,61 +637,124 @@ def grade(submissions: str | os.PathLike, name: str, out: str | os.PathLike | No
     sb.refuse_unsafe_basic(backend)  # a class is not graded where basic cannot isolate it
     settings = {"name": name, "seed": int(seed), "secret": secret, "sandbox": backend,
                 "timeout": float(timeout)}
-    feedback = out / "feedback"
-    feedback.mkdir(exist_ok=True)
-    kept_path = out / "grades.json"  # every grade with its codes (the summary of a regrade)
-    old = json.loads(kept_path.read_text(encoding="utf-8")) if student and kept_path.is_file() \
-        else []
-    grades: list[Grade | None] = [None] * len(entries)
-    t0 = time.perf_counter()
-
-    def rows() -> list[Grade]:
-        now = [g for g in grades if g is not None]
-        if student is None:
-            mine = {e.student for e in entries}
-            missing = [Grade(e.student, "", {q: 0.0 for q in possible}, possible, "not-graded")
-                       for e, g in zip(entries, grades, strict=True) if g is None]
-            return sorted(now + missing, key=lambda g: g.student.lower()) if mine else now
-        kept = [Grade(**d) for d in old if d.get("student") != student]
-        return sorted(kept + now, key=lambda g: g.student.lower())
-
-    from tqdm.auto import tqdm
-
-    bar = tqdm(total=len(entries), desc=name, unit="notebook", leave=False,
-               disable=None if progress else True)
-
-    def done(i: int, data: dict) -> None:
-        g = Grade(**data)
-        grades[i] = g
-        shown = "".join(c if c.isprintable() else "?" for c in g.student[:40])  # a folder name
-        bar.set_postfix_str(f"{shown}: {g.status}")
-        bar.update()
-        write_text(feedback / f"{_safe_name(g.student)}.txt", g.feedback)
-        current = rows()
-        write_csv(current, possible, out / "grades.csv")
-        write_text(kept_path, json.dumps([{**asdict(x), "feedback": ""} for x in current]))
-
-    write_text(record, json.dumps({
+    log.start(entries, {
         "assignment": name, "seed": int(seed), "sandbox": backend, "timeout": timeout,
         "variants": "per student (HMAC of the id under the instructor's secret)" if secret
         else "none (no secret given: every student has the public notebook's numbers)",
         "questions": possible, "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-        "student": student, "skipped": notes}, indent=2))
-    if student is None:  # a full run: the feedback of students no longer there is stale
-        keep = {f"{_safe_name(e.student)}.txt" for e in entries}
-        for f in feedback.glob("*.txt"):
-            if f.name not in keep:
-                f.unlink()
-    write_csv(rows(), possible, out / "grades.csv")
-    if dask:
-        _dask(entries, folder, settings, dask, jobs, done)
-    else:
-        _forked(entries, folder, settings, jobs, done)
-    bar.close()
-    final = rows()
-    write_summary(summary(final, possible), final, out)
-    info = json.loads(record.read_text(encoding="utf-8"))
-    info["seconds"] = round(time.perf_counter() - t0, 1)
-    info["graded"] = len(entries)
-    write_text(record, json.dumps(info, indent=2))
-    return [g for g in grades if g is not None]
+        "student": student, "skipped": notes})
+    try:
+        if dask:
+            _dask(entries, folder, settings, dask, jobs, log.done)
+        else:
+            _forked(entries, folder, settings, jobs, log.done)
+    except BaseException:  # Ctrl-C, a lost cluster: what is done stays, the rest not-graded
+        log.finish(interrupted=True)
+        raise
+    log.finish(interrupted=False)
+    return [g for g in log.grades if g is not None]
+
+
+def _checked(folder: Path, out: str | os.PathLike | None, timeout: float, jobs: int | None
+             ) -> tuple[Path, int]:
+    """The output folder and the jobs of :func:`grade`, its arguments checked."""
+    if not folder.is_dir():
+        raise ValueError(f"submissions must be a folder (a student's folder or notebook per "
+                         f"student), got {folder}")
+    if not (isinstance(timeout, (int, float)) and 0 < timeout < math.inf):
+        raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
+    jobs = min(4, os.cpu_count() or 1) if jobs is None else int(jobs)
+    if jobs < 1:
+        raise ValueError(f"jobs must be >= 1, got {jobs}")
+    out = Path(out) if out is not None else default_out(folder)
+    if out.resolve().is_relative_to(folder.resolve()):
+        raise ValueError(f"out: {out} is inside the submissions folder; write the grades "
+                         f"elsewhere (a student's files must not share a folder with them)")
+    return out, jobs
+
+
+class _Log:
+    """What a run writes, each file whole (:mod:`gpsaccel._atomic`), after every notebook.
+
+    ``grades.csv`` (and ``grades.json``, the same rows with their codes) always hold a row for
+    every student: a full run starts them ``not-graded``; a regrade (``student``) keeps the
+    student's old row until the new one is written.  ``grading.json`` holds the class record;
+    a regrade appends itself to its ``regrades``."""
+
+    def __init__(self, out: Path, possible: dict[str, float], student: str | None,
+                 progress: bool = False) -> None:
+        self.out, self.possible, self.student, self.progress = out, possible, student, progress
+        self.record = out / "grading.json"
+        self.kept_path = out / "grades.json"
+        self.feedback = out / "feedback"
+        self.previous = self._json(self.record, {})
+        self.old = [Grade(**d) for d in self._json(self.kept_path, [])] if student else []
+        for g in self.old:  # a row of an earlier version, without its id
+            g.id = g.id or _untrusted.student_id(g.student)
+        self.entries: list[Entry] = []
+        self.grades: list[Grade | None] = []
+        self.t0 = time.perf_counter()
+
+    @staticmethod
+    def _json(path: Path, default):  # noqa: ANN001, ANN205 - a dict or a list
+        return json.loads(path.read_text(encoding="utf-8")) if path.is_file() else default
+
+    def start(self, entries: list[Entry], info: dict) -> None:
+        from tqdm.auto import tqdm
+
+        self.bar = tqdm(total=len(entries), desc=info["assignment"], unit="notebook",
+                        leave=False, disable=None if self.progress else True)
+        self.entries, self.grades = entries, [None] * len(entries)
+        self.feedback.mkdir(exist_ok=True)
+        if self.student is None or not isinstance(self.previous, dict) or not self.previous:
+            self.info = {**info, "regrades": []}
+        else:  # the class record stays; the regrade is appended to it
+            self.info = self.previous
+            self.info.setdefault("regrades", []).append(
+                {k: info[k] for k in ("student", "seed", "started")})
+        write_text(self.record, json.dumps(self.info, indent=2))
+        if self.student is None:  # a full run: the feedback of students no longer there is stale
+            keep = {f"{e.id}.txt" for e in entries}
+            for f in self.feedback.glob("*.txt"):
+                if f.name not in keep:
+                    f.unlink()
+        self.flush()
+
+    def rows(self) -> list[Grade]:
+        now = [g for g in self.grades if g is not None]
+        if self.student is None:
+            missing = [Grade(e.shown, "", {q: 0.0 for q in self.possible}, self.possible,
+                             "not-graded", id=e.id)
+                       for e, g in zip(self.entries, self.grades, strict=True) if g is None]
+            return sorted(now + missing, key=lambda g: (g.student.lower(), g.id))
+        new = {g.id for g in now}
+        kept = [g for g in self.old if g.id not in new]
+        return sorted(kept + now, key=lambda g: (g.student.lower(), g.id))
+
+    def flush(self) -> None:
+        current = self.rows()
+        write_csv(current, self.possible, self.out / "grades.csv")
+        write_text(self.kept_path, json.dumps([{**asdict(x), "feedback": ""} for x in current]))
+
+    def done(self, i: int, data: dict) -> None:
+        g = Grade(**data)
+        g.student = _untrusted.clean(g.student)
+        g.feedback = _untrusted.clean(g.feedback, newlines=True)
+        self.bar.set_postfix_str(f"{g.student[:40]}: {g.status}")
+        self.bar.update()
+        write_text(self.feedback / f"{self.entries[i].id}.txt", g.feedback)
+        self.grades[i] = g
+        self.flush()
+
+    def finish(self, interrupted: bool) -> None:
+        self.bar.close()
+        self.flush()
+        final = self.rows()
+        if not interrupted:
+            write_summary(summary(final, self.possible), final, self.out)
+        entry = self.info["regrades"][-1] if self.student is not None and \
+            self.info.get("regrades") else self.info
+        entry["seconds"] = round(time.perf_counter() - self.t0, 1)
+        entry["graded"] = sum(g is not None for g in self.grades)
+        entry["interrupted"] = interrupted
+        write_text(self.record, json.dumps(self.info, indent=2))

@@ -10,9 +10,15 @@ submission:
   as Jupyter shows them when counted from the top), so a traceback names the student's cell;
 * IPython syntax handled explicitly, outside the box, by IPython's own input transformer
   (:class:`IPython.core.inputtransformer2.TransformerManager`: ``%magic``, ``%%cell magic``,
-  ``!shell``, ``x?``).  In the box a small ``get_ipython()`` stands in for the kernel: ``%%time``,
-  ``%%capture``, ``%time`` run their code; ``%%writefile`` writes into the box; every other magic
-  and every shell line is *not run* and is listed in the student's feedback;
+  ``!shell``, ``x?``).  The notebook is parsed and transformed by :func:`load` in a forked
+  process of its own under hard limits (:data:`LOAD_CPU` seconds of CPU, :data:`LOAD_MEMORY`
+  more bytes of address space; the file at most :data:`MAX_NOTEBOOK_BYTES`): the transformer is
+  quadratic on some input (a 9 KB cell of line magics took 31 CPU s, a 0.8 MB cell 356 MB) and
+  ``json`` recurses on nested lists, so what cannot be read within them is the student's
+  ``unreadable``, never the grader's error.  In the box a small ``get_ipython()`` stands in for
+  the kernel: ``%%time``, ``%%capture``, ``%time`` run their code; ``%%writefile`` writes into
+  the box; every other magic and every shell line is *not run* and is listed in the student's
+  feedback;
 * nothing runs at import.  The grader calls ``_gpsaccel_cell(i)`` once per cell, in order, so each
   cell's outcome comes back as its own frame: a cell that raises is recorded and the next one runs
   (as ``otter run`` does), a cell that loops or kills its process is named by the frames that
@@ -36,8 +42,14 @@ from __future__ import annotations
 
 import inspect
 import json
+import os
+import resource
+import select
+import signal
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -48,6 +60,14 @@ HIDDEN_PACKAGES = ("gpsaccel.check", "gpsaccel.assignments")
 
 #: Largest notebook file read (bytes).
 MAX_NOTEBOOK_BYTES = 16 << 20
+
+#: CPU seconds and extra address space (bytes) of the process that parses and transforms one
+#: notebook (:func:`load`): an honest notebook needs well under 0.1 s and 50 MB.
+LOAD_CPU = 5
+LOAD_MEMORY = 256 << 20
+#: Wall-clock seconds after which that process is killed whatever its CPU time: only a guard
+#: (it reads one file and computes), generous because a loaded machine gives it a small share.
+LOAD_WALL = 120
 
 #: Bytes of a message (exception text) a wrapper sends back.
 MESSAGE_BYTES = 320
@@ -66,10 +86,12 @@ class NotebookError(ValueError):
 
 @dataclass(frozen=True)
 class Cell:
-    """One code cell: its number among all cells (1-based) and its source."""
+    """One code cell: its number among all cells (1-based), its source and, once
+    :func:`load` has transformed it, the plain Python it runs as."""
 
     number: int
     source: str
+    python: str | None = None
 
 
 @dataclass
@@ -104,6 +126,9 @@ def read(path: str | Path) -> Notebook:
         data = json.loads(path.read_bytes())
     except (ValueError, UnicodeDecodeError) as exc:
         raise NotebookError(f"{path.name} is not a notebook (not JSON: {exc}).") from None
+    except RecursionError:
+        raise NotebookError(f"{path.name} is not a notebook (its JSON is nested too deep to "
+                            f"read).") from None
     cells = data.get("cells") if isinstance(data, dict) else None
     if not isinstance(cells, list):
         raise NotebookError(f"{path.name} is not a notebook (no list of cells).")
@@ -124,6 +149,89 @@ def transform(source: str) -> str:
     from IPython.core.inputtransformer2 import TransformerManager
 
     return TransformerManager().transform_cell(source)
+
+
+def _python(source: str) -> str:
+    try:
+        return transform(source)
+    except Exception:  # noqa: BLE001 - a cell IPython cannot parse stays as it is
+        return source
+
+
+def load(path: str | os.PathLike) -> Notebook:
+    """:func:`read` and :func:`transform` every cell, in a forked process under :data:`LOAD_CPU`
+    and :data:`LOAD_MEMORY` (module docstring); NotebookError for the student when it fails
+    or runs past them."""
+    import IPython.core.inputtransformer2  # noqa: F401 - imported before the fork, not in it
+
+    path = Path(path)
+    rfd, wfd = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # the child: parse, transform, send JSON, exit without cleanup
+        code = 0
+        out: dict[str, Any] = {}
+        try:
+            os.close(rfd)
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+            _limit_self()
+            nb = read(path)
+            out = {"cells": [[c.number, c.source, _python(c.source)] for c in nb.cells]}
+        except NotebookError as exc:
+            out = {"error": str(exc)}
+        except MemoryError:
+            out = {"error": "memory"}
+        except BaseException:  # noqa: BLE001 - anything else: the parent reports the exit
+            code = 3
+        try:
+            sent = json.dumps(out).encode()
+            while sent:
+                sent = sent[os.write(wfd, sent):]
+        finally:
+            os._exit(code)
+    os.close(wfd)
+    return _loaded(path, _collect(rfd, pid))
+
+
+def _limit_self() -> None:
+    resource.setrlimit(resource.RLIMIT_CPU, (LOAD_CPU, LOAD_CPU))
+    try:
+        with open("/proc/self/statm") as f:
+            now = int(f.read().split()[0]) * resource.getpagesize()
+    except OSError:  # not Linux: the CPU limit alone
+        return
+    resource.setrlimit(resource.RLIMIT_AS, (now + LOAD_MEMORY, now + LOAD_MEMORY))
+
+
+def _collect(rfd: int, pid: int) -> bytes | None:
+    """What the child sent (None: it died, or was killed after :data:`LOAD_WALL` seconds)."""
+    chunks: list[bytes] = []
+    deadline = time.monotonic() + LOAD_WALL
+    try:
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0 or not select.select([rfd], [], [], left)[0]:
+                os.kill(pid, signal.SIGKILL)
+                break
+            chunk = os.read(rfd, 1 << 20)
+            if not chunk:
+                break
+            chunks.append(chunk)
+    finally:
+        os.close(rfd)
+        _, status = os.waitpid(pid, 0)
+    return b"".join(chunks) if os.waitstatus_to_exitcode(status) == 0 else None
+
+
+def _loaded(path: Path, data: bytes | None) -> Notebook:
+    out: dict[str, Any] = json.loads(data) if data else {"error": "killed"}
+    if "cells" in out:
+        return Notebook([Cell(n, src, py) for n, src, py in out["cells"]])
+    why = {"memory": f"needed more than {LOAD_MEMORY >> 20} MB", "killed": f"took more than "
+           f"{LOAD_CPU} CPU seconds or more than {LOAD_MEMORY >> 20} MB"}.get(out["error"])
+    if why is None:
+        raise NotebookError(out["error"])
+    raise NotebookError(f"{path.name} could not be read: parsing it and its IPython lines "
+                        f"(%, !) {why}. Remove the long runs of magics and save it again.")
 
 
 #: The checker's path test (:func:`gpsaccel.sandbox.path_test`), as source for the box.
@@ -317,13 +425,8 @@ class Read:
 
 def module_source(nb: Notebook, reads: list[Read]) -> str:
     """The text of ``notebook.py`` for the sandbox: the prelude, the cells, one wrapper per read."""
-    cells = []
-    for cell in nb.cells:
-        try:
-            src = transform(cell.source)
-        except Exception:  # noqa: BLE001 - a cell IPython cannot parse stays as it is
-            src = cell.source
-        cells.append((cell.number, src))
+    cells = [(c.number, c.python if c.python is not None else _python(c.source))
+             for c in nb.cells]
     lines = ["# A student's notebook, rewritten by gpsaccel.assignments.notebook for the sandbox.",
              f"_G_HIDDEN = {HIDDEN_PACKAGES!r}",
              f"_G_MESSAGE_BYTES = {MESSAGE_BYTES}",

@@ -20,12 +20,12 @@ from __future__ import annotations
 import hashlib
 import hmac
 import math
-import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from gpsaccel._untrusted import clean
 from gpsaccel.assignments.notebook import MAX_NDIM, STATUSES, Read
 from gpsaccel.check.report import Report
 
@@ -76,13 +76,11 @@ def answer_from(result: dict[str, np.ndarray] | None, n_outputs: int) -> Answer:
     return Answer("ok", message, tuple(result[f"out{k}"] for k in range(n_outputs)))
 
 
-_CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f]")
-
-
 def text(data: np.ndarray) -> str:
-    """A message array from the box as printable text (NUL-padded UTF-8, control chars dropped)."""
+    """A message array from the box as printable text (NUL-padded UTF-8; control, bidi and
+    zero-width characters dropped: :func:`gpsaccel._untrusted.clean`)."""
     raw = bytes(np.asarray(data, dtype=np.uint8)).split(b"\0", 1)[0]
-    return _CONTROL.sub("", raw.decode("utf-8", errors="replace"))[:300]
+    return clean(raw.decode("utf-8", errors="replace"))[:300]
 
 
 class StudentError(Exception):
@@ -121,7 +119,8 @@ def _give(a: Answer, pick: int | None, r: Read, name: str) -> object:
     if a.status == "returns-none":
         return None
     if a.status == "shape":
-        bad = np.full(a.shape or (0,), np.nan)
+        bad = np.full(bounded(a.shape or (0,), r.shapes[max(a.which, 0) % len(r.shapes)]),
+                      np.nan)
         if len(r.shapes) == 1:
             return bad
         out = [np.zeros(s) for s in r.shapes]
@@ -132,6 +131,26 @@ def _give(a: Answer, pick: int | None, r: Read, name: str) -> object:
     if a.status == "not-run":
         raise StudentError("it did not return: the notebook stopped before (see above)")
     raise StudentError(a.message or f"{name} could not be called ({a.status})")
+
+
+#: How many times the declared size a wrong shape from the box may be allocated at (at least
+#: :data:`MIN_ELEMENTS` elements): a shape is only a status the box declares, any size.
+SHAPE_FACTOR = 16
+MIN_ELEMENTS = 1 << 16
+
+
+def bounded(shape: tuple[int, ...], declared: tuple[int, ...]) -> tuple[int, ...]:
+    """``shape`` (what the box says the student returned) cut down, before anything is
+    allocated, to at most :data:`SHAPE_FACTOR` times the ``declared`` shape's size (at least
+    :data:`MIN_ELEMENTS`): each size clipped to ``[0, limit]``, then the trailing ones halved
+    until the product fits.  An honest wrong shape within that is kept as it is."""
+    limit = max(SHAPE_FACTOR * math.prod(declared), MIN_ELEMENTS)
+    out = [min(max(int(d), 0), limit) for d in shape[:MAX_NDIM]]
+    k = len(out) - 1
+    while math.prod(out) > limit and k >= 0:
+        out[k] = max(out[k] // 2, 1) if out[k] > 1 else out[k]
+        k = k - 1 if out[k] <= 1 else k
+    return tuple(out)
 
 
 def value(report: Report, name: str, a: Answer, part: str = "") -> np.ndarray | None:
@@ -201,11 +220,13 @@ def variant_number(secret: bytes, assignment: str, student: str) -> int:
     Without the secret nobody can derive anyone's variant; with it, the instructor always gets
     the same one for the same student.
     """
-    mac = hmac.new(secret, f"{assignment}\0{student}".encode(), hashlib.sha256).digest()
+    key = f"{assignment}\0{student}".encode("utf-8", "surrogateescape")  # any name's bytes
+    mac = hmac.new(secret, key, hashlib.sha256).digest()
     return int.from_bytes(mac[:8], "big") >> 1
 
 
 def question_seed(seed: int, assignment: str, question: str, student: str) -> int:
     """The seed of one question's fresh data for one student, from the grading run's seed."""
-    digest = hashlib.sha256(f"{seed}\0{assignment}\0{question}\0{student}".encode()).digest()
+    key = f"{seed}\0{assignment}\0{question}\0{student}".encode("utf-8", "surrogateescape")
+    digest = hashlib.sha256(key).digest()
     return int.from_bytes(digest[:8], "big") >> 1

@@ -11,12 +11,15 @@ import stat
 from dataclasses import dataclass
 from pathlib import Path
 
+from gpsaccel import _untrusted
+
 #: Largest submission copied into a box: files and bytes (a folder of data files may be large).
 MAX_FILES = 200
 MAX_BYTES = 32 << 20
-#: Entries (files and folders, hidden ones too) a submission's folder may hold, and its depth.
-MAX_ENTRIES = 2000
-MAX_DEPTH = 16
+#: Entries (files and folders, hidden ones too) a submission's folder may hold, and its depth:
+#: the same walk and limits as the grader's (:mod:`gpsaccel._untrusted`).
+MAX_ENTRIES = _untrusted.MAX_ENTRIES
+MAX_DEPTH = _untrusted.MAX_DEPTH
 
 
 @dataclass(frozen=True)
@@ -124,48 +127,36 @@ def _check_file(full: Path, st: os.stat_result, rel: str) -> None:
 
 def _walk(root: Path, name: str) -> list[str]:
     """The files of a student's folder (relative paths), breadth first, without following
-    anything; :class:`SubmissionError` at a link, below :data:`MAX_DEPTH` or beyond the
-    limits of entries, files and bytes."""
+    anything (:func:`gpsaccel._untrusted.walk`); :class:`SubmissionError` at a link, below
+    :data:`MAX_DEPTH` or beyond the limits of entries, files and bytes."""
     files: list[str] = []
-    size = entries = 0
-    queue: list[tuple[str, int]] = [("", 0)]
+    size = 0
     too_many = SubmissionError("file-limit", f"The folder {_shown(name)} holds more than "
                                f"{MAX_FILES} files, {MAX_ENTRIES} entries or "
                                f"{MAX_BYTES >> 20} MB: hand in your code and the data it reads, "
                                f"nothing else.")
-    while queue:
-        rel_dir, depth = queue.pop(0)
-        try:
-            with os.scandir(root / rel_dir if rel_dir else root) as it:
-                listing = sorted(it, key=lambda e: e.name)
-        except OSError as exc:
-            raise SubmissionError("not-found", f"The folder {_shown(name)}/{_shown(rel_dir)} "
-                                  f"cannot be read ({exc.strerror}).") from None
-        entries += len(listing)
-        if entries > MAX_ENTRIES:
-            raise too_many
-        for e in listing:
-            rel = f"{rel_dir}/{e.name}" if rel_dir else e.name
-            if e.name.startswith(".") or e.name == "__pycache__":
-                continue
+    try:
+        for rel, e in _untrusted.walk(root, skip=lambda n: n.startswith(".") or n == "__pycache__"):
             if e.is_symlink():
                 raise SubmissionError("link-refused", f"{_shown(name)}/{_shown(rel)} is a "
                                       f"symbolic link; a submission holds its own files, not "
                                       f"links. Replace it with a copy.")
             st = e.stat(follow_symlinks=False)
-            if stat.S_ISDIR(st.st_mode):
-                if depth + 1 >= MAX_DEPTH:
-                    raise SubmissionError("file-limit", f"The folder {_shown(name)} is nested "
-                                          f"more than {MAX_DEPTH} levels deep "
-                                          f"({_shown(rel, 80)}); keep your code in a few "
-                                          f"folders.")
-                queue.append((rel, depth + 1))
-            elif stat.S_ISREG(st.st_mode):
+            if stat.S_ISREG(st.st_mode):
                 _check_file(Path(e.path), st, f"{name}/{rel}")
                 files.append(rel)
                 size += st.st_size
                 if len(files) > MAX_FILES or size > MAX_BYTES:
                     raise too_many
+    except _untrusted.WalkLimit as exc:
+        if exc.kind == "entries":
+            raise too_many from None
+        raise SubmissionError("file-limit", f"The folder {_shown(name)} is nested more than "
+                              f"{MAX_DEPTH} levels deep ({_shown(exc.where, 80)}); keep your "
+                              f"code in a few folders.") from None
+    except OSError as exc:
+        raise SubmissionError("not-found", f"The folder {_shown(name)} cannot be read "
+                              f"({exc.strerror}).") from None
     return files
 
 

@@ -1,0 +1,167 @@
+r"""Names, folders and text a student controls, made safe once for the grader and the checker.
+
+Everything here is a student's: a folder or notebook name (any bytes but ``/`` and NUL; not
+necessarily UTF-8; NFC or NFD; punctuation; any length), the depth and width of a folder, the
+text of an exception.  Three small tools, each used wherever such input enters:
+
+* :func:`student_id` maps a name's raw bytes to a printable id that is a safe file name (a slug
+  of the name, plus a short hash of the raw bytes whenever the slug is not the name itself), so
+  two different names never get the same file: ``"Doe, Jane"`` is ``Doe_ Jane-5d0a7e1c`` and
+  ``"Doe_ Jane"`` stays ``Doe_ Jane``.  Ids are compared without case (a Mac's or Windows' disk
+  does not tell ``Bob.txt`` from ``bob.txt``): :func:`collisions` finds what is left.
+* :func:`walk` lists a folder breadth first, never following a link, within
+  :data:`MAX_DEPTH` levels and :data:`MAX_ENTRIES` entries (the checker's limits: one walk for
+  the checker's box and the grader's search for notebooks); beyond them :class:`WalkLimit`,
+  before the rest is read.  No recursion: 1500 nested folders cost 16 listings.
+* :func:`clean` removes control, format (bidirectional overrides, zero-width) and separator
+  characters from text that goes into feedback or a table, so a name cannot reorder or hide the
+  text around it.
+
+Names stay ``str`` as :func:`os.fsdecode` gives them (bytes that are not UTF-8 as surrogate
+escapes, exactly what :func:`os.scandir` returns), and are encoded back with
+:func:`os.fsencode`; nothing here ever encodes them strictly.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import unicodedata
+from collections import deque
+from collections.abc import Callable, Iterator
+from typing import Any
+
+#: Entries (files and folders, hidden ones too) a student's folder may hold, and its depth.
+MAX_ENTRIES = 2000
+MAX_DEPTH = 16
+
+#: Longest slug kept from a name (characters), before the hash.
+SLUG_CHARS = 80
+
+#: Hex digits of the hash of the raw name added to an id whose slug is not the name.
+HASH_DIGITS = 8
+
+_DROPPED = ("Cc", "Cf", "Cs", "Zl", "Zp")
+
+
+def clean(text: str, newlines: bool = False) -> str:
+    """``text`` without control, format (bidi, zero-width) or line/paragraph-separator
+    characters (tabs become spaces; newlines kept only when asked); a lone surrogate (a byte
+    that was not UTF-8) becomes U+FFFD."""
+    out = []
+    for c in text:
+        cat = unicodedata.category(c)
+        if c == "\n" and newlines:
+            out.append(c)
+        elif c == "\t":
+            out.append(" ")
+        elif cat == "Cs":
+            out.append("\ufffd")
+        elif cat not in _DROPPED:
+            out.append(c)
+    return "".join(out)
+
+
+def shown(name: str | bytes, limit: int = 200) -> str:
+    """A name as a person reads it: UTF-8 decoded (other bytes as ``\\xNN``), NFC, cleaned, at
+    most ``limit`` characters."""
+    raw = os.fsencode(name)
+    text = unicodedata.normalize("NFC", raw.decode("utf-8", "backslashreplace"))
+    text = clean(text)
+    return text if len(text) <= limit else text[:limit - 1] + "…"
+
+
+def _slug(text: str) -> str:
+    out = []
+    for c in unicodedata.normalize("NFC", text):
+        ok = c.isalnum() or c in "_.- " or unicodedata.category(c)[0] == "M"
+        if ok:
+            out.append(c)
+        elif not out or out[-1] != "_":
+            out.append("_")
+    return "".join(out)[:SLUG_CHARS].strip(" .")
+
+
+def student_id(name: str | bytes) -> str:
+    """The printable, file-safe id of a student's name (module docstring): the name itself when
+    it is already a short slug of letters, digits, ``_.- ``; else its slug and a hash of its raw
+    bytes, ``slug-1a2b3c4d``."""
+    raw = os.fsencode(name)
+    slug = _slug(raw.decode("utf-8", "replace"))
+    if slug and slug.encode("utf-8") == raw:
+        return slug
+    return f"{slug or 'student'}-{hashlib.sha256(raw).hexdigest()[:HASH_DIGITS]}"
+
+
+def hashed_id(name: str | bytes) -> str:
+    """The id of ``name`` with the hash of its raw bytes always added (for names whose ids
+    collide: two such ids differ unless the raw names are equal)."""
+    raw = os.fsencode(name)
+    digest = hashlib.sha256(raw).hexdigest()[:2 * HASH_DIGITS]
+    return f"{_slug(raw.decode('utf-8', 'replace')) or 'student'}-{digest}"
+
+
+def collisions(ids: list[str]) -> list[list[int]]:
+    """Groups of indices of ``ids`` that name the same file on a disk that ignores case."""
+    groups: dict[str, list[int]] = {}
+    for i, x in enumerate(ids):
+        groups.setdefault(x.casefold(), []).append(i)
+    return [g for g in groups.values() if len(g) > 1]
+
+
+class WalkLimit(Exception):
+    """A folder is deeper than :data:`MAX_DEPTH` (``kind="depth"``, ``where`` the folder that is
+    too deep) or holds more than :data:`MAX_ENTRIES` entries (``kind="entries"``)."""
+
+    def __init__(self, kind: str, where: str, limit: int) -> None:
+        super().__init__(f"{kind} beyond {limit} at {where!r}")
+        self.kind, self.where, self.limit = kind, where, limit
+
+
+def walk(root: str | os.PathLike[str], skip: Callable[[str], bool] = lambda name: False,
+         max_depth: int = MAX_DEPTH, max_entries: int = MAX_ENTRIES
+         ) -> Iterator[tuple[str, os.DirEntry[str]]]:
+    """``(relative path, entry)`` of everything under ``root``, breadth first, each folder's
+    entries by name; a link is listed, never followed; an entry for which ``skip(name)`` is
+    true is neither listed nor entered (it still counts).  :class:`WalkLimit` as soon as a
+    folder is ``max_depth`` levels down or the entries seen exceed ``max_entries``; OSError
+    when a folder cannot be listed."""
+    top: str = os.fspath(root)
+    queue: deque[tuple[str, int]] = deque([("", 0)])
+    seen = 0
+    while queue:
+        rel_dir, depth = queue.popleft()
+        listing: list[os.DirEntry[str]] = []
+        with os.scandir(os.path.join(top, rel_dir) if rel_dir else top) as it:
+            for e in it:  # counted as read: a folder of a million entries stops at the limit
+                seen += 1
+                if seen > max_entries:
+                    raise WalkLimit("entries", rel_dir, max_entries)
+                listing.append(e)
+        for e in sorted(listing, key=lambda e: e.name):
+            if skip(e.name):
+                continue
+            rel = f"{rel_dir}/{e.name}" if rel_dir else e.name
+            yield rel, e
+            if e.is_dir(follow_symlinks=False):
+                if depth + 1 >= max_depth:
+                    raise WalkLimit("depth", rel, max_depth)
+                queue.append((rel, depth + 1))
+
+
+def decoded(name: str) -> str:
+    """``name`` (from :func:`os.fsdecode`) with every byte that was not UTF-8 written ``\\xNN``:
+    a ``str`` that can be encoded, for a JSON file or a terminal."""
+    return os.fsencode(name).decode("utf-8", "backslashreplace")
+
+
+def json_safe(obj: Any) -> Any:
+    """A copy of a JSON-like value (dicts, lists, tuples, strings) whose strings and keys have
+    passed through :func:`decoded` (a file name that was not UTF-8 crashed the JSON writer)."""
+    if isinstance(obj, str):
+        return decoded(obj) if any("\udc80" <= c <= "\udcff" for c in obj) else obj
+    if isinstance(obj, dict):
+        return {json_safe(k): json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_safe(v) for v in obj]
+    return obj

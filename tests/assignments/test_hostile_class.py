@@ -1,0 +1,200 @@
+"""A hostile class graded to the end (issue 27, items 4 and 5): every student has a row and a
+feedback file of their own, each hostile one its own status, every other student is graded; a
+regrade interrupted with Ctrl-C leaves the old row; a regrade is appended to the class record.
+
+Kept cheap: three notebooks run in a box (two honest, one forging a shape); the others end
+before any box (a folder nested 1500 deep, an unparseable notebook, a cell of magics stopped at a
+CPU limit lowered to 1 s, colliding names).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import psutil
+import pytest
+
+from gpsaccel import _untrusted
+from gpsaccel.assignments import notebook as nbm
+from gpsaccel.assignments.grading import grade
+
+from .conftest import kill_pids, write_variant
+
+ZOE = os.fsdecode(b"Zo\xeby")  # Latin-1, not UTF-8: the run used to crash here and on every rerun
+BAD_FILE = os.fsdecode(b"\xff\xfe.ipynb")
+
+# the student replaces the wrapper that reports a read: every read says "shape (10⁶, 10⁶)"
+FORGE = """
+import numpy as _n
+def _gpsaccel_probe(name, value_only, args, shapes):
+    st = _n.zeros(9, dtype=_n.int64)
+    st[0], st[2], st[3], st[4] = 7, 2, 10**6, 10**6
+    return (st, _gpsaccel_text(""), *[_n.full(s, _n.nan) for s in shapes])
+"""
+
+
+def _rows(out: Path) -> dict[str, dict[str, str]]:
+    with open(out / "grades.csv", newline="", encoding="utf-8") as f:
+        return {r["id"]: r for r in csv.DictReader(f) if r["student"] != "Points Possible"}
+
+
+def _unnest(top) -> None:
+    """Remove a chain of nested folders from the top down, each step on short paths (pytest's
+    rmtree recurses and dies on it; full paths would cost O(n²) lookups)."""
+    top, k = str(top), 0
+    while top is not None:
+        inner = None
+        for e in os.scandir(top):
+            if e.is_dir(follow_symlinks=False) and inner is None:
+                k += 1
+                inner = os.path.join(os.path.dirname(top), f".unnest-{k}")
+                os.rename(e.path, inner)
+            elif not e.is_dir(follow_symlinks=False):
+                os.unlink(e.path)
+        os.rmdir(top)
+        top = inner
+
+
+def _class(sub: Path) -> None:
+    write_variant("calibration", sub / "alice" / "calibration.ipynb")
+    write_variant("calibration", sub / ZOE / "calibration.ipynb")
+    write_variant("calibration", sub / "mallory" / "calibration.ipynb", last_cell=FORGE)
+    write_variant("calibration", sub / "deep" / "calibration.ipynb")
+    fd = os.open(sub / "deep", os.O_RDONLY)
+    for _ in range(1500):  # rglob died here with RecursionError before anyone was graded
+        os.mkdir("d", dir_fd=fd)
+        fd, old = os.open("d", os.O_RDONLY, dir_fd=fd), fd
+        os.close(old)
+    os.close(fd)
+    (sub / BAD_FILE).write_text("[" * 100_000)  # json recursed: grader-error, not unreadable
+    (sub / "Doe, Jane").mkdir()
+    (sub / "Doe, Jane" / "calibration.ipynb").write_text(json.dumps({"cells": [
+        {"cell_type": "code", "source": "%time x = 1\n" * 300, "metadata": {}, "outputs": []}]}))
+    (sub / "Doe_ Jane").mkdir()
+    (sub / "Doe_ Jane" / "calibration.ipynb").write_text("{not json")
+    write_variant("calibration", sub / "bob" / "calibration.ipynb")
+    (sub / "bob.ipynb").write_bytes((sub / "bob" / "calibration.ipynb").read_bytes())
+
+
+@pytest.fixture(scope="module")
+def hostile(tmp_path_factory):
+    root = tmp_path_factory.mktemp("hostile")
+    sub = root / "class"
+    _class(sub)
+    out = root / "out"
+    mp = pytest.MonkeyPatch()
+    mp.setattr(nbm, "LOAD_CPU", 1)  # inherited by the forked children
+    try:
+        grades = grade(sub, "calibration", out=out, seed=7, jobs=2, timeout=60)
+    except BaseException:
+        _unnest(sub / "deep")
+        raise
+    finally:
+        mp.undo()
+    yield {"sub": sub, "out": out, "grades": grades}
+    _unnest(sub / "deep")
+
+
+WANT = {  # id: (status, total)
+    "alice": ("graded", "10"),
+    _untrusted.student_id(ZOE): ("graded", "10"),
+    "deep": ("file-limit", "0"),
+    _untrusted.student_id(BAD_FILE[:-6]): ("unreadable", "0"),
+    _untrusted.student_id("Doe, Jane"): ("unreadable", "0"),
+    "Doe_ Jane": ("unreadable", "0"),
+}
+
+
+def test_every_student_has_a_row_of_their_own(hostile):
+    rows = _rows(hostile["out"])
+    got = {k: (r["status"], r["total"]) for k, r in rows.items()}
+    for sid, want in WANT.items():
+        assert got.pop(sid) == want, (sid, rows.get(sid))
+    mallory = got.pop("mallory")
+    assert mallory[0] == "graded" and float(mallory[1]) <= 4  # its reads all forged: q2 only
+    # bob's folder and bob.ipynb: both reported, neither graded, two rows, two files
+    assert sorted(got.values()) == [("id-collision", "0")] * 2 and len(got) == 2
+    assert sorted(r["student"] for k, r in rows.items() if k in got) == ["bob", "bob"]
+    assert rows[_untrusted.student_id(ZOE)]["student"] == "Zo\\xeby"
+
+
+def test_feedback_one_file_each_printable_and_its_own(hostile):
+    fb = hostile["out"] / "feedback"
+    files = {p.name: p.read_text(encoding="utf-8") for p in fb.iterdir()}
+    assert sorted(files) == sorted(f"{k}.txt" for k in _rows(hostile["out"]))
+    assert len(files) == 9
+    assert "not JSON" in files["Doe_ Jane.txt"]
+    assert "CPU seconds" in files[f"{_untrusted.student_id('Doe, Jane')}.txt"]
+    assert "levels deep" in files["deep.txt"]
+    for text in files.values():
+        assert text == _untrusted.clean(text, newlines=True)
+    assert any("id-collision" in n for n in json.loads(
+        (hostile["out"] / "grading.json").read_text(encoding="utf-8"))["skipped"])
+
+
+def _cmdline(p: psutil.Process) -> list[str]:
+    try:
+        return p.cmdline()
+    except psutil.Error:  # gone, or a zombie
+        return []
+
+
+def _wait(predicate, seconds: float = 120.0) -> None:
+    deadline = time.monotonic() + seconds
+    while not predicate():
+        assert time.monotonic() < deadline, "the event never came"
+        time.sleep(0.05)
+
+
+def test_ctrl_c_during_a_regrade_keeps_the_old_row(hostile):
+    sub, out = hostile["sub"], hostile["out"]
+    before = _rows(out)["alice"]
+    write_variant("calibration", sub / "alice" / "calibration.ipynb",
+                  first_cell="while True:\n    pass")  # handed in again; it loops in its box
+    record = out / "grading.json"
+    proc = subprocess.Popen([sys.executable, "-m", "gpsaccel", "grade", str(sub), "--assignment",
+                             "calibration", "--out", str(out), "--student", "alice",
+                             "--timeout", "60"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    seen: set[int] = set()
+    try:
+        me = psutil.Process(proc.pid)
+
+        def in_the_box() -> bool:  # the regrade is recorded, then its notebook's box runs
+            if not json.loads(record.read_text(encoding="utf-8")).get("regrades"):
+                return False
+            kids = me.children(recursive=True)
+            seen.update(p.pid for p in kids)
+            return any(_cmdline(p) not in ([], me.cmdline()) for p in kids)  # exec'd: the box
+
+        _wait(in_the_box)
+        assert _rows(out)["alice"] == before  # the old row stays while the regrade runs
+        os.kill(proc.pid, signal.SIGINT)
+        stdout, stderr = proc.communicate(timeout=120)
+    finally:
+        kill_pids([proc.pid, *seen])
+    assert proc.returncode != 0, (stdout, stderr)
+    assert _rows(out)["alice"] == before
+    info = json.loads(record.read_text(encoding="utf-8"))
+    assert info["student"] is None and info["seed"] == 7  # the class record is kept
+    assert info["regrades"][-1]["student"] == "alice" and info["regrades"][-1]["interrupted"]
+
+
+def test_a_regrade_replaces_its_row_and_is_appended_to_the_record(hostile):
+    sub, out = hostile["sub"], hostile["out"]
+    write_variant("calibration", sub / "mallory" / "calibration.ipynb")  # the honest one now
+    again = grade(sub, "calibration", out=out, student="mallory", timeout=60)
+    assert [(g.status, g.total) for g in again] == [("graded", 10.0)]
+    rows = _rows(out)
+    assert rows["mallory"]["total"] == "10" and len(rows) == 9
+    assert rows["deep"]["status"] == "file-limit" and rows["alice"]["total"] == "10"
+    info = json.loads((out / "grading.json").read_text(encoding="utf-8"))
+    assert info["student"] is None and [r["student"] for r in info["regrades"]] == \
+        ["alice", "mallory"]
+    assert info["regrades"][-1]["seed"] == 7 and not info["regrades"][-1]["interrupted"]

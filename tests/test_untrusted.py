@@ -1,0 +1,195 @@
+"""What a student controls, made safe once (gpsaccel._untrusted): ids, the bounded walk, clean
+text; the notebook parsed under limits; a shape the box declares bounded before allocation.
+Small and fast: the class graded end to end is tests/assignments/test_hostile_class.py."""
+
+from __future__ import annotations
+
+import json
+import os
+import unicodedata
+
+import numpy as np
+import pytest
+
+from gpsaccel import _untrusted as u
+from gpsaccel.assignments import notebook as nbm
+from gpsaccel.assignments.questions import Answer, bounded, replay
+
+LONG = "x" * 130
+NAMES = [
+    "alice", "Doe, Jane", "Doe_ Jane", "O'Brien", "O\u2019Brien", "O\u02bcBrien",
+    unicodedata.normalize("NFC", "Jos\u00e9"), unicodedata.normalize("NFD", "Jos\u00e9"),
+    LONG + "a", LONG + "b", os.fsdecode(b"bad\xff\xfename"), os.fsdecode(b"bad\xfe\xffname"),
+    "evil\u202etxt.exe", "a/../b", "..", ".hidden", "", "con", "tab\tname", "Bob", "bob",
+]
+
+
+def test_every_name_gets_its_own_printable_file_safe_id():
+    ids = [u.student_id(n) for n in NAMES]
+    # "Bob"/"bob" differ only in case: the one pair collisions() must report
+    assert u.collisions(ids) == [[NAMES.index("Bob"), NAMES.index("bob")]]
+    assert len(set(ids)) == len(NAMES)
+    for name, sid in zip(NAMES, ids, strict=True):
+        assert sid.isprintable() and sid == u.clean(sid), name
+        assert "/" not in sid and not sid.startswith(".") and 0 < len(sid) <= 100, sid
+        sid.encode("utf-8")  # strict: every id can be written anywhere
+    assert u.student_id("alice") == "alice" and u.student_id("Doe_ Jane") == "Doe_ Jane"
+    assert u.student_id("Doe, Jane").startswith("Doe_ Jane-")
+    # the same raw bytes always give the same id; bytes and str agree
+    assert u.student_id(b"bad\xff\xfename") == u.student_id(os.fsdecode(b"bad\xff\xfename"))
+
+
+def test_hashed_ids_tell_apart_what_collides():
+    assert u.hashed_id("bob") != u.hashed_id("bob.ipynb") != u.hashed_id("Bob")
+
+
+def test_clean_drops_controls_bidi_and_zero_width_only():
+    text = "a\x1b[31mb\u202ec\u2066d\u200be\u2028f\x85g\t\u00e5" + os.fsdecode(b"\xff") + "z"
+    assert u.clean(text) == "a[31mbcdef" + "g \u00e5\ufffdz"
+    assert u.clean("one\ntwo") == "onetwo" and u.clean("one\ntwo", newlines=True) == "one\ntwo"
+    assert u.clean("Φ₂₃ = 0.5 (x̂, P)") == "Φ₂₃ = 0.5 (x̂, P)"
+
+
+def test_json_safe_writes_bytes_that_are_not_utf8_escaped():
+    bad = os.fsdecode(b"class/bad\xffname.py")
+    out = u.json_safe({"results": [{"subject": bad, bad: 1, "n": 2.5}]})
+    text = json.dumps(out, ensure_ascii=False)
+    text.encode("utf-8")
+    assert "bad\\\\xffname.py" in text and out["results"][0]["n"] == 2.5
+
+
+def _unnest(top) -> None:
+    """Remove a chain of nested folders from the top down, each step on short paths (pytest's
+    rmtree recurses and dies on it; full paths would cost O(n²) lookups)."""
+    top, k = str(top), 0
+    while top is not None:
+        inner = None
+        for e in os.scandir(top):
+            if e.is_dir(follow_symlinks=False) and inner is None:
+                k += 1
+                inner = os.path.join(os.path.dirname(top), f".unnest-{k}")
+                os.rename(e.path, inner)
+            elif not e.is_dir(follow_symlinks=False):
+                os.unlink(e.path)
+        os.rmdir(top)
+        top = inner
+
+
+def _nest(root, depth):
+    """``depth`` folders one in the other, made relative to an open folder (O(depth))."""
+    fd = os.open(root, os.O_RDONLY)
+    for _ in range(depth):
+        os.mkdir("d", dir_fd=fd)
+        fd, old = os.open("d", os.O_RDONLY, dir_fd=fd), fd
+        os.close(old)
+    os.close(fd)
+
+
+def test_walk_stops_at_the_depth_limit_without_recursion(tmp_path):
+    (tmp_path / "top").mkdir()
+    _nest(str(tmp_path / "top"), 1500)  # rglob died with RecursionError here
+    try:
+        with pytest.raises(u.WalkLimit) as exc:
+            list(u.walk(tmp_path / "top"))
+    finally:
+        _unnest(tmp_path / "top")
+    assert exc.value.kind == "depth" and exc.value.where.count("/") == u.MAX_DEPTH - 1
+
+
+def test_walk_stops_at_the_entry_limit_and_never_follows_links(tmp_path):
+    (tmp_path / "a").mkdir()
+    (tmp_path / "a" / "x.ipynb").write_text("{}")
+    os.symlink(tmp_path / "a", tmp_path / "link")
+    (tmp_path / ".hidden").mkdir()
+    (tmp_path / ".hidden" / "y.ipynb").write_text("{}")
+    got = [rel for rel, _ in u.walk(tmp_path, skip=lambda n: n.startswith("."))]
+    assert got == ["a", "link", "a/x.ipynb"]
+    for i in range(30):
+        (tmp_path / "a" / f"f{i}").write_text("")
+    with pytest.raises(u.WalkLimit) as exc:
+        list(u.walk(tmp_path, max_entries=20))
+    assert exc.value.kind == "entries"
+
+
+def _notebook(path, cells):
+    path.write_text(json.dumps({"cells": [{"cell_type": "code", "source": c, "metadata": {},
+                                           "outputs": []} for c in cells],
+                                "metadata": {}, "nbformat": 4, "nbformat_minor": 5}))
+    return path
+
+
+def test_a_notebook_is_parsed_and_transformed_in_a_child(tmp_path):
+    nb = nbm.load(_notebook(tmp_path / "ok.ipynb", ["%time x = 1\n!ls", "y = 2"]))
+    assert [c.number for c in nb.cells] == [1, 2]
+    assert nb.cells[0].python == "get_ipython().run_line_magic('time', 'x = 1')\n" \
+                                 "get_ipython().system('ls')\n"
+    assert "_G_CELLS" in nbm.module_source(nb, [])
+
+
+def test_nested_json_is_unreadable_not_a_grader_error(tmp_path):
+    path = tmp_path / "nested.ipynb"
+    path.write_text("[" * 100_000)
+    with pytest.raises(nbm.NotebookError, match="nested too deep"):
+        nbm.load(path)
+
+
+def test_a_cell_of_magics_stops_at_the_cpu_limit(tmp_path, monkeypatch):
+    # 300 lines of %time take about 3 CPU s to transform (400: 5.7 s); the limit is 1 s here
+    monkeypatch.setattr(nbm, "LOAD_CPU", 1)
+    path = _notebook(tmp_path / "magic.ipynb", ["%time x = 1\n" * 300])
+    with pytest.raises(nbm.NotebookError, match="CPU seconds"):
+        nbm.load(path)
+
+
+def test_a_forged_shape_is_bounded_before_anything_is_allocated():
+    declared = (3, 3)
+    assert bounded((5, 4), declared) == (5, 4)  # an honest wrong shape stays as it is
+    for forged in ((10**9, 10**9), (2**62,) * 6, (-5, 2**40)):
+        b = bounded(forged, declared)
+        assert all(d >= 0 for d in b) and int(np.prod(b)) <= 1 << 16 and b != declared
+    read = nbm.Read("f", (np.zeros(2),), (declared,))
+    f = replay([read], [Answer("shape", shape=(2**31, 2**31), which=0)], "f")
+    out = f(np.zeros(2))
+    assert out.nbytes <= 8 << 16 and out.shape != declared and np.isnan(out).all()
+
+
+def test_check_json_names_a_file_that_is_not_utf8(tmp_path, capsys):
+    from pathlib import Path
+
+    from gpsaccel.cli import main
+
+    src = Path(__file__).parent / "submissions" / "broken_no_function.py"
+    folder = tmp_path / "class"
+    folder.mkdir()
+    (folder / os.fsdecode(b"bad\xff\xfename.py")).write_bytes(src.read_bytes())
+    # it crashed: 'utf-8' codec can't encode characters ...: surrogates not allowed
+    assert main(["check", str(folder), "--json", str(tmp_path / "out.json")]) == 1
+    data = json.loads((tmp_path / "out.json").read_text(encoding="utf-8"))
+    assert data["results"][0]["subject"] == "bad\\xff\\xfename.py"
+    capsys.readouterr().out.encode("utf-8")  # the table too: no lone surrogate
+
+
+def test_an_interrupted_run_leaves_not_graded_rows_and_raises(tmp_path, monkeypatch):
+    import csv
+    from dataclasses import asdict
+
+    from gpsaccel.assignments import grading
+
+    sub = tmp_path / "class"
+    for name in ("alice", "bob", "carol"):
+        (sub / name).mkdir(parents=True)
+    (sub / "alice" / "calibration.ipynb").write_text("{}")
+
+    def interrupted(entries, folder, settings, jobs, done):  # one result, then Ctrl-C
+        done(0, asdict(grading.unusable("calibration", "alice", "", "unreadable", "x")))
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(grading, "_forked", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        grading.grade(sub, "calibration", out=tmp_path / "out", seed=3)
+    with open(tmp_path / "out" / "grades.csv", newline="", encoding="utf-8") as f:
+        rows = {r["student"]: r["status"] for r in csv.DictReader(f)}
+    assert rows == {"Points Possible": "", "alice": "unreadable", "bob": "not-graded",
+                    "carol": "not-graded"}
+    info = json.loads((tmp_path / "out" / "grading.json").read_text(encoding="utf-8"))
+    assert info["interrupted"] and info["graded"] == 1
