@@ -17,6 +17,7 @@ from __future__ import annotations
 import importlib
 import importlib.util
 import sys
+import types
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
@@ -53,6 +54,19 @@ def attach(package: str, submodules: Iterable[str] = (),
     def __dir__() -> list[str]:
         return sorted(set(vars(sys.modules[package])) | set(where))
 
+    class _Package(types.ModuleType):
+        """Importing ``package.name`` binds the sub-module as ``package.name``; where a public
+        name is a function of the same name in it (``check.student_filter``), the eager package
+        rebound the function after the import, so the function is what ``package.name`` stays."""
+
+        def __setattr__(self, name: str, value: Any) -> None:
+            entry = where.get(name)
+            if (entry is not None and entry[1] is not None and isinstance(value, types.ModuleType)
+                    and value.__name__ == f"{package}.{name}"):
+                return
+            super().__setattr__(name, value)
+
+    sys.modules[package].__class__ = _Package
     return __getattr__, __dir__
 
 

@@ -106,6 +106,19 @@ def test_every_public_name_resolves_and_is_what_mypy_sees(package):
         module.no_such_name  # noqa: B018
 
 
+def test_a_function_named_like_its_module_stays_the_function_after_the_module_is_imported():
+    """``import gpsaccel.check.student_filter`` binds the sub-module on the package; the public
+    name of the same name (the function) must win, as it did when the package was eager (the
+    CLI's ``compare`` called the module and failed)."""
+    code = ("import gpsaccel.check.student_filter, gpsaccel.check.jacobians\n"
+            "from gpsaccel.check import student_filter, jacobians\n"
+            "import gpsaccel.check as c\n"
+            "assert callable(student_filter) and callable(jacobians), (student_filter, jacobians)\n"
+            "assert c.student_filter is student_filter\n"
+            "assert c.student_filter.__module__ == 'gpsaccel.check.student_filter'\n")
+    loaded_after(code)  # asserts the subprocess exits 0
+
+
 def test_sub_modules_stay_reachable_as_attributes_and_star_import_works():
     import gpsaccel
 
