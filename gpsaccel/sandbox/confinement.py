@@ -261,13 +261,18 @@ def sweep_stale_boxes(parent: str | None = None) -> int:
 
 
 def _remove_tree(path: str) -> None:
-    """rmtree that also removes what a student made unreadable (chmod 000 folders)."""
+    """rmtree that also removes what a student made unreadable (chmod 000 folders).  Modes are
+    changed only inside ``path``: the folder that holds it (``/tmp``) is never touched (a failed
+    removal of the box itself once made ``/tmp`` 0700, which locked every other user out)."""
+    root = os.path.abspath(path)
+
     def retry(func, p, _exc):  # noqa: ANN001
-        try:
-            os.chmod(os.path.dirname(p), 0o700)
-            os.chmod(p, 0o700)
-        except OSError:
-            pass
+        for q in (os.path.dirname(p), p):
+            if os.path.abspath(q) == root or os.path.abspath(q).startswith(root + os.sep):
+                try:
+                    os.chmod(q, 0o700)
+                except OSError:
+                    pass
         try:
             func(p)
         except OSError:

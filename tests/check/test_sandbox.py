@@ -331,3 +331,21 @@ def test_bwrap_mounts_tmp_before_the_interpreters_folders(tmp_path, monkeypatch)
     first_bind = cmd.index("--ro-bind")
     assert first_tmpfs < first_bind
     assert cmd.count("/tmp") == 1  # mounted once
+
+
+def test_removing_a_box_never_changes_the_mode_of_the_folder_that_holds_it(tmp_path):
+    """A box lives in /tmp; removing it once chmod-ed its parent (/tmp) to 0700 when the box's own
+    folder could not be removed, which locked every other user (and every later box) out."""
+    from gpsaccel.sandbox import confinement
+
+    parent = tmp_path / "shared"
+    parent.mkdir()
+    parent.chmod(0o1777)
+    confinement._remove_tree(str(parent / "gone-already"))  # rmtree fails on the root itself
+    box = parent / "box"
+    (box / "locked" / "deep").mkdir(parents=True)
+    (box / "locked" / "deep" / "f").write_text("x")
+    (box / "locked").chmod(0)  # what a student can do to a folder of theirs
+    confinement._remove_tree(str(box))
+    assert not box.exists()
+    assert parent.stat().st_mode & 0o7777 == 0o1777
