@@ -258,7 +258,6 @@ def _cmd_check(args: argparse.Namespace) -> int:
         check_many,
         find_submissions,
         log_path,
-        printable,
         secret_seed,
         table,
         write_json,
@@ -279,22 +278,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
     spec = _dask_spec(args.dask)
     if spec is None:
         spec = "processes"  # a process per check, even with --workers 1
-    try:
-        limits = sandbox.Limits(memory=int(args.memory * 2**20), time=args.timeout,
-                                file_size=int(args.max_file_size * 2**20),
-                                processes=args.max_processes,
-                                output=int(args.max_output * 2**20))
-    except ValueError as exc:
-        raise ValueError(str(exc).replace("limits.", "--")) from None
-    backend = sandbox.resolve_backend(args.sandbox)
-    sandbox.refuse_unsafe_basic(backend, args.allow_unsafe_basic)
-    # a class is graded on secret data unless a seed is given; the seed is in the JSON
-    seed = secret_seed() if args.seed is None else args.seed
-    settings = {"problem": args.problem, "runs": args.runs, "seed": seed,
-                "seed_drawn": args.seed is None,
-                "timeout": args.timeout,
-                "sandbox": backend, "allow_gpsaccel": args.allow_gpsaccel,
-                "limits": {k: v for k, v in vars(limits).items()}}
+    limits, backend, seed, settings = _check_settings(args, sandbox, secret_seed)
     print(f"sandbox: {backend}" + (" (bubblewrap not available: apt-get install bubblewrap)"
                                    if backend != "bwrap" and args.sandbox == "auto" else ""),
           file=sys.stderr)
@@ -327,7 +311,38 @@ def _cmd_check(args: argparse.Namespace) -> int:
             print(f"wrote {args.json} ({len(done)} of {len(files)} checked)")
         print("gpsaccel check: interrupted", file=sys.stderr)
         return 130
-    seconds = time.perf_counter() - t0
+    return _check_report(args, results, settings, time.perf_counter() - t0)
+
+
+def _check_settings(args: argparse.Namespace, sandbox, secret_seed) -> tuple:  # noqa: ANN001
+    """The limits, backend and seed of ``gpsaccel check``, and the settings its JSON records;
+    a bad limit is named by its flag."""
+    try:
+        limits = sandbox.Limits(memory=int(args.memory * 2**20), time=args.timeout,
+                                file_size=int(args.max_file_size * 2**20),
+                                processes=args.max_processes,
+                                output=int(args.max_output * 2**20))
+    except ValueError as exc:
+        raise ValueError(str(exc).replace("limits.", "--")) from None
+    backend = sandbox.resolve_backend(args.sandbox)
+    sandbox.refuse_unsafe_basic(backend, args.allow_unsafe_basic)
+    # a class is graded on secret data unless a seed is given; the seed is in the JSON
+    seed = secret_seed() if args.seed is None else args.seed
+    settings = {"problem": args.problem, "runs": args.runs, "seed": seed,
+                "seed_drawn": args.seed is None,
+                "timeout": args.timeout,
+                "sandbox": backend, "allow_gpsaccel": args.allow_gpsaccel,
+                "limits": {k: v for k, v in vars(limits).items()}}
+    return limits, backend, seed, settings
+
+
+def _check_report(args: argparse.Namespace, results: list, settings: dict, seconds: float) -> int:
+    """The JSON first (printing can fail), then the table and the one-line summary; exit 0 when
+    every submission passed."""
+    from gpsaccel._untrusted import json_safe
+    from gpsaccel.check.batch import printable, table, write_json
+
+    seed, backend = settings["seed"], settings["sandbox"]
     results = json_safe(results)  # a name that is not UTF-8 written \xNN, never a crash
     if args.json is not None:  # first: printing can fail (a closed terminal), the file must not
         path = write_json(results, args.json, **settings)

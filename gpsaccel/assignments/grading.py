@@ -52,7 +52,6 @@ import io
 import json
 import math
 import os
-import re
 import secrets
 import tempfile
 import time
@@ -266,6 +265,51 @@ def _stop_message(failure: str, where: str, limits) -> str:
     return f"The notebook stopped {where}: {why}. Nothing after that was graded."
 
 
+def _cell_notes(cells: Sequence, results: Sequence) -> list[str]:
+    """The notes on the student's own cells: which raised, which lines were not run."""
+    notes: list[str] = []
+    skipped: list[str] = []
+    for cell, res in zip(cells, results, strict=True):
+        if res is None:
+            break
+        msg = answer_from(res, 0)
+        if msg.status == "exception" and cell.number:
+            notes.append(f"Cell {cell.number} raised {msg.message.split(': ', 1)[-1]}")
+        elif msg.message and msg.status == "ok":
+            skipped += [m for m in msg.message.split() if m not in skipped]
+    if skipped:
+        notes.append("Not run when graded (IPython magics and shell lines other than %%time, "
+                     "%%capture, %%writefile): " + ", ".join(skipped[:10]))
+    return notes
+
+
+def _where_stopped(k: int, cells: Sequence, reads: Sequence[nbm.Read],
+                   spans: dict[str, tuple[int, int]]) -> str:
+    """Where a box that returned ``k`` results stopped: a cell, a read of a question, or after."""
+    if k < len(cells):
+        number = cells[k].number
+        return f"in cell {number}" if number else "before the first cell"
+    if k - len(cells) < len(reads):
+        failed = reads[k - len(cells)]
+        asked = next(q for q, (a, b) in spans.items() if a <= k - len(cells) < b)
+        return f"while {'reading' if failed.value else 'calling'} {failed.name} ({asked})"
+    return "after its last answer"
+
+
+def _question_report(q: Question, nb: nbm.Notebook, draw: Draw, answers: list[Answer],
+                     timeout: float) -> Report:
+    """One question's report: graded from a file, not run (the notebook stopped before it),
+    or graded from its answers."""
+    if q.file is not None:
+        return _grade_file(q, nb, draw, timeout)
+    if any(x.status == "not-run" for x in answers):
+        rep = Report(q.name)
+        rep.add("not-run", text="Not graded: the notebook stopped before this question "
+                "(see above).")
+        return rep
+    return _safe_grade(q, draw, answers)
+
+
 def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
                    secret: bytes | None = None, sandbox: str = "auto",
                    timeout: float = TIMEOUT, file: str = "", sid: str = "") -> Grade:
@@ -301,46 +345,16 @@ def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
         box = sb.run(sub, calls, limits, backend=sandbox, allow_gpsaccel=True)
     # ---- the box is empty from here on: nothing of the student's runs while answers exist
     results = box.results + [None] * (len(calls) - len(box.results))
-    skipped: list[str] = []
-    for cell, res in zip(run.cells, results[:len(run.cells)], strict=True):
-        if res is None:
-            break
-        msg = answer_from(res, 0)
-        if msg.status == "exception" and cell.number:
-            notes.append(f"Cell {cell.number} raised {msg.message.split(': ', 1)[-1]}")
-        elif msg.message and msg.status == "ok":
-            skipped += [m for m in msg.message.split() if m not in skipped]
-    if skipped:
-        notes.append("Not run when graded (IPython magics and shell lines other than %%time, "
-                     "%%capture, %%writefile): " + ", ".join(skipped[:10]))
+    notes += _cell_notes(run.cells, results[:len(run.cells)])
     answers = [answer_from(res, len(r.shapes)) for r, res in
                zip(reads, results[len(run.cells):], strict=True)]
     status = "graded"
     if box.failure is not None:
         status = box.failure
-        k = len(box.results)
-        if k < len(run.cells):
-            number = run.cells[k].number
-            where = f"in cell {number}" if number else "before the first cell"
-        elif k - len(run.cells) < len(reads):
-            failed = reads[k - len(run.cells)]
-            asked = next(q for q, (a, b) in spans.items() if a <= k - len(run.cells) < b)
-            where = f"while {'reading' if failed.value else 'calling'} {failed.name} ({asked})"
-        else:
-            where = "after its last answer"
+        where = _where_stopped(len(box.results), run.cells, reads, spans)
         notes.append(_stop_message(box.failure, where, limits))
-    reports: dict[str, Report] = {}
-    for q in qs:
-        a, b = spans[q.name]
-        if q.file is not None:
-            reports[q.name] = _grade_file(q, nb, draws[q.name], timeout)
-        elif any(x.status == "not-run" for x in answers[a:b]):
-            rep = Report(q.name)
-            rep.add("not-run", text="Not graded: the notebook stopped before this question "
-                    "(see above).")
-            reports[q.name] = rep
-        else:
-            reports[q.name] = _safe_grade(q, draws[q.name], answers[a:b])
+    reports = {q.name: _question_report(q, nb, draws[q.name], answers[slice(*spans[q.name])],
+                                        timeout) for q in qs}
     scores = {q.name: q.score(reports[q.name]) for q in qs}
     codes = {k: r.codes for k, r in reports.items()}
     g = Grade(_untrusted.shown(student), file, scores, possible, status, "", codes,
