@@ -69,7 +69,7 @@ def jacobians(jacobian_A: object, jacobian_B: object, jacobian_C: object, seed: 
               n_random: int = 20) -> Report:
     """Question 1: the student's A(x, u), B(x, u), C(x), checked by
     :func:`gpsaccel.check.jacobians` (analytic, element by element); never raises."""
-    from gpsaccel.check import jacobians as check_jacobians
+    from gpsaccel.check.jacobians import jacobians as check_jacobians  # the function itself
 
     given = {"A": jacobian_A, "B": jacobian_B, "C": jacobian_C}
     missing = [k for k, v in given.items() if v is None or v is Ellipsis]

@@ -26,7 +26,7 @@ A is nilpotent here (A² = 0), so the exact e^{ΔT·A} equals I + ΔT·A and pas
 Every wrong element is named in 1-based course notation (A₁₃), with the expected expression, the
 student's and the right value at the first state where it differs, and, for the recognised
 mistakes, the likely cause.  Codes: ``jacobian-A``, ``jacobian-B``, ``jacobian-C``,
-``dt-linearization``, ``omega-dt-gamma``; ``not-callable``, ``exception``, ``shape``,
+``dt-linearization``, ``omega-dt-gamma``; ``not-callable``, ``exception``, ``returns-none``, ``shape``,
 ``not-finite`` for what cannot be checked.
 """
 
@@ -134,6 +134,10 @@ def _call(report: Report, name: str, fn: Callable[..., object], args: tuple, sha
         tb = "".join(traceback.format_exception_only(type(exc), exc)).strip()
         report.add("exception", text="{where} raised {error} at x = {x}.", where=what,
                    observed={"error": tb, "x": np.round(args[0], 4).tolist()})
+        return None
+    if out is None:  # a body still `...` or a missing return: say so, not "shape ()"
+        report.add("returns-none", text="{where} returned None: end it with a return "
+                   "statement.", where=what)
         return None
     near = np.hypot(x[3] - x[0], x[4] - x[1]) < 0.1
     return as_array(report, what, out, shape, _RETURNED, x=np.round(x, 6).tolist(),

@@ -3,11 +3,14 @@ model's mistakes, an unwrapped residual); the checks on their own."""
 
 from __future__ import annotations
 
+import shutil
+
 import numpy as np
 import pytest
 
 from gpsaccel import CoopModel
 from gpsaccel.assignments import coop, grade
+from gpsaccel.assignments.generate import student_package_dir
 from gpsaccel.coop import model as cm
 from gpsaccel.coop.filters import run_ekf
 
@@ -35,6 +38,9 @@ def graded(tmp_path_factory):
                   [(F_EULER, "F = dt * jacobian_A(x, u)")])
     write_variant("coop", sub / "zoh" / "coop.ipynb", [(G_EULER, (
         "G = (dt * np.eye(6) + dt**2 / 2 * jacobian_A(x, u)) @ jacobian_B(x, u)"))])
+    released = sub / "released" / "coop.ipynb"  # what the wheel hands out, run as it is
+    released.parent.mkdir()
+    shutil.copy(student_package_dir() / "coop" / "coop.ipynb", released)
     grades = grade(sub, "coop", out=sub.parent / "coop-grades", jobs=2, timeout=120, seed=11)
     return {g.student: g for g in grades}
 
@@ -44,6 +50,16 @@ def test_solution_full_marks_blank_zero(graded):
     blank = graded["blank"]
     assert blank.status == "graded" and blank.total == 0
     assert blank.codes["q3"] == ["not-defined"]
+
+
+def test_the_released_notebook_run_as_handed_out_gets_findings_not_grader_errors(graded):
+    """Its functions are defined with bodies `...` (they return None): each question says so
+    to the student; none of them is a grader-error (q1 was, when check.jacobians resolved to the
+    module of that name: TypeError)."""
+    g = graded["released"]
+    assert g.status == "graded" and g.total == 0, g.feedback
+    assert g.codes == {"q1": ["returns-none"], "q2": ["returns-none"], "q3": ["returns-none"]}
+    assert "grader-error" not in g.feedback and "A(x, u) returned None" in g.feedback
 
 
 def test_mistakes_lose_exactly_their_questions_and_name_the_codes(graded):
@@ -84,6 +100,8 @@ def test_jacobian_checks_call_the_checker_and_name_the_element():
     assert r.codes == ["jacobian-B"] and "B₃₂" in str(r)
     assert coop.jacobians(cm.jacobian_A, cm.jacobian_B, lambda x: 1 / 0).codes == ["exception"]
     assert coop.jacobians(None, cm.jacobian_B, cm.jacobian_C).codes == ["not-defined"]
+    r = coop.jacobians(cm.jacobian_A, lambda x, u: None, cm.jacobian_C)  # a body still `...`
+    assert r.codes == ["returns-none"] and "B(x, u) returned None" in str(r)
 
 
 def test_dt_linearization_grades_G_against_the_students_own_B():
