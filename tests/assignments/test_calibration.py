@@ -59,9 +59,11 @@ def test_question_3_grades_the_functions_on_the_draws_data():
 def test_question_1_uses_the_students_rate():
     from gpsaccel.assignments.calibration import rate_model
 
-    for rate in graded.RATES_HZ:
+    for rate in graded.RATES_HZ:  # Δt is the student's own; the 5 Hz GPS falls on a step of it
         m = rate_model(rate)
-        assert m.dt * m.gps_every == 0.2 and m.dt == 1 / rate
+        assert m.dt == 1 / rate and m.gps_every * 5 == rate, rate  # exact: integers, one division
+        # GPS interval gps_every·Δt: 0.2 s to two roundings (35 Hz: 7 · (1/35) = 0.19999999999999998)
+        assert abs(m.gps_interval - 0.2) <= 2 * np.spacing(0.2), rate
     dt = 1 / 400
     Phi = np.array([[1.0, dt, -dt**2 / 2], [0.0, 1.0, -dt], [0.0, 0.0, 1.0]])
     given = [Phi, -np.array([[dt**2 / 2], [dt], [0.0]]), np.eye(2, 3), np.diag([1.0, 0.04**2]),
