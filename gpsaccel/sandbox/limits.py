@@ -94,6 +94,13 @@ def _preexec(limits: Limits, nproc: int, drop_caps: bool, cap_last: int,
                 os.write(fd, b"0")
             finally:
                 os.close(fd)
+    if c.reveal:  # before the rlimits: the parent's descriptors are still open here (close_fds
+        # comes after preexec_fn), so with RLIMIT_NOFILE set first, a grader holding more than
+        # open_files descriptors could not open the folders to reveal and no box would start
+        libc = _libc()
+        if libc is None:
+            raise OSError("the box's reveal needs Linux's libc")
+        _boxuser.apply_reveal(libc, c.reveal)
     cpu = int(limits.time) + 2
     for res, value in ((resource.RLIMIT_AS, limits.memory), (resource.RLIMIT_CPU, cpu),
                        (resource.RLIMIT_FSIZE, limits.file_size),
@@ -101,11 +108,6 @@ def _preexec(limits: Limits, nproc: int, drop_caps: bool, cap_last: int,
                        (resource.RLIMIT_NOFILE, limits.open_files),
                        (resource.RLIMIT_CORE, 0)):
         resource.setrlimit(res, (value, value))
-    if c.reveal:
-        libc = _libc()
-        if libc is None:
-            raise OSError("the box's reveal needs Linux's libc")
-        _boxuser.apply_reveal(libc, c.reveal)
     if drop_caps:  # root: after exec the permitted set is the bounding set, so empty it
         for cap in range(cap_last + 1):
             _prctl(PR_CAPBSET_DROP, cap)

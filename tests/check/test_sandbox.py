@@ -349,3 +349,21 @@ def test_removing_a_box_never_changes_the_mode_of_the_folder_that_holds_it(tmp_p
     confinement._remove_tree(str(box))
     assert not box.exists()
     assert parent.stat().st_mode & 0o7777 == 0o1777
+
+
+def test_a_grader_holding_many_descriptors_still_starts_its_boxes(tmp_path, backend):
+    """A long-lived grader (a Jupyter kernel, a Dask worker, a test worker that ran hundreds of
+    boxes) may hold more descriptors than a box may open.  They are still open in the child when
+    preexec runs (close_fds comes after it): with RLIMIT_NOFILE set before the root-only reveal
+    mounts opened their folders, every box of such a grader failed to start."""
+    (tmp_path / "student.py").write_text("def f(x):\n    return x + 1.0\n")
+    sub = sb.load_submission(tmp_path / "student.py", "f")
+    held = [os.open(os.devnull, os.O_RDONLY) for _ in range(LIMITS.open_files + 44)]
+    try:
+        box = sb.run(sub, [sb.Call("f", (np.ones(2),), (sb.Output("y", (2,)),))], LIMITS,
+                     backend)
+    finally:
+        for fd in held:
+            os.close(fd)
+    assert box.failure is None, (box.failure, box.detail)
+    np.testing.assert_array_equal(box.results[0]["y"], np.full(2, 2.0))
