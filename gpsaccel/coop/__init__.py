@@ -1,7 +1,8 @@
 """Cooperative air/ground localization (report 002): a UGV and a UAV, nonlinear.
 
 * :mod:`~gpsaccel.coop.model`: f, h, the Jacobians A, B, C, the DT linearization, the truth;
-* :mod:`~gpsaccel.coop.filters`: one vectorised filter, the LKF, EKF and UKF through its hooks (filterpy is the tests' oracle);
+* :mod:`~gpsaccel.coop.filters`: one vectorised filter, the LKF, EKF and UKF through its
+  hooks (filterpy is the tests' oracle);
 * :mod:`~gpsaccel.coop.mistakes`: the homework's known mistakes as runnable filters;
 * :mod:`~gpsaccel.coop.montecarlo`: the NEES/NIS truth-model tests and the Q tuning.
 """
