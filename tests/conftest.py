@@ -214,3 +214,46 @@ def lesson_02_html(disk_cache):
     entry = disk_cache.path("cli", key, make)
     return (entry / "html", int((entry / "returncode").read_text()),
             (entry / "stdout").read_text(), (entry / "stderr").read_text())
+
+
+class NestedFolders:
+    """A chain of folders nested ``depth`` deep (what a hostile student hands in) and its removal:
+    both on short relative paths, since pytest's rmtree recurses and dies on it and full paths
+    would cost O(n²) lookups."""
+
+    @staticmethod
+    def make(root, depth: int) -> None:
+        """``depth`` folders ``d`` one in the other below the existing folder ``root``."""
+        import os
+
+        fd = os.open(root, os.O_RDONLY)
+        for _ in range(depth):
+            os.mkdir("d", dir_fd=fd)
+            fd, old = os.open("d", os.O_RDONLY, dir_fd=fd), fd
+            os.close(old)
+        os.close(fd)
+
+    @staticmethod
+    def remove(top) -> None:
+        """Remove ``top`` and the chain below it, from the top down."""
+        import os
+
+        top, k = str(top), 0
+        while top is not None:
+            inner = None
+            for e in os.scandir(top):
+                if e.is_dir(follow_symlinks=False) and inner is None:
+                    k += 1
+                    inner = os.path.join(os.path.dirname(top), f".unnest-{k}")
+                    os.rename(e.path, inner)
+                elif not e.is_dir(follow_symlinks=False):
+                    os.unlink(e.path)
+            os.rmdir(top)
+            top = inner
+
+
+@pytest.fixture(scope="session")
+def nested_folders() -> NestedFolders:
+    """Make and remove folders nested too deep for a recursive walk (tests/test_untrusted.py,
+    tests/assignments/test_hostile_class.py)."""
+    return NestedFolders()

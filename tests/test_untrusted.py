@@ -58,41 +58,14 @@ def test_json_safe_writes_bytes_that_are_not_utf8_escaped():
     assert "bad\\\\xffname.py" in text and out["results"][0]["n"] == 2.5
 
 
-def _unnest(top) -> None:
-    """Remove a chain of nested folders from the top down, each step on short paths (pytest's
-    rmtree recurses and dies on it; full paths would cost O(n²) lookups)."""
-    top, k = str(top), 0
-    while top is not None:
-        inner = None
-        for e in os.scandir(top):
-            if e.is_dir(follow_symlinks=False) and inner is None:
-                k += 1
-                inner = os.path.join(os.path.dirname(top), f".unnest-{k}")
-                os.rename(e.path, inner)
-            elif not e.is_dir(follow_symlinks=False):
-                os.unlink(e.path)
-        os.rmdir(top)
-        top = inner
-
-
-def _nest(root, depth):
-    """``depth`` folders one in the other, made relative to an open folder (O(depth))."""
-    fd = os.open(root, os.O_RDONLY)
-    for _ in range(depth):
-        os.mkdir("d", dir_fd=fd)
-        fd, old = os.open("d", os.O_RDONLY, dir_fd=fd), fd
-        os.close(old)
-    os.close(fd)
-
-
-def test_walk_stops_at_the_depth_limit_without_recursion(tmp_path):
+def test_walk_stops_at_the_depth_limit_without_recursion(tmp_path, nested_folders):
     (tmp_path / "top").mkdir()
-    _nest(str(tmp_path / "top"), 1500)  # rglob died with RecursionError here
+    nested_folders.make(tmp_path / "top", 1500)  # rglob died with RecursionError here
     try:
         with pytest.raises(u.WalkLimit) as exc:
             list(u.walk(tmp_path / "top"))
     finally:
-        _unnest(tmp_path / "top")
+        nested_folders.remove(tmp_path / "top")
     assert exc.value.kind == "depth" and exc.value.where.count("/") == u.MAX_DEPTH - 1
 
 

@@ -45,34 +45,12 @@ def _rows(out: Path) -> dict[str, dict[str, str]]:
         return {r["id"]: r for r in csv.DictReader(f) if r["student"] != "Points Possible"}
 
 
-def _unnest(top) -> None:
-    """Remove a chain of nested folders from the top down, each step on short paths (pytest's
-    rmtree recurses and dies on it; full paths would cost O(n²) lookups)."""
-    top, k = str(top), 0
-    while top is not None:
-        inner = None
-        for e in os.scandir(top):
-            if e.is_dir(follow_symlinks=False) and inner is None:
-                k += 1
-                inner = os.path.join(os.path.dirname(top), f".unnest-{k}")
-                os.rename(e.path, inner)
-            elif not e.is_dir(follow_symlinks=False):
-                os.unlink(e.path)
-        os.rmdir(top)
-        top = inner
-
-
-def _class(sub: Path) -> None:
+def _class(sub: Path, nested_folders) -> None:
     write_variant("calibration", sub / "alice" / "calibration.ipynb")
     write_variant("calibration", sub / ZOE / "calibration.ipynb")
     write_variant("calibration", sub / "mallory" / "calibration.ipynb", last_cell=FORGE)
     write_variant("calibration", sub / "deep" / "calibration.ipynb")
-    fd = os.open(sub / "deep", os.O_RDONLY)
-    for _ in range(1500):  # rglob died here with RecursionError before anyone was graded
-        os.mkdir("d", dir_fd=fd)
-        fd, old = os.open("d", os.O_RDONLY, dir_fd=fd), fd
-        os.close(old)
-    os.close(fd)
+    nested_folders.make(sub / "deep", 1500)  # rglob died here: RecursionError, nobody graded
     (sub / BAD_FILE).write_text("[" * 100_000)  # json recursed: grader-error, not unreadable
     (sub / "Doe, Jane").mkdir()
     (sub / "Doe, Jane" / "calibration.ipynb").write_text(json.dumps({"cells": [
@@ -84,22 +62,22 @@ def _class(sub: Path) -> None:
 
 
 @pytest.fixture(scope="module")
-def hostile(tmp_path_factory):
+def hostile(tmp_path_factory, nested_folders):
     root = tmp_path_factory.mktemp("hostile")
     sub = root / "class"
-    _class(sub)
+    _class(sub, nested_folders)
     out = root / "out"
     mp = pytest.MonkeyPatch()
     mp.setattr(nbm, "LOAD_CPU", 1)  # inherited by the forked children
     try:
         grades = grade(sub, "calibration", out=out, seed=7, jobs=2, timeout=60)
     except BaseException:
-        _unnest(sub / "deep")
+        nested_folders.remove(sub / "deep")
         raise
     finally:
         mp.undo()
     yield {"sub": sub, "out": out, "grades": grades}
-    _unnest(sub / "deep")
+    nested_folders.remove(sub / "deep")
 
 
 WANT = {  # id: (status, total)
