@@ -335,6 +335,9 @@ class LinearModel:
         for name, value in (("Phi", Phi), ("Gamma", Gamma), ("W", W), ("H", H), ("V", V),
                             ("M0", M0), ("x0", x0), ("every", every), ("n_epochs", n_epochs),
                             ("dt", dt), ("states", states), ("measurements", meas)):
+            if isinstance(value, np.ndarray):  # the model's own read-only copy: a filter that
+                value = np.array(value)        # updates in place (filterpy's square root did,
+                value.setflags(write=False)    # on x0) raises instead of changing the problem
             object.__setattr__(self, name, value)
 
     @property

@@ -123,12 +123,12 @@ class FilterpyInformation(_FilterpyAdapter):
     def __init__(self, model: FormModel) -> None:
         kf = FilterpyInformationFilter(dim_x=model.dim_x, dim_z=model.dim_z,
                                        compute_log_likelihood=False)
-        kf.F = np.asarray(model.Phi, dtype=float)  # filterpy keeps F⁻¹ too
-        kf.Q = np.asarray(model.Q, dtype=float)
-        kf.H = np.asarray(model.H, dtype=float)
+        kf.F = np.array(model.Phi, dtype=float)  # filterpy keeps F⁻¹ too
+        kf.Q = np.array(model.Q, dtype=float)
+        kf.H = np.array(model.H, dtype=float)
         kf.R_inv = np.linalg.inv(model.V)
         kf.P_inv = np.linalg.inv(model.M0)
-        kf.x = np.asarray(model.x0, dtype=float).reshape(-1, 1)
+        kf.x = np.array(model.x0, dtype=float).reshape(-1, 1)
         self.filter = kf
         self.K = np.zeros((model.dim_x, model.dim_z))
 
@@ -155,12 +155,12 @@ class FilterpySquareRoot(_FilterpyAdapter):
 
     def __init__(self, model: FormModel) -> None:
         kf = SquareRootKalmanFilter(dim_x=model.dim_x, dim_z=model.dim_z)
-        kf.F = np.asarray(model.Phi, dtype=float)
-        kf.H = np.asarray(model.H, dtype=float)
-        kf.R = np.asarray(model.V, dtype=float)
-        kf.P = np.asarray(model.M0, dtype=float)
-        kf._Q1_2 = np.asarray(model.Gamma, dtype=float) @ cholesky(model.W, lower=True)
-        kf.x = np.asarray(model.x0, dtype=float).reshape(-1, 1)
+        kf.F = np.array(model.Phi, dtype=float)
+        kf.H = np.array(model.H, dtype=float)
+        kf.R = np.array(model.V, dtype=float)
+        kf.P = np.array(model.M0, dtype=float)
+        kf._Q1_2 = np.array(model.Gamma, dtype=float) @ cholesky(model.W, lower=True)
+        kf.x = np.array(model.x0, dtype=float).reshape(-1, 1)
         self.filter = kf
 
     @property

@@ -56,7 +56,7 @@ class InformationFilter:
     def __init__(self, Phi: np.ndarray, Q: np.ndarray, H: np.ndarray, V: np.ndarray,
                  x0: np.ndarray, M0: np.ndarray, B: np.ndarray | None = None) -> None:
         self.Phi, self.Q, self.H, self.V, self.B = Phi, Q, H, V, B
-        self.x = np.asarray(x0, dtype=float).reshape(-1, 1)   # x̄ or x̂, whichever is latest
+        self.x = np.array(x0, dtype=float).reshape(-1, 1)     # x̄ or x̂, whichever is latest
         self.P = np.asarray(M0, dtype=float).copy()            # M or P, whichever is latest
         self.Y = _spd_inverse(self.P)                          # its inverse: what is carried
         self.x_bar, self.M = self.x.copy(), self.P.copy()

@@ -70,3 +70,17 @@ def test_measurements_are_needed_where_the_model_cannot_draw_them():
 
     with pytest.raises(ValueError, match="z must be given"):
         compare(NoSimulate(), "joseph", repeat=1)
+
+
+def test_no_form_changes_the_model_it_is_built_from():
+    """filterpy's square-root filter updated x in place, and its x was a view of the model's x0:
+    a comparison moved the registered tracker's x0 to 2.42, and every later check of that problem
+    in the process graded a correct filter wrong (0.18 σ at t = 0).  The model now holds its own
+    read-only copies, and the forms copy what they are given."""
+    model = LinearModel(Phi=MODEL.Phi, Gamma=MODEL.Gamma, W=MODEL.W, H=MODEL.H, V=MODEL.V,
+                        M0=MODEL.M0, x0=np.array([0.5, 2.0, 0.0]), every=4, n_epochs=30, dt=DT)
+    before = {k: np.array(getattr(model, k)) for k in ("Phi", "Gamma", "W", "H", "V", "M0", "x0")}
+    compare(model, *FORMS, seed=3, repeat=1)
+    for k, v in before.items():
+        np.testing.assert_array_equal(getattr(model, k), v, err_msg=k)
+        assert not getattr(model, k).flags.writeable, k
