@@ -34,6 +34,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from gpsaccel.sandbox.procs import proc_files
+
 #: First uid of the boxes' range (2^31 - 2^27: above every distribution's allocation ranges,
 #: below the 32-bit overflow uids): SLOTS uids for each pid (threads of one process may run
 #: boxes at once), for pids below 2^22 (the largest ``pid_max``); the range ends below 2^32 - 1.
@@ -100,14 +102,7 @@ def uid_pids(uid: int) -> set[int]:
     from /proc by hand: psutil's ``uids()`` has no file-system uid, which a box process may keep
     (``setfsuid``) while its other uids change."""
     out = set()
-    for entry in os.scandir("/proc"):
-        if not entry.name.isdigit():
-            continue
-        try:
-            with open(f"/proc/{entry.name}/status", "rb") as f:
-                status = f.read()
-        except OSError:
-            continue
+    for pid, status in proc_files("status"):
         uids = state = None
         for line in status.splitlines():
             if line.startswith(b"Uid:"):
@@ -115,7 +110,7 @@ def uid_pids(uid: int) -> set[int]:
             elif line.startswith(b"State:"):
                 state = line.split()[1:2]
         if uids and str(uid).encode() in uids and state not in ([b"Z"], [b"X"]):
-            out.add(int(entry.name))
+            out.add(pid)
     return out
 
 

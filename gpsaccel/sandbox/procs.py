@@ -10,6 +10,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from collections.abc import Set as AbstractSet
 from typing import TYPE_CHECKING
 
@@ -71,21 +72,26 @@ def _proc_table() -> dict[int, tuple[int, str, str]]:
     if not os.path.isdir("/proc/self"):
         return _psutil_table()
     table: dict[int, tuple[int, str, str]] = {}
-    for entry in os.scandir("/proc"):
-        if not entry.name.isdigit():
-            continue
-        try:
-            with open(f"/proc/{entry.name}/stat", "rb") as f:
-                raw = f.read()
-        except OSError:
-            continue
+    for pid, raw in proc_files("stat"):
         close = raw.rfind(b")")
         rest = raw[close + 2:].split()
         if close < 0 or len(rest) < 2:
             continue  # the process went away while it was read
         comm = raw[raw.find(b"(") + 1:close].decode(errors="replace")
-        table[int(entry.name)] = (int(rest[1]), rest[0].decode(), comm)
+        table[pid] = (int(rest[1]), rest[0].decode(), comm)
     return table
+
+
+def proc_files(name: str) -> Iterator[tuple[int, bytes]]:
+    """(pid, the bytes of /proc/<pid>/``name``) for every process that is still there when read."""
+    for entry in os.scandir("/proc"):
+        if not entry.name.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry.name}/{name}", "rb") as f:
+                yield int(entry.name), f.read()
+        except OSError:
+            continue
 
 
 def _psutil_table() -> dict[int, tuple[int, str, str]]:
