@@ -112,3 +112,23 @@ def hostile():
     return SimpleNamespace(DIR=HOSTILE, SUBMISSIONS=SUBMISSIONS, MARKER=MARKER,
                            marked_pids=marked_pids, alive=alive, Watch=Watch,
                            env=env_with_package, HANG=HANG, wait_gone=wait_gone)
+
+
+#: The modules whose hostile submissions leave marked processes that :func:`marked_pids` watches
+#: machine-wide: run side by side (two xdist workers, or two test runs on one machine) each saw
+#: the other's processes ("marked processes before the test", "alive after the command").
+HOSTILE_MODULES = ("test_batch", "test_sandbox", "test_sandbox_attacks")
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _one_hostile_module_at_a_time(request):
+    """Hold a machine-wide lock while a hostile module runs, so no two of them overlap."""
+    if request.module.__name__.rsplit(".", 1)[-1] not in HOSTILE_MODULES:
+        yield
+        return
+    import fcntl
+    import tempfile
+
+    with open(os.path.join(tempfile.gettempdir(), "gpsaccel-hostile-tests.lock"), "a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes, or the process dies
+        yield
