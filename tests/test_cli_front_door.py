@@ -191,7 +191,7 @@ def test_ctrl_c_is_one_line_exit_130_and_writes_nothing(tmp_path):
     env = dict(os.environ, PYTHONPATH=str(ROOT), MPLBACKEND="Agg")
     read, write = os.pipe()
     code = ("import os, sys\n"
-            "import gpsaccel.calibration.montecarlo as mc\n"
+            "import gpsaccel.calibration.montecarlo.engine as mc\n"
             "real = mc._chunk_sums\n"
             "def chunk_sums(*args, **kwargs):\n"
             f"    os.write({write}, b'running\\n')\n"

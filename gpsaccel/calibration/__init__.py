@@ -4,7 +4,8 @@
   state names and units;
 * :mod:`~gpsaccel.calibration.reports`: each report's model, truth and presets;
 * :mod:`~gpsaccel.calibration.simulation`: one realization (error-model or kinematic truth);
-* :mod:`~gpsaccel.calibration.montecarlo`: the reports' Monte Carlo as arrays, and its table;
+* :mod:`~gpsaccel.calibration.montecarlo`: the reports' Monte Carlo as arrays, and its table (a
+  package: plan, random streams, reduction to sums, engine, statistics, verdicts);
 * :mod:`~gpsaccel.calibration.forms`: the update's forms (standard, Joseph, information, filterpy's
   information and square-root filters) as filter objects for the multirate driver (the core's
   :mod:`gpsaccel.kalman.forms`, which runs any linear model);

@@ -13,14 +13,9 @@ import pytest
 
 from gpsaccel import monte_carlo
 from gpsaccel.calibration.model import CalibrationModel
-from gpsaccel.calibration.montecarlo import (
-    BLOCK_RUNS,
-    _run_block,
-    _standard_normals,
-    gps_interval_noise,
-    plan,
-    realizations,
-)
+from gpsaccel.calibration.montecarlo import BLOCK_RUNS, gps_interval_noise, plan, realizations
+from gpsaccel.calibration.montecarlo.reduction import _run_block
+from gpsaccel.calibration.montecarlo.streams import _standard_normals
 from gpsaccel.calibration.simulation import simulate, truth_mean
 from gpsaccel.figures._shared import ensemble
 from gpsaccel.kalman.consistency import nees, nis, z_sample_mean, z_threshold

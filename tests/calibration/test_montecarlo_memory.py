@@ -11,17 +11,15 @@ import tracemalloc
 import numpy as np
 import pytest
 
-import gpsaccel.calibration.montecarlo as mcmod
+import gpsaccel.calibration.montecarlo.streams as streams
 from gpsaccel import monte_carlo
 from gpsaccel.calibration.model import CalibrationModel
-from gpsaccel.calibration.montecarlo import (
-    BLOCK_RUNS,
+from gpsaccel.calibration.montecarlo import BLOCK_RUNS, plan, whole_blocks
+from gpsaccel.calibration.montecarlo.reduction import _run_block
+from gpsaccel.calibration.montecarlo.streams import (
     _block_normals,
-    _run_block,
     _standard_normals,
     _StreamedNormals,
-    plan,
-    whole_blocks,
 )
 
 MODEL = CalibrationModel()
@@ -34,12 +32,12 @@ def test_streamed_normals_give_the_same_numbers_as_the_whole_block(truth):
     pl = plan(MODEL, truth, max_lag=9, residual_pairs=[(150, 3)], full_residual_matrix=True)
     lo, hi = BLOCK_RUNS + 17, BLOCK_RUNS + 130  # inside block 1
     whole, kept = _run_block(pl, _standard_normals(4, pl.n_normals, lo, hi), keep=True)
-    old = mcmod.STREAM_EPOCHS
+    old = streams.STREAM_EPOCHS
     try:
-        mcmod.STREAM_EPOCHS = 13
+        streams.STREAM_EPOCHS = 13
         streamed, kept_s = _run_block(pl, _StreamedNormals(4, pl.n_gps, 1, 17, 130), keep=True)
     finally:
-        mcmod.STREAM_EPOCHS = old
+        streams.STREAM_EPOCHS = old
     for name in ("mean_e", "C_ee", "C_ex", "C_xx", "rr_band", "rr_pairs", "rr_full", "nees",
                  "nis"):
         np.testing.assert_array_equal(getattr(streamed, name), getattr(whole, name), err_msg=name)
@@ -80,7 +78,7 @@ def test_an_hour_at_5_hz_fits_in_tens_of_megabytes():
 def test_memory_grows_linearly_with_the_duration(monkeypatch):
     """Doubling the duration at most doubles the peak (a quadratic engine would quadruple it),
     at 60, 120 and 240 s on the code path of long runs (normals streamed, as from ≈ 400 s on)."""
-    monkeypatch.setattr(mcmod, "WHOLE_DRAW_BYTES", 0)
+    monkeypatch.setattr(streams, "WHOLE_DRAW_BYTES", 0)
     durations = (60.0, 120.0, 240.0)
     assert isinstance(_block_normals(0, CalibrationModel(duration=60.0).n_gps, 0, 5),
                       _StreamedNormals)
