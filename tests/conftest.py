@@ -22,11 +22,11 @@ SLOW: tuple[str, ...] = (
     "tests/calibration/test_compare.py::test_gps_sweep_",
     "tests/calibration/test_montecarlo.py::test_cli_montecarlo_prints_the_table",  # 8
     # every one executes a notebook, renders one, or runs otter in a kernel
-    "tests/test_lessons.py::test_solutions_version_runs_with_a_tick_under_every_self_check",
-    "tests/test_lessons.py::test_student_version_runs_and_shows_no_answer",
-    "tests/test_lesson_figures.py",
-    "tests/test_cli_lessons.py::test_lessons_html",
-    "tests/test_cli_lessons.py::test_lessons_kernel",
+    "tests/lessons/test_lessons.py::test_solutions_version_runs_with_a_tick_under_every_self_check",
+    "tests/lessons/test_lessons.py::test_student_version_runs_and_shows_no_answer",
+    "tests/lessons/test_figures.py",
+    "tests/cli/test_lessons.py::test_lessons_html",
+    "tests/cli/test_lessons.py::test_lessons_kernel",
     "tests/assignments/",
 )
 

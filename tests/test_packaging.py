@@ -182,7 +182,7 @@ def test_a_missing_extra_is_named(monkeypatch, tmp_path, capsys):
     def absent(*args, **kwargs):
         raise ModuleNotFoundError("gpsaccel lab needs JupyterLab", name="jupyterlab")
 
-    monkeypatch.setattr(lessons, "lab_command", absent)
+    monkeypatch.setattr(lessons.lab, "lab_command", absent)  # what the command calls
     assert main(["lab", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert "jupyterlab is not installed" in err and "gpsaccel[lab]" in err

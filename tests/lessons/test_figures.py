@@ -12,7 +12,8 @@ import subprocess
 
 import pytest
 
-from gpsaccel.lessons import _mentions, lessons_dir, report_figures
+from gpsaccel.lessons import lessons_dir, report_figures
+from gpsaccel.lessons.render import _mentions
 
 LESSONS = sorted(lessons_dir().glob("*.ipynb"))
 

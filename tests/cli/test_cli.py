@@ -30,7 +30,7 @@ def test_compare_prints_the_table(capsys):
 
 
 def test_compare_a_form_with_a_student_file(capsys):
-    path = Path(__file__).parent / "submissions" / "correct_joseph.py"
+    path = Path(__file__).parent.parent / "submissions" / "correct_joseph.py"
     assert main(["compare", "joseph", str(path), "--repeat", "1"]) == 0
     out = capsys.readouterr().out
     row = next(line for line in out.splitlines() if line.startswith("correct_joseph.py"))
@@ -53,7 +53,7 @@ def test_compare_sweep_writes_one_figure(tmp_path, capsys, monkeypatch):
 def test_compare_bad_arguments_exit_2(capsys):
     assert main(["compare", "ud"]) == 2
     assert "neither a filter form" in capsys.readouterr().err
-    path = Path(__file__).parent / "submissions" / "correct_joseph.py"
+    path = Path(__file__).parent.parent / "submissions" / "correct_joseph.py"
     assert main(["compare", str(path), "--sweep", "gps"]) == 2
     assert "built-in forms only" in capsys.readouterr().err
 

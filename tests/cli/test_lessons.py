@@ -2,7 +2,7 @@
 
 One real run renders lesson 02 (conftest's ``lesson_02_html``, shared with the browser test);
 the run without ``--html`` executes through conftest's ``executed_lesson`` (shared with
-tests/test_lessons.py)."""
+tests/lessons/test_lessons.py)."""
 
 from __future__ import annotations
 
@@ -40,6 +40,7 @@ def test_lessons_kernel_does_not_warn_about_tcp(lesson_02_html):
 def test_lessons_without_html_executes_the_student_version(monkeypatch, executed_lesson, capsys):
     """Without --html the student version is executed, at the ensemble --runs asks for."""
     from gpsaccel import lessons
+    from gpsaccel.lessons import kernel
 
     calls = []
 
@@ -47,7 +48,7 @@ def test_lessons_without_html_executes_the_student_version(monkeypatch, executed
         calls.append((path, runs))
         return executed_lesson(path, runs=runs, timeout=timeout)
 
-    monkeypatch.setattr(lessons, "execute", execute)
+    monkeypatch.setattr(kernel, "execute", execute)  # what the command runs
     assert main(["lessons", "--only", "02", "--runs", "20"]) == 0  # test_lessons.py's ensemble
     assert calls == [(lessons.lessons_dir() / "02-error-model.ipynb", 20)]
     assert "1 lessons executed" in capsys.readouterr().out

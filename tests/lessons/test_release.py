@@ -8,6 +8,7 @@ import nbformat
 import pytest
 
 from gpsaccel import lessons as L
+from gpsaccel.lessons import render
 
 
 def _notebook():
@@ -42,7 +43,7 @@ def test_the_remote_check_reads_every_way_a_page_loads_from_elsewhere(html):
 
 
 def test_the_index_tells_a_pip_user_what_to_run(tmp_path, monkeypatch):
-    monkeypatch.setattr(L, "report_figures", lambda: {})
+    monkeypatch.setattr(render, "report_figures", lambda: {})
     text = L.write_index(tmp_path).read_text(encoding="utf-8")
     assert "gpsaccel lessons --copy" in text and "gpsaccel lab" in text
     assert "make lessons-html" not in text

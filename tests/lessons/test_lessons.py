@@ -16,6 +16,7 @@ import pytest
 
 from gpsaccel import lessons as L
 from gpsaccel.exercises.answers import ANSWERS
+from gpsaccel.lessons import numbers
 
 MASTERS = L.masters()
 IDS = [p.stem for p in MASTERS]
@@ -196,7 +197,7 @@ def test_the_number_check_reads_decimals_and_skips_code_tags_and_given_constants
     assert L.PRINTED.findall("[[3.58 @04]], [[0.687]], [[−0.0034, −0.0005], [−0.0005, 0.0]]") == \
         [("3.58", "04"), ("0.687", "")]
     printed = "rank 4.5 of 14; σ = 0.55, 0.5; z = [0.04 3.58 2.48]"
-    assert [L._prints(printed, n) for n in ("4", "0.5", "3.58", "0.55", "5", "2.4")] == \
+    assert [numbers._prints(printed, n) for n in ("4", "0.5", "3.58", "0.55", "5", "2.4")] == \
         [False, True, True, True, False, False]
 
 

@@ -25,7 +25,7 @@ from gpsaccel import _atomic  # noqa: E402
 from gpsaccel import _validation as _v  # noqa: E402
 from gpsaccel.cli import build_parser, main  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SUBMISSION = ROOT / "tests" / "submissions" / "correct_joseph.py"
 
 

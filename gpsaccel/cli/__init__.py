@@ -1,0 +1,99 @@
+"""The ``gpsaccel`` command: ``run`` (the main job), ``compare``, ``figures`` and the others.
+
+This module parses and dispatches; each group of sub-commands is a module of its own
+(:mod:`~gpsaccel.cli.reports`, :mod:`~gpsaccel.cli.lessons`, :mod:`~gpsaccel.cli.checking`,
+:mod:`~gpsaccel.cli.homework`), a small function per command that calls the package, where the
+work lives.  Building the parser imports none of the work (tests/test_lazy_imports.py).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+from gpsaccel.cli.checking import add_check
+from gpsaccel.cli.homework import add_assignment, add_grade
+from gpsaccel.cli.lessons import add_lab, add_lessons
+from gpsaccel.cli.reports import add_compare, add_coop, add_figures, add_montecarlo, add_run, add_ship
+
+#: The sub-commands in the order ``gpsaccel --help`` lists them; each function adds one parser.
+SUBCOMMANDS = (
+    add_run,
+    add_compare,
+    add_figures,
+    add_lessons,
+    add_lab,
+    add_coop,
+    add_montecarlo,
+    add_ship,
+    add_check,
+    add_assignment,
+    add_grade,
+)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from gpsaccel._version import __version__
+
+    parser = _Parser(prog="gpsaccel", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True)
+    for add in SUBCOMMANDS:  # a new sub-command: an add_NAME function and one line above
+        add(sub)
+    return parser
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with a one-line error: ``gpsaccel check: error: argument --runs: must be ...``.
+
+    Every flag's ``type=`` is a validator of :mod:`gpsaccel._validation` (``flag_int``,
+    ``flag_float``, ``flag_seed``, ``flag_probability``, ``output_dir``, ``output_file``), so a bad
+    number or an unusable output path is refused here, exit 2, before any work; sub-commands
+    added later should use the same ones.
+    """
+
+    def error(self, message: str):  # type: ignore[override]
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+#: The extra that installs what a sub-command imports beyond the core (pyproject.toml).
+_EXTRAS = {"lessons": "lessons", "lab": "lab", "assignment": "grading", "grade": "grading",
+           "montecarlo": "dask", "check": "dask"}
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Parse, run, and turn the expected failures into one line on stderr.
+
+    Exit codes: 0 success; 1 a sub-command's own "not all passed" (``check``); 2 bad input
+    (ValueError) or a file-system error (OSError: disk full, permission, ...); 130 interrupted
+    (Ctrl-C), after which no half-written file is left (:mod:`gpsaccel._atomic`).
+    """
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as exc:  # --help (0) or a refused flag (2): returned, for callers in-process
+        return exc.code if isinstance(exc.code, int) else 2
+    except KeyboardInterrupt:
+        print("gpsaccel: interrupted", file=sys.stderr)
+        return 130
+    try:
+        return int(args.func(args) or 0)
+    except ModuleNotFoundError as exc:  # an optional part not installed: name the extra
+        extra = _EXTRAS.get(args.command, "test")
+        print(f"gpsaccel {args.command}: error: {exc.msg}: the module {exc.name} is not "
+              f"installed (pip install 'gpsaccel[{extra}]')", file=sys.stderr)
+        return 2
+    except ValueError as exc:  # bad input: one clear line, not a traceback
+        print(f"gpsaccel {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # the file system said no: say what and where, in one line
+        where = f": {exc.filename}" if getattr(exc, "filename", None) else ""
+        print(f"gpsaccel {args.command}: error: {exc.strerror or exc}{where}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"gpsaccel {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,193 @@
+"""``gpsaccel check``: students' submissions for one problem, each in a sandbox."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from gpsaccel import _validation as _v
+from gpsaccel.cli._flags import dask_spec
+
+
+def _cmd_check(args: argparse.Namespace) -> int:
+    """Check students' submissions for one problem, each in a sandbox; table on stdout, --json
+    for the details."""
+    import time
+
+    from gpsaccel import sandbox
+    from gpsaccel._untrusted import json_safe
+    from gpsaccel.check.batch import (
+        Interrupted,
+        appender,
+        check_many,
+        find_submissions,
+        log_path,
+        secret_seed,
+        table,
+        write_json,
+    )
+    from gpsaccel.check.own import is_file_spec, load_problem
+
+    if is_file_spec(args.problem) and args.dask is not None:
+        raise ValueError("--dask: a problem from a file of your own is known to this process "
+                         "only, not to Dask's workers; leave out --dask (or register it in a "
+                         "module the workers import)")
+    args.problem = load_problem(args.problem)  # the instructor's file run, its problem registered
+    # the notes and the count only: check_many expands the same raw paths itself, once
+    files, notes = find_submissions(args.paths)
+    for note in notes:
+        print(note, file=sys.stderr)
+    if not files:
+        raise ValueError("paths: no .py file or submission folder was found")
+    spec = dask_spec(args.dask)
+    if spec is None:
+        spec = "processes"  # a process per check, even with --workers 1
+    limits, backend, seed, settings = _check_settings(args, sandbox, secret_seed)
+    print(f"sandbox: {backend}" + (" (bubblewrap not available: apt-get install bubblewrap)"
+                                   if backend != "bwrap" and args.sandbox == "auto" else ""),
+          file=sys.stderr)
+    log = appender(log_path(args.json)) if args.json is not None else None
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=len(files), desc="check", unit="submission", leave=False,
+               disable=None)  # on stderr, when it is a terminal
+
+    def on_result(result: dict) -> None:
+        bar.update()
+        if log is not None:
+            log(json_safe(result))
+
+    t0 = time.perf_counter()
+    try:
+        with bar:
+            results = check_many(args.paths, n_runs=args.runs, seed=seed, timeout=args.timeout,
+                                 executor=spec, max_workers=args.workers, sandbox=backend,
+                                 limits=limits, allow_gpsaccel=args.allow_gpsaccel,
+                                 on_result=on_result, problem=args.problem,
+                                 allow_unsafe_basic=args.allow_unsafe_basic)
+    except Interrupted as exc:
+        done = json_safe([r for r in exc.results if r is not None])
+        if args.json is not None:  # first: the terminal may be gone
+            write_json(done, args.json, interrupted=True, **settings)
+        if done:
+            print(table(done))
+        if args.json is not None:
+            print(f"wrote {args.json} ({len(done)} of {len(files)} checked)")
+        print("gpsaccel check: interrupted", file=sys.stderr)
+        return 130
+    return _check_report(args, results, settings, time.perf_counter() - t0)
+
+
+def _check_settings(args: argparse.Namespace, sandbox, secret_seed) -> tuple:  # noqa: ANN001
+    """The limits, backend and seed of ``gpsaccel check``, and the settings its JSON records;
+    a bad limit is named by its flag."""
+    try:
+        limits = sandbox.Limits(memory=int(args.memory * 2**20), time=args.timeout,
+                                file_size=int(args.max_file_size * 2**20),
+                                processes=args.max_processes,
+                                output=int(args.max_output * 2**20))
+    except ValueError as exc:
+        raise ValueError(str(exc).replace("limits.", "--")) from None
+    backend = sandbox.resolve_backend(args.sandbox)
+    sandbox.refuse_unsafe_basic(backend, args.allow_unsafe_basic)
+    # a class is graded on secret data unless a seed is given; the seed is in the JSON
+    seed = secret_seed() if args.seed is None else args.seed
+    settings = {"problem": args.problem, "runs": args.runs, "seed": seed,
+                "seed_drawn": args.seed is None,
+                "timeout": args.timeout,
+                "sandbox": backend, "allow_gpsaccel": args.allow_gpsaccel,
+                "limits": {k: v for k, v in vars(limits).items()}}
+    return limits, backend, seed, settings
+
+
+def _check_report(args: argparse.Namespace, results: list, settings: dict, seconds: float) -> int:
+    """The JSON first (printing can fail), then the table and the one-line summary; exit 0 when
+    every submission passed."""
+    from gpsaccel._untrusted import json_safe
+    from gpsaccel.check.batch import printable, table, write_json
+
+    seed, backend = settings["seed"], settings["sandbox"]
+    results = json_safe(results)  # a name that is not UTF-8 written \xNN, never a crash
+    if args.json is not None:  # first: printing can fail (a closed terminal), the file must not
+        path = write_json(results, args.json, **settings)
+    if args.verbose:
+        for r in results:
+            print(printable(r["text"], keep_newlines=True), end="\n\n")
+    print(table(results))
+    runs = results[0]["details"].get("n_runs", args.runs) if results else args.runs
+    print(f"{len(results)} submissions, problem {args.problem}, {runs} runs each (seed "
+          f"{seed}{', drawn' if args.seed is None else ''}), sandbox {backend}, {seconds:.1f} s")
+    if args.json is not None:
+        print(f"wrote {path}")
+    return 0 if all(r["passed"] for r in results) else 1
+
+
+def _problem_flag(value: str) -> str:
+    """--problem: a registered problem's name, or FILE.py:NAME (the file exists; it is run by
+    the command, not by the parser)."""
+    from gpsaccel import registry
+    from gpsaccel.check.own import is_file_spec
+
+    if is_file_spec(value):
+        if not Path(value.rpartition(":")[0]).is_file():
+            raise argparse.ArgumentTypeError(f"{value.rpartition(':')[0]} is not a file "
+                                             f"(expected FILE.py:NAME)")
+        return value
+    if value not in registry.problems():
+        raise argparse.ArgumentTypeError(f"invalid choice: {value!r} (choose from "
+                                         f"{', '.join(registry.problems())}, or FILE.py:NAME)")
+    return value
+
+
+def add_check(sub: argparse._SubParsersAction) -> None:
+    from gpsaccel import registry
+
+    p = sub.add_parser("check", help="check students' homework files (" +
+                       ", ".join(registry.problems()) + ")")
+    p.add_argument("paths", nargs="+", type=Path,
+                   help="submission files, or folders whose every top-level .py file or "
+                        "sub-folder is one submission")
+    p.add_argument("--problem", type=_problem_flag, default="calibration",
+                   metavar="NAME|FILE.py:NAME",
+                   help="the problem (default calibration), one of gpsaccel.registry's: " +
+                        "; ".join(f"{name}: {registry.entry(name).title}"
+                                  for name in registry.problems()) +
+                        "; or FILE.py:NAME, a problem of your own defined in FILE.py "
+                        "(check.Problem.linear(NAME, ...))")
+    p.add_argument("--json", type=_v.output_file, default=None, metavar="FILE",
+                   help="write every finding and number to FILE (e.g. results.json)")
+    p.add_argument("--runs", type=_v.flag_int(minimum=2), default=None,
+                   help="realizations per check (default: the problem's, see gpsaccel.check)")
+    p.add_argument("--seed", type=_v.flag_seed, default=None,
+                   help="seed of the realizations (default: drawn with secrets, so no student "
+                        "can precompute the answers; recorded in --json to reproduce a verdict)")
+    p.add_argument("--timeout", type=_v.flag_float(0.0, open_min=True), default=60.0,
+                   help="time limit per submission, s (default 60)")
+    p.add_argument("--workers", type=_v.flag_int(minimum=1), default=None,
+                   help="parallel local processes (default: one per CPU; 1 = one at a time)")
+    p.add_argument("--dask", default=None, metavar="local|tcp://host:port",
+                   help="check on a Dask LocalCluster or a running scheduler instead")
+    p.add_argument("--sandbox", choices=("auto", "bwrap", "basic"), default="auto",
+                   help="isolation of each submission: bwrap (bubblewrap namespaces), basic "
+                        "(limits, scrubbed environment, private folder) or auto (bwrap when it "
+                        "works; default)")
+    p.add_argument("--memory", type=_v.flag_float(256.0), default=1024, metavar="MIB",
+                   help="address space per student process, MiB (default 1024)")
+    p.add_argument("--max-output", type=_v.flag_float(0.0, open_min=True), default=16,
+                   metavar="MIB",
+                   help="printed output per submission, MiB (default 16)")
+    p.add_argument("--max-file-size", type=_v.flag_float(0.0, open_min=True), default=64,
+                   metavar="MIB",
+                   help="largest file a submission may write, MiB (default 64)")
+    p.add_argument("--max-processes", type=_v.flag_int(minimum=1), default=64,
+                   help="processes per submission at once (default 64)")
+    p.add_argument("--allow-gpsaccel", action="store_true",
+                   help="let submissions import gpsaccel (by default an import is the finding "
+                        "uses-checker)")
+    p.add_argument("--allow-unsafe-basic", action="store_true",
+                   help="accept --sandbox basic (or auto without bubblewrap) when not run as "
+                        "root, where it cannot keep a student's code from your files and "
+                        "processes (docs/sandbox.md)")
+    p.add_argument("-v", "--verbose", action="store_true", help="print every report in full")
+    p.set_defaults(func=_cmd_check)

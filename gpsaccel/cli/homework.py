@@ -1,0 +1,143 @@
+"""The homework: ``assignment`` (otter assign, one notebook per student) and ``grade`` (a class)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from gpsaccel import _validation as _v
+from gpsaccel.cli._flags import Registered, registered_assignments
+
+
+def _cmd_assignment(args: argparse.Namespace) -> int:
+    """``otter assign`` a homework (the package's or a folder of the instructor's own): the
+    student notebook and the autograder zip; with ``--roster`` one notebook per student carrying
+    that student's variant.  Every flag is checked before the minutes of ``otter assign``."""
+    import time
+
+    from tqdm.auto import tqdm
+
+    from gpsaccel.assignments.generate import generate, personalize, resolve
+    from gpsaccel.assignments.grading import read_secret
+    from gpsaccel.assignments.roster import read_roster
+
+    name = resolve(args.name)
+    if args.roster is None and args.secret_file is not None:
+        raise ValueError("--secret-file: the secret makes per-student variants, which need "
+                         "--roster (the students to write a notebook for)")
+    students, secret = None, None
+    if args.roster is not None:
+        students = read_roster(args.roster)
+        secret = read_secret(args.secret_file)
+        if secret is None:
+            raise ValueError("--roster: per-student variants need the instructor's secret "
+                             "(--secret-file FILE, or $GPSACCEL_GRADING_SECRET)")
+    t0 = time.perf_counter()
+    from gpsaccel.assignments.gradescope import build
+
+    with tqdm(total=2 + (len(students) if students else 0), desc=name, unit="step",
+              leave=False, disable=None) as bar:  # on stderr, when it is a terminal
+        bar.set_postfix_str("otter assign" + ("" if args.no_run_tests else " (testing the "
+                                                                          "solution)"))
+        try:
+            g = generate(name, args.out, run_tests=not args.no_run_tests)
+        except RuntimeError as exc:  # the master's own tests failed: otter's output says why
+            print(f"gpsaccel assignment: error: {exc}", file=sys.stderr)
+            return 1
+        bar.update()
+        if students is not None:
+            assert secret is not None
+            folder = personalize(name, g.student, [s.id for s in students], secret,
+                                 g.out / "students", progress=bar)
+        bar.set_postfix_str("Gradescope autograder")
+        gradescope = build(name, g.out, students, secret)
+        bar.update()
+    print(f"hand out:  {g.student}\ngrade with: gpsaccel grade SUBMISSIONS --assignment "
+          f"{args.name}\nGradescope: {gradescope} (scores computed outside the sandbox; "
+          f"otter's own zip: {g.autograder.name})\nsolution:  {g.solution}")
+    if students is not None:
+        print(f"per student: {folder}/<id>/{name}.ipynb ({len(students)} students)")
+    print(f"{time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def _cmd_grade(args: argparse.Namespace) -> int:
+    """Grade a class in the sandbox; grades.csv, feedback/, summary.csv/png in --out; with
+    --roster the LMS gradebook files; the similarity report."""
+    from gpsaccel.assignments import grade
+    from gpsaccel.assignments.generate import resolve
+    from gpsaccel.assignments.grading import default_out, read_secret
+    from gpsaccel.assignments.roster import read_roster
+
+    name = resolve(args.assignment)
+    if args.dask is not None and name != args.assignment:
+        raise ValueError("--dask: a homework from a folder of your own is known to this process "
+                         "only, not to Dask's workers; leave out --dask")
+    roster = read_roster(args.roster) if args.roster is not None else None
+    secret = read_secret(args.secret_file)
+    out = args.out if args.out is not None else default_out(args.submissions)
+    grades = grade(args.submissions, name, out=out, jobs=args.jobs, timeout=args.timeout,
+                   seed=args.seed, secret=secret, student=args.student, dask=args.dask,
+                   sandbox=args.sandbox, progress=True)
+    if not grades:
+        raise ValueError(f"submissions: no student's folder or notebook in {args.submissions}")
+    width = max(len(g.student) for g in grades)
+    for g in grades:
+        print(f"{g.student:<{width}}  {g.total:>5g} / {g.max_total:g}  {g.status:<13} "
+              f"{g.seconds:5.1f} s")
+    print(f"wrote {out / 'grades.csv'}, {out / 'grades.json'}, {out / 'feedback'}/, "
+          f"{out / 'summary.csv'}, {out / 'summary.png'} (seed in {out / 'grading.json'})")
+    from gpsaccel.assignments.classwide import after_grading
+
+    for line in after_grading(Path(args.submissions), out, name, roster, secret,
+                              similarity=not args.no_similarity):
+        print(line)
+    return 0
+
+
+def add_assignment(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("assignment", help="otter assign a homework: student notebook + autograder")
+    p.add_argument("name", choices=Registered(registered_assignments), metavar="NAME",
+                   help="the homework: %(choices)s, or a folder of your own holding NAME.ipynb "
+                        "(the master) and graded.py (its questions)")
+    p.add_argument("--out", type=_v.output_dir, required=True, help="folder to write (replaced)")
+    p.add_argument("--no-run-tests", action="store_true",
+                   help="do not execute the solution against its tests first (faster)")
+    p.add_argument("--roster", type=Path, default=None,
+                   help="the class: one student id a line, or a CSV file with an id column "
+                        "(docs/grading.md): one notebook each, with its variant")
+    p.add_argument("--secret-file", type=Path, default=None,
+                   help="the instructor's secret (default $GPSACCEL_GRADING_SECRET)")
+    p.set_defaults(func=_cmd_assignment)
+
+
+def add_grade(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("grade", help="grade a class of homework notebooks in the sandbox")
+    p.add_argument("submissions", type=Path,
+                   help="LMS export: a folder per student (or one .ipynb per student)")
+    p.add_argument("--assignment", required=True, choices=Registered(registered_assignments),
+                   metavar="NAME", help="the homework: %(choices)s, or a folder of your own "
+                                        "holding NAME.ipynb and graded.py")
+    p.add_argument("--roster", type=Path, default=None,
+                   help="the class roster (a CSV file with id, name, email, sis_id, ... "
+                        "columns): write canvas.csv, moodle.csv and Gradescope's CSV files too")
+    p.add_argument("--no-similarity", action="store_true",
+                   help="skip the similarity report (similarity.csv, similarity.html)")
+    p.add_argument("--out", type=_v.output_dir, default=None,
+                   help="folder for grades.csv, feedback/, summary (default SUBMISSIONS-grades)")
+    p.add_argument("--jobs", type=_v.flag_int(minimum=1), default=None,
+                   help="notebooks graded at once (default: CPUs, at most 4)")
+    p.add_argument("--timeout", type=_v.flag_float(0.0, open_min=True), default=120.0,
+                   help="time limit of one notebook's box, s (default 120)")
+    p.add_argument("--seed", type=_v.flag_seed, default=None,
+                   help="seed of the fresh data (default: random; recorded in grading.json)")
+    p.add_argument("--secret-file", type=Path, default=None,
+                   help="the instructor's secret for per-student variants (default "
+                        "$GPSACCEL_GRADING_SECRET; none: no variants)")
+    p.add_argument("--student", default=None, help="regrade this student only")
+    p.add_argument("--dask", default=None,
+                   help="grade on Dask: 'dask-local' or a scheduler address tcp://host:port")
+    p.add_argument("--sandbox", choices=("auto", "bwrap", "basic"), default="auto",
+                   help="isolation of each notebook (default auto: bwrap where it works)")
+    p.set_defaults(func=_cmd_grade)

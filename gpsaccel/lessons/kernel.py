@@ -1,0 +1,69 @@
+"""Executing a lesson top to bottom in a kernel of its own, as nobody's front end.
+
+The kernel talks over Unix sockets in a private folder (:func:`_local_kernel`) and is told, through
+:data:`~gpsaccel.lessons.HEADLESS_VARIABLE`, that no slider can move.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
+
+from gpsaccel.lessons import HEADLESS_VARIABLE, RUNS_VARIABLE
+
+
+def execute(path: Path | str, timeout: int = 600, runs: int | None = None):
+    """Execute a notebook top to bottom in its own folder; returns the executed ``NotebookNode``.
+
+    ``runs`` sets ``GPSACCEL_LESSON_RUNS`` for the kernel; ``GPSACCEL_HEADLESS`` tells slider cells
+    that nobody can move them (:func:`sliders`).  A cell that raises raises
+    ``nbclient.exceptions.CellExecutionError`` here.
+    """
+    import nbformat
+    from nbclient import NotebookClient
+
+    path = Path(path)
+    nb = nbformat.read(path, as_version=4)
+    env_before = os.environ.get(RUNS_VARIABLE)
+    headless_before = os.environ.get(HEADLESS_VARIABLE)
+    if runs is not None:
+        os.environ[RUNS_VARIABLE] = str(runs)
+    os.environ[HEADLESS_VARIABLE] = "1"
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    try:
+        with _local_kernel() as km:
+            NotebookClient(nb, km=km, timeout=timeout, kernel_name="python3",
+                           resources={"metadata": {"path": str(path.parent)}}).execute()
+    finally:
+        if runs is not None:
+            if env_before is None:
+                os.environ.pop(RUNS_VARIABLE, None)
+            else:
+                os.environ[RUNS_VARIABLE] = env_before
+        if headless_before is None:
+            os.environ.pop(HEADLESS_VARIABLE, None)
+        else:
+            os.environ[HEADLESS_VARIABLE] = headless_before
+    return nb
+
+
+@contextmanager
+def _local_kernel():
+    """A kernel manager whose kernel talks over Unix sockets in a private temporary folder.
+
+    The default TCP transport makes every kernel warn "Kernel is running over TCP without
+    encryption" on the terminal of ``gpsaccel lessons``; the kernel runs on this machine only, so
+    IPC sockets (readable by this user alone) are both quieter and safer.  The kernel is shut down
+    and the folder removed on exit.
+    """
+    from jupyter_client.manager import KernelManager
+
+    with tempfile.TemporaryDirectory(prefix="gpsaccel-kernel-") as folder:
+        km = KernelManager(kernel_name="python3", transport="ipc", ip=os.path.join(folder, "kernel"))
+        try:
+            yield km
+        finally:
+            if km.has_kernel:
+                km.shutdown_kernel(now=True)
