@@ -47,7 +47,7 @@ import nbformat  # noqa: E402
 import numpy as np  # noqa: E402
 
 from gpsaccel import sandbox as sb  # noqa: E402
-from gpsaccel.assignments import generate, grade, grading  # noqa: E402
+from gpsaccel.assignments import generate, grade, grading, scoring  # noqa: E402
 from gpsaccel.assignments import notebook as nbm  # noqa: E402
 from tests.assignments.conftest import write_variant  # noqa: E402
 from tests.assignments.test_grading import MEAN, PHI  # noqa: E402
@@ -182,9 +182,9 @@ def profile(repeats: int) -> None:
         grading.warm("calibration")
         qs = grading.questions_of("calibration")
         variant = grading.student_variant("calibration", "s", b"benchmark-secret-16b")
-        run = grading._prepare(nbm.read(nb_path), variant)
-        reads = [r for q in qs for r in q.reads(grading.Draw(
-            grading.question_seed(1, "calibration", q.name, "s"), variant))]
+        run = scoring._prepare(nbm.read(nb_path), variant)
+        reads = [r for q in qs for r in q.reads(scoring.Draw(
+            scoring.question_seed(1, "calibration", q.name, "s"), variant))]
         calls = grading._calls(len(run.cells), reads)
         source = nbm.module_source(run, reads)
         # the module's one call of its audit hook, a line of its own (notebook.py's prelude)

@@ -1,0 +1,28 @@
+"""Grading one notebook (:mod:`gpsaccel.assignments.scoring`): the calls its box makes."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gpsaccel.assignments import notebook as nbm
+from gpsaccel.assignments import scoring
+
+
+def test_module_wrappers_survive_the_students_cells(tmp_path):
+    from gpsaccel import sandbox as sb
+
+    nb = nbm.Notebook([nbm.Cell(1, "import numpy as np\ndef f(a):\n    return a * 2"),
+                       nbm.Cell(2, "raise SystemExit(1)"), nbm.Cell(3, "np = None\ng = 1")])
+    reads = [nbm.Read("f", (np.arange(3.0),), ((3,),)), nbm.Read("h", (), ((),), value=True),
+             nbm.Read("g", (np.arange(3.0),), ((3,),))]
+    (tmp_path / "notebook.py").write_text(nbm.module_source(nb, reads), encoding="utf-8")
+    sub = sb.load_submission(tmp_path / "notebook.py", "_gpsaccel_cell")
+    box = sb.run(sub, scoring._calls(3, reads), sb.Limits(time=60), allow_gpsaccel=True)
+    assert box.failure is None, box.detail
+    from gpsaccel.assignments.questions import answer_from
+    cells = [answer_from(r, 0) for r in box.results[:3]]
+    assert [c.status for c in cells] == ["ok", "exception", "ok"] and "SystemExit" in \
+        cells[1].message and "cell 2" in cells[1].message
+    f, h, g = (answer_from(r, 1) for r in box.results[3:])
+    assert f.status == "ok" and f.values[0].tolist() == [0.0, 2.0, 4.0]
+    assert (h.status, g.status) == ("not-defined", "not-callable")
