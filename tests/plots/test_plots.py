@@ -10,6 +10,7 @@ from matplotlib.figure import Figure
 from gpsaccel import plots, run_multirate, simulate
 from gpsaccel.calibration.montecarlo import monte_carlo
 from gpsaccel.calibration.reports import report_model
+from gpsaccel.plots.units import _ratio_unit
 
 matplotlib.use("Agg")
 
@@ -41,7 +42,7 @@ def test_product_unit(a, b, unit):
 @pytest.mark.parametrize("a, b, unit", [("m", "m", "1"), ("m", "m/s", "s"),
                                         ("m/s²", "m", "1/s²"), ("m/s²", "m/s", "1/s")])
 def test_gain_units(a, b, unit):
-    assert plots._ratio_unit(a, b) == unit
+    assert _ratio_unit(a, b) == unit
 
 
 def test_errors_with_sigma_draws_the_error_and_its_bounds(one_run):
