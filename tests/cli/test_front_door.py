@@ -14,6 +14,7 @@ import signal
 import subprocess
 import sys
 import time
+import uuid
 from pathlib import Path
 
 import matplotlib
@@ -274,7 +275,9 @@ def test_check_many_refuses_bad_numbers_before_running_anyone(tmp_path):
 
 def _student_pids(folder: Path) -> dict[int, str]:
     """PID -> file name of every sandboxed runner of a file in ``folder`` (its working folder, the
-    box, holds the copy of the file)."""
+    box, holds the copy of the file).  The scan is machine-wide, so the callers name their files
+    uniquely: another test (or another checkout's run) checking an ``alice.py`` at the same time
+    would otherwise be counted as ours."""
     names = {p.name for p in folder.iterdir()}
     found = {}
     for proc in Path("/proc").iterdir():
@@ -303,9 +306,11 @@ def test_ctrl_c_during_a_parallel_check_stops_workers_and_students(tmp_path):
     subs = tmp_path / "subs"
     subs.mkdir()
     loop = (ROOT / "tests" / "submissions" / "broken_infinite_loop.py").read_text()
-    for name in ("alice.py", "bob.py"):
+    tag = uuid.uuid4().hex[:12]  # names no other run on the machine uses (see _student_pids)
+    alice, bob, carol = (f"{who}_{tag}.py" for who in ("alice", "bob", "carol"))
+    for name in (alice, bob):
         (subs / name).write_text(loop)
-    (subs / "carol.py").write_text(SUBMISSION.read_text())
+    (subs / carol).write_text(SUBMISSION.read_text())
     env = dict(os.environ, PYTHONPATH=str(ROOT), MPLBACKEND="Agg")
     # the students' time limit is beyond every wait below: only the interrupt can end the check
     # (exit 130; a time limit would give exit 1 with findings)
@@ -315,10 +320,10 @@ def test_ctrl_c_during_a_parallel_check_stops_workers_and_students(tmp_path):
                             start_new_session=True)
     try:
         deadline = time.monotonic() + HANG  # a hang guard: the event is the two loops running
-        while (_students_running(subs) != {"alice.py", "bob.py"} and proc.poll() is None
+        while (_students_running(subs) != {alice, bob} and proc.poll() is None
                and time.monotonic() < deadline):
             time.sleep(0.2)  # until carol's two runs are done (her worker idle), the others loop
-        assert _students_running(subs) == {"alice.py", "bob.py"}
+        assert _students_running(subs) == {alice, bob}
         os.killpg(proc.pid, signal.SIGINT)
         stdout, stderr = proc.communicate(timeout=HANG)
     finally:
