@@ -16,8 +16,9 @@ import time
 import numpy as np
 
 from gpsaccel import CalibrationModel, simulate
-from gpsaccel.calibration.exact import exact_filter
-from gpsaccel.calibration.forms import FORMS, run_form
+from gpsaccel.kalman.exact import exact_filter
+from gpsaccel.kalman.factory import FORMS
+from gpsaccel.kalman.multirate import run_form
 
 
 def best_of(repeat: int, f) -> float:

@@ -6,14 +6,10 @@
 * :mod:`~gpsaccel.calibration.simulation`: one realization (error-model or kinematic truth);
 * :mod:`~gpsaccel.calibration.montecarlo`: the reports' Monte Carlo as arrays, and its table (a
   package: plan, random streams, reduction to sums, engine, statistics, verdicts);
-* :mod:`~gpsaccel.calibration.forms`: the update's forms (standard, Joseph, information, filterpy's
-  information and square-root filters) as filter objects for the multirate driver (the core's
-  :mod:`gpsaccel.kalman.forms`, which runs any linear model);
-* :mod:`~gpsaccel.calibration.exact`: the exact answer, the filter in 50-digit arithmetic (the
-  core's :mod:`gpsaccel.kalman.exact`);
 * :mod:`~gpsaccel.calibration.compare`: any filters side by side against the exact answer on
   report 000's data (the core's :mod:`gpsaccel.kalman.compare` takes any linear model), and the
-  conditioning sweeps;
+  conditioning sweeps (the forms it compares and the 50-digit exact answer are the core's, which
+  run any linear model: :mod:`gpsaccel.kalman.factory`, :mod:`gpsaccel.kalman.exact`);
 * :mod:`~gpsaccel.calibration.mistakes`: known mistakes as filters (used by errata and the checker);
 * :mod:`~gpsaccel.calibration.errata`: the reports' mistakes and their exact cost.
 """
@@ -26,8 +22,6 @@ if TYPE_CHECKING:  # for mypy and editors; at run time each name loads on first 
     from gpsaccel.calibration import (
         compare,
         errata,
-        exact,
-        forms,
         mistakes,
         model,
         montecarlo,
@@ -38,15 +32,13 @@ if TYPE_CHECKING:  # for mypy and editors; at run time each name loads on first 
     from gpsaccel.calibration.montecarlo import MonteCarloResult, monte_carlo
     from gpsaccel.calibration.simulation import Realization, simulate
 
-__all__ = ["CalibrationModel", "MonteCarloResult", "Realization", "compare", "errata", "exact",
-           "forms", "mistakes", "model", "monte_carlo", "montecarlo", "reports", "simulate",
-           "simulation"]
+__all__ = ["CalibrationModel", "MonteCarloResult", "Realization", "compare", "errata", "mistakes",
+           "model", "monte_carlo", "montecarlo", "reports", "simulate", "simulation"]
 
 # ``from gpsaccel.calibration.model import CalibrationModel`` imports this package first: it must
-# not import compare (mpmath), errata or filterpy's forms for that.
+# not import compare (mpmath) or errata for that.
 __getattr__, __dir__ = _lazy.attach(
     __name__,
-    submodules=("compare", "errata", "exact", "forms", "mistakes", "model", "montecarlo",
-                "reports", "simulation"),
+    submodules=("compare", "errata", "mistakes", "model", "montecarlo", "reports", "simulation"),
     attributes={"model": ("CalibrationModel",), "montecarlo": ("MonteCarloResult", "monte_carlo"),
                 "simulation": ("Realization", "simulate")})

@@ -3,7 +3,7 @@ r"""Filters side by side, each measured against the exact answer; and the condit
 :func:`compare` runs any number of filters on one realization of the calibration problem (the
 core's :func:`gpsaccel.kalman.compare.compare`, which takes any linear model, on a realization of
 report 000 drawn with its truth): the built-in forms by name
-(:data:`~gpsaccel.kalman.forms.FORMS`: ``standard``, ``joseph``, ``information``,
+(:data:`~gpsaccel.kalman.factory.FORMS`: ``standard``, ``joseph``, ``information``,
 ``filterpy-information``, ``square-root``) and any callables with the checkers'
 signature ``kalman_filter(z) -> (x_hat, P)`` (``z`` the (n_gps, 2) measurements, ``x_hat``
 (n_gps, 3) and ``P`` (n_gps, 3, 3) a posteriori at the GPS times).  A student's *file* becomes
@@ -62,7 +62,7 @@ from gpsaccel.kalman.compare import (  # noqa: F401 - the calibration names of t
     update_condition_number,
 )
 from gpsaccel.kalman.exact import DIGITS, Errors, exact_filter
-from gpsaccel.kalman.forms import FORMS
+from gpsaccel.kalman.factory import FORMS
 
 #: The sweeps of :func:`sweep` and the scale factor of their last point.
 SWEEPS = ("prior", "gps")
@@ -79,7 +79,7 @@ def compare(*forms: str, model: CalibrationModel | None = None, seed: int = 0,
 
     Parameters
     ----------
-    forms : names of built-in forms (see :data:`~gpsaccel.kalman.forms.FORMS`); with neither
+    forms : names of built-in forms (see :data:`~gpsaccel.kalman.factory.FORMS`); with neither
         ``forms`` nor ``filters``, every built-in form.
     model : the problem (report 000's defaults when None).
     seed : seed of the realization (``numpy.random.default_rng(seed)``), a non-negative integer;
@@ -113,7 +113,7 @@ class Sweep:
     factors : (n_points,) scale factors.  kappa : (n_points,) the update's condition number κ.
     cond_P : (n_points,) max over epochs of cond(P) (exact P, 2-norm, SI units).
     floor : the exact answer rounded to float64, per point (the best a float64 filter can do).
-    errors : form -> per point :class:`~gpsaccel.calibration.exact.Errors` (inf if it broke down).
+    errors : form -> per point :class:`~gpsaccel.kalman.exact.Errors` (inf if it broke down).
     problems : form -> per point what it raised (None where it ran).
     """
 

@@ -220,16 +220,9 @@ class CalibrationModel:
 
     def kalman_filter(self) -> KalmanFilter:
         """A filterpy ``KalmanFilter`` for one accelerometer step: F = Φ, Q = ΓWΓᵀ, H, R = V, P = M0."""
-        from filterpy.kalman import KalmanFilter
+        from gpsaccel.kalman.factory import kalman_filter  # filterpy: only when called
 
-        kf = KalmanFilter(dim_x=3, dim_z=2)
-        kf.F = self.Phi
-        kf.Q = self.Q
-        kf.H = self.H
-        kf.R = self.V.copy()
-        kf.P = self.M0.copy()
-        kf.x = self.x0.reshape(3, 1)
-        return kf
+        return kalman_filter(self)
 
     # ----------------------------------------------------------------- truth
     def acceleration(self, t: np.ndarray) -> np.ndarray:

@@ -102,7 +102,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     from gpsaccel import plots
     from gpsaccel._atomic import savefig
     from gpsaccel.calibration.compare import compare, sweep
-    from gpsaccel.calibration.forms import FORMS
+    from gpsaccel.kalman.factory import FORMS
 
     forms = [c for c in args.filters if c in FORMS]
     files = [c for c in args.filters if c not in FORMS]

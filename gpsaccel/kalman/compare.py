@@ -1,11 +1,12 @@
 r"""Filters side by side, each measured against the exact answer, for any linear model.
 
 :func:`compare` runs any number of filters on one set of measurements of a linear model: the
-built-in forms by name (:data:`~gpsaccel.kalman.forms.FORMS`: ``standard``, ``joseph``,
+built-in forms by name (:data:`~gpsaccel.kalman.factory.FORMS`: ``standard``, ``joseph``,
 ``information``, ``filterpy-information``, ``square-root``) and any callables with the checkers'
 signature ``kalman_filter(z) -> (x_hat, P)`` (``z`` the (n_epochs, p) measurements, ``x_hat``
 (n_epochs, n) and ``P`` (n_epochs, n, n) a posteriori at the epochs).  The model is any the forms
-and the exact filter take (:class:`~gpsaccel.kalman.forms.FormModel`): an instructor's
+and the exact filter take (the driver's
+:class:`~gpsaccel.kalman.multirate.LinearGaussianModel`, with Γ and W): an instructor's
 :class:`~gpsaccel.kalman.epochs.LinearModel` (the tracker: its own realization is drawn from
 ``seed``), or report 000's ``CalibrationModel`` (:func:`gpsaccel.calibration.compare.compare`
 draws its realization with the report's truth and calls this).
@@ -40,14 +41,14 @@ from gpsaccel import _validation as _v
 from gpsaccel.kalman.consistency import sigma_distance
 from gpsaccel.kalman.exact import DIGITS, Errors, ExactResult, errors, exact_filter
 from gpsaccel.kalman.exact import min_eigenvalue_exact as _min_eig_exact
-from gpsaccel.kalman.forms import FORMS, FormModel, run_form
-from gpsaccel.kalman.multirate import run_multirate
+from gpsaccel.kalman.factory import FORMS
+from gpsaccel.kalman.multirate import LinearGaussianModel, run_form, run_multirate
 from gpsaccel.kalman.update import NumericalWarning
 
 FilterCallable = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
-def reference_filter(model: FormModel, method: str = "filterpy") -> FilterCallable:
+def reference_filter(model: LinearGaussianModel, method: str = "filterpy") -> FilterCallable:
     """The package's filter (``run_multirate``) as a ``kalman_filter(z) -> (x_hat, P)`` callable."""
 
     def kalman_filter(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -58,7 +59,7 @@ def reference_filter(model: FormModel, method: str = "filterpy") -> FilterCallab
     return kalman_filter
 
 
-def form_filter(name: str, model: FormModel) -> FilterCallable:
+def form_filter(name: str, model: LinearGaussianModel) -> FilterCallable:
     """Built-in form ``name`` as a ``kalman_filter(z) -> (x_hat, P)`` callable."""
 
     def kalman_filter(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -83,7 +84,7 @@ def differences(x_ref: np.ndarray, P_ref: np.ndarray, x_hat: np.ndarray,
 class ComparisonRow:
     """One filter against the exact answer.
 
-    errors : its :class:`~gpsaccel.calibration.exact.Errors` (None if it gave nothing back).
+    errors : its :class:`~gpsaccel.kalman.exact.Errors` (None if it gave nothing back).
     seconds : time of one run (s).  problem : what went wrong, if it raised (None otherwise).
     """
 
@@ -146,7 +147,7 @@ def floor(exact: ExactResult) -> Errors:
     return errors(exact, exact.x_hat, exact.P)
 
 
-def update_condition_number(model: FormModel, exact: ExactResult) -> float:
+def update_condition_number(model: LinearGaussianModel, exact: ExactResult) -> float:
     """κ = max over epochs of λmax(S V⁻¹) = λmax(M P⁻¹), S = H M Hᵀ + V (every component measured)."""
     H, V = np.asarray(model.H, dtype=float), np.asarray(model.V, dtype=float)
     S = H @ exact.M @ H.T + V
@@ -191,7 +192,7 @@ def run_one(name: str, f: FilterCallable, z: np.ndarray, exact: ExactResult, rep
 
 
 def contestants(forms: Sequence[str], filters: Mapping[str, FilterCallable] | None,
-                 model: FormModel) -> list[tuple[str, FilterCallable, str]]:
+                 model: LinearGaussianModel) -> list[tuple[str, FilterCallable, str]]:
     out = []
     for name in forms:
         name = _v.choice("forms", name, FORMS)
@@ -206,7 +207,7 @@ def contestants(forms: Sequence[str], filters: Mapping[str, FilterCallable] | No
     return out
 
 
-def compare(model: FormModel, *forms: str, z: np.ndarray | None = None, seed: int = 0,
+def compare(model: LinearGaussianModel, *forms: str, z: np.ndarray | None = None, seed: int = 0,
             truth: str = "", filters: Mapping[str, FilterCallable] | None = None,
             repeat: int = 3, digits: int = DIGITS) -> Comparison:
     """Run the built-in ``forms`` and the callables ``filters`` on one set of measurements of
@@ -214,9 +215,9 @@ def compare(model: FormModel, *forms: str, z: np.ndarray | None = None, seed: in
 
     Parameters
     ----------
-    model : the linear model (:class:`~gpsaccel.kalman.forms.FormModel`, e.g. a
+    model : the linear model (:class:`~gpsaccel.kalman.multirate.LinearGaussianModel`, e.g. a
         :class:`~gpsaccel.kalman.epochs.LinearModel`).
-    forms : names of built-in forms (:data:`~gpsaccel.kalman.forms.FORMS`); with neither
+    forms : names of built-in forms (:data:`~gpsaccel.kalman.factory.FORMS`); with neither
         ``forms`` nor ``filters``, every built-in form.
     z : the measurements (n_epochs, p), NaN = not measured; None draws one realization from the
         model's own ``simulate(rng, 1)`` with ``numpy.random.default_rng(seed)`` (a

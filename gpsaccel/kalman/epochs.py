@@ -365,13 +365,9 @@ class LinearModel:
 
     def kalman_filter(self) -> KalmanFilter:
         """A filterpy ``KalmanFilter`` for one step: F = Φ, Q = Γ W Γᵀ, H, R = V, x = x0, P = M0."""
-        from filterpy.kalman import KalmanFilter
+        from gpsaccel.kalman.factory import kalman_filter  # filterpy: only when called
 
-        kf = KalmanFilter(dim_x=self.dim_x, dim_z=self.dim_z)
-        kf.F, kf.Q, kf.H = self.Phi.copy(), self.Q, self.H.copy()
-        kf.R, kf.P = self.V.copy(), self.M0.copy()
-        kf.x = self.x0.reshape(-1, 1).copy()
-        return kf
+        return kalman_filter(self)
 
     @property
     def t(self) -> np.ndarray:

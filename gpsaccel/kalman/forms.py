@@ -2,9 +2,10 @@ r"""The Kalman filter's algebraically equal forms, each as a filter object the m
 
 In exact arithmetic every form below computes the same x̂ and P; in float64 they round differently,
 and how much that matters depends on the conditioning (:mod:`gpsaccel.kalman.compare` measures it
-against :mod:`gpsaccel.kalman.exact`).  The model is any linear one the multirate driver runs, with
-Γ, W and its sizes (:class:`FormModel`: report 000's ``CalibrationModel``, an instructor's
-:class:`~gpsaccel.kalman.epochs.LinearModel`).  With S = H M Hᵀ + V and K = M Hᵀ S⁻¹:
+against :mod:`gpsaccel.kalman.exact`).  This module holds the filter classes; every form is built
+from a model's matrices in one place, :func:`gpsaccel.kalman.factory.make_form` (its table
+:data:`~gpsaccel.kalman.factory.FORMS`), and run by :func:`gpsaccel.kalman.multirate.run_form`.
+With S = H M Hᵀ + V and K = M Hᵀ S⁻¹:
 
 ``standard``  P = (I − K H) M.  :class:`StandardKalmanFilter`: filterpy's ``KalmanFilter`` with
     this one line changed.
@@ -37,34 +38,12 @@ Two of filterpy's filters need care, both handled in their adapters:
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 from filterpy.kalman import InformationFilter as FilterpyInformationFilter
 from filterpy.kalman import KalmanFilter, SquareRootKalmanFilter
 from scipy.linalg import cholesky
-
-from gpsaccel import _validation as _v
-from gpsaccel.kalman.information import InformationFilter
-from gpsaccel.kalman.multirate import LinearGaussianModel, MultirateResult, run_multirate
-
-
-class FormModel(LinearGaussianModel, Protocol):
-    """What the forms need of a model: the driver's (:class:`LinearGaussianModel`), Γ and W (the
-    square-root form's factor Γ √W of Q) and the sizes."""
-
-    @property
-    def Gamma(self) -> np.ndarray: ...
-
-    @property
-    def W(self) -> np.ndarray: ...
-
-    @property
-    def dim_x(self) -> int: ...
-
-    @property
-    def dim_z(self) -> int: ...
 
 
 class StandardKalmanFilter(KalmanFilter):
@@ -120,17 +99,15 @@ class FilterpyInformation(_FilterpyAdapter):
     filterpy's own ``inv(P_inv)``.
     """
 
-    def __init__(self, model: FormModel) -> None:
-        kf = FilterpyInformationFilter(dim_x=model.dim_x, dim_z=model.dim_z,
+    def __init__(self, Phi: np.ndarray, Q: np.ndarray, H: np.ndarray, V: np.ndarray,
+                 x0: np.ndarray, M0: np.ndarray) -> None:
+        kf = FilterpyInformationFilter(dim_x=Phi.shape[0], dim_z=H.shape[0],
                                        compute_log_likelihood=False)
-        kf.F = np.array(model.Phi, dtype=float)  # filterpy keeps F⁻¹ too
-        kf.Q = np.array(model.Q, dtype=float)
-        kf.H = np.array(model.H, dtype=float)
-        kf.R_inv = np.linalg.inv(model.V)
-        kf.P_inv = np.linalg.inv(model.M0)
-        kf.x = np.array(model.x0, dtype=float).reshape(-1, 1)
+        kf.F, kf.Q, kf.H = Phi, Q, H  # filterpy keeps F⁻¹ too
+        kf.R_inv, kf.P_inv = np.linalg.inv(V), np.linalg.inv(M0)
+        kf.x = x0
         self.filter = kf
-        self.K = np.zeros((model.dim_x, model.dim_z))
+        self.K = np.zeros((Phi.shape[0], H.shape[0]))
 
     def update(self, z: np.ndarray, R: np.ndarray | None = None,
                H: np.ndarray | None = None) -> None:
@@ -153,14 +130,12 @@ class FilterpySquareRoot(_FilterpyAdapter):
     ``P^½ P^½ᵀ``.
     """
 
-    def __init__(self, model: FormModel) -> None:
-        kf = SquareRootKalmanFilter(dim_x=model.dim_x, dim_z=model.dim_z)
-        kf.F = np.array(model.Phi, dtype=float)
-        kf.H = np.array(model.H, dtype=float)
-        kf.R = np.array(model.V, dtype=float)
-        kf.P = np.array(model.M0, dtype=float)
-        kf._Q1_2 = np.array(model.Gamma, dtype=float) @ cholesky(model.W, lower=True)
-        kf.x = np.array(model.x0, dtype=float).reshape(-1, 1)
+    def __init__(self, Phi: np.ndarray, Q_factor: np.ndarray, H: np.ndarray, V: np.ndarray,
+                 x0: np.ndarray, M0: np.ndarray) -> None:
+        kf = SquareRootKalmanFilter(dim_x=Phi.shape[0], dim_z=H.shape[0])
+        kf.F, kf.H, kf.R, kf.P = Phi, H, V, M0  # R and P: filterpy keeps their Cholesky factors
+        kf._Q1_2 = Q_factor
+        kf.x = x0
         self.filter = kf
 
     @property
@@ -181,37 +156,3 @@ class FilterpySquareRoot(_FilterpyAdapter):
             kf.update(z, cholesky(R, lower=True))
         finally:
             kf.H, kf.dim_z, kf.M = saved
-
-
-def _standard(model: FormModel) -> StandardKalmanFilter:
-    kf = StandardKalmanFilter(dim_x=model.dim_x, dim_z=model.dim_z)
-    reference = model.kalman_filter()
-    kf.F, kf.Q, kf.H, kf.R, kf.P, kf.x = (reference.F, reference.Q, reference.H, reference.R,
-                                          reference.P, reference.x)
-    return kf
-
-
-def _information(model: FormModel) -> InformationFilter:
-    return InformationFilter(model.Phi, model.Q, model.H, model.V, model.x0, model.M0)
-
-
-#: name -> (factory(model) -> filter object, one-line description).  Ordered as the table prints.
-FORMS: dict[str, tuple[Callable[[FormModel], object], str]] = {
-    "standard": (_standard, "P = (I - KH)M (filterpy's KalmanFilter, this line changed)"),
-    "joseph": (lambda model: model.kalman_filter(), "filterpy KalmanFilter.update (Joseph)"),
-    "information": (_information, "hand-written, P = (M^-1 + H'V^-1 H)^-1"),
-    "filterpy-information": (FilterpyInformation, "filterpy InformationFilter (carries P^-1)"),
-    "square-root": (FilterpySquareRoot, "filterpy SquareRootKalmanFilter (QR)"),
-}
-
-
-def make_form(name: str, model: FormModel):
-    """The filter object of form ``name`` (one of :data:`FORMS`) for ``model``, at (x0, M0)."""
-    name = _v.choice("form", name, FORMS)
-    return FORMS[name][0](model)
-
-
-def run_form(name: str, model: FormModel, z: np.ndarray) -> MultirateResult:
-    """Run form ``name`` on measurements ``z`` (n_gps, 2) under the multirate driver (200 Hz
-    predictions, GPS updates; NaN = not measured); the result's ``method`` is ``name``."""
-    return run_multirate(model, z, method=name, kf=make_form(name, model))

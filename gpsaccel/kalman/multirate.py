@@ -4,9 +4,11 @@ Any linear-Gaussian model with the course's matrices runs through it: it needs `
 (= Γ W Γᵀ), ``H``, ``V``, ``M0``, ``x0``, ``dt`` and a ``schedule()`` (see
 :class:`gpsaccel.kalman.schedule.Schedule`).  Two filters run under the same driver:
 
-* ``method="filterpy"``: filterpy's ``KalmanFilter`` (covariance form with the Joseph update),
-  set up by ``model.kalman_filter()``;
-* ``method="information"``: the hand-written :class:`~gpsaccel.kalman.information.InformationFilter`.
+* ``method="filterpy"``: filterpy's ``KalmanFilter`` (covariance form with the Joseph update);
+* ``method="information"``: the hand-written :class:`~gpsaccel.kalman.information.InformationFilter`;
+
+both built from the model's matrices by :func:`gpsaccel.kalman.factory.make_form`, which builds
+every other form too (:func:`run_form` runs one by name).
 
 Known input.  A model with a control-input matrix ``B`` (n, m) can be driven by a known input
 sequence ``u`` (n_steps, m): the prediction from fast step k to k + 1 is then
@@ -28,11 +30,12 @@ from typing import Any, Protocol
 import numpy as np
 
 from gpsaccel import _validation as _v
-from gpsaccel.kalman.information import InformationFilter
+from gpsaccel.kalman.factory import make_form
 from gpsaccel.kalman.schedule import Schedule
 from gpsaccel.kalman.update import CovarianceGuard, step_schedule
 
-METHODS = ("filterpy", "information")
+#: The driver's methods and the form (:data:`gpsaccel.kalman.factory.FORMS`) each one runs.
+METHODS = {"filterpy": "joseph", "information": "information"}
 #: What :func:`run_multirate` needs of a model (``schedule`` is a method).
 MODEL_ATTRIBUTES = ("Phi", "Q", "H", "V", "M0", "x0", "dt", "schedule")
 
@@ -67,8 +70,6 @@ class LinearGaussianModel(Protocol):
     def dt(self) -> float: ...
 
     def schedule(self) -> Schedule: ...
-
-    def kalman_filter(self): ...
 
 
 @dataclass(frozen=True, eq=False)
@@ -120,16 +121,9 @@ class MultirateResult:
 
 
 def make_filter(model: LinearGaussianModel, method: str):
-    """The filter object for ``method``, initialised at (x0, M0) from the model.
-
-    A model with a control-input matrix ``B`` hands it to the information form too (filterpy's
-    ``KalmanFilter`` gets it from ``model.kalman_filter()``).
-    """
-    _v.choice("method", method, METHODS)
-    if method == "filterpy":
-        return model.kalman_filter()
-    return InformationFilter(model.Phi, model.Q, model.H, model.V, model.x0, model.M0,
-                             B=getattr(model, "B", None))
+    """The filter object for ``method``, initialised at (x0, M0) from the model's matrices (and its
+    control-input matrix ``B``, if it has one)."""
+    return make_form(METHODS[_v.choice("method", method, METHODS)], model)
 
 
 @dataclass(frozen=True, eq=False)
@@ -273,7 +267,7 @@ def run_multirate(model: LinearGaussianModel, z: np.ndarray, method: str = "filt
         guard = CovarianceGuard(f"run_multirate(method={method!r})", None if not carries_information
                                 else "Even the information form cannot hold this problem in "
                                      "float64: rescale the states, or see "
-                                     "gpsaccel.calibration.exact for a high-precision reference.")
+                                     "gpsaccel.kalman.exact for a high-precision reference.")
 
     def update_at(i: int) -> None:
         x_bar[i], M[i] = kf.x[:, 0], kf.P
@@ -296,3 +290,10 @@ def run_multirate(model: LinearGaussianModel, z: np.ndarray, method: str = "filt
     t = np.arange(n_fast) * model.dt
     return MultirateResult(method, t, t[schedule.steps], schedule.steps, x_bar, M, x_hat, P,
                            K, r, S, used, x_fast, M_fast)
+
+
+def run_form(name: str, model: LinearGaussianModel, z: np.ndarray) -> MultirateResult:
+    """Run form ``name`` (:data:`gpsaccel.kalman.factory.FORMS`) on measurements ``z`` (n_epochs, p)
+    under this driver (predictions at the fast rate, updates at the epochs; NaN = not measured);
+    the result's ``method`` is ``name``."""
+    return run_multirate(model, z, method=name, kf=make_form(name, model))

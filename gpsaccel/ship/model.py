@@ -286,18 +286,9 @@ class ShipModel:
 
     def kalman_filter(self) -> KalmanFilter:
         """filterpy ``KalmanFilter``: F = Φ, B, Q = ΓWΓᵀ, H, R = V, P = M0 (with the wind prior)."""
-        from filterpy.kalman import KalmanFilter
+        from gpsaccel.kalman.factory import kalman_filter  # filterpy: only when called
 
-        n = self.dim_x
-        kf = KalmanFilter(dim_x=n, dim_z=9, dim_u=3)
-        kf.F = self.Phi
-        kf.B = self.B
-        kf.Q = self.Q
-        kf.H = self.H
-        kf.R = self.V.copy()
-        kf.P = self.M0
-        kf.x = self.x0.reshape(n, 1)
-        return kf
+        return kalman_filter(self)
 
     def replace(self, **changes: Any) -> ShipModel:
         """A copy with some fields changed (validated again)."""

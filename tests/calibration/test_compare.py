@@ -13,7 +13,7 @@ from gpsaccel.calibration.compare import (
     sweep,
     sweep_model,
 )
-from gpsaccel.calibration.forms import FORMS
+from gpsaccel.kalman.factory import FORMS
 
 #: Every built-in form at the report's numbers is within this of the exact answer, in σ (x̂) and in
 #: √(P_ii P_jj) (P).  Measured (seed 0 and 3): ≤ 4e-12 in x̂, ≤ 2.2e-13 in P.

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from gpsaccel import CalibrationModel, simulate
-from gpsaccel.calibration.exact import epoch_transition_exact, errors, exact_filter
+from gpsaccel.kalman.exact import epoch_transition_exact, errors, exact_filter
 
 # dt = 2⁻⁸ s: Φ and Γ are exact in float64, so the closed forms below hold to the last digit
 EXACT_DT = CalibrationModel(dt=2.0**-8, gps_every=40, duration=30.0)

@@ -7,8 +7,9 @@ import pytest
 from filterpy.kalman import SquareRootKalmanFilter
 
 from gpsaccel import CalibrationModel, simulate
-from gpsaccel.calibration.exact import errors, exact_filter
-from gpsaccel.calibration.forms import FORMS, make_form, run_form
+from gpsaccel.kalman.exact import errors, exact_filter
+from gpsaccel.kalman.factory import FORMS, make_form
+from gpsaccel.kalman.multirate import run_form
 
 #: Every form at the report's numbers is within this of the exact answer (in σ, and in
 #: √(P_ii P_jj)); measured: 4e-12 in x̂, 2e-13 in P (seed 0, with gaps).

@@ -1,5 +1,5 @@
 """Numerical guards: the covariance form warns when it loses precision; the information form stays
-exact for diffuse priors.  Against the 50-digit mpmath reference of gpsaccel.calibration.exact
+exact for diffuse priors.  Against the 50-digit mpmath reference of gpsaccel.kalman.exact
 (the calibration filter run at GPS rate with the same float64 inputs taken as exact numbers).
 
 Data are always the report's model's (a realistic truth); only the filter's prior or noise
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from gpsaccel import CalibrationModel, NumericalWarning, monte_carlo, simulate
-from gpsaccel.calibration.exact import errors, exact_filter
+from gpsaccel.kalman.exact import errors, exact_filter
 from gpsaccel.kalman.multirate import run_multirate
 from gpsaccel.kalman.update import SYMMETRY_RTOL, covariance_defect
 

@@ -14,7 +14,7 @@ import pytest
 from gpsaccel.kalman.compare import compare
 from gpsaccel.kalman.epochs import LinearCatalogue, LinearModel
 from gpsaccel.kalman.exact import errors, exact_filter
-from gpsaccel.kalman.forms import FORMS
+from gpsaccel.kalman.factory import FORMS
 
 DT = 0.05
 MODEL = LinearModel(Phi=[[1, DT, DT**2 / 2], [0, 1, DT], [0, 0, 1]],
