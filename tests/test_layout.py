@@ -139,3 +139,89 @@ def test_the_rule_catches_a_private_name_of_the_sandbox(tmp_path):
     good = tmp_path / "y.py"
     good.write_text("from gpsaccel import sandbox as sb\nsb.run(sb.Limits()).__class__\n")
     assert _private_uses(good) == []
+
+
+# ------------------------------------------------------------------------------ no import circles
+#: Circles that other work is cutting (check/linear <-> check/problems through Problem.linear; the
+#: sandbox's three modules that share the box user and prctl).  A new circle fails; empty this
+#: list as those are cut.
+KNOWN_CIRCLES = [
+    {"check.linear", "check.problems"},
+    {"sandbox._boxuser", "sandbox.limits", "sandbox.procs"},
+]
+
+
+def _module_name(path: Path) -> str:
+    rel = path.relative_to(ROOT).with_suffix("")
+    return ".".join(rel.parts[:-1] if rel.name == "__init__" else rel.parts)
+
+
+def _module_arrows() -> dict[str, set[str]]:
+    """Module -> the gpsaccel modules it imports, at any level (``from a import b`` is an arrow to
+    ``a.b`` when that is a module, else to ``a``)."""
+    paths = {_module_name(p): p for p in _modules() if "masters" not in p.parts
+             and "student" not in p.parts and "_lessons" not in p.parts}
+    arrows: dict[str, set[str]] = {m: set() for m in paths}
+    for mod, path in paths.items():
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                targets = [f"{node.module}.{a.name}" for a in node.names]
+            else:
+                continue
+            for target in targets:
+                name = target.removeprefix("gpsaccel").lstrip(".")
+                while name and name not in paths:
+                    name = name.rpartition(".")[0]
+                if target.startswith("gpsaccel") and name != mod:
+                    arrows[mod].add(name)
+    return arrows
+
+
+def _circles(arrows: dict[str, set[str]]) -> list[set[str]]:
+    """The strongly connected components of more than one module (Tarjan, iterative)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    out: list[set[str]] = []
+    for root in arrows:
+        if root in index:
+            continue
+        work = [(root, iter(sorted(arrows[root])))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        while work:
+            v, it = work[-1]
+            w = next(it, None)
+            if w is not None:
+                if w not in index:
+                    index[w] = low[w] = len(index)
+                    stack.append(w)
+                    work.append((w, iter(sorted(arrows[w]))))
+                elif w in stack:
+                    low[v] = min(low[v], index[w])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[v])
+            if low[v] == index[v]:
+                comp = set()
+                while True:
+                    w = stack.pop()
+                    comp.add(w)
+                    if w == v:
+                        break
+                if len(comp) > 1:
+                    out.append(comp)
+    return out
+
+
+def test_no_new_import_circle():
+    new = [c for c in _circles(_module_arrows()) if c not in KNOWN_CIRCLES]
+    assert not new, f"modules that import each other (cut the circle): {new}"
+
+
+def test_the_circle_finder_finds_one():
+    arrows = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}, "e": set()}
+    assert _circles(arrows) == [{"a", "b", "c"}]

@@ -63,7 +63,6 @@ from gpsaccel.assignments import notebook as nbm
 # the names the CLI, the kit, benchmarks/ and the tests read as ``grading.NAME``
 from gpsaccel.assignments.results import HEADER as HEADER
 from gpsaccel.assignments.results import _Log
-from gpsaccel.assignments.results import _safe_name as _safe_name
 from gpsaccel.assignments.results import summary as summary
 from gpsaccel.assignments.results import write_csv as write_csv
 from gpsaccel.assignments.results import write_summary as write_summary

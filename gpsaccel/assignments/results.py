@@ -26,12 +26,6 @@ def _cell(value: str) -> str:
     return "'" + value if value[:1] in ("=", "+", "-", "@", "\t", "\r") else value
 
 
-def _safe_name(name: str) -> str:
-    """A file name that cannot leave the folder, unique to ``name``
-    (:func:`gpsaccel._untrusted.student_id`)."""
-    return _untrusted.student_id(name)
-
-
 HEADER = ("student", "id", "file")
 
 

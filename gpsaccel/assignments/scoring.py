@@ -64,7 +64,7 @@ def assignment_module(name: str):
     import sys
 
     from gpsaccel import registry
-    from gpsaccel.assignments.generate import homework_dir
+    from gpsaccel.assignments.homework import homework_dir
 
     registry.assignment(name)  # ValueError naming the homework registered
     key = f"gpsaccel_graded_{name}"

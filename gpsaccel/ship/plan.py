@@ -11,12 +11,29 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from gpsaccel.ship.model import ShipModel
+
+class ShipParameters(Protocol):
+    """What the plan needs of :class:`gpsaccel.ship.model.ShipModel` (which needs the plan for its
+    x0: a protocol here, not an import, so the two modules do not import each other)."""
+
+    @property
+    def dt(self) -> float: ...
+
+    @property
+    def n_samples(self) -> int: ...
+
+    @property
+    def beta(self) -> tuple[float, float, float]: ...
+
+    @property
+    def mass(self) -> float: ...
+
+    @property
+    def inertia(self) -> float | None: ...
 
 #: The racetrack plan of :func:`driving_input`: cruise speed (m/s), the end of the speed-up (s),
 #: the two 180° left turns (start, end in s) and the length of the smooth yaw-rate ramps (s).
@@ -45,7 +62,7 @@ def planned_rates(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return speed, rate
 
 
-def nominal_plan(model: ShipModel) -> np.ndarray:
+def nominal_plan(model: ShipParameters) -> np.ndarray:
     """(N + 1, 9) noise-free states along the plan, k = 0..N (one beyond the grid for the input).
 
     Velocities are the plan's speed along the planned heading; accelerations their forward
@@ -80,7 +97,7 @@ def _plan(Ts: float, n_samples: int) -> np.ndarray:
     return out
 
 
-def driving_input(model: ShipModel) -> np.ndarray:
+def driving_input(model: ShipParameters) -> np.ndarray:
     """(n_steps, 3) the known input u_k = [F_x, F_y, τ] (N, N, N m), k = 0..N−2.
 
     From the acceleration rows a_{k+1} = −β v_k + u_k/m of the plan:

@@ -11,7 +11,7 @@ import os
 import nbformat
 import pytest
 
-from gpsaccel import registry
+from gpsaccel import _untrusted, registry
 from gpsaccel.assignments import grading
 from gpsaccel.assignments import notebook as nbm
 from gpsaccel.assignments.grading import find_submissions, grade
@@ -102,8 +102,8 @@ def test_the_hostile_student_gets_nothing_from_the_package(graded):
 def test_feedback_once_each_without_answers_stale_files_removed(graded):
     fb = graded["out"] / "feedback"
     names = sorted(p.name for p in fb.iterdir())
-    assert names == sorted(f"{grading._safe_name(s)}.txt" for s in (*STUDENTS, "empty 1006"))
-    text = (fb / f"{grading._safe_name(STUDENTS[1])}.txt").read_text(encoding="utf-8")
+    assert names == sorted(f"{_untrusted.student_id(s)}.txt" for s in (*STUDENTS, "empty 1006"))
+    text = (fb / f"{_untrusted.student_id(STUDENTS[1])}.txt").read_text(encoding="utf-8")
     assert "nees-sum" in text and "Your variant: rate_hz = " in text
     lines = [ln for ln in text.splitlines() if ln.startswith("    - ")]
     assert len(lines) == len(set(lines))
