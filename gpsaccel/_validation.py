@@ -7,8 +7,9 @@ was expected, so a student reading a traceback knows which argument to fix.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Mapping
 from numbers import Integral, Real
+from typing import Any
 
 import numpy as np
 
@@ -139,6 +140,64 @@ def spd_matrix(name: str, value: object, n: int | None = None, rtol: float = 1e-
             f"{name} must be positive definite (smallest eigenvalue {eig:.3g})"
         ) from None
     return arr
+
+
+# ------------------------------------------------------------------------------ a model's fields
+# A student-facing model (CalibrationModel, ShipModel, CoopModel) declares its checks as a table,
+# field -> check(name, value), and its __post_init__ is one call:
+#
+#     FIELDS = {"dt": _v.positive_float, "V": _v.spd(2), "omega": _v.optional(_v.positive_float)}
+#     def __post_init__(self):
+#         _v.fields(self, FIELDS)
+#
+# Each check is one of the helpers above (the message names the field and what was expected), so the
+# physics starts right after the table instead of after a wall of setattr calls.
+
+#: A field's check: ``check(name, value)`` returns the normalised value or raises ValueError.
+Check = Callable[[str, Any], Any]
+
+
+def fields(obj: object, checks: Mapping[str, Check]) -> None:
+    """Check and normalise the fields of ``obj`` (a frozen dataclass too) in the table's order."""
+    for name, check in checks.items():
+        object.__setattr__(obj, name, check(name, getattr(obj, name)))
+
+
+def optional(check: Check) -> Check:
+    """``check``, with None passing through (a field whose None means "not given")."""
+    return lambda name, value: None if value is None else check(name, value)
+
+
+def spd(n: int) -> Check:
+    """An n x n symmetric positive definite matrix (:func:`spd_matrix`)."""
+    return lambda name, value: spd_matrix(name, value, n)
+
+
+def array(*shape: int) -> Check:
+    """A finite float array of ``shape`` (:func:`finite_array`)."""
+    return lambda name, value: finite_array(name, value, shape)
+
+
+def count(minimum: int) -> Check:
+    """An integer >= ``minimum`` (:func:`integer`)."""
+    return lambda name, value: integer(name, value, minimum)
+
+
+def flag(name: str, value: object) -> bool:
+    """True or False, nothing else (1 or "yes" is a slip)."""
+    if not isinstance(value, bool):
+        raise ValueError(f"{name} must be True or False, got {value!r}")
+    return value
+
+
+def variance(unit: str) -> Check:
+    """A finite float >= 0 in ``unit`` (a variance that may be zero)."""
+    def check(name: str, value: object) -> float:
+        out = finite_float(name, value)
+        if out < 0:
+            raise ValueError(f"{name} must be a variance >= 0 ({unit}), got {value!r}")
+        return out
+    return check
 
 
 # ------------------------------------------------------------------------------ command-line flags

@@ -72,3 +72,33 @@ def test_spd_matrix_checks_shape_symmetry_and_definiteness():
         _v.spd_matrix("M0", [[1.0, 2.0], [2.0, 1.0]])
     with pytest.raises(ValueError, match="M0 contains NaN or inf"):
         _v.spd_matrix("M0", [[np.nan]])
+
+
+def test_a_field_table_normalises_in_order_and_names_the_field():
+    from dataclasses import dataclass
+
+    @dataclass(frozen=True)
+    class Model:
+        dt: object = 1
+        V: object = 2.0
+        omega: object = None
+        on: object = True
+        drift: object = 0
+
+    table = {"dt": _v.positive_float, "V": _v.spd(1), "omega": _v.optional(_v.positive_float),
+             "on": _v.flag, "drift": _v.variance("N²")}
+    m = Model()
+    _v.fields(m, table)
+    assert m.dt == 1.0 and type(m.dt) is float and m.omega is None and m.drift == 0.0
+    np.testing.assert_array_equal(m.V, [[2.0]])
+    for kwargs, match in (({"dt": 0}, "dt must be a finite number > 0"),
+                          ({"omega": -1.0}, "omega must be a finite number > 0"),
+                          ({"on": 1}, "on must be True or False, got 1"),
+                          ({"drift": -1.0}, r"drift must be a variance >= 0 \(N²\)"),
+                          ({"dt": 0, "V": -1.0}, "^dt")):  # the table's order
+        with pytest.raises(ValueError, match=match):
+            _v.fields(Model(**kwargs), table)
+    with pytest.raises(ValueError, match=r"x0 must have shape \(3\)"):
+        _v.array(3)("x0", [1.0, 2.0])
+    with pytest.raises(ValueError, match="n must be an integer >= 2, got 1"):
+        _v.count(2)("n", 1)

@@ -85,6 +85,15 @@ def gamma(dt: float) -> np.ndarray:
     return -np.array([[dt**2 / 2], [dt], [0.0]])
 
 
+#: What each field of :class:`CalibrationModel` must be (a ValueError names the field otherwise).
+FIELDS: dict[str, _v.Check] = {
+    "dt": _v.positive_float, "gps_every": _v.count(1), "duration": _v.positive_float,
+    "W": _v.spd(1), "V": _v.spd(2), "M0": _v.spd(3), "accel_amplitude": _v.finite_float,
+    "omega": _v.optional(_v.positive_float), "frequency_hz": _v.optional(_v.positive_float),
+    "p0_mean": _v.finite_float, "v0_mean": _v.finite_float,
+}
+
+
 @dataclass(frozen=True, eq=False)
 class CalibrationModel:
     """The report-000 calibration problem; every field has the report's default.
@@ -117,25 +126,15 @@ class CalibrationModel:
     v0_mean: float = 100.0
 
     def __post_init__(self) -> None:
-        set_ = object.__setattr__  # frozen dataclass: normalise once, here
-        set_(self, "dt", _v.positive_float("dt", self.dt))
-        set_(self, "gps_every", _v.integer("gps_every", self.gps_every, minimum=1))
-        set_(self, "duration", _v.positive_float("duration", self.duration))
-        _v.whole_multiple("duration", self.duration, self.gps_interval, "the GPS interval")
-        set_(self, "W", _v.spd_matrix("W", self.W, 1))
-        set_(self, "V", _v.spd_matrix("V", self.V, 2))
-        set_(self, "M0", _v.spd_matrix("M0", self.M0, 3))
-        set_(self, "accel_amplitude", _v.finite_float("accel_amplitude", self.accel_amplitude))
         if self.omega is not None and self.frequency_hz is not None:
             raise ValueError("omega and frequency_hz: give at most one (ω = 2π f)")
-        if self.omega is not None:
-            set_(self, "omega", _v.positive_float("omega", self.omega))
-        if self.frequency_hz is not None:
-            set_(self, "frequency_hz", _v.positive_float("frequency_hz", self.frequency_hz))
-        set_(self, "p0_mean", _v.finite_float("p0_mean", self.p0_mean))
-        set_(self, "v0_mean", _v.finite_float("v0_mean", self.v0_mean))
-        # every truth integrates a(t): |v − v0| ≤ |A| T and |p − p0 − v0 T| ≤ |A| T² must be
-        # numbers, as must the (v0 ± 5σ) T of the drawn initial state
+        _v.fields(self, FIELDS)
+        _v.whole_multiple("duration", self.duration, self.gps_interval, "the GPS interval")
+        self._check_reach()
+
+    def _check_reach(self) -> None:
+        """Every truth integrates a(t): |v − v0| ≤ |A| T and |p − p0 − v0 T| ≤ |A| T² must be
+        numbers, as must the (v0 ± 5σ) T of the drawn initial state."""
         T = self.duration
         reach = max(abs(self.accel_amplitude) * T * max(T, 1.0),
                     (abs(self.v0_mean) + 5.0 * math.sqrt(self.M0[1, 1])) * T

@@ -262,6 +262,14 @@ def course_tvec() -> np.ndarray:
     return _csv("tvec.csv")
 
 
+#: What each field of :class:`CoopModel` must be (a ValueError names the field otherwise).
+FIELDS: dict[str, _v.Check] = {
+    "dt": _v.positive_float, "duration": _v.positive_float, "L": _v.positive_float,
+    "x0": _v.array(N_STATES), "u0": _v.array(N_INPUTS), "P0": _v.spd(N_STATES),
+    "Qtrue": _v.spd(N_STATES), "Rtrue": _v.spd(N_MEAS),
+}
+
+
 @dataclass(frozen=True, eq=False)
 class CoopModel:
     """Report 002's cooperative localization problem; every field has the course's default.
@@ -288,16 +296,8 @@ class CoopModel:
     Rtrue: np.ndarray = field(default_factory=course_R)
 
     def __post_init__(self) -> None:
-        set_ = object.__setattr__
-        set_(self, "dt", _v.positive_float("dt", self.dt))
-        set_(self, "duration", _v.positive_float("duration", self.duration))
+        _v.fields(self, FIELDS)
         _v.whole_multiple("duration", self.duration, self.dt, "dt")
-        set_(self, "L", _v.positive_float("L", self.L))
-        set_(self, "x0", _v.finite_array("x0", self.x0, (N_STATES,)))
-        set_(self, "u0", _v.finite_array("u0", self.u0, (N_INPUTS,)))
-        set_(self, "P0", _v.spd_matrix("P0", self.P0, N_STATES))
-        set_(self, "Qtrue", _v.spd_matrix("Qtrue", self.Qtrue, N_STATES))
-        set_(self, "Rtrue", _v.spd_matrix("Rtrue", self.Rtrue, N_MEAS))
 
     # ----------------------------------------------------------------- time grid
     @property

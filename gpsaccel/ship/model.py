@@ -94,6 +94,27 @@ GPS_ROWS = (0, 3)
 #: Report 004's measurement-noise variances, in state order.
 REPORT_VARIANCES = (15.0, 0.2, 4.9451e-5, 16.0, 0.2, 4.8815e-5, 0.2, 0.2, 2.3559e-5)
 
+
+def _drag(name: str, value: Any) -> tuple[float, float, float]:
+    """Three positive drag coefficients (βx, βy, βψ)."""
+    beta = tuple(value) if np.ndim(value) == 1 else ()
+    if len(beta) != 3:
+        raise ValueError(f"{name} must be three drag coefficients (βx, βy, βψ), got {value!r}")
+    x, y, psi = (_v.positive_float(f"{name}[{i}]", b) for i, b in enumerate(beta))
+    return x, y, psi
+
+
+#: What each field of :class:`ShipModel` must be (a ValueError names the field otherwise).
+FIELDS: dict[str, _v.Check] = {
+    "dt": _v.positive_float, "n_samples": _v.count(2), "beta": _drag,
+    "mass": _v.positive_float, "inertia": _v.positive_float,
+    "V": _v.spd(9), "W": _v.spd(3), "M0_ship": _v.spd(9),
+    "gps_rate_hz": _v.positive_float, "imu_rate_hz": _v.positive_float,
+    "multirate": _v.flag, "wind": _v.flag, "wind_drift": _v.variance("N²"),
+    "wind_prior": _v.positive_float,
+}
+
+
 @dataclass(frozen=True, eq=False)
 class ShipModel:
     """Report 004's ship (module docstring); every field has the report's value or our stated choice.
@@ -132,33 +153,12 @@ class ShipModel:
     wind_prior: float = 1.0
 
     def __post_init__(self) -> None:
-        set_ = object.__setattr__  # frozen dataclass: normalise once, here
-        set_(self, "dt", _v.positive_float("dt", self.dt))
-        set_(self, "n_samples", _v.integer("n_samples", self.n_samples, minimum=2))
-        beta = tuple(self.beta) if np.ndim(self.beta) == 1 else ()
-        if len(beta) != 3:
-            raise ValueError(f"beta must be three drag coefficients (βx, βy, βψ), got {self.beta!r}")
-        set_(self, "beta", tuple(_v.positive_float(f"beta[{i}]", b) for i, b in enumerate(beta)))
-        set_(self, "mass", _v.positive_float("mass", self.mass))
-        if self.inertia is None:
-            set_(self, "inertia", self.mass * (0.25**2 + 1.05**2) / 12.0)
-        set_(self, "inertia", _v.positive_float("inertia", self.inertia))
-        set_(self, "V", _v.spd_matrix("V", self.V, 9))
-        set_(self, "W", _v.spd_matrix("W", self.W, 3))
-        set_(self, "M0_ship", _v.spd_matrix("M0_ship", self.M0_ship, 9))
+        if self.inertia is None:  # the report's hull: m (0.25² + 1.05²)/12
+            object.__setattr__(self, "inertia", _v.positive_float("mass", self.mass)
+                               * (0.25**2 + 1.05**2) / 12.0)
+        _v.fields(self, FIELDS)
         for name in ("gps_rate_hz", "imu_rate_hz"):
-            rate = _v.positive_float(name, getattr(self, name))
-            _v.whole_multiple(f"1/{name}", 1.0 / rate, self.dt, "dt")
-            set_(self, name, rate)
-        if not isinstance(self.multirate, bool):
-            raise ValueError(f"multirate must be True or False, got {self.multirate!r}")
-        if not isinstance(self.wind, bool):
-            raise ValueError(f"wind must be True or False, got {self.wind!r}")
-        drift = _v.finite_float("wind_drift", self.wind_drift)
-        if drift < 0:
-            raise ValueError(f"wind_drift must be a variance >= 0 (N²), got {self.wind_drift!r}")
-        set_(self, "wind_drift", drift)
-        set_(self, "wind_prior", _v.positive_float("wind_prior", self.wind_prior))
+            _v.whole_multiple(f"1/{name}", 1.0 / getattr(self, name), self.dt, "dt")
 
     # ----------------------------------------------------------------- grid
     @property
