@@ -3,9 +3,19 @@
 * :mod:`~gpsaccel.kalman.schedule`: which fast steps carry an update and which components arrive;
 * :mod:`~gpsaccel.kalman.update`: the one Joseph update, the one epoch transition (Φⁿ, Σ ΦʲQΦʲᵀ)
   and the one stepping loop over a schedule, with an update hook;
-* :mod:`~gpsaccel.kalman.multirate`: ``run_multirate`` (filterpy or the information form) and its
-  result in course notation;
+* :mod:`~gpsaccel.kalman.factory`: the one place a filter object is built from a model's
+  matrices (Φ, Q, H, V, x0, M0; B), for every form: the driver and each model's
+  ``kalman_filter()`` build through it;
+* :mod:`~gpsaccel.kalman.forms`: the forms' filter classes (standard update, filterpy's information
+  and square-root filters adapted to the driver);
 * :mod:`~gpsaccel.kalman.information`: the hand-written information-form filter;
+* :mod:`~gpsaccel.kalman.multirate`: the driver ``run_multirate`` (any form, predicting at the fast
+  rate and updating at the epochs), ``run_form``, and the result in course notation;
+* :mod:`~gpsaccel.kalman.exact`: the same filter in 50-digit arithmetic (mpmath), the reference
+  every form is measured against;
+* :mod:`~gpsaccel.kalman.compare`: filters side by side against that exact answer;
+* :mod:`~gpsaccel.kalman.epochs`: a linear filter at its epochs, the known mistakes of one as
+  changes of its ingredients, and any linear model's catalogue of them (``LinearModel``);
 * :mod:`~gpsaccel.kalman.gain_sequence`: one gain sequence applied to a whole ensemble;
 * :mod:`~gpsaccel.kalman.consistency`: NEES, NIS, χ² bounds, z-scores and verdicts.
 
