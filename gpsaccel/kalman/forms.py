@@ -105,7 +105,7 @@ class FilterpyInformation(_FilterpyAdapter):
                                        compute_log_likelihood=False)
         kf.F, kf.Q, kf.H = Phi, Q, H  # filterpy keeps F⁻¹ too
         kf.R_inv, kf.P_inv = np.linalg.inv(V), np.linalg.inv(M0)
-        kf.x = x0
+        kf.x = np.array(x0, dtype=float).reshape(-1, 1)  # its own copy: filterpy updates x in place
         self.filter = kf
         self.K = np.zeros((Phi.shape[0], H.shape[0]))
 
@@ -135,7 +135,7 @@ class FilterpySquareRoot(_FilterpyAdapter):
         kf = SquareRootKalmanFilter(dim_x=Phi.shape[0], dim_z=H.shape[0])
         kf.F, kf.H, kf.R, kf.P = Phi, H, V, M0  # R and P: filterpy keeps their Cholesky factors
         kf._Q1_2 = Q_factor
-        kf.x = x0
+        kf.x = np.array(x0, dtype=float).reshape(-1, 1)  # its own copy: filterpy updates x in place
         self.filter = kf
 
     @property
