@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 
 from gpsaccel.check.batch import check_many
-from gpsaccel.check.whole_filter import DEFAULT_RUNS
+from gpsaccel.check.problems.calibration import DEFAULT_RUNS
 
 HERE = Path(__file__).resolve().parents[1] / "tests" / "submissions"
 BY_HAND_200HZ = ["correct_covariance.py", "correct_joseph.py", "correct_information.py",

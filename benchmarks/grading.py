@@ -158,7 +158,7 @@ def _notebook_cpu(nb_path: Path, cold: bool) -> tuple[float, float]:
     def child(conn) -> None:
         if cold:  # undo the warm-up in this child: what it imports is imported again
             import sys as _sys
-            for m in [m for m in _sys.modules if m.startswith(("IPython", "gpsaccel.check.tracker",
+            for m in [m for m in _sys.modules if m.startswith(("IPython", "gpsaccel.check.problems.tracker",
                                                                "traitlets", "pygments"))]:
                 del _sys.modules[m]
         s0, c0 = self_cpu(), cpu()

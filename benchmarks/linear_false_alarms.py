@@ -24,8 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from gpsaccel.check.problems.tracker import TRACKER
 from gpsaccel.check.report import Report
-from gpsaccel.check.tracker import TRACKER
 
 HERE = Path(__file__).resolve().parents[1] / "tests"
 sys.path.insert(0, str(HERE / "check"))

@@ -27,7 +27,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 #: Modules that register problems when imported (a new problem module: one line here).
-PROVIDERS = ("gpsaccel.check.whole_filter", "gpsaccel.check.problems", "gpsaccel.check.tracker")
+PROVIDERS = ("gpsaccel.check.problems.calibration", "gpsaccel.check.problems.coop",
+             "gpsaccel.check.problems.ship", "gpsaccel.check.problems.tracker")
 
 
 @dataclass(frozen=True)

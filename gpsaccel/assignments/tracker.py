@@ -1,7 +1,7 @@
 r"""The tracker homework's own checks: the model matrices for the student's numbers.
 
-The constant-velocity tracker of :mod:`gpsaccel.check.tracker` (x = [p, v], a position fix at
-2 Hz).  Question 1 asks for Φ, Γ, Q, H, V, M0 at the student's propagation rate and noise levels
+The constant-velocity tracker of :mod:`gpsaccel.check.problems.tracker` (x = [p, v], a position
+fix at 2 Hz).  Question 1 asks for Φ, Γ, Q, H, V, M0 at the student's propagation rate and noise levels
 (:func:`variant_model`) and is checked by :func:`gpsaccel.assignments.linear.matrices_answer`
 with the tracker's catalogue; question 2, the whole ``kalman_filter(z)``, by
 :func:`gpsaccel.check.submission` with ``problem="tracker"``.  Both speak the checker's codes.
@@ -16,7 +16,7 @@ from gpsaccel.assignments._answers import assert_report
 from gpsaccel.assignments.linear import matrices_answer
 from gpsaccel.check.linear import ModelProblem
 from gpsaccel.check.report import Report
-from gpsaccel.check.tracker import N_FIXES, TRACKER, model
+from gpsaccel.check.problems.tracker import N_FIXES, TRACKER, model
 from gpsaccel.kalman.epochs import LinearModel
 
 #: The position fixes' rate (Hz): the same for every variant.
@@ -25,7 +25,8 @@ FIX_RATE_HZ = 2
 
 def variant_model(rate_hz: int = 10, sigma_a: float = 0.3, sigma_p: float = 2.0) -> LinearModel:
     """The tracker propagated at ``rate_hz`` (a multiple of the 2 Hz fixes) with acceleration
-    noise σ_a (m/s²) and fixes of σ_p (m); the defaults are :data:`gpsaccel.check.tracker.TRACKER`'s."""
+    noise σ_a (m/s²) and fixes of σ_p (m); the defaults are
+    :data:`gpsaccel.check.problems.tracker.TRACKER`'s."""
     if rate_hz % FIX_RATE_HZ:
         raise ValueError(f"rate_hz must be a multiple of {FIX_RATE_HZ} Hz, got {rate_hz!r}")
     dt, base = 1.0 / rate_hz, cast(ModelProblem, TRACKER).model

@@ -13,13 +13,14 @@ Every check returns a :class:`Report` of :class:`Finding` s with stable codes::
     check.Problem.linear("mine", Phi=..., Gamma=..., W=..., H=..., V=..., M0=..., x0=...,
                          every=5, n_epochs=41)           # a problem for any linear model
 
-The problems (contract, simulated data, reference, tolerance, catalogue of mistakes) are described
-in :mod:`gpsaccel.check.problems`.  Every ``assert_*`` form raises ``AssertionError`` with the
-findings instead, for a grader's test cell (nbgrader, otter-grader).  The catalogues of known
-mistakes live with their systems (:mod:`gpsaccel.calibration.mistakes`,
-:mod:`gpsaccel.coop.mistakes`, :mod:`gpsaccel.ship.mistakes`); ``gpsaccel check PATH --problem
-...`` checks many files (:mod:`gpsaccel.check.batch`).  :func:`student_filter` makes a file a
-``kalman_filter(z)`` callable (run in its own box) for :func:`gpsaccel.calibration.compare.compare`.
+What a problem is (contract, simulated data, reference, tolerance, catalogue of mistakes) is
+:mod:`gpsaccel.check.problem`; the problems, one per file, are :mod:`gpsaccel.check.problems`.
+Every ``assert_*`` form raises ``AssertionError`` with the findings instead, for a grader's
+test cell (nbgrader, otter-grader).  The catalogues of known mistakes live with their systems
+(:mod:`gpsaccel.calibration.mistakes`, :mod:`gpsaccel.coop.mistakes`,
+:mod:`gpsaccel.ship.mistakes`); ``gpsaccel check PATH --problem ...`` checks many files
+(:mod:`gpsaccel.check.batch`).  :func:`student_filter` makes a file a ``kalman_filter(z)``
+callable (run in its own box) for :func:`gpsaccel.calibration.compare.compare`.
 Students' code runs only inside a sandbox (:mod:`gpsaccel.sandbox`: bubblewrap namespaces or
 a portable basic box, with limits), whose generic interface (named functions, numpy inputs,
 declared outputs) every problem uses through :meth:`Problem.check`.

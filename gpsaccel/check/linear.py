@@ -26,7 +26,7 @@ Bonferroni family at ``alpha``) is reported as information: it never decides ``p
 
 :class:`LinearProblem` holds this for any :class:`~gpsaccel.kalman.epochs.LinearModel`
 (``check.Problem.linear(...)``, the generic catalogue); the calibration problem
-(:mod:`gpsaccel.check.whole_filter`) is the same class with report 000's simulation, catalogue
+(:mod:`gpsaccel.check.problems.calibration`) is the same class with report 000's simulation, catalogue
 and wording.
 """
 
@@ -41,7 +41,7 @@ from numpy.typing import ArrayLike
 from gpsaccel import _validation as _v
 from gpsaccel._feedback import describe_miss
 from gpsaccel.check.findings import mistake_finding
-from gpsaccel.check.problems import Argument, Function, Problem
+from gpsaccel.check.problem import Argument, Function, Problem
 from gpsaccel.check.report import Report, used
 from gpsaccel.kalman.consistency import (
     Verdict,

@@ -3,7 +3,7 @@
 ``gpsaccel check --problem problems.py:cv2d`` runs ``problems.py`` (the instructor's file, in the
 instructor's process: it is not a student's) and uses its problem ``cv2d``: one the file
 registered (``check.Problem.linear("cv2d", ...)`` registers itself) or a module-level variable
-``cv2d`` holding a :class:`~gpsaccel.check.problems.Problem`.  From then on it is a registered
+``cv2d`` holding a :class:`~gpsaccel.check.problem.Problem`.  From then on it is a registered
 problem like the package's: the same sandbox, catalogue and feedback; nothing in the package is
 edited.  The checks run in processes forked from this one, which know the problem; a Dask
 worker would not (``--dask`` refuses a problem from a file).

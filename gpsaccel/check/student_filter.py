@@ -8,7 +8,7 @@
     print(compare("joseph", "square-root", filters={"alice": check.student_filter("alice.py")}))
 
 Each call runs the file in a sandbox (:mod:`gpsaccel.sandbox`, as
-:meth:`gpsaccel.check.problems.Problem.check` does for a check: a box of its own with limits,
+:meth:`gpsaccel.check.problem.Problem.check` does for a check: a box of its own with limits,
 nothing of the student's imported into this process) on ``repeat`` copies of ``z`` and hands back
 the first run's (x_hat, P).  The time per run is measured in the child around the student's calls
 only, and set as the callable's ``seconds`` (``compare`` reports it instead of the box's start-up).
@@ -30,8 +30,8 @@ import numpy as np
 from gpsaccel import _validation as _v
 from gpsaccel import sandbox as sb
 from gpsaccel.check.findings import box_findings
+from gpsaccel.check.problems.calibration import FUNCTION, calls
 from gpsaccel.check.report import Report
-from gpsaccel.check.whole_filter import FUNCTION, calls
 
 
 class StudentFilterError(RuntimeError):

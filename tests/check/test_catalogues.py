@@ -10,7 +10,7 @@ import pytest
 from gpsaccel import registry
 from gpsaccel.calibration import mistakes as cal
 from gpsaccel.check import problems
-from gpsaccel.check.tracker import TRACKER
+from gpsaccel.check.problems.tracker import TRACKER
 from gpsaccel.coop import mistakes as coop
 from gpsaccel.kalman.epochs import Mistake
 from gpsaccel.ship import mistakes as ship

@@ -1,7 +1,7 @@
 """check.Problem.linear: a problem for any linear model, with the generic catalogue of mistakes.
 
-The fourth problem (gpsaccel/check/tracker.py: a constant-velocity tracker, 10 Hz propagation,
-2 Hz position fixes) is defined in a few dozen lines of instructor code (counted below).  A
+The fourth problem (gpsaccel/check/problems/tracker.py: a constant-velocity tracker, 10 Hz
+propagation, 2 Hz position fixes) is defined in a few dozen lines of instructor code (counted below).  A
 student-style filter (tests/submissions/tracker/student.py, written step by step, not the
 catalogue's recursion) makes each generic mistake in turn: each gets its code on two seeds, the
 correct filter passes.
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from gpsaccel import check, registry
-from gpsaccel.check.tracker import TRACKER
+from gpsaccel.check.problems.tracker import TRACKER
 from gpsaccel.kalman.epochs import LinearModel
 
 STUDENT = Path(__file__).resolve().parents[1] / "submissions" / "tracker" / "student.py"

@@ -18,7 +18,7 @@ import pytest
 
 from gpsaccel import check
 from gpsaccel import sandbox as sb
-from gpsaccel.check import whole_filter as wf
+from gpsaccel.check.problems import calibration as wf
 from gpsaccel.sandbox.confinement import _bwrap_command
 
 LIMITS = sb.Limits(memory=512 << 20, file_size=16 << 20, output=1 << 20, time=20)

@@ -278,7 +278,7 @@ def test_a_box_that_may_import_gpsaccel_finds_no_check_nor_answer_file(tmp_path)
     """A notebook's box imports the course's models (allow_gpsaccel) but reads no file of the
     checks, the graded questions or the answers, not even with libc calls no audit hook sees:
     bwrap binds empty folders over them (a public module of the same package is readable)."""
-    rel = ["check/batch.py", "check/problems.py", "assignments/ship.py",
+    rel = ["check/batch.py", "check/problem.py", "assignments/ship.py",
            "assignments/__init__.py", "exercises/answers.py", "calibration/model.py"]
     dirs = [d for d in sb.HIDDEN_WITH_GPSACCEL if (sb.PACKAGE_DIR / d).resolve().is_relative_to(
         sb.PACKAGE_DIR)]

@@ -75,7 +75,7 @@ from gpsaccel.check.linear import (  # noqa: F401 - the calibration names of the
     answer,
     candidates,
 )
-from gpsaccel.check.problems import Argument, Function
+from gpsaccel.check.problem import Argument, Function
 from gpsaccel.check.report import Report
 from gpsaccel.sandbox import Output
 
@@ -180,7 +180,7 @@ class CalibrationProblem(LinearProblem):
 
     name = "calibration"
     title = "Report 000: GPS/accelerometer calibration filter (3 states, 200 Hz + 5 Hz GPS)"
-    tolerance = "1e-6 σ in x̂ and P (see gpsaccel.check.whole_filter)"
+    tolerance = "1e-6 σ in x̂ and P (see gpsaccel.check.problems.calibration)"
     default_runs = DEFAULT_RUNS
     step = "accelerometer step"
     messages = MESSAGES
