@@ -110,10 +110,11 @@ def test_a_function_named_like_its_module_stays_the_function_after_the_module_is
     """``import gpsaccel.check.student_filter`` binds the sub-module on the package; the public
     name of the same name (the function) must win, as it did when the package was eager (the
     CLI's ``compare`` called the module and failed)."""
-    code = ("import gpsaccel.check.student_filter, gpsaccel.check.jacobians\n"
-            "from gpsaccel.check import student_filter, jacobians\n"
+    code = ("import gpsaccel.check.student_filter, gpsaccel.check.jacobians, gpsaccel.check.dt_model\n"
+            "from gpsaccel.check import student_filter, jacobians, dt_model\n"
             "import gpsaccel.check as c\n"
             "assert callable(student_filter) and callable(jacobians), (student_filter, jacobians)\n"
+            "assert callable(dt_model) and c.dt_model is dt_model, dt_model\n"
             "assert c.student_filter is student_filter\n"
             "assert c.student_filter.__module__ == 'gpsaccel.check.student_filter'\n")
     loaded_after(code)  # asserts the subprocess exits 0

@@ -32,7 +32,8 @@ from gpsaccel import _lazy
 
 if TYPE_CHECKING:  # for mypy and editors; at run time each name loads on first use (_lazy)
     from gpsaccel.calibration.mistakes import codes
-    from gpsaccel.check.jacobians import assert_dt_model, assert_jacobians, dt_model, jacobians
+    from gpsaccel.check.dt_model import assert_dt_model, dt_model
+    from gpsaccel.check.jacobians import assert_jacobians, jacobians
     from gpsaccel.check.linear import TOLERANCE, LinearProblem
     from gpsaccel.check.matrices import assert_model_matrices, model_matrices
     from gpsaccel.check.problems import Problem, assert_submission, submission
@@ -64,7 +65,8 @@ __getattr__, __dir__ = _lazy.attach(
     __name__,
     attributes={
         "gpsaccel.calibration.mistakes": ("codes",),
-        "jacobians": ("assert_dt_model", "assert_jacobians", "dt_model", "jacobians"),
+        "dt_model": ("assert_dt_model", "dt_model"),
+        "jacobians": ("assert_jacobians", "jacobians"),
         "linear": ("TOLERANCE", "LinearProblem"),
         "matrices": ("assert_model_matrices", "model_matrices"),
         "problems": ("Problem", "assert_submission", "submission"),

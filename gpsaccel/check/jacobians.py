@@ -1,4 +1,4 @@
-r"""Check a student's cooperative-localization Jacobians and DT linearization (report 002).
+r"""Check a student's cooperative-localization Jacobians A, B, C (report 002).
 
 The model (state x = [ξg, ηg, θg, ξa, ηa, θa], input u = [vg, φg, va, ωa], wheelbase L)::
 
@@ -19,15 +19,12 @@ when it agrees with the analytic value to ``rtol`` relative to the element's own
 ``rtol`` times the largest element of that matrix at that state (the analytic matrices are exact
 to rounding; a central finite difference with a good step is 1e-8 relative away, and passes).
 
-:func:`dt_model` checks the DT perturbation model F = I + ΔT·A, G = ΔT·B, H = C (and, if given,
-the process noise Ω / Q of the course: Qtrue is already the covariance per DT step, so Ω = I).
-A is nilpotent here (A² = 0), so the exact e^{ΔT·A} equals I + ΔT·A and passes too.
-
 Every wrong element is named in 1-based course notation (A₁₃), with the expected expression, the
 student's and the right value at the first state where it differs, and, for the recognised
-mistakes, the likely cause.  Codes: ``jacobian-A``, ``jacobian-B``, ``jacobian-C``,
-``dt-linearization``, ``omega-dt-gamma``; ``not-callable``, ``exception``, ``returns-none``, ``shape``,
-``not-finite`` for what cannot be checked.
+mistakes, the likely cause.  Codes: ``jacobian-A``, ``jacobian-B``, ``jacobian-C``;
+``not-callable``, ``exception``, ``returns-none``, ``shape``, ``not-finite`` for what cannot be
+checked.  The DT linearization built from these Jacobians is checked by
+:mod:`gpsaccel.check.dt_model`, with the same states and element-by-element findings.
 """
 
 from __future__ import annotations
@@ -36,7 +33,6 @@ import math
 import time
 import traceback
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -47,7 +43,6 @@ from gpsaccel.coop.model import (
     jacobian_A,
     jacobian_B,
     jacobian_C,
-    wrap_state,
 )
 
 #: Relative tolerance of an element (see the module docstring).
@@ -153,7 +148,7 @@ _RETURNED = {
 _NEAR = " (the vehicles are 1 cm apart there: ρ² is small but not zero)"
 
 
-def _evaluate(report: Report, name: str, fn: object, X: np.ndarray, U: np.ndarray,
+def student_matrices(report: Report, name: str, fn: object, X: np.ndarray, U: np.ndarray,
               display: str | None = None) -> np.ndarray | None:
     display = display or name
     if not callable(fn):
@@ -175,7 +170,7 @@ def _evaluate(report: Report, name: str, fn: object, X: np.ndarray, U: np.ndarra
     return out
 
 
-def _expected(name: str, X: np.ndarray, U: np.ndarray, model: CoopModel) -> np.ndarray:
+def analytic(name: str, X: np.ndarray, U: np.ndarray, model: CoopModel) -> np.ndarray:
     if name == "A":
         return np.stack([jacobian_A(x, u) for x, u in zip(X, U, strict=True)])
     if name == "B":
@@ -190,7 +185,7 @@ def _bad(actual: np.ndarray, expected: np.ndarray, rtol: float) -> np.ndarray:
     return np.abs(actual - expected) > rtol * (np.abs(expected) + scale)
 
 
-def _close(a: np.ndarray, b: np.ndarray, rtol: float) -> bool:
+def close(a: np.ndarray, b: np.ndarray, rtol: float) -> bool:
     return not _bad(a, b, rtol).any()
 
 
@@ -227,7 +222,7 @@ def _element_cause(name: str, idx: tuple[int, int], a: np.ndarray, e: np.ndarray
     return ""
 
 
-def _matrix_finding(report: Report, code: str, name: str, actual: np.ndarray,
+def matrix_finding(report: Report, code: str, name: str, actual: np.ndarray,
                     expected: np.ndarray, X: np.ndarray, labels: list[str], rtol: float,
                     display: str | None = None, formulas: dict | None = None,
                     unit_hint: str = "") -> bool:
@@ -279,17 +274,17 @@ def _whole_matrix_causes(report: Report, name: str, actual: np.ndarray, expected
     code = f"jacobian-{name}"
     if name == "A":
         eye = np.eye(6)
-        if _close(actual, eye + dt * expected, rtol):
+        if close(actual, eye + dt * expected, rtol):
             report.add(code, "(A₁₃ = −vg·sin θg)", text="Your A is F = I + ΔT·A (ΔT = {dt:g} "
                        "s), the DT transition; A is the continuous-time Jacobian ∂f/∂x, without "
                        "I and without ΔT. Check F with check.dt_model.", where="A",
                        observed={"dt": dt})
             return True
-        if _close(actual, dt * expected, rtol):
+        if close(actual, dt * expected, rtol):
             report.add(code, text="Your A is ΔT·A (ΔT = {dt:g} s); A is the continuous-time "
                        "Jacobian ∂f/∂x, not multiplied by ΔT.", where="A", observed={"dt": dt})
             return True
-    if name == "B" and _close(actual, dt * expected, rtol):
+    if name == "B" and close(actual, dt * expected, rtol):
         report.add(code, text="Your B is G = ΔT·B (ΔT = {dt:g} s); B is the continuous-time "
                    "∂f/∂u.", where="B", observed={"dt": dt})
         return True
@@ -327,11 +322,11 @@ def jacobians(A: Callable | None = None, B: Callable | None = None, C: Callable 
             continue
         checked.append(name)
         mine = Report(name)  # this matrix's findings, its part (partial credit)
-        got = _evaluate(mine, name, fn, X, U)
+        got = student_matrices(mine, name, fn, X, U)
         if got is not None:
-            want = _expected(name, X, U, model)
+            want = analytic(name, X, U, model)
             if not _whole_matrix_causes(mine, name, got, want, model, rtol):
-                _matrix_finding(mine, f"jacobian-{name}", name, got, want, X, labels, rtol)
+                matrix_finding(mine, f"jacobian-{name}", name, got, want, X, labels, rtol)
         report.findings += mine.tag(name).findings
     if not checked:
         raise ValueError("pass at least one of A, B, C (the student's Jacobian functions)")
@@ -348,199 +343,6 @@ def jacobians(A: Callable | None = None, B: Callable | None = None, C: Callable 
 def assert_jacobians(**kwargs: Any) -> Report:
     """:func:`jacobians` for a grader cell: raise AssertionError with the findings if it fails."""
     report = jacobians(**kwargs)
-    if not report.passed:
-        raise AssertionError("\n" + str(report))
-    return report
-
-
-# --------------------------------------------------------------------------- the DT model
-def _dt_value(report: Report, name: str, value: object, X: np.ndarray, U: np.ndarray,
-              shape: tuple[int, int]) -> np.ndarray | None:
-    """The student's F, G or H at every state: a callable is evaluated, an array is taken as the
-    value at the first state (X has one state then)."""
-    base = {"F": "A", "G": "B", "H": "C"}[name]
-    if callable(value):
-        return _evaluate(report, base, value, X, U, display=name)
-    arr = as_array(report, name, value, shape, _VALUE,
-                   signature=ARGS[base].replace(base, name, 1))
-    return None if arr is None else arr[None]
-
-
-#: The wording of a value's findings where a function may stand (:func:`as_array`).
-_VALUE = {
-    "not-a-matrix": "{name} must be an array of numbers (or a function {signature}); "
-                    "np.array({name}, dtype=float) fails: {error}",
-    "shape": "{name} has shape {shape}; it must be {want_x}.",
-}
-
-
-def dt_model(F: object = None, G: object = None, H: object = None, Omega: object = None,
-             Q: object = None, x: object = None, u: object = None,
-             model: CoopModel | None = None, n_random: int = 20, seed: int = 0,
-             rtol: float = RTOL) -> Report:
-    """Check the student's DT linearization F = I + ΔT·A, G = ΔT·B, H = C (report 002, part 1).
-
-    Parameters
-    ----------
-    F, G, H : each either a callable (F(x, u) → 6x6, G(x, u) → 6x4, H(x) → 5x6, checked at the
-        same states as :func:`jacobians`) or a matrix, checked at the state ``x`` and input ``u``.
-    Omega : the process-noise input matrix Ω of x_{k+1} = F x_k + G u_k + Ω w_k (6x6), if the
-        student forms one; with the course's per-step Qtrue it is the identity.
-    Q : the DT process-noise covariance the student's filter adds per step (6x6): Qtrue for the
-        truth model (any Q is allowed in a filter; only Q = ΔT·Qtrue or ΔT²·Qtrue is flagged).
-    x, u : state (6,) and input (4,) for matrix-valued F, G, H (default the nominal x0, u0).
-    model, n_random, seed, rtol : as in :func:`jacobians`.
-    """
-    t0 = time.perf_counter()
-    model = CoopModel() if model is None else model
-    if F is None and G is None and H is None and Omega is None and Q is None:
-        raise ValueError("pass at least one of F, G, H, Omega, Q")
-    X, U, labels = _dt_states(model, (F, G, H), x, u, n_random, seed)
-    report = Report("DT linearization F, G, H")
-    report.details.update({"n_states": len(X), "rtol": rtol, "dt": model.dt})
-    for name, value in (("F", F), ("G", G), ("H", H)):
-        if value is not None:
-            _check_dt_matrix(report, name, value, X, U, labels, model, rtol)
-    _check_noise(report, Omega, Q, model, rtol)
-    if report.passed:
-        given = [DT_RIGHT[k] for k, v in (("F", F), ("G", G), ("H", H), ("Omega", Omega),
-                                          ("Q", Q)) if v is not None]
-        where = f"at all {len(X)} states" if len(X) > 1 else "at the given state"
-        report.add("dt-model-right", severity="note", text="{names} {where} (ΔT = {dt:g} s), "
-                   "to {rtol:g} relative.", observed={"names": ", ".join(given), "where": where,
-                                                      "dt": model.dt, "rtol": rtol})
-    report.sort()
-    report.seconds = time.perf_counter() - t0
-    return report
-
-
-#: What each DT matrix is, as the note of a right DT model says it.
-DT_RIGHT = {"F": "F = I + ΔT·A", "G": "G = ΔT·B", "H": "H = C", "Omega": "Ω = I",
-            "Q": "Q not scaled by ΔT"}
-
-
-@dataclass(frozen=True)
-class _DTForm:
-    """One DT matrix: the Jacobian it is built from, its right form, the slips recognised
-    (a wrong form and what is said of it, after "Your "), the formulas element by element and
-    the hint of an element finding.  ``{dt}`` in the texts is ΔT."""
-
-    jacobian: str
-    shape: tuple[int, int]
-    right: Callable[[np.ndarray, float], np.ndarray]
-    slips: tuple[tuple[Callable[[np.ndarray, float], np.ndarray], str], ...]
-    formulas: Callable[[], dict[tuple[int, int], str]]
-    hint: str
-
-
-DT_FORMS = {
-    "F": _DTForm("A", (6, 6), lambda J, dt: np.eye(6) + dt * J, (
-        (lambda J, dt: J, "F = A, the continuous-time Jacobian; the DT transition is "
-                          "F = I + ΔT·A (ΔT = {dt:g} s)"),
-        (lambda J, dt: dt * J, "F = ΔT·A: the identity is missing; F = I + ΔT·A"),
-        (lambda J, dt: np.eye(6) + J, "F = I + A: ΔT = {dt:g} s is missing; F = I + ΔT·A")),
-        lambda: {(i, i): "1" for i in range(6)} | {k: f"ΔT·({v})"
-                                                   for k, v in FORMULAS["A"].items()},
-        "F = I + ΔT·A with ΔT = {dt:g} s."),
-    "G": _DTForm("B", (6, 4), lambda J, dt: dt * J, (
-        (lambda J, dt: J, "G = B, the continuous-time ∂f/∂u; the DT input matrix is G = ΔT·B "
-                          "(ΔT = {dt:g} s)"),),
-        lambda: {k: f"ΔT·{v}" for k, v in FORMULAS["B"].items()},
-        "G = ΔT·B with ΔT = {dt:g} s."),
-    "H": _DTForm("C", (5, 6), lambda J, dt: J, (
-        (lambda J, dt: dt * J, "H = ΔT·C; the measurement is taken at an instant, so H = C "
-                               "(no ΔT)"),),
-        lambda: dict(FORMULAS["C"]), "H = C = ∂h/∂x."),
-}
-
-
-def _dt_states(model: CoopModel, matrices: tuple[object, ...], x: object, u: object,
-               n_random: int, seed: int) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """The states (and inputs) the DT model is checked at: those of :func:`jacobians` when every
-    matrix given is a function, else the one state ``x`` (default the nominal x0, u0)."""
-    if all(callable(v) or v is None for v in matrices):
-        X, labels = check_states(model, n_random, seed)
-        return X, _inputs(model, len(X), seed), labels
-    xs = model.x0 if x is None else np.asarray(x, dtype=float)
-    us = model.u0 if u is None else np.asarray(u, dtype=float)
-    if xs.shape != (6,) or us.shape != (4,) or not (np.isfinite(xs).all()
-                                                     and np.isfinite(us).all()):
-        raise ValueError(f"x must be a finite state (6,) and u a finite input (4,), got "
-                         f"shapes {xs.shape} and {us.shape}")
-    return wrap_state(xs)[None], us[None], [f"x = {np.round(xs, 4).tolist()}"]
-
-
-def _check_dt_matrix(report: Report, name: str, value: object, X: np.ndarray, U: np.ndarray,
-                     labels: list[str], model: CoopModel, rtol: float) -> None:
-    """The student's F, G or H against its right form (:data:`DT_FORMS`): a slip recognised is
-    named, anything else is located element by element."""
-    form, dt = DT_FORMS[name], model.dt
-    got = _dt_value(report, name, value, X, U, form.shape)
-    if got is None:
-        return
-    if len(got) == 1 and len(X) > 1:
-        got = np.broadcast_to(got, (len(X),) + form.shape)
-    J = _expected(form.jacobian, X, U, model)
-    want = form.right(J, dt)
-    if _close(got, want, rtol):
-        return
-    for slip, why in form.slips:
-        if _close(got, slip(J, dt), rtol):
-            # the student reads what their matrix is (before ";"), not the right form after it
-            report.add("dt-linearization", f"Your {why.format(dt=dt)}.", text="Your {what}.",
-                       where=name, part=name, observed={"what": why.split(";")[0].format(dt=dt)})
-            return
-    _matrix_finding(report, "dt-linearization", name, got, want, X, labels, rtol,
-                    formulas=form.formulas(), unit_hint=form.hint.format(dt=dt))
-
-
-def _matrix(report: Report, name: str, value: object, n: int) -> np.ndarray | None:
-    try:
-        arr = np.array(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        report.add("not-a-matrix", text="{where} must be an array of numbers; {error}",
-                   where=name, observed={"error": str(exc)})
-        return None
-    if arr.shape != (n, n) or not np.isfinite(arr).all():
-        report.add("shape", text="{where} must be a finite {n} x {n} matrix, got shape {shape}.",
-                   where=name, observed={"n": n, "shape": arr.shape})
-        return None
-    return arr
-
-
-def _check_noise(report: Report, Omega: object, Q: object, model: CoopModel, rtol: float) -> None:
-    dt, Qt = model.dt, model.Qtrue
-    if Omega is not None:
-        Om = _matrix(report, "Omega", Omega, 6)
-        if Om is not None and not _close(Om[None], np.eye(6)[None], rtol):
-            if _close(Om[None], dt * np.eye(6)[None], rtol):
-                report.add("omega-dt-gamma", text="Your Ω = ΔT·Γ = {dt:g}·I: the course's Qtrue "
-                           "is already the covariance of the noise added per DT step "
-                           "(x_{{k+1}} = F x_k + G u_k + w_k, w_k ~ N(0, Qtrue)). Ω = ΔT·Γ "
-                           "belongs to a continuous-time noise intensity; here it shrinks Q by "
-                           "ΔT² = {dt2:g}.", where="Ω", observed={"dt": dt, "dt2": dt**2},
-                           expected={"Ω": "I"})
-            else:
-                report.add("omega-dt-gamma", text="Your Ω is wrong (the course's Qtrue is the "
-                           "per-step DT covariance); yours has diagonal {diag}.", where="Ω",
-                           observed={"diag": np.round(np.diag(Om), 6).tolist()},
-                           expected={"Ω": "I"})
-    if Q is not None:
-        Qs = _matrix(report, "Q", Q, 6)
-        if Qs is None:
-            return
-        for scale, what in ((dt, "ΔT·Qtrue"), (dt**2, "ΔT²·Qtrue = Ω Qtrue Ωᵀ with Ω = ΔT·I")):
-            if _close(Qs[None], scale * Qt[None], rtol):
-                report.add("omega-dt-gamma", text="Your Q = {what}: the course's Qtrue is "
-                           "already the covariance of the process noise per DT step of {dt:g} s, "
-                           "so the filter's Q is not scaled by ΔT.", where="Q",
-                           observed={"what": what, "dt": dt})
-                return
-
-
-def assert_dt_model(**kwargs: Any) -> Report:
-    """:func:`dt_model` for a grader cell: raise AssertionError with the findings if it fails."""
-    report = dt_model(**kwargs)
     if not report.passed:
         raise AssertionError("\n" + str(report))
     return report
