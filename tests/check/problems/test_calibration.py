@@ -15,7 +15,7 @@ import pytest
 from gpsaccel import check
 from gpsaccel.cli import main
 
-HERE = Path(__file__).parents[1] / "submissions"
+HERE = Path(__file__).parents[2] / "submissions"
 N_RUNS = 20
 
 

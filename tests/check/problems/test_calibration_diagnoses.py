@@ -13,7 +13,7 @@ import pytest
 
 from gpsaccel import check
 
-HERE = Path(__file__).parents[1] / "submissions"
+HERE = Path(__file__).parents[2] / "submissions"
 N_RUNS = 8
 
 SHARPER = [
