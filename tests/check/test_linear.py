@@ -119,7 +119,7 @@ def test_the_tracker_is_a_few_dozen_lines_of_instructor_code():
     import ast
     import inspect
 
-    from gpsaccel.check import tracker
+    from gpsaccel.check.problems import tracker
 
     source = inspect.getsource(tracker)
     doc = ast.get_docstring(ast.parse(source), clean=False)
