@@ -5,19 +5,22 @@ reference, tolerance and catalogue of mistakes; :mod:`gpsaccel.check.problem` sa
 is and how :meth:`~gpsaccel.check.problem.Problem.check` runs) and registers itself in
 :mod:`gpsaccel.registry` when its module is imported:
 
-``calibration``  report 000: ``kalman_filter(z) -> (x_hat, P)`` (:mod:`.calibration`, on the
-                 linear pipeline of :mod:`gpsaccel.check.linear`).
-``tracker``      a constant-velocity tracker (:mod:`.tracker`), defined with
-                 :meth:`Problem.linear` as an instructor would.
+``calibration``  report 000: ``kalman_filter(z) -> (x_hat, P)``
+                 (:mod:`gpsaccel.check.problems.calibration`, on the linear pipeline of
+                 :mod:`gpsaccel.check.linear`).
+``tracker``      a constant-velocity tracker (:mod:`gpsaccel.check.problems.tracker`), defined
+                 with :meth:`Problem.linear` as an instructor would.
 ``coop``         report 002: ``ekf(y, Q, R)`` and/or ``lkf(y, Q, R) -> (x_hat, P)``
-                 (:mod:`.coop`).
-``ship``         report 004: ``multirate_filter(z, u) -> (x_hat, P)`` (:mod:`.ship`).
+                 (:mod:`gpsaccel.check.problems.coop`).
+``ship``         report 004: ``multirate_filter(z, u) -> (x_hat, P)``
+                 (:mod:`gpsaccel.check.problems.ship`).
 
-:mod:`.compare` holds what coop and ship share to compare an output with their reference.
-:func:`submission` checks a file against a registered problem by name.  ``Problem.linear`` (a
-problem for any linear model) is attached to the class here, above both the class and
-:mod:`gpsaccel.check.linear`: the linear problems are its subclasses, and a class that imported
-its own subclasses made the two modules import each other.
+:mod:`gpsaccel.check.problems.compare` holds what coop and ship share to compare an output with
+their reference.  :func:`submission` checks a file against a registered problem by name.
+
+``Problem.linear`` (a problem for any linear model) is attached to the class here, above both the
+class and :mod:`gpsaccel.check.linear`: the linear problems are its subclasses, and a class that
+imported its own subclasses made the two modules import each other.
 """
 
 from __future__ import annotations
