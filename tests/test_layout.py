@@ -142,15 +142,6 @@ def test_the_rule_catches_a_private_name_of_the_sandbox(tmp_path):
 
 
 # ------------------------------------------------------------------------------ no import circles
-#: Circles that other work is cutting (check/linear <-> check/problems through Problem.linear; the
-#: sandbox's three modules that share the box user and prctl; the Monte Carlo result and its
-#: verdicts, tied back by a TYPE_CHECKING import of MonteCarloResult).  A new circle fails; empty
-#: this list as those are cut.
-KNOWN_CIRCLES = [
-    {"check.linear", "check.problems"},
-    {"sandbox._boxuser", "sandbox.limits", "sandbox.procs"},
-    {"calibration.montecarlo.statistics", "calibration.montecarlo.verdicts"},
-]
 
 
 def _module_name(path: Path) -> str:
@@ -219,9 +210,9 @@ def _circles(arrows: dict[str, set[str]]) -> list[set[str]]:
     return out
 
 
-def test_no_new_import_circle():
-    new = [c for c in _circles(_module_arrows()) if c not in KNOWN_CIRCLES]
-    assert not new, f"modules that import each other (cut the circle): {new}"
+def test_no_import_circle():
+    circles = _circles(_module_arrows())
+    assert not circles, f"modules that import each other (cut the circle): {circles}"
 
 
 def test_the_circle_finder_finds_one():

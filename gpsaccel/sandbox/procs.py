@@ -12,12 +12,17 @@ import sys
 import time
 from collections.abc import Iterator
 from collections.abc import Set as AbstractSet
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import psutil
 
-if TYPE_CHECKING:
-    from gpsaccel.sandbox.limits import _Confinement
+
+class _NamesPids(Protocol):
+    """What a kill asks of a box's confinement (limits._Confinement, which imports this module):
+    every process it can name, by cgroup or uid."""
+
+    def pids(self) -> set[int]: ...
+
 
 # psutil.process_iter keeps its Process objects between calls, each with a lock: a thread of the
 # parent (a watcher, a second pool) may hold one at the moment of a fork, and the forked item
@@ -138,7 +143,7 @@ def box_processes(first: int, adopted_from: set[int] | None) -> list[int]:
 
 
 def _kill_box(proc: subprocess.Popen, before: set[int],
-              confinement: _Confinement | None = None) -> int:
+              confinement: _NamesPids | None = None) -> int:
     """SIGKILL every process of the box (its process tree, its cgroup, its uid) until none is
     alive; reap them.  Returns how many processes (bwrap's own not counted) were alive when the
     kill began."""
