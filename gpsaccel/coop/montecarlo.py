@@ -23,6 +23,7 @@ heading terms is scored on common random numbers (the same truth runs for every 
 from __future__ import annotations
 
 import itertools
+import sys
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -101,13 +102,18 @@ _CHUNK_RUNS = 200
 
 
 def _tests(model: CoopModel, method: str, jobs: list[tuple[np.ndarray, Truth]], alpha: float,
-           keep: bool = False) -> list[ConsistencyRun]:
+           keep: bool = False, progress: bool = False) -> list[ConsistencyRun]:
     """One consistency test per (Q, truth) job, the jobs' runs stacked into few filter calls
     (one Q per run): the per-step cost of a call is shared by every set and candidate in it.
     Each run's numbers are those of its own call, bit for bit.  ``runtime_s`` is the chunk's
-    filter time shared out by runs."""
+    filter time shared out by runs.  ``progress``: a tqdm.auto bar over the runs, one step per
+    call (a lesson's long cell shows that it is working)."""
+    from tqdm.auto import tqdm
+
     out: list[ConsistencyRun] = []
     i = 0
+    bar = tqdm(total=sum(tr.n_runs for _, tr in jobs), desc=f"{method.upper()} runs", unit="run",
+               leave=False, disable=None if progress and sys.stderr is not None else True)
     while i < len(jobs):
         chunk = [jobs[i]]
         while i + len(chunk) < len(jobs) and \
@@ -130,6 +136,8 @@ def _tests(model: CoopModel, method: str, jobs: list[tuple[np.ndarray, Truth]], 
                 nis[part].mean(axis=0), consistency.chi2_bounds(6, N, alpha),
                 consistency.chi2_bounds(5, N, alpha), runtime * N / len(y),
                 res if keep else None, tr if keep else None))
+        bar.update(len(y))
+    bar.close()
     return out
 
 
@@ -140,14 +148,29 @@ def set_seeds(seed: int, n_sets: int) -> list[np.random.SeedSequence]:
 
 def repeated_sets(model: CoopModel, method: str, Q: np.ndarray | None = None,
                   n_sets: int = 5, n_runs: int = 50, seed: int = 0,
-                  alpha: float = 0.05) -> list[ConsistencyRun]:
-    """``n_sets`` independent N-run consistency tests (seeds spawned from ``seed``)."""
+                  alpha: float = 0.05, truths: Sequence[Truth] | None = None,
+                  progress: bool = False) -> list[ConsistencyRun]:
+    """``n_sets`` independent N-run consistency tests (seeds spawned from ``seed``).
+
+    ``truths``: the sets already simulated (:func:`repeated_truths`), for a second filter on the
+    same sets without simulating them again; ``n_sets``, ``n_runs`` and ``seed`` are then unused.
+    ``progress``: a tqdm bar over the runs filtered.
+    """
     method = _v.choice("method", method, METHODS)
     alpha = _v.probability("alpha", alpha)
-    n_runs = _v.integer("n_runs", n_runs, minimum=1)
     Q = tuned_q(method, model) if Q is None else _v.spd_matrix("Q", Q, 6)
-    return _tests(model, method, [(Q, truth_runs(model, n_runs, s))
-                                  for s in set_seeds(seed, n_sets)], alpha)
+    if truths is None:
+        truths = repeated_truths(model, n_sets, n_runs, seed)
+    elif not truths:
+        raise ValueError("truths holds no set: give at least one Truth (or leave it None)")
+    return _tests(model, method, [(Q, tr) for tr in truths], alpha, progress=progress)
+
+
+def repeated_truths(model: CoopModel, n_sets: int = 5, n_runs: int = 50, seed: int = 0
+                    ) -> list[Truth]:
+    """The truth sets of :func:`repeated_sets` (``n_sets`` of ``n_runs`` runs from ``seed``)."""
+    n_runs = _v.integer("n_runs", n_runs, minimum=1)
+    return [truth_runs(model, n_runs, s) for s in set_seeds(seed, n_sets)]
 
 
 @dataclass
@@ -203,12 +226,12 @@ class TuningResult:
 
 def tune_q(model: CoopModel, method: str, grid: Sequence[Sequence[float]] | None = None,
            n_runs: int = 50, n_sets: int = 1, seed: int = 2024, alpha: float = 0.05,
-           tol: float = 0.02) -> TuningResult:
+           tol: float = 0.02, progress: bool = False) -> TuningResult:
     """Search Q = Qtrue scaled by every (UGV pos, UAV pos, heading) multiplier in ``grid``.
 
     Every candidate sees the same truth runs (common random numbers, ``n_sets`` sets of ``n_runs``
     spawned from ``seed``); fractions are averaged over the sets.  ``grid`` defaults to
-    :data:`DEFAULT_GRIDS` of the method.
+    :data:`DEFAULT_GRIDS` of the method.  ``progress``: a tqdm bar over the runs filtered.
     """
     method = _v.choice("method", method, METHODS)
     grid = DEFAULT_GRIDS[method] if grid is None else grid
@@ -219,7 +242,7 @@ def tune_q(model: CoopModel, method: str, grid: Sequence[Sequence[float]] | None
     scales = [(float(a), float(b), float(c)) for a, b, c in itertools.product(*grid)]
     alpha = _v.probability("alpha", alpha)
     jobs = [(scaled_q(model.Qtrue, *sc), tr) for sc in scales for tr in truths]
-    tests = _tests(model, method, jobs, alpha)
+    tests = _tests(model, method, jobs, alpha, progress=progress)
     per = len(truths)
     nees_f = [np.mean([r.nees_fraction for r in tests[i:i + per]])
               for i in range(0, len(tests), per)]
