@@ -2,6 +2,7 @@
 
     python benchmarks/lessons.py 07 00 14 [--before main] [--repeat 1]
     python benchmarks/lessons.py            # every lesson whose master differs from main's
+    python benchmarks/lessons.py 05 10b 11 --before REV --rest --write docs/benchmarks/lessons.txt
 
 
 For each lesson (a master's name prefix) the solutions version runs top to bottom in a fresh
@@ -10,6 +11,13 @@ kernel, as ``python -m gpsaccel.lessons measure`` runs it, once with the code of
 ``git archive`` into a temporary folder and put first on ``PYTHONPATH``, so its kernel imports that
 gpsaccel).  A lesson the revision does not have is reported as new.  Before and after alternate
 per lesson, so a change of the machine's load hits both alike.
+
+At the end a Markdown table (one row per lesson: CPU and wall before and after, CPU after/before,
+the load) is printed, and with ``--write PATH`` written there under a line saying when, where and
+at what load (``docs/benchmarks/lessons.txt``; the benchmark page is made of these files).
+``--rest`` adds a row for every other lesson, not run here: the wall time and load its own
+``measure`` recorded in lessons/measured/ (a shared machine's wall time, not CPU: read it as an
+upper bound).
 
 Reported per lesson: wall time and CPU time (user + system of the process that runs the notebook
 and its children, the kernel included: ``resource.getrusage(RUSAGE_CHILDREN)`` around a
@@ -21,6 +29,8 @@ is shared: read the ratio and the CPU time, not the wall time alone.  Nothing he
 from __future__ import annotations
 
 import argparse
+import datetime
+import json
 import os
 import resource
 import subprocess
@@ -99,12 +109,41 @@ def changed_lessons(revision: str) -> list[str]:
     return sorted(n for n in names if (ROOT / "lessons" / "masters" / f"{n}.ipynb").exists())
 
 
+def _table(results: dict[str, dict[str, tuple[float, float, float]]]) -> list[str]:
+    """Markdown rows: CPU and wall per version, CPU after/before, the loads before the runs."""
+    lines = ["| lesson | before CPU s | after CPU s | before wall s | after wall s | "
+             "CPU after/before | load (1 min) before / after |", "|---|---|---|---|---|---|---|"]
+    for name, by in results.items():
+        b, a = by.get("before"), by.get("after")
+        cpu = [f"{v[1]:.1f}" if v else "(new)" for v in (b, a)]
+        wall = [f"{v[0]:.1f}" if v else "-" for v in (b, a)]
+        ratio = f"{a[1] / b[1]:.2f}" if a and b else ""
+        load = " / ".join(f"{v[2]:.1f}" if v else "-" for v in (b, a))
+        lines.append(f"| {name} | {cpu[0]} | {cpu[1]} | {wall[0]} | {wall[1]} | {ratio} | {load} |")
+    return lines
+
+
+def _recorded(skip: set[str]) -> list[str]:
+    """Rows for the lessons not run: what their own ``measure`` recorded (wall s at a load)."""
+    lines = []
+    for path in sorted((ROOT / "lessons" / "measured").glob("*.json")):
+        if path.stem in skip:
+            continue
+        rec = json.loads(path.read_text(encoding="utf-8"))
+        lines.append(f"| {path.stem} | not run | not run | - | {rec.get('seconds', float('nan')):.1f} "
+                     f"(recorded) | | - / {rec.get('load', float('nan')):.1f} |")
+    return lines
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("lessons", nargs="*", metavar="NN",
                    help="master name prefixes, e.g. 07 14 (default: the masters changed since --before)")
     p.add_argument("--before", default="main", help="git revision to compare with (default main)")
     p.add_argument("--repeat", type=int, default=1, help="runs of each version (the best kept)")
+    p.add_argument("--rest", action="store_true",
+                   help="also list every other lesson with the wall time its measure recorded")
+    p.add_argument("--write", metavar="PATH", help="also write the Markdown table to PATH")
     args = p.parse_args(argv)
     if args.repeat < 1:
         p.error(f"--repeat must be >= 1, got {args.repeat}")
@@ -112,11 +151,13 @@ def main(argv: list[str] | None = None) -> int:
     if not lessons:
         print(f"no lesson master differs from {args.before}: nothing to measure")
         return 0
+    started = os.getloadavg()[0]
     print(f"{os.cpu_count()} CPUs; before = {args.before}, after = this checkout ({ROOT})")
     print(f"{'lesson':<34} {'version':<7} {'wall s':>8} {'CPU s':>8} {'load':>5}")
     with tempfile.TemporaryDirectory(prefix="gpsaccel-bench-lessons-") as tmp_name:
         tmp = Path(tmp_name)
         trees = {"before": _unpack(args.before, tmp), "after": ROOT}
+        results: dict[str, dict[str, tuple[float, float, float]]] = {}
         for prefix in lessons:
             best: dict[str, tuple[float, float, float]] = {}
             name = prefix
@@ -133,6 +174,7 @@ def main(argv: list[str] | None = None) -> int:
                         nb.unlink(missing_ok=True)
                     if version not in best or result[1] < best[version][1]:
                         best[version] = result
+            results[name] = best
             for version in trees:
                 if version not in best:
                     print(f"{name:<34} {version:<7} {'(new)' if version == 'before' else '-':>8}")
@@ -141,7 +183,19 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"{name:<34} {version:<7} {wall:8.1f} {cpu:8.1f} {load:5.1f}")
             if len(best) == 2:
                 print(f"{'':<34} {'after/before':<7}  wall {best['after'][0] / best['before'][0]:.2f}, "
-                      f"CPU {best['after'][1] / best['before'][1]:.2f}")
+                      f"CPU {best['after'][1] / best['before'][1]:.2f}", flush=True)
+    ended = os.getloadavg()
+    head = (f"`python benchmarks/lessons.py {' '.join(lessons)} --before {args.before}`, "
+            f"{datetime.date.today().isoformat()}, {os.cpu_count()} CPUs, load average (1 min) "
+            f"{started:.1f} at the start, {ended[0]:.1f} / {ended[1]:.1f} / {ended[2]:.1f} "
+            f"(1/5/15 min) at the end.  CPU = user + system of the notebook's process and its "
+            f"children (the kernel, its process pool); the machine was shared, so the wall times "
+            f"are not an idle machine's.")
+    rows = _table(results) + (_recorded(set(results)) if args.rest else [])
+    text = "\n".join([head, ""] + rows) + "\n"
+    print("\n" + text, end="")
+    if args.write:
+        Path(args.write).write_text(text, encoding="utf-8")
     return 0
 
 
