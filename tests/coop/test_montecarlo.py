@@ -79,3 +79,16 @@ def test_sets_and_candidates_filtered_together_equal_each_alone():
     for a, b in zip(together, alone, strict=True):
         np.testing.assert_array_equal(a.nees_mean, b.nees_mean)
         np.testing.assert_array_equal(a.nis_mean, b.nis_mean)
+
+
+def test_sets_given_as_truths_are_the_sets_repeated_sets_simulates():
+    # lesson 11 simulates its sets once and filters them three ways: the same numbers, bit for bit
+    from gpsaccel.coop.montecarlo import repeated_truths
+
+    truths = repeated_truths(MODEL, n_sets=2, n_runs=4, seed=11)
+    given = repeated_sets(MODEL, "ekf", truths=truths)
+    drawn = repeated_sets(MODEL, "ekf", n_sets=2, n_runs=4, seed=11)
+    for a, b in zip(given, drawn, strict=True):
+        assert np.array_equal(a.nees_mean, b.nees_mean) and np.array_equal(a.nis_mean, b.nis_mean)
+    with pytest.raises(ValueError, match="truths"):
+        repeated_sets(MODEL, "ekf", truths=[])

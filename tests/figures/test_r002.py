@@ -66,3 +66,22 @@ def test_captions_carry_the_measured_numbers(drawn):
     assert re.search(r"\d+\.\d% of steps inside", by_number["14"].caption)
     assert "Q = diag(" in by_number["14"].caption
     assert re.search(r"NIS time-average \d+\.\d\d", by_number["18"].caption)
+
+
+def test_a_lesson_that_stops_after_figure_09_runs_the_lkf_alone(monkeypatch):
+    # lesson 10b draws figures 01-09: the EKFs and the UKF of figures 10-15c must not run for it
+    import gpsaccel.figures.r002 as r002
+
+    ran = []
+    real = r002.consistency_test
+
+    def spy(model, method, *args, **kwargs):
+        ran.append(method)
+        return real(model, method, *args, **kwargs)
+
+    monkeypatch.setattr(r002, "consistency_test", spy)
+    for f in r002.figures(3, 0):
+        if f.number == "09":
+            break
+    assert ran == ["lkf"]
+    assert sorted(r002.monte_carlo(r002.CoopModel(), 3, 0)) == ["ekf", "ekf-qtrue", "lkf", "ukf"]
