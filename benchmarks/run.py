@@ -15,8 +15,9 @@ import sys
 import time
 from pathlib import Path
 
-#: Scripts run on their own, not by ``make bench``: suite_cost.py runs the whole test suite.
-SEPARATE = ("suite_cost.py",)
+#: Scripts run on their own, not by ``make bench``: suite_cost.py runs the whole test suite;
+#: lessons.py runs notebooks for many minutes and writes docs/benchmarks/lessons.txt itself (--write).
+SEPARATE = ("suite_cost.py", "lessons.py")
 
 
 def _header(script: Path, seconds: float) -> str:
