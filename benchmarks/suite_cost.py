@@ -8,6 +8,13 @@ the machine may share (benchmarks/run.py leaves it out).  Examples::
     python benchmarks/suite_cost.py                       # every folder, as `make test` would
     python benchmarks/suite_cost.py tests/kalman -m "not slow"
     python benchmarks/suite_cost.py -n 2 --out docs/benchmarks/suite_cost.txt
+    python benchmarks/suite_cost.py -n 2 --root /tmp/fresh-clone   # another checkout (its .venv)
+
+As on a fresh clone, the suite's disk cache (tests/conftest.py ``disk_cache``: executed lessons,
+``otter assign``) starts empty: a new folder for the whole run, shared by its folders as one
+``make test`` shares it (``--keep-cache`` uses the checkout's own).  With ``-n``, the workers share
+the work as ``make test`` does (``--dist loadscope``).  ``--durations N`` keeps pytest's N slowest
+items per folder in ``--log``.
 
 The table is Markdown; ``--out`` also writes it to a file under a line naming the date, Python and
 load (the load is printed at the start and at the end: CPU seconds are what to compare).
@@ -17,10 +24,12 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import os
 import platform
 import re
 import shlex
 import sys
+import tempfile
 from pathlib import Path
 
 import _cpu
@@ -28,19 +37,19 @@ import _cpu
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def groups(paths: list[str]) -> list[tuple[str, list[str]]]:
+def groups(paths: list[str], root: Path = ROOT) -> list[tuple[str, list[str]]]:
     """(label, pytest arguments) per folder; every folder of tests/ and its top-level files when
     ``paths`` is empty."""
     if paths:
         return [(p, [p]) for p in paths]
-    tests = ROOT / "tests"
+    tests = root / "tests"
     out = []
-    top = sorted(str(p.relative_to(ROOT)) for p in tests.glob("test_*.py"))
+    top = sorted(str(p.relative_to(root)) for p in tests.glob("test_*.py"))
     if top:
         out.append(("tests/*.py", top))
     for folder in sorted(p for p in tests.iterdir() if p.is_dir()):
         if any(folder.rglob("test_*.py")):
-            rel = str(folder.relative_to(ROOT))
+            rel = str(folder.relative_to(root))
             out.append((rel + "/", [rel]))
     return out
 
@@ -63,19 +72,39 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("-n", dest="workers", default=None,
                         help="pytest-xdist workers per folder (default: none, serial)")
     parser.add_argument("--out", type=Path, default=None, help="also write the table here")
+    parser.add_argument("--root", type=Path, default=ROOT,
+                        help="the checkout to measure, with its own .venv (default: this one)")
+    parser.add_argument("--keep-cache", action="store_true",
+                        help="use the checkout's disk cache as it is (default: an empty one)")
+    parser.add_argument("--durations", type=int, default=0, help="pytest's --durations per folder")
+    parser.add_argument("--log", type=Path, default=None, help="append every pytest's output here")
     args = parser.parse_args(argv)
+    root = args.root.resolve()
+    python = root / ".venv" / "bin" / "python"
+    env = dict(os.environ, MPLBACKEND="Agg")
+    cache = None
+    if not args.keep_cache:  # a fresh clone's: nothing executed yet
+        cache = tempfile.TemporaryDirectory(prefix="suite-cost-cache-")
+        env["GPSACCEL_TEST_CACHE"] = cache.name
     start = _cpu.load()
     print(f"start: {start}", flush=True)
     lines = ["| folder | tests | CPU s | wall s | exit |", "|---|---|---|---|---|"]
     total_cpu = total_wall = 0.0
     failed = False
-    for label, targets in groups(args.paths):
-        cmd = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *targets]
+    for label, targets in groups(args.paths, root):
+        cmd = [str(python if python.exists() else sys.executable), "-m", "pytest", "-q",
+               "-p", "no:cacheprovider", *targets]
         if args.marks:
             cmd += ["-m", args.marks]
         if args.workers:
-            cmd += ["-n", args.workers]
-        s = _cpu.run(cmd, cwd=str(ROOT))
+            cmd += ["-n", args.workers, "--dist", "loadscope"]
+        if args.durations:
+            cmd += [f"--durations={args.durations}"]
+        s = _cpu.run(cmd, cwd=str(root), env=env)
+        if args.log is not None:
+            with args.log.open("a", encoding="utf-8") as log:
+                log.write(f"\n===== {label}: CPU {s.cpu:.1f} s, wall {s.wall:.1f} s, exit "
+                          f"{s.returncode}\n{s.stdout}")
         total_cpu += s.cpu
         total_wall += s.wall
         failed |= s.returncode not in (0, 5)  # 5: nothing selected in that folder
@@ -84,6 +113,8 @@ def main(argv: list[str] | None = None) -> int:
         print(lines[-1], flush=True)
     lines.append(f"| total | | {total_cpu:.1f} | {total_wall:.1f} | |")
     end = _cpu.load()
+    if cache is not None:
+        cache.cleanup()
     what = (f"`python benchmarks/suite_cost.py {shlex.join(argv if argv is not None else sys.argv[1:])}`"
             f", {datetime.date.today().isoformat()}, Python {platform.python_version()}; "
             f"start: {start}; end: {end}; CPU = user + system of pytest and its children")

@@ -1,8 +1,7 @@
 """``gpsaccel lessons``: executes the lessons and renders them as HTML with their figures.
 
 One real run renders lesson 02 (conftest's ``lesson_02_html``, shared with the browser test);
-the run without ``--html`` executes through conftest's ``executed_lesson`` (shared with
-tests/lessons/test_lessons.py)."""
+the run without ``--html`` is recorded, not executed (tests/lessons/test_lessons.py runs the lessons)."""
 
 from __future__ import annotations
 
@@ -36,9 +35,9 @@ def test_lessons_kernel_does_not_warn_about_tcp(lesson_02_html):
     assert "1 lessons executed" in out
 
 
-@pytest.mark.slow  # executes a lesson unless conftest's cache holds it
-def test_lessons_without_html_executes_the_student_version(monkeypatch, executed_lesson, capsys):
-    """Without --html the student version is executed, at the ensemble --runs asks for."""
+def test_lessons_without_html_executes_the_student_version(monkeypatch, capsys):
+    """Without --html the student version is executed, at the ensemble --runs asks for (that it
+    runs at that ensemble is tests/lessons/test_lessons.py's, from its solutions version's run)."""
     from gpsaccel import lessons
     from gpsaccel.lessons import kernel
 
@@ -46,7 +45,6 @@ def test_lessons_without_html_executes_the_student_version(monkeypatch, executed
 
     def execute(path, timeout=600, runs=None):
         calls.append((path, runs))
-        return executed_lesson(path, runs=runs, timeout=timeout)
 
     monkeypatch.setattr(kernel, "execute", execute)  # what the command runs
     assert main(["lessons", "--only", "02", "--runs", "20"]) == 0  # test_lessons.py's ensemble
@@ -63,7 +61,6 @@ def test_names_the_lessons_type_are_reachable_after_import_gpsaccel():
     assert callable(gpsaccel.calibration.mistakes.mutant)
     assert callable(gpsaccel.lessons.sliders)
     assert callable(gpsaccel.kalman.update.epoch_transition)
-    import pytest
 
     with pytest.raises(AttributeError, match="no attribute 'nonsense'"):
         gpsaccel.nonsense  # noqa: B018

@@ -1,8 +1,9 @@
 """The lessons: one master each (lessons/masters/), released as a student version (lessons/) without
 any solution and a solutions version (lessons/solutions/); both are exactly what the release step
 writes, so they cannot drift from the master.  The masters run (as their solutions version, at a
-small ensemble) with ✓ under every self-check; the student versions run with no answer printed.
-Each is executed once per content (conftest's ``executed_lesson``: a changed lesson or package
+small ensemble) with ✓ under every self-check; the student versions run with no answer printed
+(read from that same run: their code is its lesson cells, then unanswered cells).  Each is
+executed once per content (conftest's ``executed_lesson``: a changed lesson or package
 executes again)."""
 
 from __future__ import annotations
@@ -244,11 +245,52 @@ def test_solutions_version_runs_with_a_tick_under_every_self_check(master, execu
             f"{master.name}: the self-check says {out!r} to the solution"
 
 
+_UNANSWERED = re.compile(r"answer_\w+ = None(\s*#[^\n]*)?")
+
+
 @pytest.mark.parametrize("master", MASTERS, ids=IDS)
-def test_student_version_runs_and_shows_no_answer(master, executed_lesson):
-    nb = executed_lesson(L.lessons_dir() / master.name, runs=SMALL_RUNS)
-    for c in nb.cells:
-        out = _outputs(c)
-        assert "<function" not in out, f"{master.name}: a stray repr {out[:80]!r}"
-        if L.CHECK in c.metadata.get("tags", []):
+def test_student_version_runs_and_shows_no_answer(master, executed_lesson, monkeypatch):
+    """The student version runs, prints no stray repr, and every self-check says "not answered".
+
+    Without a second kernel: its code is the solutions version's lesson cells (every code cell up
+    to the last untagged one, none of them a solution), unchanged and in order, then only
+    ``answer_k = None`` cells and self-checks.  So it runs those lesson cells exactly as the
+    solutions run above does (same ensemble; no lesson cell reads a file relative to its folder,
+    the one thing that differs), and its outputs there are that run's; the answer and check
+    cells are then run here, in one namespace, as the kernel would run them after."""
+    import contextlib
+    import io
+
+    from gpsaccel.exercises import RECORD_VARIABLE
+
+    def tags(c):
+        return set(c.metadata.get("tags", []))
+
+    student = [c for c in _nb(L.lessons_dir() / master.name).cells if c.cell_type == "code"]
+    solved = [c for c in _nb(L.lessons_dir() / "solutions" / master.name).cells
+              if c.cell_type == "code"]
+    lesson = solved[:max(i for i, c in enumerate(solved) if not tags(c)) + 1]
+    assert not any(tags(c) for c in lesson), f"{master.name}: a tagged cell among the lesson's"
+    assert [(c.source, tags(c)) for c in student[:len(lesson)]] == \
+        [(c.source, tags(c)) for c in lesson], f"{master.name}: the lesson cells differ"
+    rest = student[len(lesson):]
+    assert all(tags(c) in ({L.ANSWER}, {L.CHECK}) for c in rest), master.name
+    assert all(_UNANSWERED.fullmatch(c.source.strip()) for c in rest if L.ANSWER in tags(c)), \
+        [c.source for c in rest if L.ANSWER in tags(c)]
+
+    ran = [c for c in executed_lesson(L.lessons_dir() / "solutions" / master.name,
+                                      runs=SMALL_RUNS).cells if c.cell_type == "code"]
+    assert [c.source for c in ran[:len(lesson)]] == [c.source for c in lesson]
+    outputs = [_outputs(c) for c in ran[:len(lesson)]]
+    monkeypatch.delenv(RECORD_VARIABLE, raising=False)
+    namespace: dict = {}
+    for c in rest:
+        printed = io.StringIO()
+        with contextlib.redirect_stdout(printed):
+            exec(compile(c.source, f"<{master.stem}: {c.source[:30]!r}>", "exec"), namespace)
+        outputs.append(printed.getvalue())
+        if L.CHECK in tags(c):
+            out = outputs[-1]
             assert out.startswith("… ") and "not answered yet" in out and out.count("\n") == 1, out
+    for out in outputs:
+        assert "<function" not in out, f"{master.name}: a stray repr {out[:80]!r}"
