@@ -153,17 +153,16 @@ def test_math_is_typeset_offline_in_a_browser(site, tmp_path):
 
 
 @pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed")
-def test_a_lessons_html_typesets_its_math_offline(tmp_path):
-    """``gpsaccel lessons --html``: MathJax is copied next to the pages and loaded from there."""
-    pytest.importorskip("nbconvert")
-    from gpsaccel.lessons import lessons_dir, render_html
-
-    (page,) = render_html([lessons_dir() / "02-error-model.ipynb"], tmp_path / "out", runs=10,
-                          index=False)
+def test_a_lessons_html_typesets_its_math_offline(lesson_02_html, tmp_path):
+    """``gpsaccel lessons --html``: MathJax is copied next to the pages and loaded from there
+    (the CLI's one rendering of lesson 02, conftest's ``lesson_02_html``)."""
+    out, returncode, _, err = lesson_02_html
+    assert returncode == 0, err
+    page = out / "02-error-model.html"
     html = page.read_text(encoding="utf-8")
     (src,) = re.findall(r'<script[^>]*src="([^"]*MathJax\.js[^"]*)"', html)
     assert src.startswith("mathjax/MathJax.js?config=")
-    assert (tmp_path / "out" / "mathjax" / "MathJax.js").is_file()
+    assert (out / "mathjax" / "MathJax.js").is_file()
     dom = _parse(_dom(page, tmp_path))
     assert dom.mathjax > 0, "no typeset math in the lesson's HTML"
     assert not RAW_MATH.findall("".join(dom.text))
