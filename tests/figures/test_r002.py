@@ -22,11 +22,24 @@ EXTRA = ["08b", "14b", "15b", "14c", "15c", "18b", "19b", "19c"]
 
 @pytest.fixture(scope="module")
 def drawn(tmp_path_factory):
+    """Report 002's figures drawn once (12 runs): written by write_figures, and kept open for
+    the axes tests (write_figures closes what it writes: it gets copies of the records)."""
+    import dataclasses
+
     import gpsaccel.figures.r002 as r002
 
     out = tmp_path_factory.mktemp("r002")
     figs = list(r002.figures(12, 0))
-    paths = write_figures(["002"], out, runs=12, seed=0, dpi=40)
+    asked = []
+
+    def figures(runs, seed):
+        asked.append((runs, seed))
+        return iter([dataclasses.replace(f) for f in figs])
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(r002, "figures", figures)
+        paths = write_figures(["002"], out, runs=12, seed=0, dpi=40)
+    assert asked == [(12, 0)]
     return figs, paths, out
 
 
