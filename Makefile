@@ -44,7 +44,9 @@ run: $(VENV)/.installed-core
 PYTEST_ARGS ?=
 # --dist loadscope: each module (and class) runs whole on one worker, so a module fixture (a graded
 # class, a Monte Carlo ensemble, a sweep) is built once, not once per worker that got one of its
-# tests (with --dist load the attack and coop classes were graded on both workers)
+# tests (with --dist load the attack and coop classes were graded on both workers); tests/conftest.py
+# makes each lesson a unit of its own and hands out the costliest units first (FIRST), so the two
+# workers end together
 XDIST = $(if $(filter-out 0,$(JOBS)),-n $(JOBS) --dist loadscope)
 test: $(VENV)/.installed-test
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q $(XDIST) $(PYTEST_ARGS)

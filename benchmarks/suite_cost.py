@@ -14,7 +14,8 @@ As on a fresh clone, the suite's disk cache (tests/conftest.py ``disk_cache``: e
 ``otter assign``) starts empty: a new folder per checkout for the whole run, shared by its folders
 as one ``make test`` shares it (``--keep-cache`` uses the checkout's own).  The sum over folders
 is a little more than one ``make test``: each folder's pytest starts and collects on its own.
-With ``-n``, the workers share the work as ``make test`` does (``--dist loadscope``).
+With ``-n``, the workers share the work as the checkout's ``make test`` does (its Makefile's
+``--dist``).
 ``--durations N`` keeps pytest's N slowest items per folder in ``--log``.
 
 The table is Markdown; ``--out`` also writes it to a file under a line naming the date, Python and
@@ -66,6 +67,15 @@ def outcome(stdout: str) -> str:
     return lines[-1][:80] if lines else ""
 
 
+def _dist(root: Path) -> list[str]:
+    """How ``make test`` of ``root`` shares the tests between its workers (its Makefile's XDIST),
+    ``--dist loadscope`` if it does not say."""
+    makefile = root / "Makefile"
+    text = makefile.read_text(encoding="utf-8") if makefile.exists() else ""
+    found = re.search(r"^XDIST\s*=.*?-n \$\(JOBS\) ([^)]*)\)", text, re.M)
+    return found.group(1).split() if found else ["--dist", "loadscope"]
+
+
 def _pytest(root: Path, targets: list[str], args: argparse.Namespace) -> list[str]:
     """The pytest command line of one folder in ``root`` (its own .venv's Python when it has one)."""
     python = root / ".venv" / "bin" / "python"
@@ -74,7 +84,7 @@ def _pytest(root: Path, targets: list[str], args: argparse.Namespace) -> list[st
     if args.marks:
         cmd += ["-m", args.marks]
     if args.workers:
-        cmd += ["-n", args.workers, "--dist", "loadscope"]
+        cmd += ["-n", args.workers, *_dist(root)]
     if args.durations:
         cmd += [f"--durations={args.durations}"]
     return cmd

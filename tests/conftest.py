@@ -31,9 +31,66 @@ SLOW: tuple[str, ...] = (
 )
 
 
+#: The costliest work units (node id prefixes), costliest first: ``make test`` (``--dist loadscope``)
+#: hands them out first, so the two workers end together instead of one running a long unit alone
+#: at the end.  From ``--durations`` (2 workers, load 10 and more).
+FIRST: tuple[str, ...] = (
+    "tests/assignments/test_attacks.py",
+    "tests/assignments/test_coop.py",
+    "tests/assignments/test_hostile_class.py",
+    "tests/assignments/test_grading.py",
+    "tests/test_packaging.py",
+    "tests/test_docs.py",
+    "tests/test_lessons.py",
+    "tests/assignments/",
+    "tests/calibration/test_montecarlo_memory.py",
+    "tests/figures/",
+    "tests/check/test_sandbox_attacks.py",
+    "tests/check/test_batch.py",
+)
+
+#: Modules whose parametrized tests are work units of their own, one per parameter (a lesson):
+#: they share no module fixture, and one unit of 18 lesson executions kept a worker busy alone at
+#: the end.  The disk cache's lock keeps a lesson executed once either way.
+SPLIT: tuple[str, ...] = ("tests/test_lessons.py",)
+
+
 @pytest.hookimpl(tryfirst=True)  # before -k and -m deselect: every collected item is marked
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     mark_slow(items, SLOW)
+    if hasattr(config, "workerinput"):  # an xdist worker: the controller hands out in this order
+        items.sort(key=lambda item: first_rank(item.nodeid.replace("\\", "/"), FIRST))
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config: pytest.Config, log):
+    """``--dist loadscope`` with :func:`work_unit`'s units, handed out in the collection's order
+    (the costliest first, above) instead of the largest units first.  (``--dist loadgroup`` cannot
+    do this: pytest-xdist 3.8 renames its items through ``_nodeid``, which pytest 9 ignores.)"""
+    if config.getvalue("dist") != "loadscope":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class CostliestFirst(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            return work_unit(nodeid)
+
+    config.option.loadscopereorder = False
+    return CostliestFirst(config, log)
+
+
+def work_unit(nodeid: str, split: tuple[str, ...] = SPLIT) -> str:
+    """The test's work unit: its module (or class), as ``--dist loadscope`` has it, except in
+    the ``split`` modules: its parameters (``module[params]``)."""
+    module = nodeid.split("::")[0]
+    if module in split and nodeid.endswith("]") and "[" in nodeid:
+        return f"{module}[{nodeid[nodeid.index('[') + 1:-1]}]"
+    return nodeid.rsplit("::", 1)[0]
+
+
+def first_rank(nodeid: str, first: tuple[str, ...]) -> int:
+    """The position of the first ``first`` prefix ``nodeid`` starts with; after all, if none."""
+    return next((k for k, prefix in enumerate(first) if nodeid.startswith(prefix)), len(first))
 
 
 def mark_slow(items: list[pytest.Item], slow: tuple[str, ...]) -> None:
