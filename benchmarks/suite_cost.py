@@ -127,6 +127,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="use the checkouts' disk caches as they are (default: empty ones)")
     parser.add_argument("--durations", type=int, default=0, help="pytest's --durations per folder")
     parser.add_argument("--log", type=Path, default=None, help="append every pytest's output here")
+    parser.add_argument("--only", nargs="+", default=None,
+                        help="only these rows of the default folders (e.g. 'tests/*.py' tests/figures/)")
     args = parser.parse_args(argv)
     roots = [r.resolve() for r in (args.root or [ROOT])]
     work = tempfile.TemporaryDirectory(prefix="suite-cost-")
@@ -137,6 +139,8 @@ def main(argv: list[str] | None = None) -> int:
     totals = [[0.0, 0.0] for _ in roots]
     failed = False
     for label, targets in groups(args.paths, roots[0]):
+        if args.only and label not in args.only:
+            continue
         load = _cpu.load().split(" (")[0]
         samples = []
         for k, root in enumerate(roots):
