@@ -29,13 +29,28 @@ def test_coop_summary_shows_a_bar_on_a_terminal_only(monkeypatch):
     assert piped.getvalue() == ""
 
 
-@pytest.mark.slow
 def test_figures_show_a_bar_of_the_figures_on_a_terminal_only(monkeypatch, tmp_path):
-    from gpsaccel.figures import write_figures
+    """write_figures' bar, around a report of three empty figures (drawing a real report twice
+    cost 20 CPU s; the reports' figures are tests/figures/')."""
+    import time
+    from types import SimpleNamespace
 
+    import matplotlib.pyplot as plt
+
+    import gpsaccel.figures as F
+    from gpsaccel.figures import ReportFigure, write_figures
+
+    def figures(runs, seed):
+        for n in ("01", "02", "03"):
+            time.sleep(0.15)  # longer than tqdm's mininterval (0.1 s): each figure is shown
+            yield ReportFigure("001", n, "empty", "An empty figure.", plt.figure(figsize=(1, 1)))
+
+    report = SimpleNamespace(DEFAULT_RUNS=2, TITLE="Report 001", figures=figures)
+    monkeypatch.setattr(F, "report_module", lambda name: report)
     terminal = _Terminal()
     monkeypatch.setattr("sys.stderr", terminal)
     paths = write_figures(["001"], tmp_path / "a", runs=2, progress=True)
+    assert len(paths) == 3
     shown = terminal.getvalue()
     assert "figures" in shown and f"{len(paths)}/" not in shown  # a count, no total known ahead
     assert f"{len(paths)}figure" in shown.replace(" ", "") or f"{len(paths)} figure" in shown
