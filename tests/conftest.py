@@ -41,7 +41,7 @@ FIRST: tuple[str, ...] = (
     "tests/assignments/test_grading.py",
     "tests/test_packaging.py",
     "tests/test_docs.py",
-    "tests/test_lessons.py",
+    "tests/lessons/test_lessons.py",
     "tests/assignments/",
     "tests/calibration/test_montecarlo_memory.py",
     "tests/figures/",
@@ -52,7 +52,7 @@ FIRST: tuple[str, ...] = (
 #: Modules whose parametrized tests are work units of their own, one per parameter (a lesson):
 #: they share no module fixture, and one unit of 18 lesson executions kept a worker busy alone at
 #: the end.  The disk cache's lock keeps a lesson executed once either way.
-SPLIT: tuple[str, ...] = ("tests/test_lessons.py",)
+SPLIT: tuple[str, ...] = ("tests/lessons/test_lessons.py",)
 
 
 @pytest.hookimpl(tryfirst=True)  # before -k and -m deselect: every collected item is marked
