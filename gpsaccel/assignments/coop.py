@@ -15,7 +15,7 @@ EKF (question 3).  The student's ``ekf(y, x0, P0, Q, R) -> (x_hat, P)`` against 
 (:func:`gpsaccel.coop.filters.run_ekf`): predict with the exact step φ_ΔT (``model.step``) and
 M = F P Fᵀ + Q with F = I + ΔT·A(x̂), update with the rows of y that are not NaN, H = C(x̄), the
 bearing residuals wrapped.  Distances are in units of the reference σ = √diag P_ref; both must be
-within 1e-6.  A failing filter is matched against the typical mistakes (:data:`EKF_MISTAKES`):
+within 1e-6.  A failing filter is matched against the typical mistakes (:func:`ekf_mistakes`):
 entries of the coop catalogue (:func:`gpsaccel.coop.mistakes.catalogue`), run by the package's
 one EKF with that entry's ingredients, so no second reference filter lives here.
 """
@@ -40,19 +40,12 @@ __all__ = ["assert_report", "dt_linearization", "ekf", "jacobians"]
 #: Distance (units of the reference σ) within which the EKF's x̂ and P count as equal.
 EKF_TOL = 1e-6
 
-#: The EKF mistakes recognised, as (code, variant) of the coop catalogue, in the order tried.
-EKF_MISTAKES = (("no-angle-wrap", "residual y − h(x̄) not wrapped"),
-                ("euler-propagation", "one Euler step per sample"),
-                ("jacobian-point", "H at the previous posterior x̂_k"),
-                ("returns-a-priori", "x̄ and M returned"))
-
-
 def ekf_mistakes() -> tuple:
-    """The catalogue entries (:class:`gpsaccel.coop.mistakes.Mistake`) of :data:`EKF_MISTAKES`."""
+    """The EKF mistakes the homework recognises, in the order tried: the entries of the coop
+    catalogue (:func:`gpsaccel.coop.mistakes.catalogue`) marked ``homework``."""
     from gpsaccel.coop.mistakes import catalogue
 
-    entries = {(m.code, m.variant): m for m in catalogue(kind="ekf")}
-    return tuple(entries[key] for key in EKF_MISTAKES)
+    return tuple(m for m in catalogue(kind="ekf") if m.homework)
 
 
 # ------------------------------------------------------------------ Jacobians, DT model
@@ -277,7 +270,7 @@ def ekf(func: object, y: np.ndarray, x0: np.ndarray | None = None, P0: np.ndarra
                "mistakes ({codes}). {row0}Check the prediction (x̄ = model.step(x̂), M = F P Fᵀ + "
                "Q with F = I + ΔT·A(x̂)) and the update (H = C(x̄), only the rows of y that are "
                "not NaN).", where=f"t = {t[first]:g} s (step {first})", observed={
-                   "dx": dx, "dP": dP, "codes": ", ".join(c for c, _ in EKF_MISTAKES),
+                   "dx": dx, "dP": dP, "codes": ", ".join(m.code for m in ekf_mistakes()),
                    "row0": "Row 0 must be (x0, P0): nothing is measured at t = 0. "
                    if first == 0 else ""})
     return report

@@ -18,14 +18,9 @@ import numpy as np
 from gpsaccel.assignments._answers import array
 from gpsaccel.check.findings import mistake_finding
 from gpsaccel.check.report import Report
-from gpsaccel.kalman.epochs import (
-    LinearCatalogue,
-    LinearIngredients,
-    LinearModel,
-    Mistake,
-    combinations,
-    with_changes,
-)
+from gpsaccel.kalman.linear_catalogue import LinearCatalogue
+from gpsaccel.kalman.linear_model import LinearIngredients, LinearModel
+from gpsaccel.kalman.mistakes import Mistake, combinations, with_changes
 
 #: The matrices the question asks for, in the order it lists them.
 MATRICES = ("Phi", "Gamma", "Q", "H", "V", "M0")

@@ -17,7 +17,7 @@ from gpsaccel.assignments.linear import matrices_answer
 from gpsaccel.check.linear import ModelProblem
 from gpsaccel.check.report import Report
 from gpsaccel.check.problems.tracker import N_FIXES, TRACKER, model
-from gpsaccel.kalman.epochs import LinearModel
+from gpsaccel.kalman.linear_model import LinearModel
 
 #: The position fixes' rate (Hz): the same for every variant.
 FIX_RATE_HZ = 2

@@ -37,17 +37,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from gpsaccel.calibration.model import CalibrationModel, gamma, phi
-from gpsaccel.kalman.epochs import (  # noqa: F401 - the recursion and the entry type, re-exported
+from gpsaccel.kalman.epochs import EpochFilter, batch_gains  # noqa: F401 - re-exported
+from gpsaccel.kalman.linear_catalogue import (
     LINEAR_MESSAGES,
-    EpochFilter,
-    LinearIngredients,
-    Mistake,
-    batch_gains,
-    combinations,
     predict_before_first_update,
     state_orders,
-    with_changes,
 )
+from gpsaccel.kalman.linear_model import LinearIngredients
+from gpsaccel.kalman.mistakes import Mistake, combinations, with_changes  # noqa: F401
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,9 +106,13 @@ def _plural(n: int, word: str) -> str:
     return f"{n} {word}" + ("" if n == 1 else "s")
 
 
-#: Report 000's wording of its catalogue: code (or code.variant) -> template; the fields are
-#: the model's numbers (:func:`_fields`) and each entry's own.
+#: Report 000's wording, one table: code (or code.part) -> template.  Its catalogue's entries (the
+#: fields are the model's numbers, :func:`_fields`, and each entry's own) and its checker's findings
+#: where they say more than the generic text (:class:`gpsaccel.check.whole_filter
+#: .CalibrationProblem` reads this table over :data:`gpsaccel.kalman.linear_messages.MESSAGES`
+#: and the sandbox's :data:`gpsaccel.check.findings.MESSAGES`).
 MESSAGES: dict[str, str] = {
+    # ------------------------------------------------------------ the catalogue's entries
     "phi-sign": "Φ₁₃ has the wrong sign: the bias enters position as −Δt²/2 = {half_dt2:.4g}, "
                 "and your filter uses +Δt²/2. Likely cause: the accelerometer reads a + b, so the "
                 "integrated accelerometer runs ahead by the bias and δp = p − p_c loses b·Δt²/2 "
@@ -170,6 +171,42 @@ MESSAGES: dict[str, str] = {
     "state-order": "Your H is written for the state order [{order}]; the state is [δp, δv, b] "
                    "(Φ, M0 and your outputs follow it), so your H takes the GPS position for "
                    "{wrong}. Write H's columns in the state's order.",
+    "mean-not-propagated": "Your covariance is propagated between GPS fixes but your estimate "
+                           "is not: the residual uses x̂ₖ₋₁ where it should use x̄ₖ = Φ^{n} x̂ₖ₋₁ "
+                           "(Φ applied at each of the {n} accelerometer steps). Likely cause: "
+                           "x_bar = Phi @ x_hat is missing from the propagation loop, or its "
+                           "result is not kept.",
+    "x0-total-state": "Your error-state estimate starts at the total-state means [p̄0, v̄0, 0] = "
+                      "[{p0:g}, {v0:g}, 0], as report 000's code does. The state is the error "
+                      "[δp, δv, b] of the accelerometer-integrated solution, which itself starts "
+                      "at (p̄0, v̄0), so the prior mean of the error is x̄₀ = [0, 0, 0].",
+    # ----------------------------------------------------------- the checker's findings
+    "no-function": "Your file does not define a function kalman_filter(z){found}. Functions it "
+                   "defines: {callables}. Name your filter kalman_filter, taking z and returning "
+                   "(x_hat, P).",
+    "memory-limit": "Your code ran out of memory: a check may use {mib:g} MiB of address space, "
+                    "and your file asked for more (after {done} of {n_calls} runs){tb} A filter "
+                    "for {n_gps} GPS times needs a few kilobytes: look for an array sized by the "
+                    "accelerometer steps squared, or a list that grows in a loop that never "
+                    "ends.",
+    "exception": "kalman_filter(z) raised an exception on {label}; the traceback ends "
+                 "with:\n{traceback}",
+    "epoch-shift.late": "one GPS time late: row k holds the estimate of time k − 1",
+    "epoch-shift.early": "one GPS time early: row k holds the estimate of time k + 1",
+    "p-mismatch.later": "P at t = 0 is right (so M0, H, V and the update are), but P differs "
+                        "from t = {t:g} s on: the propagation between GPS fixes is wrong (Φ, "
+                        "Q = Γ W Γᵀ, or the number of steps).",
+    "p-mismatch.matrices": "Check your matrices with gpsaccel.check.model_matrices(Phi=..., "
+                           "Gamma=..., H=..., V=..., W=..., M0=...).",
+    "aliased-output": "Every row of your x_hat and P holds the same values, those of the last "
+                      "GPS time (t = {t_last:g} s): each row is the same array object, changed "
+                      "in place at every step (e.g. x += K @ r or P[:] = ..., then appended to a "
+                      "list). Store a copy: x_hat[k] = x (into a preallocated array) or "
+                      "xs.append(x.copy()).",
+    "last-update-missing": "Your filter is right except at the last GPS time (t = {t:g} s), "
+                           "where x̂ and P are the a priori x̄ and M: the update with the last "
+                           "fix z[{row}] is missing (a loop such as range(n - 1), or the update "
+                           "placed before the propagation).",
 }
 
 
@@ -282,22 +319,11 @@ def mean_mistakes(model: CalibrationModel | None = None) -> tuple[Mistake, ...]:
     n = model.gps_every
     x0_total = np.array([model.p0_mean, model.v0_mean, 0.0])
     return (
-        Mistake(
-            "mean-not-propagated", "x̄ₖ = x̂ₖ₋₁",
-            f"Your covariance is propagated between GPS fixes but your estimate is not: the "
-            f"residual uses x̂ₖ₋₁ where it should use x̄ₖ = Φ^{n} x̂ₖ₋₁ (Φ applied at each of the "
-            f"{n} accelerometer steps). Likely cause: x_bar = Phi @ x_hat is missing from the "
-            f"propagation loop, or its result is not kept.",
-            (("mean_propagated", False),),
-        ),
-        Mistake(
-            "x0-total-state", f"x̄₀ = [{x0_total[0]:g}, {x0_total[1]:g}, 0]",
-            f"Your error-state estimate starts at the total-state means [p̄0, v̄0, 0] = "
-            f"[{x0_total[0]:g}, {x0_total[1]:g}, 0], as report 000's code does. The state is the "
-            f"error [δp, δv, b] of the accelerometer-integrated solution, which itself starts at "
-            f"(p̄0, v̄0), so the prior mean of the error is x̄₀ = [0, 0, 0].",
-            (("x0", x0_total),),
-        ),
+        Mistake("mean-not-propagated", "x̄ₖ = x̂ₖ₋₁", MESSAGES["mean-not-propagated"].format(n=n),
+                (("mean_propagated", False),)),
+        Mistake("x0-total-state", f"x̄₀ = [{x0_total[0]:g}, {x0_total[1]:g}, 0]",
+                MESSAGES["x0-total-state"].format(p0=x0_total[0], v0=x0_total[1]),
+                (("x0", x0_total),)),
     )
 
 

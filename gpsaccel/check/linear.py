@@ -54,15 +54,11 @@ from gpsaccel.kalman.consistency import (
     z_ensemble_normalized_squared,
     z_sample_mean,
 )
-from gpsaccel.kalman.epochs import (
-    Catalogue,
-    EpochFilter,
-    LinearCatalogue,
-    LinearModel,
-    Mistake,
-    batch_gains,
-    combinations,
-)
+from gpsaccel.kalman.epochs import EpochFilter, batch_gains
+from gpsaccel.kalman.linear_catalogue import LinearCatalogue
+from gpsaccel.kalman.linear_messages import MESSAGES
+from gpsaccel.kalman.linear_model import LinearModel
+from gpsaccel.kalman.mistakes import Catalogue, Mistake, combinations
 from gpsaccel.sandbox import Call, Output
 
 #: Largest distance (units of the optimal σ) at which P and x̂ count as equal; also the distance
@@ -76,72 +72,9 @@ HINT_FACTOR = 10.0
 #: precision" (measured on report 000's 6000 steps: 8e-5 σσ in P, 0.035 σ in x̂).
 LOW_PRECISION = (1e-3, 0.1)
 
-#: code -> template of the diagnosis's findings (a problem overrides entries in ``messages``).
-FINDINGS: dict[str, str] = {
-    "matches-optimal": "P and x̂ match the optimal filter to {tol:g} σ on all {n_runs} runs.",
-    "nan-output": "{name} contains {what} in {bad_runs} of {n_runs} runs; in run {run} first at "
-                  "t = {t:g} s (row {row}). Likely causes: an array made with np.empty and never "
-                  "filled at that row, a division by zero, or the inverse of a singular matrix.",
-    "p-depends-on-data": "Your P changes from run to run (by up to {spread:.3g} σσ). In a linear "
-                         "Kalman filter P depends only on Φ, Q, H, V and M0, never on the "
-                         "measurements: compute P without z.",
-    "aliased-output": "Every row of your x_hat and P holds the same values, those of the last "
-                      "time (t = {t_last:g} s): each row is the same array object, changed in "
-                      "place at every step (e.g. x += K @ r or P[:] = ..., then appended to a "
-                      "list). Store a copy: x_hat[k] = x (into a preallocated array) or "
-                      "xs.append(x.copy()).",
-    "state-between-calls": "Your filter is right on the first call but not on later ones: "
-                           "{what} first differs on run {run} (by {by:.3g} σ), and {n_bad} of "
-                           "{n_runs} runs differ. Something survives between calls: a "
-                           "module-level list or array that keeps growing, a global M0 or x0 "
-                           "changed in place (M = M0 then M -= ...). Copy globals before "
-                           "changing them (M = M0.copy()).",
-    "low-precision": "Your filter computes in single precision (float32): its output differs "
-                     "from the optimal filter by up to {dP:.2g} σσ in P and {dx:.2g} σ in x̂, "
-                     "what float32 rounding (about 6e-8 relative) builds up over {n_steps} "
-                     "steps; the tolerance is {tol:g}. This is not a wrong M0, H or V: use "
-                     "float64 throughout (no .astype(np.float32), z as given) and check again — "
-                     "at float32 precision a small mistake could hide.",
-    "p-scaled": "Your P is the optimal P multiplied by one same factor at every time{sym}. "
-                "{x_note} M0, H and V are not the problem: look at the line that symmetrises or "
-                "scales P.",
-    "epoch-shift": "Your outputs are shifted by one epoch, {where} (every row but the {end} "
-                   "matches the optimal filter shifted). Store x̂ and P of time t_k in row k, "
-                   "right after the update with z[k].",
-    "epoch-shift.late": "one time late: row k holds the estimate of time k − 1",
-    "epoch-shift.early": "one time early: row k holds the estimate of time k + 1",
-    "last-update-missing": "Your filter is right except at the last time (t = {t:g} s), where "
-                           "x̂ and P are the a priori x̄ and M: the update with the last "
-                           "measurement z[{row}] is missing (a loop such as range(n - 1), or the "
-                           "update placed before the propagation).",
-    "update-skipped": "Your filter is right up to t = {t_prev:g} s, but at t = {t:g} s (row "
-                      "{row}) x̂ and P are the a priori x̄ and M: the update with z[{row}] is "
-                      "missing there, and every later row follows from it. Look at the "
-                      "condition that decides when to update.",
-    "covariance-update-skipped": "At t = {t:g} s (row {row}) your P is the a priori M: the "
-                                 "covariance update with z[{row}] is missing, though your x̂ "
-                                 "there used it; every earlier row matches, so the propagation "
-                                 "is right. Update P with the same gain: P = (I − K H) M "
-                                 "(I − K H)ᵀ + K V Kᵀ.",
-    "mean-update-skipped": "At t = {t:g} s (row {row}) your x̂ is the a priori x̄ while your P "
-                           "was updated: the mean update x̂ = x̄ + K (z − H x̄) with z[{row}] is "
-                           "missing there; every earlier row matches.",
-    "gain-or-residual": "{lead} your x̂ differs from what that filter gives on the same z by up "
-                        "to {dx:.3g} σ ({where}). The mistake is in how x̂ is formed: check "
-                        "K = M Hᵀ (H M Hᵀ + V)⁻¹, x̄ = Φ x̂ at every {step}, the residual "
-                        "r = z − H x̄ and x̂ = x̄ + K r, with z at the matching time.",
-    "p-mismatch": "Your P does not match the optimal filter (it differs by up to {d:.3g} σσ)."
-                  "{hint} {where}{depart} {matrices}",
-    "p-mismatch.first": "P at t = 0 already differs: the first update uses only M0, H and V, so "
-                        "one of them is wrong (or the update formula).",
-    "p-mismatch.later": "P at t = 0 is right (so M0, H, V and the update are), but P differs "
-                        "from t = {t:g} s on: the propagation between measurements is wrong "
-                        "(Φ, Q = Γ W Γᵀ, or the number of steps).",
-    "p-mismatch.matrices": "Check your Φ, Γ, W, H, V and M0 against the problem's.",
-    "hint.near": " The nearest known mistake is {names}: your P is within {d:.3g} σσ of it "
-                 "({ratio:.2g}× the tolerance), so look there first.",
-    "hint.none": " No catalogued mistake matches.",
-}
+#: code -> template of the diagnosis's findings: the generic linear problem's one table of
+#: wording (:mod:`gpsaccel.kalman.linear_messages`; a problem overrides entries in ``messages``).
+FINDINGS = MESSAGES
 
 
 @dataclass(frozen=True, eq=False)

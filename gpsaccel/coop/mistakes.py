@@ -20,39 +20,25 @@ them on N logs at once (vectorised over runs, the same order of operations as
 :func:`gpsaccel.coop.filters.run_batch`, so with no mistake it reproduces the reference EKF and
 LKF to rounding).
 
-The catalogue is system knowledge; the checker that matches a student's output against it is in
-:mod:`gpsaccel.check`.
+Each entry is the core's one entry type (:class:`gpsaccel.kalman.mistakes.Mistake`: code, title,
+message, hint, the ingredients it changes, ``kinds`` the filters it applies to, ``homework`` for
+the four the homework's EKF question names).  The catalogue is system knowledge; the checker that
+matches a student's output against it is in :mod:`gpsaccel.check`, the homework in
+:mod:`gpsaccel.assignments.coop`.
 """
 
 from __future__ import annotations
-
-from dataclasses import dataclass, replace
 
 import numpy as np
 
 from gpsaccel.coop.filters import FilterResult, Ingredients, euler_nominal, run_batch
 from gpsaccel.coop.model import ANGLE_STATES, CoopModel, wrap_angle
-from gpsaccel.kalman import epochs
+from gpsaccel.kalman.mistakes import Mistake, apply
 
 KINDS = ("ekf", "lkf")
 
 __all__ = ["KINDS", "Ingredients", "Mistake", "catalogue", "codes", "euler_nominal",
            "heading_range", "ingredients", "run", "wrapped_difference"]
-
-
-@dataclass(frozen=True)
-class Mistake(epochs.Mistake):
-    """One entry of the catalogue, the core's entry (code, variant, message, hint, the
-    ingredients it changes: :class:`gpsaccel.kalman.epochs.Mistake`) and the filters it applies
-    to.  ``checker``: False for an entry only the homework tries (its question asks for x̂ and
-    P, so returning x̄ and M is a mistake there; the checker's contract names the outputs)."""
-
-    kinds: tuple[str, ...] = KINDS
-    informational: bool = False
-    checker: bool = True
-
-    def __str__(self) -> str:
-        return f"{self.code} ({self.variant})"
 
 
 def catalogue(model: CoopModel | None = None, kind: str = "ekf") -> tuple[Mistake, ...]:
@@ -65,7 +51,7 @@ def catalogue(model: CoopModel | None = None, kind: str = "ekf") -> tuple[Mistak
     out = [
         Mistake("no-angle-wrap", "residual y − h(x̄) not wrapped",
                 "The bearing residuals are not wrapped. " + wrap_hint,
-                (("wrap_residual", "difference"),)),
+                (("wrap_residual", "difference"),), homework=True),
         Mistake("no-angle-wrap", "h and the residual not wrapped",
                 "Neither your predicted bearings h(x̄) = atan2(Δη, Δξ) − θ nor the residual "
                 "y − h(x̄) are wrapped. " + wrap_hint, (("wrap_residual", "none"),)),
@@ -108,7 +94,7 @@ def catalogue(model: CoopModel | None = None, kind: str = "ekf") -> tuple[Mistak
                 f"{dt:g} s; for an LKF, an Euler nominal trajectory). That is an approximation "
                 f"of the nonlinear motion with an error of order ΔT² per step; the reference "
                 f"integrates the motion exactly (closed form, or scipy.integrate.solve_ivp "
-                f"over each ΔT — either passes).", (("propagation", "euler"),)),
+                f"over each ΔT — either passes).", (("propagation", "euler"),), homework=True),
     ]
     out += [
         Mistake("jacobian-point", "F at the prior x̄_(k+1)",
@@ -117,7 +103,7 @@ def catalogue(model: CoopModel | None = None, kind: str = "ekf") -> tuple[Mistak
         Mistake("jacobian-point", "H at the previous posterior x̂_k",
                 "Your H = C is evaluated at x̂_k, the previous estimate; the measurement at "
                 "t_(k+1) is predicted from x̄_(k+1), so H = C(x̄_(k+1)).",
-                (("H_point", "posterior"),), kinds=("ekf",)),
+                (("H_point", "posterior"),), kinds=("ekf",), homework=True),
         Mistake("jacobian-point", "F and H at the nominal",
                 "Your F and H are evaluated on the nominal trajectory x* (an LKF's Jacobians) "
                 "while the mean follows the estimate; an EKF linearizes about its own estimate: "
@@ -132,9 +118,9 @@ def catalogue(model: CoopModel | None = None, kind: str = "ekf") -> tuple[Mistak
         Mistake("returns-a-priori", "x̄ and M returned",
                 "Your filter returns x̄ and M, the estimate before the update, instead of x̂ "
                 "and P.", (("output", "prior"),), kinds=("ekf",), hint="Store x̂ and P after the "
-                "update at each step.", checker=False),
+                "update at each step.", checker=False, homework=True),
     ]
-    return tuple(m for m in out if kind in m.kinds)
+    return tuple(m for m in out if m.applies(kind))
 
 
 def codes(kind: str = "ekf") -> tuple[str, ...]:
@@ -144,10 +130,7 @@ def codes(kind: str = "ekf") -> tuple[str, ...]:
 
 def ingredients(mistakes: tuple[Mistake, ...] = ()) -> Ingredients:
     """The ingredients of a filter making ``mistakes`` (none: the right one)."""
-    g = Ingredients()
-    for m in mistakes:
-        g = replace(g, **dict(m.changes))
-    return g
+    return apply(Ingredients(), mistakes)
 
 
 def run(model: CoopModel, y: np.ndarray, Q: np.ndarray, R: np.ndarray, kind: str = "ekf",

@@ -34,15 +34,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gpsaccel.kalman.epochs import Mistake
+from gpsaccel.kalman.mistakes import Mistake, apply
 from gpsaccel.kalman.update import joseph_update, partial_update
 from gpsaccel.ship.model import ShipModel
 from gpsaccel.ship.plan import driving_input
 
-CODES = ("zeroed-gain", "report-covariance", "monorate-gain", "no-input")
-
-#: code -> what the checker tells the student (``{cost}``: the σ excess of the variant's true
-#: covariance over the optimal, said in words by the checker).
+#: The ship's wording, one table: code -> the filter entry's message (``{cost}``: the σ excess of
+#: the student's filter's true covariance over the optimal, said in words by the checker);
+#: ``update.<code>`` -> what the homework's one update is, ``update.<code>.hint`` -> its hint.
 MESSAGES: dict[str, str] = {
     "zeroed-gain": "Your update computes the full gain M Hᵀ (H M Hᵀ + V)⁻¹ as if every sensor had "
                    "reported and zeroes the columns of the missing ones (the report's filter). "
@@ -57,77 +56,111 @@ MESSAGES: dict[str, str] = {
                      "from its own M: {cost}.",
     "no-input": "Your prediction leaves out the known input: x̄_(k+1) = Φ x̂_k + B u_k (u[k] "
                 "drives the step from t_k to t_(k+1)).",
+    "update.zeroed-gain": "the full gain M Hᵀ (H M Hᵀ + V)⁻¹ with the columns of the missing "
+                          "rows set to zero (report 004's BD(:,1,n) = 0)",
+    "update.zeroed-gain.hint": "The kept columns of the full gain were computed as if the "
+                               "missing rows would also correct the estimate, so they "
+                               "under-weight what did arrive. Use only the rows r that arrived: "
+                               "K_r = M H_rᵀ (H_r M H_rᵀ + V_r)⁻¹.",
+    "update.report-covariance": "report 004's zeroed gain with P = (I − K H) M",
+    "update.report-covariance.hint": "Besides the zeroed gain (use K_r = M H_rᵀ (H_r M H_rᵀ + "
+                                     "V_r)⁻¹ with the rows r that arrived), P = (I − K H) M "
+                                     "holds only for the optimal gain: with any other it is not "
+                                     "even symmetric. The Joseph form holds for every gain.",
+    "update.missing-as-zero": "the missing rows used as measurements of 0",
+    "update.missing-as-zero.hint": "A NaN means the row did not arrive: leave it out (H_r, V_r, "
+                                   "z_r), do not replace it with 0.",
 }
 
 
 @dataclass(frozen=True)
-class Variant:
-    """One filter of the catalogue: the codes it makes and the settings of :func:`run`."""
+class Ingredients:
+    """What a student chooses writing the ship's update or filter; every switch off is the
+    optimal one.  zeroed: the full gain with the missing columns zeroed; report_covariance:
+    P = (I − K H) M; monorate_gain: the monorate filter's gain at the GPS fixes; no_input: the
+    prediction without B u; missing_as_zero: NaN rows used as measurements of 0."""
 
-    codes: tuple[str, ...]
     zeroed: bool = False
     report_covariance: bool = False
     monorate_gain: bool = False
     no_input: bool = False
+    missing_as_zero: bool = False
 
-    def __str__(self) -> str:
-        return " + ".join(self.codes) or "optimal"
 
+#: (code, the switches it sets, the filters it applies to): the catalogue's entries in order.
+#: ``report-covariance`` of the filter sets only its own switch: :func:`variants` pairs it with
+#: ``zeroed-gain`` (with the optimal gain (I − KH) M is the Joseph form, no mistake).
+_ENTRIES: tuple[tuple[str, tuple[tuple, ...], str], ...] = (
+    ("zeroed-gain", (("zeroed", True),), "filter"),
+    ("report-covariance", (("report_covariance", True),), "filter"),
+    ("monorate-gain", (("monorate_gain", True),), "filter"),
+    ("no-input", (("no_input", True),), "filter"),
+    ("zeroed-gain", (("zeroed", True),), "update"),
+    ("report-covariance", (("zeroed", True), ("report_covariance", True)), "update"),
+    ("missing-as-zero", (("missing_as_zero", True),), "update"),
+)
+
+
+def catalogue(kind: str = "filter") -> tuple[Mistake, ...]:
+    """The ship's catalogue: entries of the core's one type (:class:`gpsaccel.kalman.mistakes
+    .Mistake`), each a change of :class:`Ingredients`, for ``kind`` "filter" (the checker's
+    ``multirate_filter``, message templates with ``{cost}``) or "update" (the homework's one
+    update, :func:`update`: what it is and the hint; ``missing-as-zero`` is the homework's own,
+    the checker's filter gets NaN rows, whose zero-filled use it names as a mismatch)."""
+    out = []
+    for code, changes, k in _ENTRIES:
+        if k != kind:
+            continue
+        key = code if k == "filter" else f"update.{code}"
+        out.append(Mistake(code, code if k == "filter" else MESSAGES[key], MESSAGES[key],
+                           changes, hint=MESSAGES.get(f"{key}.hint", ""), kinds=(k,),
+                           homework=k == "update"))
+    return tuple(out)
+
+
+CODES = tuple(m.code for m in catalogue("filter"))
 
 #: The homework's question 1 (one update, :func:`update`): the mistakes it names, in the order
-#: tried; ``missing-as-zero`` is the homework's own (the checker's filter gets NaN rows, whose
-#: zero-filled use it names as a mismatch).
-UPDATE_CODES = ("zeroed-gain", "report-covariance", "missing-as-zero")
-
-#: code -> (what the update is, the hint) for the homework's one-update question.
-UPDATE_MESSAGES: dict[str, tuple[str, str]] = {
-    "zeroed-gain": ("the full gain M Hᵀ (H M Hᵀ + V)⁻¹ with the columns of the missing rows set "
-                    "to zero (report 004's BD(:,1,n) = 0)",
-                    "The kept columns of the full gain were computed as if the missing rows "
-                    "would also correct the estimate, so they under-weight what did arrive. Use "
-                    "only the rows r that arrived: K_r = M H_rᵀ (H_r M H_rᵀ + V_r)⁻¹."),
-    "report-covariance": ("report 004's zeroed gain with P = (I − K H) M",
-                          "Besides the zeroed gain (use K_r = M H_rᵀ (H_r M H_rᵀ + V_r)⁻¹ with "
-                          "the rows r that arrived), P = (I − K H) M holds only for the optimal "
-                          "gain: with any other it is not even symmetric. The Joseph form holds "
-                          "for every gain."),
-    "missing-as-zero": ("the missing rows used as measurements of 0",
-                        "A NaN means the row did not arrive: leave it out (H_r, V_r, z_r), do "
-                        "not replace it with 0."),
-}
+#: tried.
+UPDATE_CODES = tuple(m.code for m in catalogue("update"))
 
 
 def update_catalogue() -> tuple[Mistake, ...]:
-    """The homework's one-update mistakes as catalogue entries: changes of :func:`update`'s
-    ingredients (the :class:`Variant` switches, plus ``missing_as_zero``)."""
-    changes = {"zeroed-gain": (("zeroed", True),),
-               "report-covariance": (("zeroed", True), ("report_covariance", True)),
-               "missing-as-zero": (("missing_as_zero", True),)}
-    return tuple(Mistake(code, UPDATE_MESSAGES[code][0], UPDATE_MESSAGES[code][0],
-                         changes[code], hint=UPDATE_MESSAGES[code][1]) for code in UPDATE_CODES)
+    """The homework's one-update mistakes: :func:`catalogue` ``("update")``."""
+    return catalogue("update")
 
 
 def update(x_bar: np.ndarray, M: np.ndarray, z: np.ndarray, H: np.ndarray, V: np.ndarray,
            mistakes: tuple[Mistake, ...] = ()) -> tuple[np.ndarray, np.ndarray]:
     """(x̂, P): one update with the rows of z that are finite (NaN = did not arrive), the
     optimal one (:func:`gpsaccel.kalman.update.partial_update`) or the one making ``mistakes``."""
-    g = dict(c for m in mistakes for c in m.changes)
-    if g.get("missing_as_zero"):
+    g = apply(Ingredients(), mistakes)
+    if g.missing_as_zero:
         z = np.nan_to_num(z, nan=0.0)
     rows = np.flatnonzero(np.isfinite(z))
-    if rows.size == 0 and not g.get("zeroed"):
+    if rows.size == 0 and not g.zeroed:
         return x_bar.copy(), M.copy()
-    x, P, _ = partial_update(x_bar, M, z, H, V, rows, zeroed=bool(g.get("zeroed")),
-                             short_form=bool(g.get("report_covariance")))
+    x, P, _ = partial_update(x_bar, M, z, H, V, rows, zeroed=g.zeroed,
+                             short_form=g.report_covariance)
     return x, P
 
 
-def catalogue() -> tuple[Mistake, ...]:
-    """The catalogue as entries of the core's one type (code, variant, message template with
-    ``{cost}``, the :class:`Variant` switch it sets): what every system's catalogue gives."""
-    switch = dict(zip(CODES, ("zeroed", "report_covariance", "monorate_gain", "no_input"),
-                      strict=True))
-    return tuple(Mistake(code, code, MESSAGES[code], ((switch[code], True),)) for code in CODES)
+@dataclass(frozen=True)
+class Variant:
+    """One filter the checker matches against: a combination of the catalogue's entries."""
+
+    mistakes: tuple[Mistake, ...] = ()
+
+    @property
+    def codes(self) -> tuple[str, ...]:
+        return tuple(m.code for m in self.mistakes)
+
+    @property
+    def ingredients(self) -> Ingredients:
+        return apply(Ingredients(), self.mistakes)
+
+    def __str__(self) -> str:
+        return " + ".join(self.codes) or "optimal"
 
 
 def variants() -> tuple[Variant, ...]:
@@ -136,13 +169,13 @@ def variants() -> tuple[Variant, ...]:
     ``report-covariance`` needs ``zeroed-gain`` (with the optimal gain (I − KH) M equals the Joseph
     form, so it is not a mistake there).
     """
+    entries = catalogue("filter")
     out = [Variant(())]
-    for zeroed, report, mono, no_input in itertools.product((False, True), repeat=4):
-        if report and not zeroed or not (zeroed or report or mono or no_input):
+    for on in itertools.product((False, True), repeat=len(entries)):
+        zeroed, report = on[0], on[1]
+        if report and not zeroed or not any(on):
             continue
-        codes = tuple(c for c, on in zip(CODES, (zeroed, report, mono, no_input), strict=True)
-                      if on)
-        out.append(Variant(codes, zeroed, report, mono, no_input))
+        out.append(Variant(tuple(m for m, o in zip(entries, on, strict=True) if o)))
     return tuple(out)
 
 
@@ -183,7 +216,8 @@ def run(model: ShipModel, z: np.ndarray, u: np.ndarray | None = None,
     u = driving_input(model) if u is None else np.asarray(u, dtype=float)
     Phi, Q, H, V, B = model.Phi, model.Q, model.H, model.V, model.B
     n = Phi.shape[0]
-    if variant.monorate_gain and mono_K is None:
+    g = variant.ingredients
+    if g.monorate_gain and mono_K is None:
         mono_K = monorate_gains(model)
     x = np.broadcast_to(model.x0, (R, n)).copy()
     C = model.M0.copy()
@@ -195,16 +229,16 @@ def run(model: ShipModel, z: np.ndarray, u: np.ndarray | None = None,
     x_hat[:, 0], P[0], P_true[0] = x, C, Ct
     for k in range(N - 1):
         j = k + 1
-        x = x @ Phi.T + (0.0 if variant.no_input else B @ u[k])
+        x = x @ Phi.T + (0.0 if g.no_input else B @ u[k])
         C = Phi @ C @ Phi.T + Q
         Ct = Phi @ Ct @ Phi.T + Q
         rows = np.flatnonzero(avail[j])
         K = np.zeros((n, p))
         if rows.size:
-            given = mono_K[j] if mono_K is not None and variant.monorate_gain and \
+            given = mono_K[j] if mono_K is not None and g.monorate_gain and \
                 rows.size == p else None
-            x, C, K = partial_update(x, C, z[:, j], H, V, rows, given, variant.zeroed,
-                                     variant.report_covariance)
+            x, C, K = partial_update(x, C, z[:, j], H, V, rows, given, g.zeroed,
+                                     g.report_covariance)
             Ct = joseph_update(Ct, K, H, V)                 # the true covariance of any gain
         K_all[j] = K
         x_hat[:, j], P[j], P_true[j] = x, C, Ct

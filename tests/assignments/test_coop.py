@@ -130,8 +130,11 @@ def test_the_homework_grades_with_the_package_ekf_and_recognises_each_mistake():
     y = model.log()
     ref = run_ekf(model, y, Q=model.Qtrue)
     assert coop.ekf(lambda y, x0, P0, Q, R: (ref.x_hat, ref.P), y).passed
-    assert [c for c, _ in coop.EKF_MISTAKES] == ["no-angle-wrap", "euler-propagation",
-                                                 "jacobian-point", "returns-a-priori"]
+    assert [(m.code, m.variant) for m in coop.ekf_mistakes()] == [
+        ("no-angle-wrap", "residual y − h(x̄) not wrapped"),
+        ("euler-propagation", "one Euler step per sample"),
+        ("jacobian-point", "H at the previous posterior x̂_k"),
+        ("returns-a-priori", "x̄ and M returned")]
     for m in coop.ekf_mistakes():
         def student(y, x0, P0, Q, R, m=m):
             out = run_ekf(model, y, Q, R, x0, P0, ingredients=ingredients((m,)))

@@ -12,7 +12,7 @@ from gpsaccel.assignments.grading import assignment_module, student_variant
 from gpsaccel.assignments.linear import matrices, matrices_answer
 from gpsaccel.assignments.tracker import variant_model
 from gpsaccel.check.problems.tracker import TRACKER
-from gpsaccel.kalman.epochs import LinearIngredients
+from gpsaccel.kalman.linear_model import LinearIngredients
 
 from .conftest import write_variant
 

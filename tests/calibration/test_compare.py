@@ -45,7 +45,7 @@ def test_report_000_as_any_linear_model_gives_the_same_table(table):
     one (Φ, Γ, W, H, V, M0, x0, a fix every 40 steps) gives the same errors, to the last bit."""
     from gpsaccel.calibration.simulation import simulate
     from gpsaccel.kalman import compare as core
-    from gpsaccel.kalman.epochs import LinearModel
+    from gpsaccel.kalman.linear_model import LinearModel
 
     m = CalibrationModel()
     linear = LinearModel(m.Phi, m.Gamma, m.W, m.H, m.V, m.M0, m.x0, m.gps_every, m.n_gps, m.dt)

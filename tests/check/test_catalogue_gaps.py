@@ -75,7 +75,7 @@ def test_the_calibration_problem_names_each_gap(tmp_path, mistake):
 
 
 def test_state_orders_and_phi_signs_of_the_cv_problem():
-    from gpsaccel.kalman.epochs import phi_sign_variants, state_orders
+    from gpsaccel.kalman.linear_catalogue import phi_sign_variants, state_orders
 
     assert (0, 2, 1, 3) in state_orders(4)          # [x, vx, y, vy] read as [x, y, vx, vy]
     variants = [v for v, _ in phi_sign_variants(np.array(CV2D.model.Phi))]

@@ -12,7 +12,7 @@ from gpsaccel.calibration import mistakes as cal
 from gpsaccel.check import problems
 from gpsaccel.check.problems.tracker import TRACKER
 from gpsaccel.coop import mistakes as coop
-from gpsaccel.kalman.epochs import Mistake
+from gpsaccel.kalman.mistakes import Mistake
 from gpsaccel.ship import mistakes as ship
 
 CATALOGUES = {

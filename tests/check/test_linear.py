@@ -16,7 +16,7 @@ import pytest
 
 from gpsaccel import check, registry
 from gpsaccel.check.problems.tracker import TRACKER
-from gpsaccel.kalman.epochs import LinearModel
+from gpsaccel.kalman.linear_model import LinearModel
 
 STUDENT = Path(__file__).resolve().parents[1] / "submissions" / "tracker" / "student.py"
 

@@ -12,9 +12,10 @@ import numpy as np
 import pytest
 
 from gpsaccel.kalman.compare import compare
-from gpsaccel.kalman.epochs import LinearCatalogue, LinearModel
 from gpsaccel.kalman.exact import errors, exact_filter
 from gpsaccel.kalman.factory import FORMS
+from gpsaccel.kalman.linear_catalogue import LinearCatalogue
+from gpsaccel.kalman.linear_model import LinearModel
 
 DT = 0.05
 MODEL = LinearModel(Phi=[[1, DT, DT**2 / 2], [0, 1, DT], [0, 0, 1]],

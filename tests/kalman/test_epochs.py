@@ -10,7 +10,9 @@ import numpy as np
 import pytest
 from filterpy.kalman import KalmanFilter
 
-from gpsaccel.kalman.epochs import LinearCatalogue, LinearIngredients, LinearModel, batch_gains
+from gpsaccel.kalman.epochs import batch_gains
+from gpsaccel.kalman.linear_catalogue import LinearCatalogue
+from gpsaccel.kalman.linear_model import LinearIngredients, LinearModel
 
 MODEL = LinearModel(Phi=[[1.0, 0.1], [0.0, 1.0]], Gamma=[[0.005], [0.1]], W=[[0.09]],
                     H=[[1.0, 0.0]], V=[[4.0]], M0=np.diag([25.0, 4.0]), x0=[0.0, 1.0],

@@ -23,7 +23,9 @@ def test_optimal_variant_is_run_multirate_and_zeroed_is_run_zeroed_gain():
         np.testing.assert_allclose(ref.x_hat[r, 1:], res.x_hat, rtol=0, atol=1e-9)
         np.testing.assert_allclose(ref.P[1:], res.P, rtol=0, atol=1e-12)
     for cov, report in (("joseph", False), ("report", True)):
-        v = mistakes.Variant(("zeroed-gain",), zeroed=True, report_covariance=report)
+        entry = {m.code: m for m in mistakes.catalogue()}
+        v = mistakes.Variant((entry["zeroed-gain"],) + ((entry["report-covariance"],) if report
+                                                        else ()))
         out = mistakes.run(M, Z, ENS.u, v)
         zg = run_zeroed_gain(M, Z[0][SCHED.steps], schedule=SCHED, covariance=cov, u=ENS.u)
         # with the report's non-symmetric M the gain depends on how it is written: here

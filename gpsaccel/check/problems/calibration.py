@@ -139,37 +139,6 @@ def calls(z: np.ndarray) -> list[sb.Call]:
 
 
 # ------------------------------------------------------------------------------- the problem
-#: Report 000's wording, where it says more than the generic text (code -> template).
-MESSAGES: dict[str, str] = {
-    "no-function": "Your file does not define a function kalman_filter(z){found}. Functions it "
-                   "defines: {callables}. Name your filter kalman_filter, taking z and returning "
-                   "(x_hat, P).",
-    "memory-limit": "Your code ran out of memory: a check may use {mib:g} MiB of address space, "
-                    "and your file asked for more (after {done} of {n_calls} runs){tb} A filter "
-                    "for {n_gps} GPS times needs a few kilobytes: look for an array sized by the "
-                    "accelerometer steps squared, or a list that grows in a loop that never "
-                    "ends.",
-    "exception": "kalman_filter(z) raised an exception on {label}; the traceback ends "
-                 "with:\n{traceback}",
-    "epoch-shift.late": "one GPS time late: row k holds the estimate of time k − 1",
-    "epoch-shift.early": "one GPS time early: row k holds the estimate of time k + 1",
-    "p-mismatch.later": "P at t = 0 is right (so M0, H, V and the update are), but P differs "
-                        "from t = {t:g} s on: the propagation between GPS fixes is wrong (Φ, "
-                        "Q = Γ W Γᵀ, or the number of steps).",
-    "p-mismatch.matrices": "Check your matrices with gpsaccel.check.model_matrices(Phi=..., "
-                           "Gamma=..., H=..., V=..., W=..., M0=...).",
-    "aliased-output": "Every row of your x_hat and P holds the same values, those of the last "
-                      "GPS time (t = {t_last:g} s): each row is the same array object, changed "
-                      "in place at every step (e.g. x += K @ r or P[:] = ..., then appended to a "
-                      "list). Store a copy: x_hat[k] = x (into a preallocated array) or "
-                      "xs.append(x.copy()).",
-    "last-update-missing": "Your filter is right except at the last GPS time (t = {t:g} s), "
-                           "where x̂ and P are the a priori x̄ and M: the update with the last "
-                           "fix z[{row}] is missing (a loop such as range(n - 1), or the update "
-                           "placed before the propagation).",
-}
-
-
 class CalibrationProblem(LinearProblem):
     """Report 000: ``kalman_filter(z) -> (x_hat, P)`` on the calibration model (module docstring).
 
@@ -183,7 +152,7 @@ class CalibrationProblem(LinearProblem):
     tolerance = "1e-6 σ in x̂ and P (see gpsaccel.check.problems.calibration)"
     default_runs = DEFAULT_RUNS
     step = "accelerometer step"
-    messages = MESSAGES
+    messages = cat.MESSAGES  # report 000's one table: its catalogue's and its checker's wording
     renames = {"no-function": "no-kalman-filter"}
 
     def __init__(self, model: CalibrationModel | None = None, alpha: float = 0.01,
