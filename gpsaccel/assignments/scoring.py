@@ -32,6 +32,7 @@ from gpsaccel.assignments.questions import (
     variant_number,
 )
 from gpsaccel.check.report import Report
+from gpsaccel.sandbox.outcomes import OUTCOMES
 
 #: Wall-clock limit (s) of one notebook's box (every cell and every read), default.
 TIMEOUT = 120.0
@@ -203,16 +204,8 @@ def _calls(n_cells: int, reads: list[nbm.Read]):
     return calls
 
 
-_STOPS = {
-    "timeout": "it was still running at the time limit of {limit:g} s",
-    "memory-limit": "it ran out of memory (the limit is {memory} GB)",
-    "process-limit": "it started too many processes",
-    "output-limit": "it printed too much",
-    "file-limit": "it wrote too large a file",
-    "crashed": "its process ended (a crash, os._exit or a signal)",
-    "result-refused": "the grader's channel received something that is not an answer",
-    "uses-checker": "it tried to use the grader's own checks",
-}
+#: failure -> what the notebook's stop says (the sandbox's one table of outcomes)
+_STOPS = {code: o.stop for code, o in OUTCOMES.items() if o.stop}
 
 
 def _stop_message(failure: str, where: str, limits) -> str:

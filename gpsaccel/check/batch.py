@@ -43,6 +43,7 @@ from gpsaccel import sandbox as sb
 from gpsaccel._atomic import write_text
 from gpsaccel.check.problems import submission
 from gpsaccel.check.report import Report
+from gpsaccel.sandbox.outcomes import OUTCOMES
 
 #: Seconds a check's process may take beyond the student's time limit (simulating the data,
 #: comparing, diagnosing) before it is killed as a checker error.
@@ -198,22 +199,11 @@ def _check_item(item: tuple[str, tuple, dict]) -> dict:
         return checker_error(path, f"the checker failed: {type(exc).__name__}: {exc}")
 
 
-#: What the batch says of a check that gave no report (a checker error of its file), by
-#: :attr:`gpsaccel.sandbox.Lost.reason`.
-NO_REPORT: dict[str, str] = {
-    "error": "the checker failed: {detail}",
-    "not-a-report": "the check's process returned no report",
-    "too-long": "the check took more than {limit:g} s (time limit plus {slack:g} s) and was "
-                "stopped",
-    "died": "the process checking this file died ({detail}) before it reported; a submission "
-            "that kills its parent process ends like this",
-}
-
-
 def _lost(path: Path, lost: sb.Lost, timeout: float) -> dict:
-    why = NO_REPORT.get(lost.reason, "{detail}").format(detail=lost.detail,
-                                                       limit=timeout + CHECK_SLACK,
-                                                       slack=CHECK_SLACK)
+    # the sandbox's table of outcomes words each reason (lost.<reason>)
+    known = OUTCOMES.get(f"lost.{lost.reason}")
+    why = (known.finding if known else "{detail}").format(
+        detail=lost.detail, limit=timeout + CHECK_SLACK, slack=CHECK_SLACK)
     return checker_error(path, why)
 
 

@@ -20,6 +20,7 @@ from collections.abc import Mapping, Sequence
 
 from gpsaccel import sandbox as sb
 from gpsaccel.check.report import Report, used
+from gpsaccel.sandbox.outcomes import OUTCOMES
 
 #: Characters of the student's printed output kept in a finding.
 OUTPUT_KEEP = 1500
@@ -27,55 +28,22 @@ OUTPUT_KEEP = 1500
 #: Printed output (bytes) beyond which a check warns about prints.
 OUTPUT_WARN = 20_000
 
-#: code -> message template (module docstring for the fields).  "timeout.never" and
-#: "timeout.slow" complete "timeout"; "no-function.found" completes "no-function".
+#: code -> message template (module docstring for the fields): how the box ended, from the
+#: sandbox's one table of outcomes (:data:`gpsaccel.sandbox.outcomes.OUTCOMES`), and the notes on
+#: a box that returned.  "timeout.never" and "timeout.slow" complete "timeout";
+#: "no-function.found" completes "no-function".
 MESSAGES: dict[str, str] = {
+    **{code: o.finding for code, o in OUTCOMES.items() if not code.startswith("lost.")},
     "prints-a-lot": "Your code printed {output_bytes:,} bytes during the check ({n_calls} "
                     "calls). Remove debug prints from {function}: they slow it down and bury "
                     "the messages that matter. The last lines were:\n{last6}",
     "left-processes": "Your code left {killed} process(es) running after it returned; the "
                       "checker killed them. {function} should not start processes (os.fork, "
                       "subprocess, multiprocessing).",
-    "timeout": "Your {function} did not finish within the time limit of {time:g} s: it "
-               "completed {done} of {n_calls} calls{rate}. {timeout_hint}",
     "timeout.never": "It never returned once: look for a loop whose condition never changes "
                      "(e.g. while k < n without k += 1) or input() waiting for a keyboard.",
     "timeout.slow": "It is too slow: {work}.",
-    "memory-limit": "Your code ran out of memory: a check may use {mib:g} MiB of address "
-                    "space, and your file asked for more (after {done} of {n_calls} calls){tb} "
-                    "A filter needs a few kilobytes: look for an array sized by the number of "
-                    "steps squared, or a list that grows in a loop that never ends.",
-    "output-limit": "Your code printed more than {output_limit:,} bytes, the most a check "
-                    "keeps, so it was stopped after {done} of {n_calls} calls. Remove the prints "
-                    "from {function} (or print only when debugging).\nIts last output:\n{last8}",
-    "file-limit": "Your code wrote a file larger than the {file_size:,} bytes a check allows (or "
-                  "filled its working folder){tb} A filter needs no files: return its results "
-                  "instead of saving them.",
-    "process-limit": "Your code started more processes than the {processes} a check allows "
-                     "(after {done} of {n_calls} calls){tb} {function} must compute its result "
-                     "in its own process: remove os.fork, subprocess and multiprocessing.",
-    "uses-checker": "Your file imports gpsaccel, the package that checks it. During a check the "
-                    "submission must compute its results with its own code (numpy, scipy and "
-                    "filterpy are available); remove the import of gpsaccel.",
-    "result-refused": "What your code handed back to the checker was refused ({detail}). Only "
-                      "{function}'s return value counts: do not write to the checker's file "
-                      "descriptors or replace the checker's functions.",
-    "crashed": "The Python process running your file ended without a result ({detail}) after "
-               "{done} of {n_calls} calls. Does your file call os._exit() or kill a "
-               "process?\nIts last output:\n{last8}",
-    "import-error": "Your file raises an error when it is imported (before {function} is "
-                    "called); the traceback ends with:\n{traceback}",
-    "no-function": "Your file does not define a function {signature}{found}. Functions it "
-                   "defines: {callables}. Name your function {function}.",
     "no-function.found": " ({function} is a {found_type}, not a function)",
-    "exception": "{function}(...) raised an exception on {label}; the traceback ends "
-                 "with:\n{traceback}",
-    "return-value": "{function}(...) must return a tuple ({outputs}); on {label} it returned a "
-                    "{type}{shape_text}{length_text}. End it with: return {outputs}.",
-    "not-numeric": "{name} returned by {function} is not an array of numbers ({type}): "
-                   "np.array({name}, dtype=float) fails with: {error}.",
-    "wrong-shape": "{function} must return {wanted} ({rows}); on {label} it returned "
-                   "{returned}{between_calls}.{hints}",
     "runner": "The check could not run your file: {failure} {detail}",
     "returns-list": "{name} is a Python {type}; it was converted with np.array({name}, "
                     "dtype=float). Returning numpy arrays is expected (np.array(...) at the end "

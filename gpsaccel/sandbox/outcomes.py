@@ -1,0 +1,93 @@
+"""How a student's box can end, as data: one table of the sandbox's outcomes and their wording.
+
+Every failure code a box reports (:attr:`gpsaccel.sandbox.BoxResult.failure`: a limit, a crash, a
+refused result, a use of the checker, or the runner's account of the student's function) has
+one :class:`Outcome` here: the checker's template of its finding (:func:`gpsaccel.check.findings
+.box_findings`, fields in that module's docstring) and, where the homework's grader stops a
+notebook on it, the clause it says (:mod:`gpsaccel.assignments.scoring`, fields ``limit`` (s)
+and ``memory`` (GB)).  ``lost.<reason>`` are the pool's items without a result
+(:class:`gpsaccel.sandbox.Lost`), as the batch checker says them (fields ``detail``, ``limit``,
+``slack``).  These are student-facing texts built from the student's own run and the check's
+limits only, never from an answer.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """One way a box ends: ``finding`` the checker's template, ``stop`` the grader's clause
+    ("" where the grader does not stop on it)."""
+
+    finding: str
+    stop: str = ""
+
+
+#: failure code (or ``lost.<reason>``) -> its wording (module docstring).
+OUTCOMES: dict[str, Outcome] = {
+    "timeout": Outcome(
+        "Your {function} did not finish within the time limit of {time:g} s: it completed {done} of "
+        "{n_calls} calls{rate}. {timeout_hint}",
+        stop="it was still running at the time limit of {limit:g} s"),
+    "memory-limit": Outcome(
+        "Your code ran out of memory: a check may use {mib:g} MiB of address space, and your file "
+        "asked for more (after {done} of {n_calls} calls){tb} A filter needs a few kilobytes: look for "
+        "an array sized by the number of steps squared, or a list that grows in a loop that never ends.",
+        stop="it ran out of memory (the limit is {memory} GB)"),
+    "output-limit": Outcome(
+        "Your code printed more than {output_limit:,} bytes, the most a check keeps, so it was stopped "
+        "after {done} of {n_calls} calls. Remove the prints from {function} (or print only when "
+        "debugging).\nIts last output:\n{last8}",
+        stop="it printed too much"),
+    "file-limit": Outcome(
+        "Your code wrote a file larger than the {file_size:,} bytes a check allows (or filled its "
+        "working folder){tb} A filter needs no files: return its results instead of saving them.",
+        stop="it wrote too large a file"),
+    "process-limit": Outcome(
+        "Your code started more processes than the {processes} a check allows (after {done} of "
+        "{n_calls} calls){tb} {function} must compute its result in its own process: remove os.fork, "
+        "subprocess and multiprocessing.",
+        stop="it started too many processes"),
+    "uses-checker": Outcome(
+        "Your file imports gpsaccel, the package that checks it. During a check the submission must "
+        "compute its results with its own code (numpy, scipy and filterpy are available); remove the "
+        "import of gpsaccel.",
+        stop="it tried to use the grader's own checks"),
+    "result-refused": Outcome(
+        "What your code handed back to the checker was refused ({detail}). Only {function}'s return "
+        "value counts: do not write to the checker's file descriptors or replace the checker's "
+        "functions.",
+        stop="the grader's channel received something that is not an answer"),
+    "crashed": Outcome(
+        "The Python process running your file ended without a result ({detail}) after {done} of "
+        "{n_calls} calls. Does your file call os._exit() or kill a process?\nIts last output:\n{last8}",
+        stop="its process ended (a crash, os._exit or a signal)"),
+    "import-error": Outcome(
+        "Your file raises an error when it is imported (before {function} is called); the traceback "
+        "ends with:\n{traceback}"),
+    "no-function": Outcome(
+        "Your file does not define a function {signature}{found}. Functions it defines: {callables}. "
+        "Name your function {function}."),
+    "exception": Outcome(
+        "{function}(...) raised an exception on {label}; the traceback ends with:\n{traceback}"),
+    "return-value": Outcome(
+        "{function}(...) must return a tuple ({outputs}); on {label} it returned a "
+        "{type}{shape_text}{length_text}. End it with: return {outputs}."),
+    "not-numeric": Outcome(
+        "{name} returned by {function} is not an array of numbers ({type}): np.array({name}, "
+        "dtype=float) fails with: {error}."),
+    "wrong-shape": Outcome(
+        "{function} must return {wanted} ({rows}); on {label} it returned "
+        "{returned}{between_calls}.{hints}"),
+    "lost.error": Outcome(
+        "the checker failed: {detail}"),
+    "lost.not-a-report": Outcome(
+        "the check's process returned no report"),
+    "lost.too-long": Outcome(
+        "the check took more than {limit:g} s (time limit plus {slack:g} s) and was stopped"),
+    "lost.died": Outcome(
+        "the process checking this file died ({detail}) before it reported; a submission that kills "
+        "its parent process ends like this"),
+}
