@@ -15,16 +15,17 @@ this order (each would otherwise read as a wrong V or M0):
    skipped update at the first row that departs — x̂ = x̄ and P = M there (``update-skipped``,
    ``last-update-missing`` at the last epoch), P = M only (``covariance-update-skipped``) or
    x̂ = x̄ only (``mean-update-skipped``);
-2. the catalogue (:class:`gpsaccel.kalman.epochs.Catalogue`): P does not depend on the data, so P
-   is matched first against every covariance mistake and every combination of up to three that
-   touch different ingredients, then x̂ against the matched entry with the mean mistakes;
+2. the catalogue (:class:`gpsaccel.kalman.mistakes.Catalogue`, matched by
+   :mod:`gpsaccel.check.linear_diagnosis`): P does not depend on the data, so P is matched first
+   against every covariance mistake and every combination of up to three that touch different
+   ingredients, then x̂ against the matched entry with the mean mistakes;
 3. otherwise the first departure is located (t = 0: the update; later: the propagation), with
    the nearest catalogue entry as a hint when it is within :data:`HINT_FACTOR` × tol.
 
 Then consistency over the runs with the student's own P (mean error and average NEES, each a
 Bonferroni family at ``alpha``) is reported as information: it never decides ``passed``.
 
-:class:`LinearProblem` holds this for any :class:`~gpsaccel.kalman.epochs.LinearModel`
+:class:`LinearProblem` holds this for any :class:`~gpsaccel.kalman.linear_model.LinearModel`
 (``check.Problem.linear(...)``, the generic catalogue); the calibration problem
 (:mod:`gpsaccel.check.problems.calibration`) is the same class with report 000's simulation, catalogue
 and wording.
@@ -32,7 +33,7 @@ and wording.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from functools import lru_cache
 
 import numpy as np
@@ -41,6 +42,15 @@ from numpy.typing import ArrayLike
 from gpsaccel import _validation as _v
 from gpsaccel._feedback import describe_miss
 from gpsaccel.check.findings import mistake_finding
+from gpsaccel.check.linear_diagnosis import (  # noqa: F401 - the diagnosis's names, re-exported
+    TOLERANCE,
+    Answer,
+    Cases,
+    Diagnosis,
+    answer,
+    candidates,
+    diagnose,
+)
 from gpsaccel.check.problem import Argument, Function, Problem
 from gpsaccel.check.report import Report, used
 from gpsaccel.kalman.consistency import (
@@ -54,16 +64,11 @@ from gpsaccel.kalman.consistency import (
     z_ensemble_normalized_squared,
     z_sample_mean,
 )
-from gpsaccel.kalman.epochs import EpochFilter, batch_gains
 from gpsaccel.kalman.linear_catalogue import LinearCatalogue
 from gpsaccel.kalman.linear_messages import MESSAGES
 from gpsaccel.kalman.linear_model import LinearModel
-from gpsaccel.kalman.mistakes import Catalogue, Mistake, combinations
+from gpsaccel.kalman.mistakes import Catalogue, Mistake
 from gpsaccel.sandbox import Call, Output
-
-#: Largest distance (units of the optimal σ) at which P and x̂ count as equal; also the distance
-#: within which a catalogue entry counts as matching.
-TOLERANCE = 1e-6
 
 #: The nearest catalogued mistake is shown as a hint only within this factor of the tolerance.
 HINT_FACTOR = 10.0
@@ -75,79 +80,6 @@ LOW_PRECISION = (1e-3, 0.1)
 #: code -> template of the diagnosis's findings: the generic linear problem's one table of
 #: wording (:mod:`gpsaccel.kalman.linear_messages`; a problem overrides entries in ``messages``).
 FINDINGS = MESSAGES
-
-
-@dataclass(frozen=True, eq=False)
-class Cases:
-    """The realizations a check runs on (no answer in it): z (n_runs, n_epochs, p) and the true
-    states x_true (n_runs, n_epochs, n)."""
-
-    seed: int
-    z: np.ndarray
-    x_true: np.ndarray
-
-
-@dataclass(frozen=True, eq=False)
-class Answer:
-    """The optimal filter on the cases: x_ref (n_runs, n_epochs, n), P_ref (n_epochs, n, n),
-    sd = √diag P_ref."""
-
-    x_ref: np.ndarray
-    P_ref: np.ndarray
-    sd: np.ndarray
-
-
-def answer(flt: EpochFilter, z: np.ndarray) -> Answer:
-    """The filter ``flt`` (the optimal one) run on z."""
-    x_ref, P_ref = flt.apply(z)
-    return Answer(x_ref, P_ref, np.sqrt(np.diagonal(P_ref, axis1=1, axis2=2)))
-
-
-@dataclass(frozen=True)
-class Diagnosis:
-    """The catalogue entries that reproduce the student's (x̂, P), or the nearest P entry."""
-
-    covariance: tuple[Mistake, ...] | None
-    mean: tuple[Mistake, ...] | None
-    nearest: tuple[Mistake, ...] | None
-    nearest_distance: float
-
-
-def candidates(catalogue: Catalogue, max_combined: int
-               ) -> tuple[list[tuple[Mistake, ...]], np.ndarray]:
-    """Every covariance entry and combination of up to ``max_combined`` (the first is the optimal
-    filter, ``()``) and the covariance each returns, (C, n_epochs, n, n)."""
-    cov = catalogue.covariance_mistakes()
-    combos: list[tuple[Mistake, ...]] = [()]
-    for k in range(1, max_combined + 1):
-        combos += list(combinations(cov, k))
-    filters = [catalogue.build(c) for c in combos]
-    _, M, P = batch_gains(filters)
-    prior = np.array([f.output == "prior" for f in filters])
-    return combos, np.where(prior[:, None, None, None], M, P)
-
-
-def diagnose(P_student: np.ndarray, x_student: np.ndarray, z: np.ndarray, sd: np.ndarray,
-             catalogue: Catalogue, combos: list[tuple[Mistake, ...]], P_out: np.ndarray,
-             tol: float = TOLERANCE) -> Diagnosis:
-    """Match (x̂, P) of the student (all runs) against the catalogue; see the module docstring."""
-    # run 0's P against every candidate ranks them; a candidate within the tolerance must then
-    # also match every other run's P (a P that varies with the data matches nothing)
-    d = covariance_distance(P_student[0][None], P_out, sd).reshape(len(combos), -1).max(axis=1)
-    for c in np.flatnonzero(d <= tol):
-        d[c] = covariance_distance(P_student, P_out[c][None], sd).max()
-    order = np.argsort(d, kind="stable")
-    means = catalogue.mean_mistakes()
-    mean_combos = [()] + [(m,) for m in means] + list(combinations(means, 2))
-    matching = [int(c) for c in order if d[c] <= tol]
-    for ci in matching:
-        for mc in mean_combos:
-            x, _ = catalogue.build(combos[ci] + mc).apply(z)
-            if np.max(np.abs(x_student - x) / sd) <= tol:
-                return Diagnosis(combos[ci], mc, None, float(d[ci]))
-    if matching:
-        return Diagnosis(combos[matching[0]], None, None, float(d[matching[0]]))
-    return Diagnosis(None, None, combos[int(order[0])], float(d[int(order[0])]))
 
 
 def _float32_exact(a: np.ndarray) -> bool:
@@ -507,8 +439,8 @@ class LinearProblem(Problem):
 
 # ================================================================== any model, by an instructor
 class ModelProblem(LinearProblem):
-    """A :class:`LinearProblem` for a :class:`~gpsaccel.kalman.epochs.LinearModel` with the
-    generic catalogue (:class:`~gpsaccel.kalman.epochs.LinearCatalogue`); see
+    """A :class:`LinearProblem` for a :class:`~gpsaccel.kalman.linear_model.LinearModel` with the
+    generic catalogue (:class:`~gpsaccel.kalman.linear_catalogue.LinearCatalogue`); see
     :meth:`Problem.linear`."""
 
     def __init__(self, name: str, model: LinearModel, title: str = "",
@@ -516,7 +448,7 @@ class ModelProblem(LinearProblem):
                  default_runs: int = 10, alpha: float = 0.01, tol: float = TOLERANCE) -> None:
         super().__init__(alpha=alpha, tol=tol)
         if not isinstance(model, LinearModel):
-            raise ValueError(f"model must be a gpsaccel.kalman.epochs.LinearModel, got "
+            raise ValueError(f"model must be a gpsaccel.kalman.linear_model.LinearModel, got "
                              f"{type(model).__name__}")
         if not isinstance(name, str) or not name.replace("-", "").isalnum():
             raise ValueError(f"name must be letters, digits and dashes, got {name!r}")
