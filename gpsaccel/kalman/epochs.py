@@ -27,13 +27,14 @@ first use so that no import circle exists.  Nothing here knows a system.
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 
-from gpsaccel import _lazy
 from gpsaccel.kalman.update import gain, joseph_update
 
 
@@ -202,10 +203,16 @@ def _skips(f: EpochFilter, i: int, n_gps: int, kind: str) -> bool:
     return bool(how) if kind == "P" else how is True
 
 
-# the names that moved out (module docstring), read from their modules on first use
-__getattr__, __dir__ = _lazy.attach(__name__, attributes={
-    "gpsaccel.kalman.mistakes": ("Catalogue", "Mistake", "combinations", "with_changes"),
-    "gpsaccel.kalman.linear_model": ("LinearIngredients", "LinearModel"),
-    "gpsaccel.kalman.linear_catalogue": ("LINEAR_MESSAGES", "LinearCatalogue", "phi_sign_variants",
-                                         "predict_before_first_update", "state_orders",
-                                         "structural_mistakes")})
+#: The names that moved out (module docstring) -> their module, read from it on first use.
+_MOVED = {**dict.fromkeys(("Catalogue", "Mistake", "combinations", "with_changes"),
+                          "gpsaccel.kalman.mistakes"),
+          **dict.fromkeys(("LinearIngredients", "LinearModel"), "gpsaccel.kalman.linear_model"),
+          **dict.fromkeys(("LINEAR_MESSAGES", "LinearCatalogue", "phi_sign_variants",
+                           "predict_before_first_update", "state_orders", "structural_mistakes"),
+                          "gpsaccel.kalman.linear_catalogue")}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _MOVED:
+        return getattr(importlib.import_module(_MOVED[name]), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
