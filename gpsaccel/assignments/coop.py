@@ -30,12 +30,18 @@ import numpy as np
 from gpsaccel import registry
 from gpsaccel.assignments._answers import array, assert_report, call
 from gpsaccel.check.report import Report
+from gpsaccel.coop.mistakes import MESSAGES as COOP_MESSAGES
 from gpsaccel.coop.model import (
     CoopModel,
     state_residual,
 )
 
 __all__ = ["assert_report", "dt_linearization", "ekf", "jacobians"]
+
+#: The homework's wording: the ``homework.*`` entries of the coop's one table
+#: (:data:`gpsaccel.coop.mistakes.MESSAGES`), code (or code.part) -> template.
+TEXT = {k.removeprefix("homework."): v for k, v in COOP_MESSAGES.items()
+        if k.startswith("homework.")}
 
 #: Distance (units of the reference σ) within which the EKF's x̂ and P count as equal.
 EKF_TOL = 1e-6
@@ -71,8 +77,7 @@ def jacobians(jacobian_A: object, jacobian_B: object, jacobian_C: object, seed: 
         Report("Jacobians A, B, C")
     report.subject = "question 1: Jacobians A, B, C"
     for k in missing:
-        report.add("not-defined", text="{where} is not defined yet (or still `...`).",
-                   where=f"jacobian_{k}", part=k)
+        report.add("not-defined", text=TEXT["not-defined"], where=f"jacobian_{k}", part=k)
     report.sort()
     return report
 
@@ -108,8 +113,7 @@ def _student_matrices(report: Report, func: object, X: np.ndarray, U: np.ndarray
         if out is None:
             return None
         if not isinstance(out, (tuple, list)) or len(out) != 3:
-            report.add("return-value", text="dt_linearization must return three matrices "
-                       "(F, G, H); it returned a {type}.", where="dt_linearization",
+            report.add("return-value", text=TEXT["return-value.dt"], where="dt_linearization",
                        observed={"type": type(out).__name__})
             return None
         for name, v, shape in zip("FGH", out, ((6, 6), (6, 4), (5, 6)), strict=True):
@@ -136,19 +140,15 @@ def _explained(report: Report, name: str, base: str, form: str, mat: np.ndarray,
     if own is not None:
         want = eye + dt * own if name == "F" else dt * own if name == "G" else own
         if _close(mat, want):
-            report.add("uses-own-jacobian", severity="note", text="{where} is {form} with "
-                       "your own jacobian_{base}: right here (question 1 grades "
-                       "jacobian_{base}).", where=name, observed={"form": form, "base": base})
+            report.add("uses-own-jacobian", severity="note", text=TEXT["uses-own-jacobian"],
+                       where=name, observed={"form": form, "base": base})
             return True
     if name == "G":
         A_ = np.stack([true_A(x, u) for x, u in zip(X, U, strict=True)])
         B_ = np.stack([true_B(x, u, model.L) for x, u in zip(X, U, strict=True)])
         zoh = (dt * eye + dt**2 / 2 * A_) @ B_  # A² = 0: ∫₀^ΔT e^{Aτ} dτ = ΔT I + ΔT²A/2
         if _close(mat, zoh):
-            report.add("zero-order-hold", text="Your G is the exact zero-order-hold "
-                       "∫₀^ΔT e^{{Aτ}} dτ B = (ΔT·I + ΔT²·A/2) B. It is a better "
-                       "discretization, but the question asks for the course's Euler form "
-                       "G = ΔT·B.", where="G")
+            report.add("zero-order-hold", text=TEXT["zero-order-hold"], where="G")
             return True
     return False
 
@@ -190,8 +190,7 @@ def dt_linearization(func: object, seed: int = 0, n_random: int = 5,
             continue
         report.findings.extend(sub.findings)
     if report.passed:
-        report.add("ok", severity="note", text="F = I + ΔT·A, G = ΔT·B and H = C at every "
-                   "state checked.")
+        report.add("ok", severity="note", text=TEXT["ok.dt"])
     report.sort()
     return report
 
@@ -243,8 +242,8 @@ def ekf(func: object, y: np.ndarray, x0: np.ndarray | None = None, P0: np.ndarra
         report.sort()
         return report
     if not isinstance(out, (tuple, list)) or len(out) != 2:
-        report.add("return-value", text="ekf must return a pair (x_hat, P); it returned a "
-                   "{type}.", where="ekf", observed={"type": type(out).__name__})
+        report.add("return-value", text=TEXT["return-value.ekf"], where="ekf",
+                   observed={"type": type(out).__name__})
         return report
     x = array(report, "x_hat", out[0], (n, 6))
     P = array(report, "P", out[1], (n, 6, 6))
@@ -254,24 +253,20 @@ def ekf(func: object, y: np.ndarray, x0: np.ndarray | None = None, P0: np.ndarra
     dx, dP, first = _distances(x, P, x_ref, P_ref)
     report.details.update({"dx_sigma": dx, "dP_sigma2": dP})
     if first < 0:
-        report.add("matches-reference", severity="note", text="x̂ and P match the course EKF "
-                   "on {where} to {tol:g} σ (largest distances {dx:.2g} σ, {dP:.2g} σσ).",
+        report.add("matches-reference", severity="note", text=TEXT["matches-reference"],
                    where=label, observed={"tol": EKF_TOL, "dx": dx, "dP": dP})
         return report
     for m in ekf_mistakes():
         xm, Pm = _ref(y, x0, P0, Q, R, (m.code, m.variant))
         if _distances(x, P, xm, Pm)[2] < 0:
-            report.add(m.code, text="Your EKF matches the course EKF with one mistake: {what} "
-                       "{hint}", where=label, observed={"what": m.message, "hint": m.hint})
+            report.add(m.code, text=TEXT["ekf-mistake"], where=label,
+                       observed={"what": m.message, "hint": m.hint})
             return report
     t = model.t
-    report.add("ekf-mismatch", text="Your EKF differs from the course EKF from {where} on: x̂ "
-               "by up to {dx:.3g} σ, P by up to {dP:.3g} σσ, and matches none of the typical "
-               "mistakes ({codes}). {row0}Check the prediction (x̄ = model.step(x̂), M = F P Fᵀ + "
-               "Q with F = I + ΔT·A(x̂)) and the update (H = C(x̄), only the rows of y that are "
-               "not NaN).", where=f"t = {t[first]:g} s (step {first})", observed={
+    report.add("ekf-mismatch", text=TEXT["ekf-mismatch"], where=f"t = {t[first]:g} s (step {first})",
+               observed={
                    "dx": dx, "dP": dP, "codes": ", ".join(m.code for m in ekf_mistakes()),
-                   "row0": "Row 0 must be (x0, P0): nothing is measured at t = 0. "
+                   "row0": TEXT["ekf-mismatch.row0"]
                    if first == 0 else ""})
     return report
 

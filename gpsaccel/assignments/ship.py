@@ -23,10 +23,16 @@ import numpy as np
 from gpsaccel import registry
 from gpsaccel.assignments._answers import array, assert_report, call
 from gpsaccel.check.report import Report
+from gpsaccel.ship.mistakes import MESSAGES as SHIP_MESSAGES
 from gpsaccel.ship.model import GPS_ROWS, ShipModel
 
 __all__ = ["assert_report", "cost_answer", "optimal_update", "update_answer", "update_mistakes",
            "zeroed_update"]
+
+#: The homework's wording: the ``homework.*`` entries of the ship's one table
+#: (:data:`gpsaccel.ship.mistakes.MESSAGES`), code (or code.part) -> template.
+TEXT = {k.removeprefix("homework."): v for k, v in SHIP_MESSAGES.items()
+        if k.startswith("homework.")}
 
 #: Distance (units of the reference σ) within which x̂ and P count as equal.
 TOL = 1e-6
@@ -113,8 +119,8 @@ def update_answer(update: object, seed: int = 0) -> Report:
         if out is None:
             break
         if not isinstance(out, (tuple, list)) or len(out) != 2:
-            report.add("return-value", text="update must return a pair (x_hat, P); it "
-                       "returned a {type}.", where="update", observed={"type": type(out).__name__})
+            report.add("return-value", text=TEXT["return-value"], where="update",
+                       observed={"type": type(out).__name__})
             break
         x = array(report, "x_hat", out[0], (9,))
         P = array(report, "P", out[1], (9, 9))
@@ -128,20 +134,16 @@ def update_answer(update: object, seed: int = 0) -> Report:
             x_bar, M, z, H, V = args
             xm, Pm = ship_update(x_bar, M, z, H, V, (m,))
             if _matches(x, P, xm, Pm)[0]:
-                report.add(m.code, text="Case “{where}”: your update is {what}. {hint}",
-                           where=label, observed={"what": m.message, "hint": m.hint})
+                report.add(m.code, text=TEXT["update-mistake"], where=label,
+                           observed={"what": m.message, "hint": m.hint})
                 break
         else:
-            report.add("update-mismatch", text="Case “{where}”: x̂ differs from the update "
-                       "with the rows that arrived by up to {dx:.3g} σ and P by up to {dP:.3g} σσ. "
-                       "Use the rows r where z is not NaN: K_r = M H_rᵀ (H_r M H_rᵀ + V_r)⁻¹, "
-                       "x̂ = x̄ + K_r (z_r − H_r x̄), P in Joseph form.{none}", where=label,
-                       observed={"dx": dx, "dP": dP, "none": " With nothing arrived, x̂ = x̄ "
-                                 "and P = M." if label == "nothing arrived" else ""})
+            report.add("update-mismatch", text=TEXT["update-mismatch"], where=label,
+                       observed={"dx": dx, "dP": dP, "none": TEXT["update-mismatch.none"]
+                                 if label == "nothing arrived" else ""})
         break
     if report.passed:
-        report.add("ok", severity="note", text="The update matches the optimal one with the "
-                   "rows that arrived on {n} cases (IMU-only, all rows, one row missing, none).",
+        report.add("ok", severity="note", text=TEXT["ok.update"],
                    observed={"n": len(cases(seed))})
     report.sort()
     return report
@@ -180,44 +182,33 @@ def cost_answer(sigma_optimal: object, sigma_zeroed: object, mass_kg: float = 12
         try:
             v = float(np.asarray(value, dtype=float).reshape(()))
         except (TypeError, ValueError):
-            report.add("not-a-number", text="{where} must be one number; got {value}.",
-                       where=name, observed={"value": str(value)[:60]}, part=name)
+            report.add("not-a-number", text=TEXT["not-a-number"], where=name,
+                       observed={"value": str(value)[:60]}, part=name)
             continue
         if not math.isfinite(v):
-            report.add("not-a-number", text="{where} = {value}: it must be a finite number.",
-                       where=name, observed={"value": v}, part=name)
+            report.add("not-a-number", text=TEXT["not-a-number.finite"], where=name,
+                       observed={"value": v}, part=name)
             continue
         right = want[key]
         if math.isclose(v, right, rel_tol=RTOL):
             continue
         if math.isclose(v, right**2, rel_tol=RTOL):
-            report.add("std-as-variance", text="{where} is the variance P₁₁; the question asks "
-                       "for the standard deviation σ = √P₁₁ (m).", where=name, part=name,
+            report.add("std-as-variance", text=TEXT["std-as-variance"], where=name, part=name,
                        observed={"value": v}, expected={name: right})
         elif key == "sigma_actual" and math.isclose(v, want["sigma_claimed"], rel_tol=RTOL):
-            report.add("claimed-not-actual", text="sigma_zeroed is what the report's filter "
-                       "claims, from its P = (I − K H) M. That formula holds only for the optimal "
-                       "gain; the zeroed gain's actual error covariance is the Joseph form of the "
-                       "gains it applied (P_actual).", where=name, part=name,
-                       observed={"value": v}, expected={name: right})
+            report.add("claimed-not-actual", text=TEXT["claimed-not-actual"], where=name,
+                       part=name, observed={"value": v}, expected={name: right})
         elif key == "sigma_actual" and math.isclose(v, want["sigma_optimal"], rel_tol=RTOL):
-            report.add("sigma-value", text="sigma_zeroed is the optimal filter's σ; use the "
-                       "zeroed-gain filter's P_actual.", where=name, part=name,
+            report.add("sigma-value", text=TEXT["sigma-value.optimal"], where=name, part=name,
                        observed={"value": v}, expected={name: right})
         elif key == "sigma_optimal" and math.isclose(v, want["sigma_actual"], rel_tol=RTOL):
-            report.add("sigma-value", text="sigma_optimal is the zeroed-gain filter's σ; use "
-                       "the optimal filter's P.", where=name, part=name, observed={"value": v},
-                       expected={name: right})
+            report.add("sigma-value", text=TEXT["sigma-value.zeroed"], where=name, part=name,
+                       observed={"value": v}, expected={name: right})
         else:
-            report.add("sigma-value", text="{where} = {value:.6g} m is not σ of the x position "
-                       "at the last step (t = 100 s) for your ship (VARIANT); give at least 6 "
-                       "significant digits (within {rtol:g} relative: the filters differ in "
-                       "the 4th).", where=name, part=name, observed={"value": v, "rtol": RTOL},
-                       expected={name: right})
+            report.add("sigma-value", text=TEXT["sigma-value"], where=name, part=name,
+                       observed={"value": v, "rtol": RTOL}, expected={name: right})
     if report.passed:
-        report.add("ok", severity="note", text="σ_x(100 s) of both filters is right; compare "
-                   "them: the zeroed gain's actual σ is larger than the optimal one, and larger "
-                   "than it claims.")
+        report.add("ok", severity="note", text=TEXT["ok.cost"])
     report.sort()
     return report
 

@@ -7,8 +7,12 @@ The templates name no expected value and no number of the reference; the one fie
 finding has is ``{where}`` (may be "").  A catalogue's diagnosis adds what the student's filter
 was recognised as doing (its entry's variant) after the code's text.
 
-Systems' own wording (issue 31 will give each system one table) overrides an entry where the
-catalogue is (``Problem.student_messages``).  A code missing here reads :data:`UNWORDED`.
+Each system's own table (:data:`gpsaccel.calibration.mistakes.MESSAGES`,
+:data:`gpsaccel.kalman.linear_messages.MESSAGES`, :data:`gpsaccel.ship.mistakes.MESSAGES`,
+:data:`gpsaccel.coop.mistakes.MESSAGES`) and the sandbox's outcomes
+(:data:`gpsaccel.sandbox.outcomes.OUTCOMES`) hold the instructor's templates, which a student
+reads only filled with observed fields; this table is the fallback that never quotes a number.
+A code missing here reads :data:`UNWORDED`.
 """
 
 from __future__ import annotations

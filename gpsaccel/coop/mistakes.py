@@ -41,85 +41,123 @@ __all__ = ["KINDS", "Ingredients", "Mistake", "catalogue", "codes", "euler_nomin
            "heading_range", "ingredients", "run", "wrapped_difference"]
 
 
+_WRAP_HINT = ("The bearings jump by 2π where they cross ±π; the residual y − h(x̄) must be "
+              "wrapped to [−π, π) (e.g. np.mod(r + π, 2π) − π) for rows 1 and 3 (the two "
+              "bearings), or the update drags the estimate by 2π/σ.")
+
+#: The coop wording, one table: code.part -> the catalogue entry's message (``{dt}``: the model's
+#: ΔT); ``homework.<code>`` -> the homework's findings (:mod:`gpsaccel.assignments.coop`).
+MESSAGES: dict[str, str] = {
+    "no-angle-wrap.residual": "The bearing residuals are not wrapped. " + _WRAP_HINT,
+    "no-angle-wrap.both": "Neither your predicted bearings h(x̄) = atan2(Δη, Δξ) − θ nor the "
+                          "residual y − h(x̄) are wrapped. " + _WRAP_HINT,
+    "no-state-wrap": "Your heading estimates θg, θa leave [−π, π): in 100 s the UGV turns about "
+                     "11 times and the UAV twice. The filter's arithmetic does not care (sin, "
+                     "cos and the wrapped residual are periodic) but every error, NEES and plot "
+                     "against the truth does: wrap x̂'s headings after each update and "
+                     "prediction.",
+    "dt-linearization.A": "Your covariance is propagated with F = A, the continuous-time "
+                          "Jacobian; the DT transition is F = I + ΔT·A (ΔT = {dt:g} s).",
+    "dt-linearization.dtA": "Your covariance is propagated with F = ΔT·A: the identity is "
+                            "missing, F = I + ΔT·A.",
+    "process-noise.omitted": "Your prediction leaves out Q: M = F P Fᵀ + Q. Without it the filter "
+                             "becomes overconfident and stops listening to the measurements.",
+    "process-noise.dt": "Your prediction adds ΔT·Q (ΔT = {dt:g} s); Q given to ekf/lkf is "
+                        "already the covariance per DT step: M = F P Fᵀ + Q.",
+    "std-as-variance": "Your update uses the standard deviations √R where R (variances) belongs: "
+                       "S = H M Hᵀ + R with R as given.",
+    "epoch-shift.measurement": "Your update at t_(k+1) uses y_k, the previous row: the loop "
+                               "updates before it predicts (or indexes y one row early). Predict "
+                               "from t_k to t_(k+1), then update with y_(k+1) (row 0 of y is "
+                               "NaN: nothing to update at t = 0).",
+    "epoch-shift.output": "Every output row holds the estimate of the row before (x̂ at t_k "
+                          "stored in row k+1): store x̂_(k+1) and P_(k+1) in row k+1, and x̂_0, "
+                          "P_0 in row 0.",
+    "p-not-symmetric": "Your update P = (I − KH) M is right in exact arithmetic but loses "
+                       "symmetry to rounding; the Joseph form (I − KH) M (I − KH)ᵀ + K R Kᵀ "
+                       "keeps P symmetric and positive definite.",
+    "euler-propagation": "Your mean is propagated with one Euler step x + ΔT·f(x, u) per sample "
+                         "(ΔT = {dt:g} s; for an LKF, an Euler nominal trajectory). That is an "
+                         "approximation of the nonlinear motion with an error of order ΔT² per "
+                         "step; the reference integrates the motion exactly (closed form, or "
+                         "scipy.integrate.solve_ivp over each ΔT — either passes).",
+    "jacobian-point.F-prior": "Your F = I + ΔT·A is evaluated at the predicted state x̄_(k+1); it "
+                              "linearizes the step from x̂_k, so A(x̂_k, u).",
+    "jacobian-point.H-posterior": "Your H = C is evaluated at x̂_k, the previous estimate; the "
+                                  "measurement at t_(k+1) is predicted from x̄_(k+1), so "
+                                  "H = C(x̄_(k+1)).",
+    "jacobian-point.nominal": "Your F and H are evaluated on the nominal trajectory x* (an LKF's "
+                              "Jacobians) while the mean follows the estimate; an EKF linearizes "
+                              "about its own estimate: F = I + ΔT·A(x̂_k), H = C(x̄_(k+1)).",
+    "jacobian-point.relinearized": "Your LKF evaluates F and H at its own estimate x̂ (and "
+                                   "propagates x̂ itself): that is an EKF, as report 002's "
+                                   "\"LKF\" is. The LKF linearizes once, about the nominal "
+                                   "trajectory x* of the noiseless model: F_k = I + ΔT·A(x*_k), "
+                                   "H_k = C(x*_k), and filters the perturbation δx = x − x*.",
+    "returns-a-priori": "Your filter returns x̄ and M, the estimate before the update, instead "
+                        "of x̂ and P.",
+    "returns-a-priori.hint": "Store x̂ and P after the update at each step.",
+    # ------------------------------------- the homework's findings (assignments/coop.py)
+    "homework.not-defined": "{where} is not defined yet (or still `...`).",
+    "homework.return-value.dt": "dt_linearization must return three matrices (F, G, H); it returned a "
+                                "{type}.",
+    "homework.uses-own-jacobian": "{where} is {form} with your own jacobian_{base}: right here "
+                                  "(question 1 grades jacobian_{base}).",
+    "homework.zero-order-hold": "Your G is the exact zero-order-hold ∫₀^ΔT e^{{Aτ}} dτ B = (ΔT·I + "
+                                "ΔT²·A/2) B. It is a better discretization, but the question asks for "
+                                "the course's Euler form G = ΔT·B.",
+    "homework.ok.dt": "F = I + ΔT·A, G = ΔT·B and H = C at every state checked.",
+    "homework.return-value.ekf": "ekf must return a pair (x_hat, P); it returned a {type}.",
+    "homework.matches-reference": "x̂ and P match the course EKF on {where} to {tol:g} σ (largest "
+                                  "distances {dx:.2g} σ, {dP:.2g} σσ).",
+    "homework.ekf-mistake": "Your EKF matches the course EKF with one mistake: {what} {hint}",
+    "homework.ekf-mismatch": "Your EKF differs from the course EKF from {where} on: x̂ by up to "
+                             "{dx:.3g} σ, P by up to {dP:.3g} σσ, and matches none of the typical "
+                             "mistakes ({codes}). {row0}Check the prediction (x̄ = model.step(x̂), M = "
+                             "F P Fᵀ + Q with F = I + ΔT·A(x̂)) and the update (H = C(x̄), only the "
+                             "rows of y that are not NaN).",
+    "homework.ekf-mismatch.row0": "Row 0 must be (x0, P0): nothing is measured at t = 0. ",
+}
+
+#: The catalogue: (message key, title, the ingredients it changes, options of the entry).
+_ENTRIES: tuple[tuple[str, str, tuple[tuple, ...], dict], ...] = (
+    ("no-angle-wrap.residual", "residual y − h(x̄) not wrapped",
+     (("wrap_residual", "difference"),), {"homework": True}),
+    ("no-angle-wrap.both", "h and the residual not wrapped", (("wrap_residual", "none"),), {}),
+    ("no-state-wrap", "headings not wrapped", (("wrap_state", False),), {}),
+    ("dt-linearization.A", "F = A", (("F_form", "A"),), {}),
+    ("dt-linearization.dtA", "F = ΔT·A", (("F_form", "dtA"),), {}),
+    ("process-noise.omitted", "Q omitted", (("q_scale", 0.0),), {}),
+    ("process-noise.dt", "Q scaled by ΔT", (("q_scale", "dt"),), {}),
+    ("std-as-variance", "R replaced by √R", (("r_sqrt", True),), {}),
+    ("epoch-shift.measurement", "update with y_k before the prediction",
+     (("shift", "measurement"),), {}),
+    ("epoch-shift.output", "outputs one row late", (("shift", "output"),), {}),
+    ("p-not-symmetric", "P = (I − KH) M", (("joseph", False),), {"informational": True}),
+    ("euler-propagation", "one Euler step per sample", (("propagation", "euler"),),
+     {"homework": True}),
+    ("jacobian-point.F-prior", "F at the prior x̄_(k+1)", (("F_point", "prior"),),
+     {"kinds": ("ekf",)}),
+    ("jacobian-point.H-posterior", "H at the previous posterior x̂_k", (("H_point", "posterior"),),
+     {"kinds": ("ekf",), "homework": True}),
+    ("jacobian-point.nominal", "F and H at the nominal",
+     (("F_point", "nominal"), ("H_point", "nominal")), {"kinds": ("ekf",)}),
+    ("jacobian-point.relinearized", "LKF linearized about the estimate", (("relinearize", True),),
+     {"kinds": ("lkf",)}),
+    ("returns-a-priori", "x̄ and M returned", (("output", "prior"),),
+     {"kinds": ("ekf",), "checker": False, "homework": True}),
+)
+
+
 def catalogue(model: CoopModel | None = None, kind: str = "ekf") -> tuple[Mistake, ...]:
-    """Every mistake that applies to ``kind`` ("ekf" or "lkf"), with ``model``'s numbers."""
-    model = CoopModel() if model is None else model
-    dt = model.dt
-    wrap_hint = ("The bearings jump by 2π where they cross ±π; the residual y − h(x̄) must be "
-                 "wrapped to [−π, π) (e.g. np.mod(r + π, 2π) − π) for rows 1 and 3 (the two "
-                 "bearings), or the update drags the estimate by 2π/σ.")
-    out = [
-        Mistake("no-angle-wrap", "residual y − h(x̄) not wrapped",
-                "The bearing residuals are not wrapped. " + wrap_hint,
-                (("wrap_residual", "difference"),), homework=True),
-        Mistake("no-angle-wrap", "h and the residual not wrapped",
-                "Neither your predicted bearings h(x̄) = atan2(Δη, Δξ) − θ nor the residual "
-                "y − h(x̄) are wrapped. " + wrap_hint, (("wrap_residual", "none"),)),
-        Mistake("no-state-wrap", "headings not wrapped",
-                "Your heading estimates θg, θa leave [−π, π): in 100 s the UGV turns about 11 "
-                "times and the UAV twice. "
-                "The filter's arithmetic does not care (sin, cos and the wrapped residual are "
-                "periodic) but every error, NEES and plot against the truth does: wrap x̂'s "
-                "headings after each update and prediction.", (("wrap_state", False),)),
-        Mistake("dt-linearization", "F = A",
-                f"Your covariance is propagated with F = A, the continuous-time Jacobian; the DT "
-                f"transition is F = I + ΔT·A (ΔT = {dt:g} s).", (("F_form", "A"),)),
-        Mistake("dt-linearization", "F = ΔT·A",
-                "Your covariance is propagated with F = ΔT·A: the identity is missing, "
-                "F = I + ΔT·A.", (("F_form", "dtA"),)),
-        Mistake("process-noise", "Q omitted",
-                "Your prediction leaves out Q: M = F P Fᵀ + Q. Without it the filter becomes "
-                "overconfident and stops listening to the measurements.", (("q_scale", 0.0),)),
-        Mistake("process-noise", "Q scaled by ΔT",
-                f"Your prediction adds ΔT·Q (ΔT = {dt:g} s); Q given to ekf/lkf is already the "
-                f"covariance per DT step: M = F P Fᵀ + Q.", (("q_scale", dt),)),
-        Mistake("std-as-variance", "R replaced by √R",
-                "Your update uses the standard deviations √R where R (variances) belongs: "
-                "S = H M Hᵀ + R with R as given.", (("r_sqrt", True),)),
-        Mistake("epoch-shift", "update with y_k before the prediction",
-                "Your update at t_(k+1) uses y_k, the previous row: the loop updates before it "
-                "predicts (or indexes y one row early). Predict from t_k to t_(k+1), then update "
-                "with y_(k+1) (row 0 of y is NaN: nothing to update at t = 0).",
-                (("shift", "measurement"),)),
-        Mistake("epoch-shift", "outputs one row late",
-                "Every output row holds the estimate of the row before (x̂ at t_k stored in "
-                "row k+1): store x̂_(k+1) and P_(k+1) in row k+1, and x̂_0, P_0 in row 0.",
-                (("shift", "output"),)),
-        Mistake("p-not-symmetric", "P = (I − KH) M",
-                "Your update P = (I − KH) M is right in exact arithmetic but loses symmetry to "
-                "rounding; the Joseph form (I − KH) M (I − KH)ᵀ + K R Kᵀ keeps P symmetric "
-                "and positive definite.", (("joseph", False),), informational=True),
-        Mistake("euler-propagation", "one Euler step per sample",
-                f"Your mean is propagated with one Euler step x + ΔT·f(x, u) per sample (ΔT = "
-                f"{dt:g} s; for an LKF, an Euler nominal trajectory). That is an approximation "
-                f"of the nonlinear motion with an error of order ΔT² per step; the reference "
-                f"integrates the motion exactly (closed form, or scipy.integrate.solve_ivp "
-                f"over each ΔT — either passes).", (("propagation", "euler"),), homework=True),
-    ]
-    out += [
-        Mistake("jacobian-point", "F at the prior x̄_(k+1)",
-                "Your F = I + ΔT·A is evaluated at the predicted state x̄_(k+1); it linearizes the "
-                "step from x̂_k, so A(x̂_k, u).", (("F_point", "prior"),), kinds=("ekf",)),
-        Mistake("jacobian-point", "H at the previous posterior x̂_k",
-                "Your H = C is evaluated at x̂_k, the previous estimate; the measurement at "
-                "t_(k+1) is predicted from x̄_(k+1), so H = C(x̄_(k+1)).",
-                (("H_point", "posterior"),), kinds=("ekf",), homework=True),
-        Mistake("jacobian-point", "F and H at the nominal",
-                "Your F and H are evaluated on the nominal trajectory x* (an LKF's Jacobians) "
-                "while the mean follows the estimate; an EKF linearizes about its own estimate: "
-                "F = I + ΔT·A(x̂_k), H = C(x̄_(k+1)).",
-                (("F_point", "nominal"), ("H_point", "nominal")), kinds=("ekf",)),
-        Mistake("jacobian-point", "LKF linearized about the estimate",
-                "Your LKF evaluates F and H at its own estimate x̂ (and propagates x̂ itself): "
-                "that is an EKF, as report 002's \"LKF\" is. The LKF linearizes once, about the "
-                "nominal trajectory x* of the noiseless model: F_k = I + ΔT·A(x*_k), "
-                "H_k = C(x*_k), and filters the perturbation δx = x − x*.",
-                (("relinearize", True),), kinds=("lkf",)),
-        Mistake("returns-a-priori", "x̄ and M returned",
-                "Your filter returns x̄ and M, the estimate before the update, instead of x̂ "
-                "and P.", (("output", "prior"),), kinds=("ekf",), hint="Store x̂ and P after the "
-                "update at each step.", checker=False, homework=True),
-    ]
+    """Every mistake that applies to ``kind`` ("ekf" or "lkf"), with ``model``'s numbers (its
+    ΔT in the messages and in ``process-noise``'s ΔT·Q)."""
+    dt = (CoopModel() if model is None else model).dt
+    out = []
+    for key, title, changes, options in _ENTRIES:
+        changes = tuple((f, dt if v == "dt" else v) for f, v in changes)
+        out.append(Mistake(key.split(".")[0], title, MESSAGES[key].format(dt=dt), changes,
+                           hint=MESSAGES.get(f"{key}.hint", ""), **options))
     return tuple(m for m in out if m.applies(kind))
 
 

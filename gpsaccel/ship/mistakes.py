@@ -41,7 +41,8 @@ from gpsaccel.ship.plan import driving_input
 
 #: The ship's wording, one table: code -> the filter entry's message (``{cost}``: the σ excess of
 #: the student's filter's true covariance over the optimal, said in words by the checker);
-#: ``update.<code>`` -> what the homework's one update is, ``update.<code>.hint`` -> its hint.
+#: ``update.<code>`` -> what the homework's one update is, ``update.<code>.hint`` -> its hint;
+#: ``homework.<code>`` -> the homework's findings (:mod:`gpsaccel.assignments.ship`).
 MESSAGES: dict[str, str] = {
     "zeroed-gain": "Your update computes the full gain M Hᵀ (H M Hᵀ + V)⁻¹ as if every sensor had "
                    "reported and zeroes the columns of the missing ones (the report's filter). "
@@ -70,6 +71,33 @@ MESSAGES: dict[str, str] = {
     "update.missing-as-zero": "the missing rows used as measurements of 0",
     "update.missing-as-zero.hint": "A NaN means the row did not arrive: leave it out (H_r, V_r, "
                                    "z_r), do not replace it with 0.",
+    # -------------------------------------- the homework's findings (assignments/ship.py)
+    "homework.return-value": "update must return a pair (x_hat, P); it returned a {type}.",
+    "homework.update-mistake": "Case “{where}”: your update is {what}. {hint}",
+    "homework.update-mismatch": "Case “{where}”: x̂ differs from the update with the rows that "
+                                "arrived by up to {dx:.3g} σ and P by up to {dP:.3g} σσ. Use the "
+                                "rows r where z is not NaN: K_r = M H_rᵀ (H_r M H_rᵀ + V_r)⁻¹, "
+                                "x̂ = x̄ + K_r (z_r − H_r x̄), P in Joseph form.{none}",
+    "homework.update-mismatch.none": " With nothing arrived, x̂ = x̄ and P = M.",
+    "homework.ok.update": "The update matches the optimal one with the rows that arrived on {n} "
+                          "cases (IMU-only, all rows, one row missing, none).",
+    "homework.not-a-number": "{where} must be one number; got {value}.",
+    "homework.not-a-number.finite": "{where} = {value}: it must be a finite number.",
+    "homework.std-as-variance": "{where} is the variance P₁₁; the question asks for the standard "
+                                "deviation σ = √P₁₁ (m).",
+    "homework.claimed-not-actual": "sigma_zeroed is what the report's filter claims, from its "
+                                   "P = (I − K H) M. That formula holds only for the optimal "
+                                   "gain; the zeroed gain's actual error covariance is the "
+                                   "Joseph form of the gains it applied (P_actual).",
+    "homework.sigma-value.optimal": "sigma_zeroed is the optimal filter's σ; use the zeroed-gain "
+                                    "filter's P_actual.",
+    "homework.sigma-value.zeroed": "sigma_optimal is the zeroed-gain filter's σ; use the optimal "
+                                   "filter's P.",
+    "homework.sigma-value": "{where} = {value:.6g} m is not σ of the x position at the last step "
+                            "(t = 100 s) for your ship (VARIANT); give at least 6 significant "
+                            "digits (within {rtol:g} relative: the filters differ in the 4th).",
+    "homework.ok.cost": "σ_x(100 s) of both filters is right; compare them: the zeroed gain's "
+                        "actual σ is larger than the optimal one, and larger than it claims.",
 }
 
 
