@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from gpsaccel import sandbox as sb
-from gpsaccel.assignments import grading
+from gpsaccel.assignments import scoring
 from gpsaccel.check import batch, findings
 from gpsaccel.sandbox.outcomes import OUTCOMES
 
@@ -27,7 +27,7 @@ def test_the_grader_stops_with_the_tables_clause():
     assert stops == {"timeout", "memory-limit", "process-limit", "output-limit", "file-limit",
                      "crashed", "result-refused", "uses-checker"}
     for code in stops:
-        assert grading._STOPS[code] == OUTCOMES[code].stop
+        assert scoring._STOPS[code] == OUTCOMES[code].stop
 
 
 def test_a_lost_check_is_worded_by_the_table():
