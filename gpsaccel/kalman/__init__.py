@@ -14,8 +14,14 @@
 * :mod:`~gpsaccel.kalman.exact`: the same filter in 50-digit arithmetic (mpmath), the reference
   every form is measured against;
 * :mod:`~gpsaccel.kalman.compare`: filters side by side against that exact answer;
-* :mod:`~gpsaccel.kalman.epochs`: a linear filter at its epochs, the known mistakes of one as
-  changes of its ingredients, and any linear model's catalogue of them (``LinearModel``);
+* :mod:`~gpsaccel.kalman.epochs`: a linear filter at its epochs and its gains (one recursion for
+  a whole stack of filters);
+* :mod:`~gpsaccel.kalman.mistakes`: the one mechanism for a known mistake, for every system: an
+  entry (code, title, message, hint) whose changes are applied to that system's ingredients;
+* :mod:`~gpsaccel.kalman.linear_model`: ``LinearModel``, any linear problem an instructor
+  describes by its matrices;
+* :mod:`~gpsaccel.kalman.linear_catalogue`: the known mistakes of any linear model, and
+  :mod:`~gpsaccel.kalman.linear_messages` their texts (one table);
 * :mod:`~gpsaccel.kalman.gain_sequence`: one gain sequence applied to a whole ensemble;
 * :mod:`~gpsaccel.kalman.consistency`: NEES, NIS, χ² bounds, z-scores and verdicts.
 
