@@ -17,6 +17,10 @@ from gpsaccel.cli.homework import add_assignment, add_grade
 from gpsaccel.cli.lessons import add_lab, add_lessons
 from gpsaccel.cli.reports import add_compare, add_coop, add_figures, add_montecarlo, add_run, add_ship
 
+#: what ``gpsaccel --help`` says first (the docstring's reST markup would print as is)
+DESCRIPTION = ("The gpsaccel command: run (the main job), compare, figures, the lessons, and the "
+               "checking and grading of homework.")
+
 #: The sub-commands in the order ``gpsaccel --help`` lists them; each function adds one parser.
 SUBCOMMANDS = (
     add_run,
@@ -36,7 +40,7 @@ SUBCOMMANDS = (
 def build_parser() -> argparse.ArgumentParser:
     from gpsaccel._version import __version__
 
-    parser = _Parser(prog="gpsaccel", description=__doc__.splitlines()[0])
+    parser = _Parser(prog="gpsaccel", description=DESCRIPTION)
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     for add in SUBCOMMANDS:  # a new sub-command: an add_NAME function and one line above

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
 from pathlib import Path
 
@@ -53,8 +54,11 @@ def _cmd_assignment(args: argparse.Namespace) -> int:
         bar.set_postfix_str("Gradescope autograder")
         gradescope = build(name, g.out, students, secret)
         bar.update()
+    # the grader recomputes each student's variant from the same roster and secret
+    variant_flags = (f" --roster {shlex.quote(str(args.roster))} --secret-file "
+                     f"{shlex.quote(str(args.secret_file))}" if students is not None else "")
     print(f"hand out:  {g.student}\ngrade with: gpsaccel grade SUBMISSIONS --assignment "
-          f"{args.name}\nGradescope: {gradescope} (scores computed outside the sandbox; "
+          f"{args.name}{variant_flags}\nGradescope: {gradescope} (scores computed outside the sandbox; "
           f"otter's own zip: {g.autograder.name})\nsolution:  {g.solution}")
     if students is not None:
         print(f"per student: {folder}/<id>/{name}.ipynb ({len(students)} students)")
