@@ -43,7 +43,7 @@ from typing import Any
 import numpy as np
 from filterpy.kalman import InformationFilter as FilterpyInformationFilter
 from filterpy.kalman import KalmanFilter, SquareRootKalmanFilter
-from scipy.linalg import cholesky
+from scipy.linalg import cholesky, qr
 
 
 class StandardKalmanFilter(KalmanFilter):
@@ -141,6 +141,19 @@ class FilterpySquareRoot(_FilterpyAdapter):
     @property
     def K(self) -> np.ndarray:
         return self.filter.K
+
+    def predict(self) -> None:
+        """filterpy's ``SquareRootKalmanFilter.predict`` (x̄ = Φ x̂; M^½ from one QR of
+        [Φ P^½, Q^½]ᵀ), with the QR in scipy's ``mode="r"``: filterpy asks for the full QR and
+        throws its orthogonal factor away.  The same LAPACK factorisation gives the same R, bit for
+        bit (tests/calibration/test_forms.py), without forming Q: the lesson's sweeps run this
+        6000 times per form and point.  No control input: the driver never passes one."""
+        kf = self.filter
+        kf.x = np.dot(kf.F, kf.x) + np.dot(kf.B, 0)  # filterpy's own expression, to the bit
+        (P2,) = qr(np.hstack([np.dot(kf.F, kf._P1_2), kf._Q1_2]).T, mode="r")
+        kf._P1_2 = P2[:kf.dim_x, :kf.dim_x].T
+        kf.x_prior = np.copy(kf.x)
+        kf._P1_2_prior = np.copy(kf._P1_2)
 
     def update(self, z: np.ndarray, R: np.ndarray | None = None,
                H: np.ndarray | None = None) -> None:

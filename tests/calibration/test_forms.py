@@ -65,3 +65,22 @@ def test_filterpy_square_root_cannot_take_this_q_through_its_setter():
 def test_unknown_form_is_named():
     with pytest.raises(ValueError, match="form"):
         make_form("ud", CalibrationModel())
+
+
+def test_square_root_prediction_is_filterpys_to_the_bit():
+    """The adapter's predict (QR in mode "r") against filterpy's own (full QR), step by step, from
+    a badly conditioned P^½ (the prior sweep's last point) and from the report's."""
+    model = CalibrationModel()
+    for M0 in (model.M0, model.M0 * 1e12):
+        ours = make_form("square-root", model.replace(M0=M0))
+        theirs = make_form("square-root", model.replace(M0=M0)).filter
+        for k in range(200):
+            ours.predict()
+            SquareRootKalmanFilter.predict(theirs)
+            if k % 40 == 39:
+                z = np.array([[1.0], [0.1]])
+                ours.update(z)
+                theirs.update(z)
+        assert ours.filter._P1_2.tobytes() == theirs._P1_2.tobytes()
+        assert ours.x.tobytes() == theirs.x.tobytes()
+        assert ours.filter._P1_2_prior.tobytes() == theirs._P1_2_prior.tobytes()
