@@ -61,7 +61,7 @@ from gpsaccel.kalman.compare import (  # noqa: F401 - the calibration names of t
     reference_filter,
     update_condition_number,
 )
-from gpsaccel.kalman.exact import DIGITS, Errors, exact_filter
+from gpsaccel.kalman.exact import DIGITS, Errors, ExactResult, exact_filter
 from gpsaccel.kalman.factory import FORMS
 
 #: The sweeps of :func:`sweep` and the scale factor of their last point.
@@ -73,7 +73,8 @@ DEFAULT_FACTORS = {"prior": 10.0 ** np.arange(13), "gps": 10.0 ** -np.arange(13)
 
 def compare(*forms: str, model: CalibrationModel | None = None, seed: int = 0,
             truth: str = "error-model", filters: Mapping[str, FilterCallable] | None = None,
-            repeat: int = 3, digits: int = DIGITS) -> Comparison:
+            repeat: int = 3, digits: int = DIGITS, exact: ExactResult | None = None
+            ) -> Comparison:
     """Run the built-in ``forms`` and the callables ``filters`` on one realization, each against
     the exact answer (:func:`gpsaccel.kalman.compare.compare` on report 000's data).
 
@@ -91,6 +92,10 @@ def compare(*forms: str, model: CalibrationModel | None = None, seed: int = 0,
         that returns the wrong shapes is an error naming it.
     repeat : each filter is timed ``repeat`` times and the best time kept.
     digits : significant decimal digits of the exact answer.
+    exact : the exact answer on this realization (``exact_filter(model, simulate(model,
+        default_rng(seed), truth).z)``), if already computed: the 50-digit answer is the
+        comparison's dearest part, and a lesson comparing several times on one realization needs
+        it once.
     """
     model = CalibrationModel() if model is None else model
     seed = _v.integer("seed", seed, minimum=0)
@@ -101,7 +106,7 @@ def compare(*forms: str, model: CalibrationModel | None = None, seed: int = 0,
     _core.contestants(forms, filters, model)  # bad names refused before the simulation
     z = simulate(model, np.random.default_rng(seed), truth).z
     return _core.compare(model, *forms, z=z, seed=seed, truth=truth, filters=filters,
-                         repeat=repeat, digits=digits)
+                         repeat=repeat, digits=digits, exact=exact)
 
 
 # ------------------------------------------------------------------------------ the sweeps
@@ -192,23 +197,51 @@ def sweep(kind: str, factors: Sequence[float] | None = None, forms: Sequence[str
         their rounding).
     progress : a tqdm.auto bar over the points (a lesson's long cell shows progress).
     """
+    kind = _v.choice("kind", kind, SWEEPS)
+    return sweeps((kind,), None if factors is None else {kind: factors}, forms, seed, truth,
+                  digits, executor, progress)[0]
+
+
+def sweeps(kinds: Sequence[str] = SWEEPS, factors: Mapping[str, Sequence[float]] | None = None,
+           forms: Sequence[str] | None = None, seed: int = 0, truth: str = "error-model",
+           digits: int = DIGITS, executor: object = None, progress: bool = False
+           ) -> tuple[Sweep, ...]:
+    """:func:`sweep` of each of ``kinds``, their points on one executor at once, each distinct
+    problem computed once: factor 1 is the report's own problem in every sweep (same filter model,
+    same data), so a lesson running both sweeps would compute it twice.  ``factors``: kind ->
+    factors (default :data:`DEFAULT_FACTORS`); the other arguments as :func:`sweep`'s.  The
+    numbers are those of :func:`sweep` for each kind, bit for bit (a point is computed whole by
+    one worker, whichever sweep asked for it)."""
     from gpsaccel.executors import resolve_executor
 
-    kind = _v.choice("kind", kind, SWEEPS)
+    kinds = tuple(_v.choice("kind", k, SWEEPS) for k in kinds)
     seed = _v.integer("seed", seed, minimum=0)  # None would draw a sweep nobody can redraw
     truth = _v.choice("truth", truth, TRUTHS)
-    points = DEFAULT_FACTORS[kind] if factors is None else np.asarray(factors, dtype=float)
+    points = {k: DEFAULT_FACTORS[k] if factors is None or k not in factors
+              else np.asarray(factors[k], dtype=float) for k in kinds}
     forms = tuple(FORMS) if forms is None else tuple(_v.choice("forms", f, FORMS) for f in forms)
-    for factor in points:  # a bad factor is refused here, before any worker starts
-        sweep_model(kind, factor)
+    keys = {k: [_point_key(k, f) for f in points[k]] for k in kinds}  # refuses a bad factor here
+    todo = list(dict.fromkeys(key for k in kinds for key in keys[k]))  # distinct, in order
     resolved = resolve_executor(executor)  # ValueError naming ``executor`` for anything else
-    with resolved as ex, _progress_bar(progress, len(points), f"sweep '{kind}'") as bar:
-        futures = [ex.submit(_sweep_point, kind, float(f), forms, seed, truth, digits)
-                   for f in points]
-        for future in cf.as_completed(futures):
+    desc = f"sweep '{kinds[0]}'" if len(kinds) == 1 else "sweeps " + ", ".join(kinds)
+    with resolved as ex, _progress_bar(progress, len(todo), desc) as bar:
+        futures = {key: ex.submit(_sweep_point, *key, forms, seed, truth, digits) for key in todo}
+        for future in cf.as_completed(futures.values()):
             future.result()  # a worker's exception surfaces here, at once
             bar.update(1)
-        results = [future.result() for future in futures]  # in the order of the points
+    return tuple(_assemble(k, seed, points[k], [futures[key].result() for key in keys[k]], forms)
+                 for k in kinds)
+
+
+def _point_key(kind: str, factor: float) -> tuple[str, float]:
+    """What :func:`_sweep_point` computes for (kind, factor): factor 1 is the report's problem
+    whatever the kind (:func:`sweep_model` leaves the model as it is)."""
+    sweep_model(kind, factor)  # a bad factor is refused here, before any worker starts
+    return ("prior", 1.0) if float(factor) == 1.0 else (kind, float(factor))
+
+
+def _assemble(kind: str, seed: int, points: np.ndarray, results: list[_Point],
+              forms: tuple[str, ...]) -> Sweep:
     errs = {name: tuple(r.errors[name] for r in results) for name in forms}
     problems = {name: tuple(r.problems[name] for r in results) for name in forms}
     return Sweep(kind, seed, points, np.array([r.kappa for r in results]),

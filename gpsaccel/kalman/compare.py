@@ -209,7 +209,8 @@ def contestants(forms: Sequence[str], filters: Mapping[str, FilterCallable] | No
 
 def compare(model: LinearGaussianModel, *forms: str, z: np.ndarray | None = None, seed: int = 0,
             truth: str = "", filters: Mapping[str, FilterCallable] | None = None,
-            repeat: int = 3, digits: int = DIGITS) -> Comparison:
+            repeat: int = 3, digits: int = DIGITS, exact: ExactResult | None = None
+            ) -> Comparison:
     """Run the built-in ``forms`` and the callables ``filters`` on one set of measurements of
     ``model``, each against the exact answer.
 
@@ -228,6 +229,9 @@ def compare(model: LinearGaussianModel, *forms: str, z: np.ndarray | None = None
         what it raised; one that returns the wrong shapes is an error naming it.
     repeat : each filter is timed ``repeat`` times and the best time kept.
     digits : significant decimal digits of the exact answer.
+    exact : the exact answer of ``model`` on these ``z`` with ``digits`` digits, if already
+        computed (``exact_filter(model, z, digits)``; a lesson that compares several times on one
+        realization computes it once).  Only its shape and digits are checked.
     """
     seed = _v.integer("seed", seed, minimum=0)
     repeat = _v.integer("repeat", repeat, minimum=1)
@@ -242,7 +246,11 @@ def compare(model: LinearGaussianModel, *forms: str, z: np.ndarray | None = None
         z = simulate(np.random.default_rng(seed), 1)[0][0]
         truth = truth or "the model"
     z = np.asarray(z, dtype=float)
-    exact = exact_filter(model, z, digits)
+    if exact is None:
+        exact = exact_filter(model, z, digits)
+    elif exact.digits != digits or exact.x_hat.shape[0] != z.shape[0]:
+        raise ValueError(f"exact is a {exact.digits}-digit answer on {exact.x_hat.shape[0]} epochs; "
+                         f"these z have {z.shape[0]} epochs and digits = {digits}")
     rows = tuple(run_one(name, f, z, exact, repeat, description)
                  for name, f, description in entries)
     return Comparison(seed, truth, exact.digits, exact.seconds, _min_eig_exact(exact),

@@ -12,6 +12,7 @@ from gpsaccel.calibration.compare import (
     reference_filter,
     sweep,
     sweep_model,
+    sweeps,
 )
 from gpsaccel.kalman.factory import FORMS
 
@@ -197,3 +198,40 @@ def test_sweep_refuses_a_bad_executor_or_factor_before_running():
         sweep("gps", factors=[1.0], executor="no-such-pool")
     with pytest.raises(ValueError, match="factor"):
         sweep("gps", factors=[1.0, -1.0], executor="processes")
+
+
+def test_sweeps_are_each_sweep_and_compute_factor_1_once(prior, gps):
+    """Both sweeps at once equal each alone, bit for bit; the report's own problem (factor 1 in
+    both) is computed once: five distinct points are submitted for six."""
+    from gpsaccel.executors import InProcessExecutor
+
+    class Counting(InProcessExecutor):
+        calls: list = []
+
+        def submit(self, fn, /, *args, **kwargs):
+            self.calls.append(args[:2])
+            return super().submit(fn, *args, **kwargs)
+
+    both = sweeps(("prior", "gps"), factors={"prior": [1.0, 1e6, 1e12], "gps": [1.0, 1e-6, 1e-12]},
+                  executor=Counting())
+    assert Counting.calls == [("prior", 1.0), ("prior", 1e6), ("prior", 1e12), ("gps", 1e-6),
+                              ("gps", 1e-12)]
+    for alone, together in zip((prior, gps), both, strict=True):
+        assert together.kind == alone.kind
+        np.testing.assert_array_equal(together.factors, alone.factors)
+        np.testing.assert_array_equal(together.kappa, alone.kappa)
+        assert together.floor == alone.floor and together.errors == alone.errors
+        assert str(together) == str(alone)
+
+
+def test_compare_with_a_precomputed_exact_answer_is_the_same_table(table):
+    from gpsaccel import simulate
+    from gpsaccel.kalman.exact import exact_filter
+
+    model = CalibrationModel()
+    exact = exact_filter(model, simulate(model, np.random.default_rng(3)).z)
+    again = compare(seed=3, repeat=1, exact=exact)
+    assert [(r.name, r.errors) for r in again.rows] == [(r.name, r.errors) for r in table.rows]
+    assert (again.floor, again.kappa) == (table.floor, table.kappa)
+    with pytest.raises(ValueError, match="digits"):
+        compare(seed=3, repeat=1, exact=exact, digits=30)
