@@ -23,6 +23,7 @@ heading terms is scored on common random numbers (the same truth runs for every 
 from __future__ import annotations
 
 import itertools
+import os
 import sys
 import time
 from collections.abc import Sequence
@@ -102,43 +103,75 @@ _CHUNK_RUNS = 200
 
 
 def _tests(model: CoopModel, method: str, jobs: list[tuple[np.ndarray, Truth]], alpha: float,
-           keep: bool = False, progress: bool = False) -> list[ConsistencyRun]:
+           keep: bool = False, progress: bool = False, executor: object = None
+           ) -> list[ConsistencyRun]:
     """One consistency test per (Q, truth) job, the jobs' runs stacked into few filter calls
     (one Q per run): the per-step cost of a call is shared by every set and candidate in it.
-    Each run's numbers are those of its own call, bit for bit.  ``runtime_s`` is the chunk's
+    Each run's numbers are those of its own call, bit for bit.  ``runtime_s`` is the calls'
     filter time shared out by runs.  ``progress``: a tqdm.auto bar over the runs, one step per
-    call (a lesson's long cell shows that it is working)."""
+    call (a lesson's long cell shows that it is working).
+
+    ``executor`` (:func:`gpsaccel.executors.resolve_executor`; None: here): where the calls run.
+    The runs are cut into calls of at most :data:`_CHUNK_RUNS`, as many as a multiple of the
+    pool's workers and of equal size, so every worker gets the same share (a set may be cut between
+    two calls).  The numbers do not depend on the cut: a run's numbers do not depend on the
+    others in its call, and each set's averages are taken over its runs in order.  ``keep`` (one
+    result per job) keeps each job whole in one call."""
     from tqdm.auto import tqdm
 
-    out: list[ConsistencyRun] = []
-    i = 0
-    bar = tqdm(total=sum(tr.n_runs for _, tr in jobs), desc=f"{method.upper()} runs", unit="run",
+    from gpsaccel.executors import resolve_executor
+
+    sizes = [tr.n_runs for _, tr in jobs]
+    bar = tqdm(total=sum(sizes), desc=f"{method.upper()} runs", unit="run",
                leave=False, disable=None if progress and sys.stderr is not None else True)
-    while i < len(jobs):
-        chunk = [jobs[i]]
-        while i + len(chunk) < len(jobs) and \
-                sum(tr.n_runs for _, tr in chunk) + jobs[i + len(chunk)][1].n_runs <= _CHUNK_RUNS:
-            chunk.append(jobs[i + len(chunk)])
-        i += len(chunk)
-        y = np.concatenate([tr.y for _, tr in chunk])
-        Qs = np.concatenate([np.broadcast_to(Q, (tr.n_runs, 6, 6)) for Q, tr in chunk])
-        t0 = time.perf_counter()
-        res = run_batch(method, model, y, Qs if len(chunk) > 1 else chunk[0][0])
-        runtime = time.perf_counter() - t0
-        x = np.concatenate([tr.x for _, tr in chunk])
-        nees, nis = res.nees(x)[:, 1:], res.nis()[:, 1:]
-        start = 0
-        for Q, tr in chunk:
-            N, part = tr.n_runs, slice(start, start + tr.n_runs)
-            start += N
-            out.append(ConsistencyRun(
-                method, Q, N, alpha, model.t[1:], nees[part].mean(axis=0),
-                nis[part].mean(axis=0), consistency.chi2_bounds(6, N, alpha),
-                consistency.chi2_bounds(5, N, alpha), runtime * N / len(y),
-                res if keep else None, tr if keep else None))
-        bar.update(len(y))
-    bar.close()
+    with bar, resolve_executor(executor) as ex:
+        workers = 1 if executor is None else _workers(ex)
+        cuts = np.cumsum([0, *sizes]) if keep else _cuts(sum(sizes), workers)
+        y = np.concatenate([tr.y for _, tr in jobs])
+        x = np.concatenate([tr.x for _, tr in jobs])
+        Qs = np.concatenate([np.broadcast_to(Q, (tr.n_runs, 6, 6)) for Q, tr in jobs])
+        futures = [ex.submit(_filter_chunk, model, method, y[a:b], x[a:b],
+                             Qs[a:b] if len(jobs) > 1 else jobs[0][0], keep)
+                   for a, b in itertools.pairwise(cuts)]
+        parts = []
+        for (a, b), future in zip(itertools.pairwise(cuts), futures, strict=True):
+            parts.append(future.result())
+            bar.update(b - a)
+    nees = np.concatenate([p[0] for p in parts])
+    nis = np.concatenate([p[1] for p in parts])
+    runtime = sum(p[2] for p in parts)
+    out: list[ConsistencyRun] = []
+    for j, ((Q, tr), start) in enumerate(zip(jobs, np.cumsum([0, *sizes]), strict=False)):
+        N, part = tr.n_runs, slice(start, start + tr.n_runs)
+        out.append(ConsistencyRun(
+            method, Q, N, alpha, model.t[1:], nees[part].mean(axis=0), nis[part].mean(axis=0),
+            consistency.chi2_bounds(6, N, alpha), consistency.chi2_bounds(5, N, alpha),
+            runtime * N / len(nees), parts[j][3] if keep else None, tr if keep else None))
     return out
+
+
+def _workers(ex: object) -> int:
+    """How many calls a pool runs at once (its ``_max_workers`` when it says; else the CPUs)."""
+    return int(getattr(ex, "_max_workers", None) or os.cpu_count() or 1)
+
+
+def _cuts(total: int, workers: int) -> np.ndarray:
+    """Boundaries of equal calls over ``total`` runs: at most :data:`_CHUNK_RUNS` runs each, their
+    number a multiple of ``workers``."""
+    calls = -(-total // _CHUNK_RUNS)
+    calls = min(total, -(-calls // workers) * workers)
+    return np.linspace(0, total, calls + 1).round().astype(int)
+
+
+def _filter_chunk(model: CoopModel, method: str, y: np.ndarray, x: np.ndarray, Q: np.ndarray,
+                  keep: bool) -> tuple[np.ndarray, np.ndarray, float, FilterResult | None]:
+    """One filter call over these runs (``Q`` one per run, or one for all): (NEES, NIS) per run and
+    step 1..K, the filter's wall time, the result itself if ``keep``.  Module-level: a process pool
+    runs it, and sends back only the statistics unless ``keep`` (a result is ~1 MB a run)."""
+    t0 = time.perf_counter()
+    res = run_batch(method, model, y, Q)
+    runtime = time.perf_counter() - t0
+    return res.nees(x)[:, 1:], res.nis()[:, 1:], runtime, res if keep else None
 
 
 def set_seeds(seed: int, n_sets: int) -> list[np.random.SeedSequence]:
@@ -149,28 +182,39 @@ def set_seeds(seed: int, n_sets: int) -> list[np.random.SeedSequence]:
 def repeated_sets(model: CoopModel, method: str, Q: np.ndarray | None = None,
                   n_sets: int = 5, n_runs: int = 50, seed: int = 0,
                   alpha: float = 0.05, truths: Sequence[Truth] | None = None,
-                  progress: bool = False) -> list[ConsistencyRun]:
+                  progress: bool = False, executor: object = None) -> list[ConsistencyRun]:
     """``n_sets`` independent N-run consistency tests (seeds spawned from ``seed``).
 
     ``truths``: the sets already simulated (:func:`repeated_truths`), for a second filter on the
     same sets without simulating them again; ``n_sets``, ``n_runs`` and ``seed`` are then unused.
-    ``progress``: a tqdm bar over the runs filtered.
+    ``progress``: a tqdm bar over the runs filtered.  ``executor``: where the sets are simulated
+    and filtered, one set a task (:func:`gpsaccel.executors.resolve_executor`; None: here); the
+    numbers do not depend on it (each set has its own seed and its own filter call).
     """
     method = _v.choice("method", method, METHODS)
     alpha = _v.probability("alpha", alpha)
     Q = tuned_q(method, model) if Q is None else _v.spd_matrix("Q", Q, 6)
     if truths is None:
-        truths = repeated_truths(model, n_sets, n_runs, seed)
+        truths = repeated_truths(model, n_sets, n_runs, seed, executor=executor)
     elif not truths:
         raise ValueError("truths holds no set: give at least one Truth (or leave it None)")
-    return _tests(model, method, [(Q, tr) for tr in truths], alpha, progress=progress)
+    return _tests(model, method, [(Q, tr) for tr in truths], alpha, progress=progress,
+                  executor=executor)
 
 
-def repeated_truths(model: CoopModel, n_sets: int = 5, n_runs: int = 50, seed: int = 0
-                    ) -> list[Truth]:
-    """The truth sets of :func:`repeated_sets` (``n_sets`` of ``n_runs`` runs from ``seed``)."""
+def repeated_truths(model: CoopModel, n_sets: int = 5, n_runs: int = 50, seed: int = 0,
+                    executor: object = None) -> list[Truth]:
+    """The truth sets of :func:`repeated_sets` (``n_sets`` of ``n_runs`` runs from ``seed``),
+    one set a task on ``executor`` (None: here; the same sets either way, each from its seed)."""
+    from gpsaccel.executors import resolve_executor
+
     n_runs = _v.integer("n_runs", n_runs, minimum=1)
-    return [truth_runs(model, n_runs, s) for s in set_seeds(seed, n_sets)]
+    seeds = set_seeds(seed, n_sets)
+    if executor is None:
+        return [truth_runs(model, n_runs, s) for s in seeds]
+    with resolve_executor(executor) as ex:
+        futures = [ex.submit(truth_runs, model, n_runs, s) for s in seeds]
+        return [f.result() for f in futures]
 
 
 @dataclass
@@ -226,12 +270,14 @@ class TuningResult:
 
 def tune_q(model: CoopModel, method: str, grid: Sequence[Sequence[float]] | None = None,
            n_runs: int = 50, n_sets: int = 1, seed: int = 2024, alpha: float = 0.05,
-           tol: float = 0.02, progress: bool = False) -> TuningResult:
+           tol: float = 0.02, progress: bool = False, executor: object = None) -> TuningResult:
     """Search Q = Qtrue scaled by every (UGV pos, UAV pos, heading) multiplier in ``grid``.
 
     Every candidate sees the same truth runs (common random numbers, ``n_sets`` sets of ``n_runs``
     spawned from ``seed``); fractions are averaged over the sets.  ``grid`` defaults to
     :data:`DEFAULT_GRIDS` of the method.  ``progress``: a tqdm bar over the runs filtered.
+    ``executor``: where the candidates are filtered, one (candidate, set) a task (see
+    :func:`_tests`; the numbers do not depend on it).
     """
     method = _v.choice("method", method, METHODS)
     grid = DEFAULT_GRIDS[method] if grid is None else grid
@@ -242,7 +288,7 @@ def tune_q(model: CoopModel, method: str, grid: Sequence[Sequence[float]] | None
     scales = [(float(a), float(b), float(c)) for a, b, c in itertools.product(*grid)]
     alpha = _v.probability("alpha", alpha)
     jobs = [(scaled_q(model.Qtrue, *sc), tr) for sc in scales for tr in truths]
-    tests = _tests(model, method, jobs, alpha, progress=progress)
+    tests = _tests(model, method, jobs, alpha, progress=progress, executor=executor)
     per = len(truths)
     nees_f = [np.mean([r.nees_fraction for r in tests[i:i + per]])
               for i in range(0, len(tests), per)]
