@@ -14,8 +14,7 @@ import pytest
 
 SLOW: tuple[str, ...] = (
     # seconds measured serially at load 5 (tests/kalman + tests/calibration: 255 s serial)
-    "tests/calibration/test_montecarlo_memory.py::test_memory_grows_linearly_with_the_duration",  # 63
-    "tests/calibration/test_montecarlo_memory.py::test_an_hour_at_5_hz_fits_in_tens_of_megabytes",  # 54
+    "tests/calibration/test_montecarlo_memory.py::test_an_hour_at_5_hz_fits_in_tens_of_megabytes",  # 5 CPU s
     "tests/calibration/test_montecarlo.py::test_dask_cluster_gives_the_same_result",  # 21
     "tests/calibration/test_compare.py::test_sweep_",  # the sweeps' fixtures, 18
     "tests/calibration/test_compare.py::test_prior_sweep_",
