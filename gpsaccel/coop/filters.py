@@ -137,32 +137,7 @@ class FilterResult:
 
     def nis(self) -> np.ndarray:
         """NIS rᵀ S⁻¹ r at every step (..., K+1); 0 with 0 dof where nothing was measured."""
-        return _nis(self.r, self.S)
-
-
-def _nis(r: np.ndarray, S: np.ndarray) -> np.ndarray:
-    """:func:`gpsaccel.kalman.consistency.nis` bit for bit, one stacked solve per pattern of
-    measured components instead of one per (run, step).
-
-    Row 0 is NaN in every log, so consistency's loop (one LU solve and one dot per vector, the
-    Cholesky path being for all-finite input only) ran for every step of every run: 1.5 s of a
-    50-run EKF's 1.7 s.  The stacked solve is the same LAPACK call per matrix and ``(1, p) @ (p, 1)``
-    on contiguous rows the same dot, so the numbers do not move (tests/coop hold it to that).
-    """
-    out = np.zeros(r.shape[:-1])
-    flat_r, flat_S, flat_out = r.reshape(-1, r.shape[-1]), S.reshape(-1, *S.shape[-2:]), out.reshape(-1)
-    finite = np.isfinite(flat_r)
-    code = finite @ (1 << np.arange(finite.shape[-1]))   # a pattern as one integer: a cheap unique
-    for c in np.unique(code):
-        rows = np.flatnonzero(code == c)
-        m = finite[rows[0]]
-        if not m.any():
-            continue  # nothing measured: 0 with 0 dof
-        v = np.ascontiguousarray(flat_r[rows][:, m])
-        C = flat_S[rows][:, m][:, :, m]
-        x = np.ascontiguousarray(np.linalg.solve(C, v[..., None])[..., 0])
-        flat_out[rows] = (v[:, None, :] @ x[:, :, None])[:, 0, 0]
-    return out
+        return consistency.nis(self.r, self.S)
 
 
 # --------------------------------------------------------------------------- the ingredients
