@@ -19,10 +19,15 @@ linearised*.  :class:`_Linearised` is the EKF and the LKF:
 
 The LKF's P and K do not depend on the data (one covariance sequence serves every run); the
 report's "LKF" re-linearized about the estimate (an EKF), which is why it fails once the truth
-wanders from x* (lesson 10).  :class:`_Unscented` is the UKF (Merwe sigma points, α = 1, β = 2,
-κ = 0: 13 points at ±√6·σ, W0 = 0 for the mean; angles through wrapped differences and
-:func:`angle_mean`; the points redrawn after the prediction as filterpy's ``UnscentedKalmanFilter``
-does).  Everything else (the loop, NaN rows, outputs) they share.
+wanders from x* (lesson 10).  :class:`~gpsaccel.coop.unscented.Unscented` is the UKF's step
+(sigma points instead of a linearisation point; :mod:`gpsaccel.coop.unscented`).  Everything else
+(the loop, NaN rows, outputs) they share.
+
+Where the rest lives: what a run returns, with its NEES and NIS, is
+:class:`~gpsaccel.coop.result.FilterResult` (:mod:`gpsaccel.coop.result`); the UKF's sigma points,
+:func:`~gpsaccel.coop.unscented.angle_mean` and its parameters are :mod:`gpsaccel.coop.unscented`.
+``FilterResult`` and ``UKF_ALPHA``, ``UKF_BETA``, ``UKF_KAPPA`` are importable from here too,
+where callers have always found them.
 
 A student's filter, right or wrong, is this loop with other :class:`Ingredients` (the catalogue
 of :mod:`gpsaccel.coop.mistakes` is a list of such changes).  S⁻¹ is formed by inversion and
@@ -30,8 +35,8 @@ K = (M Hᵀ) S⁻¹, filterpy's order of operations: the tests check every filte
 ``KalmanFilter``, ``ExtendedKalmanFilter`` and ``UnscentedKalmanFilter`` to 1e-10.
 ``run_lkf`` / ``run_ekf`` / ``run_ukf`` are the same loop on one log.
 
-Process noise: ``Q`` defaults to the tuned :data:`TUNED_Q` of each filter (how each was found is
-documented there); ``R`` defaults to Rtrue; x̂_0 = x0 and P_0 = P0 of the model.
+Process noise: ``Q`` defaults to the tuned :data:`TUNED_SCALES` of each filter (how each was
+found is documented there); ``R`` defaults to Rtrue; x̂_0 = x0 and P_0 = P0 of the model.
 """
 
 from __future__ import annotations
@@ -44,8 +49,6 @@ import numpy as np
 
 from gpsaccel import _validation as _v
 from gpsaccel.coop.model import (
-    ANGLE_MEASUREMENTS,
-    ANGLE_STATES,
     N_MEAS,
     N_STATES,
     CoopModel,
@@ -55,11 +58,11 @@ from gpsaccel.coop.model import (
     measurement_residual,
     propagate,
     state_residual,
-    wrap_angle,
     wrap_state,
 )
-from gpsaccel.kalman import consistency
-from gpsaccel.kalman.update import cross_gain, gain, joseph_update
+from gpsaccel.coop.result import FilterResult
+from gpsaccel.coop.unscented import UKF_ALPHA, UKF_BETA, UKF_KAPPA, Unscented
+from gpsaccel.kalman.update import gain, joseph_update
 
 METHODS = ("lkf", "ekf", "ukf")
 
@@ -83,10 +86,6 @@ TUNED_SCALES = {
     "ukf": (1.0, 1.0, 1.0),
 }
 
-#: UKF sigma-point parameters (Merwe's α, β, κ).
-UKF_ALPHA, UKF_BETA, UKF_KAPPA = 1.0, 2.0, 0.0
-
-
 def scaled_q(Qtrue: np.ndarray, ugv_pos: float = 1.0, uav_pos: float = 1.0,
              heading: float = 1.0) -> np.ndarray:
     """Qtrue with its UGV position (ξg, ηg), UAV position (ξa, ηa) and heading terms scaled."""
@@ -102,42 +101,6 @@ def tuned_q(method: str, model: CoopModel | None = None) -> np.ndarray:
     method = _v.choice("method", method, METHODS)
     model = CoopModel() if model is None else model
     return scaled_q(model.Qtrue, *TUNED_SCALES[method])
-
-
-@dataclass
-class FilterResult:
-    """What a filter run produced; arrays may carry a leading run axis (N, ...) from run_batch.
-
-    t : (K+1,) s.  x_bar, x_hat : (..., K+1, 6) x̄ and x̂ (angles wrapped); M, P :
-    (..., K+1, 6, 6) M and P.  r : (..., K+1, 5) residual r = y − ŷ (NaN where not measured, row 0
-    NaN); S : (..., K+1, 5, 5) its covariance.  Row 0 holds the initial x̂_0, P_0.
-    """
-
-    method: str
-    t: np.ndarray
-    x_bar: np.ndarray
-    M: np.ndarray
-    x_hat: np.ndarray
-    P: np.ndarray
-    r: np.ndarray
-    S: np.ndarray
-
-    @property
-    def sigma(self) -> np.ndarray:
-        """Posterior standard deviations √diag(P) (..., K+1, 6)."""
-        return np.sqrt(np.diagonal(self.P, axis1=-2, axis2=-1))
-
-    def errors(self, x_true: np.ndarray) -> np.ndarray:
-        """Estimation errors x − x̂ (headings wrapped), same leading shape as x_hat."""
-        return state_residual(x_true, self.x_hat)
-
-    def nees(self, x_true: np.ndarray) -> np.ndarray:
-        """NEES eᵀ P⁻¹ e at every step (..., K+1)."""
-        return consistency.nees(self.errors(x_true), self.P)
-
-    def nis(self) -> np.ndarray:
-        """NIS rᵀ S⁻¹ r at every step (..., K+1); 0 with 0 dof where nothing was measured."""
-        return consistency.nis(self.r, self.S)
 
 
 # --------------------------------------------------------------------------- the ingredients
@@ -183,21 +146,6 @@ RIGHT = Ingredients()
 
 
 # --------------------------------------------------------------------------- helpers
-def angle_mean(points: np.ndarray, weights: np.ndarray, angles: tuple[int, ...]) -> np.ndarray:
-    """Weighted mean of points (..., m, d) with wrap-safe angle components ``angles``.
-
-    mean = p₀ + Σ wᵢ·wrap(pᵢ − p₀) on the angles (Σ wᵢ = 1), plain Σ wᵢ pᵢ elsewhere; then wrapped.
-    """
-    points = np.asarray(points, dtype=float)
-    ref = points[..., :1, :]
-    d = points - ref
-    idx = list(angles)
-    d[..., idx] = wrap_angle(d[..., idx])
-    mean = ref[..., 0, :] + np.einsum("...md,m->...d", d, weights)
-    mean[..., idx] = wrap_angle(mean[..., idx])
-    return mean
-
-
 def _tr(a: np.ndarray) -> np.ndarray:
     return np.swapaxes(a, -1, -2)
 
@@ -228,29 +176,6 @@ def _check(model: CoopModel, y: object, Q: Any, R: object, x0: object, P0: objec
     x0 = model.x0 if x0 is None else _v.finite_array("x0", x0, (N_STATES,))
     P0 = model.P0 if P0 is None else _v.spd_matrix("P0", P0, N_STATES)
     return y, Q, R, x0, P0
-
-
-def ukf_points(alpha: float = UKF_ALPHA, beta: float = UKF_BETA, kappa: float = UKF_KAPPA):
-    """filterpy's Merwe sigma points for the 6 states, sigma points built with wrapped angles.
-
-    0 < α ≤ 1 (the spread of the points; α = 0 divides by zero in the weights, a negative α
-    mirrors them), β ≥ 0 (prior knowledge of the distribution, 2 for a Gaussian) and n + κ > 0
-    (otherwise the points' covariance n + λ = α²(n + κ) is not positive), all finite.
-    """
-    from filterpy.kalman import MerweScaledSigmaPoints
-
-    alpha = _v.finite_float("alpha", alpha)
-    if not 0.0 < alpha <= 1.0:
-        raise ValueError(f"alpha must be in (0, 1] (the sigma points' spread), got {alpha!r}")
-    beta = _v.finite_float("beta", beta)
-    if beta < 0.0:
-        raise ValueError(f"beta must be >= 0 (2 for a Gaussian prior), got {beta!r}")
-    kappa = _v.finite_float("kappa", kappa)
-    if N_STATES + kappa <= 0.0:
-        raise ValueError(f"kappa must be > -{N_STATES} (n + kappa > 0 for n = {N_STATES} states), "
-                         f"got {kappa!r}")
-    return MerweScaledSigmaPoints(N_STATES, alpha=alpha, beta=beta, kappa=kappa,
-                                  subtract=state_residual)
 
 
 def euler_nominal(model: CoopModel) -> np.ndarray:
@@ -349,53 +274,6 @@ class _Linearised:
         return s, P, r, S
 
 
-def _sigma_points(x, P, lam):
-    """Merwe sigma points (N, 2n+1, n) as filterpy builds them (rows of the upper Cholesky)."""
-    n = N_STATES
-    U = _tr(np.linalg.cholesky((lam + n) * P))  # upper factor: U[k] = row k
-    return np.concatenate([x[:, None, :], wrap_state(x[:, None, :] + U),
-                           wrap_state(x[:, None, :] - U)], axis=1)
-
-
-class _Unscented:
-    """The UKF's predict and update (sigma points instead of a linearisation point)."""
-
-    def __init__(self, model: CoopModel, alpha: float, beta: float, kappa: float) -> None:
-        pts = ukf_points(alpha, beta, kappa)
-        self.model, self.Wm, self.Wc = model, pts.Wm, pts.Wc
-        self.lam = alpha**2 * (N_STATES + kappa) - N_STATES
-
-    def start(self, x0: np.ndarray) -> np.ndarray:
-        return x0
-
-    def estimate(self, j: int, s: np.ndarray) -> np.ndarray:
-        return s
-
-    def predict(self, k: int, x: np.ndarray, P: np.ndarray, Q: np.ndarray):
-        m = self.model
-        sig = wrap_state(propagate(_sigma_points(x, P, self.lam), m.u0, m.dt, m.L))
-        x = angle_mean(sig, self.Wm, ANGLE_STATES)
-        d = state_residual(sig, x[:, None, :])
-        return x, np.einsum("m,nmi,nmj->nij", self.Wc, d, d) + Q
-
-    def update(self, j: int, x: np.ndarray, M: np.ndarray, y: np.ndarray, m: np.ndarray,
-               R: np.ndarray, runs=slice(None)):
-        Wc = self.Wc
-        sig = _sigma_points(x, M, self.lam)
-        zs = h(sig)
-        zp = angle_mean(zs, self.Wm, ANGLE_MEASUREMENTS)   # componentwise: a subset is a subset
-        dz = measurement_residual(zs, zp[:, None, :])
-        r = measurement_residual(y, zp)
-        if not m.all():
-            dz, r, R = dz[..., m], r[:, m], R[np.ix_(m, m)]
-        S = np.einsum("m,nmi,nmj->nij", Wc, dz, dz) + R
-        dx = state_residual(sig, x[:, None, :])
-        Pxz = np.einsum("m,nmi,nmj->nij", Wc, dx, dz)
-        K = cross_gain(Pxz, S, inverse=True)           # K = Pxz S⁻¹, as filterpy
-        x = wrap_state(x + np.einsum("nij,nj->ni", K, r))
-        return x, M - K @ S @ _tr(K), r, S
-
-
 # --------------------------------------------------------------------------- the one loop
 def _groups(finite: np.ndarray):
     """[(runs, measured components)] of one row: runs (a slice or indices) sharing a pattern."""
@@ -446,7 +324,7 @@ def run_batch(method: str, model: CoopModel, y: np.ndarray, Q: np.ndarray | None
     Q = Q * g.q_scale if g.q_scale != 1.0 else Q
     R = np.sqrt(R) if g.r_sqrt else R
     if method == "ukf":
-        flt: _Linearised | _Unscented = _Unscented(model, alpha, beta, kappa)
+        flt: _Linearised | Unscented = Unscented(model, alpha, beta, kappa)
     else:
         if nominal is not None:
             nominal = model._trajectory("nominal", nominal)

@@ -9,15 +9,7 @@ from collections.abc import Callable
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter, KalmanFilter, UnscentedKalmanFilter
 
-from gpsaccel.coop.filters import (
-    UKF_ALPHA,
-    UKF_BETA,
-    UKF_KAPPA,
-    FilterResult,
-    _check,
-    angle_mean,
-    ukf_points,
-)
+from gpsaccel.coop.filters import _check
 from gpsaccel.coop.model import (
     ANGLE_MEASUREMENTS,
     ANGLE_STATES,
@@ -31,6 +23,8 @@ from gpsaccel.coop.model import (
     wrap_measurement,
     wrap_state,
 )
+from gpsaccel.coop.result import FilterResult
+from gpsaccel.coop.unscented import UKF_ALPHA, UKF_BETA, UKF_KAPPA, angle_mean, ukf_points
 
 
 def _subset_residual(mask: np.ndarray) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
