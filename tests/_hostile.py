@@ -1,6 +1,11 @@
-"""Shared by the sandbox and batch tests: a ``backend`` parameter (every sandbox backend that works
-here; bwrap is skipped, with its reason, where it does not) and ``hostile``: where the hostile
-submissions are and a watcher that finds their processes by PID from outside any PID namespace."""
+"""Shared by the sandbox tests (tests/sandbox/) and the checker's batch tests (tests/check/): a
+``backend`` parameter (every sandbox backend that works here; bwrap is skipped, with its reason,
+where it does not) and ``hostile``: where the hostile submissions are and a watcher that finds
+their processes by PID from outside any PID namespace.
+
+Not a conftest: tests/check/conftest.py and tests/sandbox/conftest.py import its fixtures and
+hook, so the two folders share one watcher and one lock, not two copies.
+"""
 
 from __future__ import annotations
 
@@ -16,7 +21,8 @@ import pytest
 from gpsaccel import sandbox as sb
 from gpsaccel.sandbox.procs import _proc_table
 
-SUBMISSIONS = Path(__file__).parent.parent / "submissions"
+TESTS = Path(__file__).resolve().parent
+SUBMISSIONS = TESTS / "submissions"
 HOSTILE = SUBMISSIONS / "hostile"
 
 #: The ``comm`` every process of a hostile submission gives itself (see hostile/README.md).
@@ -101,7 +107,7 @@ def watch():
 
 def env_with_package() -> dict[str, str]:
     """The environment for a ``python -m gpsaccel.cli`` child: this checkout first on the path."""
-    root = str(Path(__file__).resolve().parents[2])
+    root = str(TESTS.parent)
     return dict(os.environ, PYTHONPATH=root + os.pathsep + os.environ.get("PYTHONPATH", ""),
                 MPLBACKEND="Agg")
 
@@ -115,15 +121,17 @@ def hostile():
 
 
 #: The modules whose hostile submissions leave marked processes that :func:`marked_pids` watches
-#: machine-wide: run side by side (two xdist workers, or two test runs on one machine) each saw
-#: the other's processes ("marked processes before the test", "alive after the command").
-HOSTILE_MODULES = ("test_batch", "test_sandbox", "test_sandbox_attacks")
+#: machine-wide (paths below tests/): run side by side (two xdist workers, or two test runs on one
+#: machine) each saw the other's processes ("marked processes before the test", "alive after the
+#: command").
+HOSTILE_MODULES = ("check/test_batch.py", "sandbox/test_hostile.py", "sandbox/test_attacks.py")
 
 
 @pytest.fixture(scope="module", autouse=True)
 def _one_hostile_module_at_a_time(request):
-    """Hold a machine-wide lock while a hostile module runs, so no two of them overlap."""
-    if request.module.__name__.rsplit(".", 1)[-1] not in HOSTILE_MODULES:
+    """Hold a machine-wide lock while a hostile module runs, so no two of them overlap (whichever
+    folder, run or worker they belong to: one lock file)."""
+    if request.path.resolve().relative_to(TESTS).as_posix() not in HOSTILE_MODULES:
         yield
         return
     import fcntl

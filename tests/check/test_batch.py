@@ -3,7 +3,7 @@ class of correct ones, a parent killer, a daemon after the JSON, Ctrl-C; under e
 
 The command runs as a child process (``python -m gpsaccel.cli``), as an instructor runs it, so a
 submission that kills its parent hits a real command line.  Every hostile process is found by PID
-(tests/check/conftest.py) and must be dead when the command returns.
+(tests/_hostile.py) and must be dead when the command returns.
 """
 
 from __future__ import annotations
