@@ -1,4 +1,5 @@
-"""A student's file as a filter callable: run in its own process, compared against the exact answer."""
+"""A student's file as a filter callable: run in its own process, compared against the exact answer;
+what the sandbox refuses of it is a StudentFilterError, under every backend."""
 
 from __future__ import annotations
 
@@ -42,3 +43,11 @@ def test_bad_arguments_are_named(tmp_path):
         check.student_filter(SUBMISSIONS / "correct_joseph.py", timeout=0)
     with pytest.raises(ValueError, match="repeat"):
         check.student_filter(SUBMISSIONS / "correct_joseph.py", repeat=0)
+
+
+def test_student_filter_reports_instead_of_raising_something_else(backend, hostile):
+    from gpsaccel.check.student_filter import StudentFilterError, student_filter
+
+    f = student_filter(hostile.DIR / "frame_forger.py", timeout=20, repeat=1, sandbox=backend)
+    with pytest.raises(StudentFilterError, match="refused"):
+        f(np.zeros((151, 2)))

@@ -1,6 +1,7 @@
-"""The result channel (sandbox.FrameReader) against random frames (hypothesis): whatever bytes a
-student sends, the reader either returns declared results or raises Refused, never anything
-else, and never holds more than its budget."""
+"""The result channel (sandbox.FrameReader): the declared frames read in pieces, anything else
+refused; and against random frames (hypothesis): whatever bytes a student sends, the reader either
+returns declared results or raises Refused, never anything else, and never holds more than its
+budget."""
 
 from __future__ import annotations
 
@@ -119,3 +120,51 @@ def test_values_that_overflow_the_checkers_arithmetic_are_refused(a, k, refused)
     else:
         reader.feed(blob)
         np.testing.assert_array_equal(reader.results[0]["a"], a)
+
+
+# ------------------------------------------------------------------ the declared frames
+def _calls(n: int = 2) -> list[sb.Call]:
+    return [sb.Call("f", (np.zeros(2),), (sb.Output("a", (2,)), sb.Output("b", (2, 2))))
+            for _ in range(n)]
+
+
+def test_frames_are_read_against_the_declared_outputs():
+    reader = sb.FrameReader(_calls(2))
+    a, b = np.arange(2.0), np.eye(2)
+    blob = (_frame({"t": "imported"})
+            + _frame({"t": "result", "call": 0}, a.tobytes() + b.tobytes())
+            + _frame({"t": "result", "call": 1}, (a + 1).tobytes() + b.tobytes())
+            + _frame({"t": "done"}))
+    for i in range(0, len(blob), 7):  # in pieces, as a pipe delivers them
+        reader.feed(blob[i:i + 7])
+    assert reader.done and len(reader.results) == 2
+    np.testing.assert_array_equal(reader.results[1]["a"], a + 1)
+    assert reader.results[0]["b"].shape == (2, 2) and reader.results[0]["b"].flags.writeable
+
+
+@pytest.mark.parametrize("blob, words", [
+    (struct.pack(">I", 1 << 30), "frame header of 1073741824 bytes"),
+    (_frame({"t": "verdict", "passed": True}), "unknown kind 'verdict'"),
+    (_frame({"t": "result", "call": 1}), "call 1 where call 0"),
+    (_frame({"t": "done"}), "'done' after 0 of 2"),
+    (struct.pack(">I", 5) + b"nope!", "not JSON"),
+    (_frame([1, 2]), "not a JSON object"),
+])
+def test_anything_but_the_declared_frames_is_refused(blob, words):
+    with pytest.raises(sb.Refused, match=words):
+        sb.FrameReader(_calls(2)).feed(blob)
+
+
+def test_bytes_after_the_last_frame_are_refused_and_memory_stays_bounded():
+    reader = sb.FrameReader(_calls(1))
+    payload = np.zeros(2).tobytes() + np.eye(2).tobytes()
+    ok = _frame({"t": "result", "call": 0}, payload) + _frame({"t": "done"})
+    with pytest.raises(sb.Refused, match="after the last frame"):
+        reader.feed(ok + b"\0" * 100)
+    # a result header that announces a flood: the reader keeps at most the declared size
+    reader = sb.FrameReader(_calls(1))
+    reader.feed(_frame({"t": "result", "call": 0}))
+    reader.feed(b"\0" * (len(payload) - 1))
+    assert reader.results == [] and len(reader.buf) < len(payload) + 64
+    with pytest.raises(sb.Refused):
+        reader.feed(b"\0" * 65536)

@@ -13,6 +13,8 @@ from pathlib import Path
 import pytest
 
 from gpsaccel import check
+from gpsaccel import sandbox as sb
+from gpsaccel.check.problems import calibration as wf
 from gpsaccel.cli import main
 
 HERE = Path(__file__).parents[2] / "submissions"
@@ -195,3 +197,26 @@ def test_cli_check_table_and_json(tmp_path, capsys):
     by_name = {r["subject"]: r for r in data["results"]}
     assert by_name["correct_gps_rate.py"]["passed"] is True
     assert by_name["mutant_m0_order.py"]["codes"] == ["m0-order"]
+
+
+def test_the_answer_is_computed_only_after_the_box_is_empty(monkeypatch, hostile):
+    events = []
+    real_run, real_answer = sb.run, wf.with_answer
+
+    def run(*args, **kwargs):
+        assert wf._candidates.cache_info().currsize == 0  # no cached covariance either
+        events.append("box starts")
+        box = real_run(*args, **kwargs)
+        events.append("box empty")
+        return box
+
+    def with_answer(data):
+        events.append("answer")
+        return real_answer(data)
+
+    monkeypatch.setattr(sb, "run", run)
+    monkeypatch.setattr(wf, "with_answer", with_answer)
+    wf._candidates(wf._default_data(2, 0).model, 1)  # fill the cache
+    report = check.submission(hostile.SUBMISSIONS / "mutant_m0_order.py", n_runs=2)
+    assert report.codes == ["m0-order"]
+    assert events == ["box starts", "box empty", "answer"]

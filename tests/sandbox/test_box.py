@@ -1,0 +1,44 @@
+"""A box (gpsaccel.sandbox.run) under every backend: the generic calls another checker builds on,
+and a student's file that shadows numpy running only after the runner's guards."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gpsaccel import sandbox as sb
+from gpsaccel.check.problems import calibration as wf
+
+LIMITS = sb.Limits(memory=512 << 20, file_size=16 << 20, output=1 << 20, time=20)
+
+
+def test_generic_calls_of_several_functions(tmp_path, backend):
+    """What another checker (coop, ship) builds on: named functions, numpy inputs, declared
+    outputs of any numeric dtype, one array or a tuple."""
+    (tmp_path / "student.py").write_text(
+        "import numpy as np\n\n"
+        "def jacobian(x, u):\n    return np.outer(x, u)\n\n"
+        "def counts(z):\n    return np.arange(len(z)), float(z.sum())\n")
+    sub = sb.load_submission(tmp_path / "student.py", "jacobian")
+    x, u = np.array([1.0, 2.0]), np.array([3.0, 4.0, 5.0])
+    calls = [sb.Call("jacobian", (x, u), (sb.Output("F", (2, 3)),)),
+             sb.Call("counts", (np.ones(4),), (sb.Output("k", (4,), "int64"),
+                                                sb.Output("s", ()))),
+             sb.Call("jacobian", (x, x), (sb.Output("F", (2, 3)),))]
+    box = sb.run(sub, calls, LIMITS, backend)
+    assert box.backend == backend
+    np.testing.assert_array_equal(box.results[0]["F"], np.outer(x, u))
+    assert box.results[1]["k"].dtype == np.int64 and box.results[1]["s"] == 4.0
+    assert len(box.results) == 2 and box.failure == "wrong-shape"
+    assert box.problem["call"] == 2 and box.problem["got"] == [2, 2]
+
+
+def test_a_students_numpy_py_does_not_run_before_the_checkers_guards(tmp_path, backend):
+    folder = tmp_path / "eve"
+    folder.mkdir()
+    (folder / "numpy.py").write_text("print('SHADOW')\nimport gpsaccel\n")
+    (folder / "filter.py").write_text(
+        "import numpy as np\n\ndef kalman_filter(z):\n"
+        "    return np.zeros((len(z), 3)), np.tile(np.eye(3), (len(z), 1, 1))\n")
+    box = sb.run(sb.load_submission(folder, "kalman_filter"), wf.calls(np.zeros((2, 151, 2))),
+                 LIMITS, backend)
+    assert box.failure is None and not box.uses_checker and "SHADOW" not in box.output
