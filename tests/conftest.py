@@ -44,7 +44,7 @@ FIRST: tuple[str, ...] = (
     "tests/assignments/",
     "tests/calibration/test_montecarlo_memory.py",
     "tests/figures/",
-    "tests/check/test_sandbox_attacks.py",
+    "tests/sandbox/test_attacks.py",
     "tests/check/test_batch.py",
 )
 
