@@ -92,10 +92,10 @@ def compare(*forms: str, model: CalibrationModel | None = None, seed: int = 0,
         that returns the wrong shapes is an error naming it.
     repeat : each filter is timed ``repeat`` times and the best time kept.
     digits : significant decimal digits of the exact answer.
-    exact : the exact answer on this realization (``exact_filter(model, simulate(model,
-        default_rng(seed), truth).z)``), if already computed: the 50-digit answer is the
-        comparison's dearest part, and a lesson comparing several times on one realization needs
-        it once.
+    exact : the exact answer on this realization, if already computed
+        (``exact_filter(model, simulate(model, default_rng(seed), truth).z)``): the 50-digit
+        answer is the comparison's dearest part, and a lesson comparing several times on one
+        realization needs it once.
     """
     model = CalibrationModel() if model is None else model
     seed = _v.integer("seed", seed, minimum=0)
