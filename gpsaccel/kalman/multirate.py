@@ -30,7 +30,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from gpsaccel import _validation as _v
-from gpsaccel.kalman.factory import make_form
+from gpsaccel.kalman.factory import FormModel, make_form
 from gpsaccel.kalman.schedule import Schedule
 from gpsaccel.kalman.update import CovarianceGuard, step_schedule
 
@@ -44,27 +44,9 @@ class MissingInputWarning(UserWarning):
     """A model with a control input was filtered without its input ``u``."""
 
 
-class LinearGaussianModel(Protocol):
-    """What the driver needs of a model (``CalibrationModel`` and ``ShipModel`` have it)."""
-
-    # read-only members (a model's matrices are often properties computed from its parameters)
-    @property
-    def Phi(self) -> np.ndarray: ...
-
-    @property
-    def Q(self) -> np.ndarray: ...
-
-    @property
-    def H(self) -> np.ndarray: ...
-
-    @property
-    def V(self) -> np.ndarray: ...
-
-    @property
-    def M0(self) -> np.ndarray: ...
-
-    @property
-    def x0(self) -> np.ndarray: ...
+class LinearGaussianModel(FormModel, Protocol):
+    """What the driver needs of a model (``CalibrationModel`` and ``ShipModel`` have it): the
+    matrices the factory builds a filter from, the fast step and the schedule of updates."""
 
     @property
     def dt(self) -> float: ...
