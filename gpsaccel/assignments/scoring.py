@@ -311,16 +311,21 @@ def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
     return g
 
 
+def _grader_error(q: Question, exc: Exception) -> Report:
+    """The question's report when the grader itself raised: that question only, and the student
+    sees the exception's type, never its text (which may hold the expected value)."""
+    rep = Report(q.name)
+    rep.add("grader-error", f"{type(exc).__name__}: {exc}", text="The grader failed on "
+            "this question ({type}); tell your instructor.", observed={"type": type(exc).__name__})
+    return rep
+
+
 def _safe_grade(q: Question, draw: Draw, answers: list[Answer]) -> Report:
     assert q.grade is not None  # a question read from the box has its grade
     try:
         return q.grade(draw, answers)
     except Exception as exc:  # noqa: BLE001 - a bug of the grader: this question only
-        rep = Report(q.name)
-        rep.add("grader-error", f"{type(exc).__name__}: {exc}", text="The grader failed on "
-                "this question ({type}); tell your instructor.",
-                observed={"type": type(exc).__name__})
-        return rep
+        return _grader_error(q, exc)
 
 
 def _grade_file(q: Question, nb: nbm.Notebook, draw: Draw, timeout: float) -> Report:
@@ -338,11 +343,7 @@ def _grade_file(q: Question, nb: nbm.Notebook, draw: Draw, timeout: float) -> Re
         try:
             return q.grade_file(path, draw, timeout)
         except Exception as exc:  # noqa: BLE001 - a bug of the grader: this question only
-            rep = Report(q.name)
-            rep.add("grader-error", f"{type(exc).__name__}: {exc}", text="The grader failed on "
-                    "this question ({type}); tell your instructor.",
-                    observed={"type": type(exc).__name__})
-            return rep
+            return _grader_error(q, exc)
 
 
 # --------------------------------------------------------------------------------- feedback

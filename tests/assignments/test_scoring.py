@@ -26,3 +26,21 @@ def test_module_wrappers_survive_the_students_cells(tmp_path):
     f, h, g = (answer_from(r, 1) for r in box.results[3:])
     assert f.status == "ok" and f.values[0].tolist() == [0.0, 2.0, 4.0]
     assert (h.status, g.status) == ("not-defined", "not-callable")
+
+
+def test_a_grader_that_raises_costs_that_question_and_shows_the_student_only_its_type(tmp_path):
+    """Both ways a question is graded (its answers, or the file the notebook writes) turn a bug of
+    the grader into one ``grader-error`` finding: the instructor reads the exception, the student
+    only its type (the exception's text may hold the expected value)."""
+    from gpsaccel.assignments.questions import Draw, Question
+
+    def broken(*args):
+        raise ValueError("expected 4.25")
+
+    q = Question("q1", 1.0, grade=broken, file="f.py", grade_file=broken)
+    nb = nbm.Notebook([nbm.Cell(1, "%%writefile f.py\ndef f():\n    return 1\n")])
+    for rep in (scoring._safe_grade(q, Draw(0), []), scoring._grade_file(q, nb, Draw(0), 5.0)):
+        assert rep.codes == ["grader-error"]
+        assert "ValueError: expected 4.25" in rep.instructor_text()
+        student = str(rep.for_student())
+        assert "ValueError" in student and "4.25" not in student
