@@ -3,6 +3,8 @@
     python benchmarks/lessons.py 07 00 14 [--before main] [--repeat 1]
     python benchmarks/lessons.py            # every lesson whose master differs from main's
     python benchmarks/lessons.py 05 10b 11 --before REV --rest --write docs/benchmarks/lessons.txt
+    python benchmarks/lessons.py --all --before REV --versions before --save before.json
+    python benchmarks/lessons.py --all --versions after --add before.json --write docs/benchmarks/lessons.txt
 
 
 For each lesson (a master's name prefix) the solutions version runs top to bottom in a fresh
@@ -11,6 +13,10 @@ kernel, as ``python -m gpsaccel.lessons measure`` runs it, once with the code of
 ``git archive`` into a temporary folder and put first on ``PYTHONPATH``, so its kernel imports that
 gpsaccel).  A lesson the revision does not have is reported as new.  Before and after alternate
 per lesson, so a change of the machine's load hits both alike.
+
+``--versions before`` (or ``after``) runs one side only and ``--save`` keeps its figures as JSON;
+``--add`` merges such a file into this run's table: the two sides can then be measured at different
+times (each on a quiet machine) and still meet in one table, whose head names both runs.
 
 At the end a Markdown table (one row per lesson: CPU and wall before and after, CPU after/before,
 the load) is printed, and with ``--write PATH`` written there under a line saying when, where and
@@ -135,7 +141,52 @@ def _recorded(skip: set[str]) -> list[str]:
     return lines
 
 
-def main(argv: list[str] | None = None) -> int:
+def _measure(prefix: str, trees: dict[str, Path], tmp: Path,
+             repeat: int) -> tuple[str, dict[str, tuple[float, float, float]]]:
+    """The lesson's row name (its name in this checkout, else in --before) and the best run of
+    each version."""
+    found = _lesson(ROOT, prefix) or next(
+        (m for m in (_lesson(t, prefix) for t in trees.values()) if m), None)
+    name = found.stem if found else prefix
+    best: dict[str, tuple[float, float, float]] = {}
+    for _ in range(repeat):
+        for version, tree in trees.items():
+            master = _lesson(tree, prefix)
+            if master is None:
+                continue
+            nb = _solutions_copy(tree, master, tmp)
+            try:
+                result = run_once(tree, nb, tmp)
+            finally:
+                nb.unlink(missing_ok=True)
+            if version not in best or result[1] < best[version][1]:
+                best[version] = result
+    return name, best
+
+
+def _print(name: str, best: dict[str, tuple[float, float, float]], trees: dict[str, Path]) -> None:
+    for version in trees:
+        if version not in best:
+            print(f"{name:<34} {version:<7} {'(new)' if version == 'before' else '-':>8}")
+            continue
+        wall, cpu, load = best[version]
+        print(f"{name:<34} {version:<7} {wall:8.1f} {cpu:8.1f} {load:5.1f}")
+    if len(best) == 2:
+        print(f"{'':<34} {'after/before':<7}  wall {best['after'][0] / best['before'][0]:.2f}, "
+              f"CPU {best['after'][1] / best['before'][1]:.2f}", flush=True)
+
+
+def _save(path: str, results: dict, head: str) -> None:
+    """The figures so far, with when and at what load they were taken (for a later ``--add``)."""
+    load = os.getloadavg()
+    text = json.dumps({"head": f"{head}, {datetime.datetime.now().isoformat(timespec='minutes')}, "
+                               f"load {load[0]:.1f} / {load[1]:.1f} / {load[2]:.1f} at its end",
+                       "results": results}, indent=1)
+    Path(path).write_text(text, encoding="utf-8")
+
+
+def _arguments(argv: list[str] | None) -> tuple[argparse.Namespace, list[str], list[str]]:
+    """The parsed arguments, the versions to run and the lessons (name prefixes or names)."""
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("lessons", nargs="*", metavar="NN",
                    help="master name prefixes, e.g. 07 14 (default: the masters changed since --before)")
@@ -144,10 +195,26 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--rest", action="store_true",
                    help="also list every other lesson with the wall time its measure recorded")
     p.add_argument("--write", metavar="PATH", help="also write the Markdown table to PATH")
+    p.add_argument("--all", action="store_true", help="every lesson of this checkout")
+    p.add_argument("--versions", default="before,after",
+                   help="which sides to run: before,after (default), before or after")
+    p.add_argument("--save", metavar="JSON", help="write this run's figures to JSON")
+    p.add_argument("--add", metavar="JSON", help="merge the figures a --save wrote earlier")
     args = p.parse_args(argv)
     if args.repeat < 1:
         p.error(f"--repeat must be >= 1, got {args.repeat}")
-    lessons = args.lessons or changed_lessons(args.before)
+    versions = [v for v in args.versions.split(",") if v]
+    if not versions or set(versions) - {"before", "after"}:
+        p.error(f"--versions must be before, after or before,after; got {args.versions!r}")
+    if args.lessons and args.all:
+        p.error("give lesson prefixes or --all, not both")
+    if args.all:
+        return args, versions, [m.stem for m in sorted((ROOT / "lessons" / "masters").glob("*.ipynb"))]
+    return args, versions, args.lessons or changed_lessons(args.before)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args, versions, lessons = _arguments(argv)
     if not lessons:
         print(f"no lesson master differs from {args.before}: nothing to measure")
         return 0
@@ -156,41 +223,31 @@ def main(argv: list[str] | None = None) -> int:
     print(f"{'lesson':<34} {'version':<7} {'wall s':>8} {'CPU s':>8} {'load':>5}")
     with tempfile.TemporaryDirectory(prefix="gpsaccel-bench-lessons-") as tmp_name:
         tmp = Path(tmp_name)
-        trees = {"before": _unpack(args.before, tmp), "after": ROOT}
+        trees = {v: (_unpack(args.before, tmp) if v == "before" else ROOT) for v in versions}
         results: dict[str, dict[str, tuple[float, float, float]]] = {}
         for prefix in lessons:
-            best: dict[str, tuple[float, float, float]] = {}
-            name = prefix
-            for _ in range(args.repeat):
-                for version, tree in trees.items():
-                    master = _lesson(tree, prefix)
-                    if master is None:
-                        continue
-                    name = master.stem
-                    nb = _solutions_copy(tree, master, tmp)
-                    try:
-                        result = run_once(tree, nb, tmp)
-                    finally:
-                        nb.unlink(missing_ok=True)
-                    if version not in best or result[1] < best[version][1]:
-                        best[version] = result
+            prefix = prefix.split("-")[0]   # a whole name may have changed since --before
+            name, best = _measure(prefix, trees, tmp, args.repeat)
             results[name] = best
-            for version in trees:
-                if version not in best:
-                    print(f"{name:<34} {version:<7} {'(new)' if version == 'before' else '-':>8}")
-                    continue
-                wall, cpu, load = best[version]
-                print(f"{name:<34} {version:<7} {wall:8.1f} {cpu:8.1f} {load:5.1f}")
-            if len(best) == 2:
-                print(f"{'':<34} {'after/before':<7}  wall {best['after'][0] / best['before'][0]:.2f}, "
-                      f"CPU {best['after'][1] / best['before'][1]:.2f}", flush=True)
+            if args.save:
+                _save(args.save, results, head=f"{args.versions} of {args.before}")
+            _print(name, best, trees)
     ended = os.getloadavg()
-    head = (f"`python benchmarks/lessons.py {' '.join(lessons)} --before {args.before}`, "
+    earlier = ""
+    if args.add:
+        saved = json.loads(Path(args.add).read_text(encoding="utf-8"))
+        for name, by in saved["results"].items():
+            results.setdefault(name, {}).update(
+                {v: tuple(r) for v, r in by.items() if v not in results.get(name, {})})
+        earlier = f"  Merged from {args.add}: {saved['head']}."
+    shown = " ".join(lessons) if not args.all else "--all"
+    head = (f"`python benchmarks/lessons.py {shown} --before {args.before} "
+            f"--versions {args.versions}`, "
             f"{datetime.date.today().isoformat()}, {os.cpu_count()} CPUs, load average (1 min) "
             f"{started:.1f} at the start, {ended[0]:.1f} / {ended[1]:.1f} / {ended[2]:.1f} "
             f"(1/5/15 min) at the end.  CPU = user + system of the notebook's process and its "
             f"children (the kernel, its process pool); the machine was shared, so the wall times "
-            f"are not an idle machine's.")
+            f"are not an idle machine's.{earlier}")
     rows = _table(results) + (_recorded(set(results)) if args.rest else [])
     text = "\n".join([head, ""] + rows) + "\n"
     print("\n" + text, end="")
