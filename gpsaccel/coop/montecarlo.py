@@ -82,11 +82,14 @@ def truth_runs(model: CoopModel, n_runs: int, seed: int | np.random.SeedSequence
 
 def consistency_test(model: CoopModel, method: str, Q: np.ndarray | None = None,
                      n_runs: int = 50, seed: int = 0, alpha: float = 0.05,
-                     truth: Truth | None = None, keep: bool = False) -> ConsistencyRun:
+                     truth: Truth | None = None, keep: bool = False,
+                     result: FilterResult | None = None) -> ConsistencyRun:
     """NEES and NIS of ``method`` ('lkf', 'ekf', 'ukf') over N truth runs (or the given ``truth``).
 
     ``Q`` defaults to the tuned Q of the method.  ``keep`` keeps the filter result and the truth
-    on the returned object (for plots of a typical run).
+    on the returned object (for plots of a typical run).  ``result``: this filter already run on
+    ``truth`` (``run_batch(method, model, truth.y, Q)``), read instead of filtering again (the
+    same numbers; ``runtime_s`` is then NaN: nothing was timed here).
     """
     method = _v.choice("method", method, METHODS)
     alpha = _v.probability("alpha", alpha)
@@ -94,7 +97,17 @@ def consistency_test(model: CoopModel, method: str, Q: np.ndarray | None = None,
         n_runs = _v.integer("n_runs", n_runs, minimum=1)
         truth = truth_runs(model, n_runs, seed)
     Q = tuned_q(method, model) if Q is None else _v.spd_matrix("Q", Q, 6)
-    return _tests(model, method, [(Q, truth)], alpha, keep)[0]
+    if result is None:
+        return _tests(model, method, [(Q, truth)], alpha, keep)[0]
+    if result.method != method or np.shape(result.x_hat) != truth.x.shape:
+        raise ValueError(f"result must be the {method.upper()}'s on the truth's {truth.n_runs} "
+                         f"runs, got the {result.method.upper()}'s of shape "
+                         f"{np.shape(result.x_hat)}")
+    N = truth.n_runs
+    return ConsistencyRun(method, Q, N, alpha, model.t[1:],
+                          result.nees(truth.x)[:, 1:].mean(axis=0), result.nis()[:, 1:].mean(axis=0),
+                          consistency.chi2_bounds(6, N, alpha), consistency.chi2_bounds(5, N, alpha),
+                          float("nan"), result if keep else None, truth if keep else None)
 
 
 #: Runs filtered in one call by :func:`_tests`: ~5 ms CPU per 100-second EKF run from 100 runs
@@ -224,7 +237,8 @@ class TuningResult:
     ``tol``: candidates whose score is within ``tol`` of the highest count as equally good (one
     50-run set's NEES fraction scatters by several points); among them :attr:`best` is the one
     closest to Qtrue (smallest Σ log² of its multipliers), so Q is inflated only as far as the
-    tests can tell it helps.
+    tests can tell it helps.  ``tests``: every (candidate, set) consistency test, candidate by
+    candidate (:meth:`candidate`).
     """
 
     method: str
@@ -232,6 +246,17 @@ class TuningResult:
     nees_fraction: np.ndarray
     nis_fraction: np.ndarray
     tol: float = 0.02
+    tests: list[ConsistencyRun] | None = None
+
+    def candidate(self, scales: tuple[float, float, float]) -> list[ConsistencyRun]:
+        """The consistency tests of the candidate ``scales``, one per set (what :func:`tune_q`
+        measured: a caller that wants the numbers of one Q on the tuning sets need not run it
+        again)."""
+        if self.tests is None:
+            raise ValueError("this TuningResult keeps no tests (made without tune_q)")
+        per = len(self.tests) // len(self.scales)
+        i = self.scales.index(tuple(float(v) for v in scales))  # type: ignore[arg-type]
+        return self.tests[i * per:(i + 1) * per]
 
     @property
     def score(self) -> np.ndarray:
@@ -294,7 +319,7 @@ def tune_q(model: CoopModel, method: str, grid: Sequence[Sequence[float]] | None
               for i in range(0, len(tests), per)]
     nis_f = [np.mean([r.nis_fraction for r in tests[i:i + per]])
              for i in range(0, len(tests), per)]
-    return TuningResult(method, scales, np.array(nees_f), np.array(nis_f), tol)
+    return TuningResult(method, scales, np.array(nees_f), np.array(nis_f), tol, tests)
 
 
 def format_sets(runs_by_label: dict[str, list[ConsistencyRun]]) -> str:

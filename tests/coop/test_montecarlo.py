@@ -92,3 +92,43 @@ def test_sets_given_as_truths_are_the_sets_repeated_sets_simulates():
         assert np.array_equal(a.nees_mean, b.nees_mean) and np.array_equal(a.nis_mean, b.nis_mean)
     with pytest.raises(ValueError, match="truths"):
         repeated_sets(MODEL, "ekf", truths=[])
+
+
+def test_tune_q_keeps_each_candidates_tests_as_a_run_of_that_q_alone():
+    # lesson 11 reads the Q = Qtrue candidate's NEES from tune_q instead of filtering it again
+    from gpsaccel.coop.filters import scaled_q
+    from gpsaccel.coop.montecarlo import truth_runs
+
+    model = CoopModel(duration=5.0)
+    res = tune_q(model, "ekf", grid=((1.0, 2.0), (1.0,), (1.0,)), n_runs=4, n_sets=2, seed=3)
+    for sc in res.scales:
+        tests = res.candidate(sc)
+        assert len(tests) == 2
+        for tr_seed, got in zip(set_seeds(3, 2), tests, strict=True):
+            alone = consistency_test(model, "ekf", scaled_q(model.Qtrue, *sc),
+                                     truth=truth_runs(model, 4, tr_seed))
+            assert np.array_equal(got.nees_mean, alone.nees_mean)
+            assert np.array_equal(got.nis_mean, alone.nis_mean)
+    assert res.candidate((2, 1, 1))[0].nees_fraction == pytest.approx(
+        np.mean([t.nees_fraction for t in res.candidate((2.0, 1.0, 1.0))[:1]]))
+    with pytest.raises(ValueError, match="not in list"):
+        res.candidate((3.0, 1.0, 1.0))
+
+
+def test_consistency_of_a_result_already_run_is_that_of_running_it():
+    from gpsaccel.coop.filters import run_batch
+    from gpsaccel.coop.montecarlo import truth_runs
+
+    model = CoopModel(duration=5.0)
+    truth = truth_runs(model, 4, 9)
+    ran = consistency_test(model, "ekf", truth=truth, keep=True)
+    read = consistency_test(model, "ekf", truth=truth, keep=True,
+                            result=run_batch("ekf", model, truth.y))
+    assert np.array_equal(ran.nees_mean, read.nees_mean)
+    assert np.array_equal(ran.nis_mean, read.nis_mean)
+    assert (ran.nees_bounds, ran.nis_bounds) == (read.nees_bounds, read.nis_bounds)
+    assert read.result is not None and read.truth is truth and np.isnan(read.runtime_s)
+    with pytest.raises(ValueError, match="result must be the EKF's"):
+        consistency_test(model, "ekf", truth=truth, result=run_batch("lkf", model, truth.y))
+    with pytest.raises(ValueError, match="result must be the EKF's"):
+        consistency_test(model, "ekf", truth=truth, result=run_batch("ekf", model, truth.y[:2]))
