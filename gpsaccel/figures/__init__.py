@@ -109,7 +109,9 @@ def _write_index(path: Path, written: list, runs: int | None, seed: int) -> None
     write_text(path, "\n".join(parts) + "\n")
 
 
-def iter_report(report: str, runs: int | None = None, seed: int = 0) -> Iterator[ReportFigure]:
-    """Draw one report's figures without saving them (for notebooks)."""
+def iter_report(report: str, runs: int | None = None, seed: int = 0,
+                **options: object) -> Iterator[ReportFigure]:
+    """Draw one report's figures without saving them (for notebooks).  ``options`` go to the
+    report's ``figures`` (report 002's ``executor``: its filters on a pool while it draws)."""
     module = report_module(report)
-    return module.figures(module.DEFAULT_RUNS if runs is None else runs, seed)
+    return module.figures(module.DEFAULT_RUNS if runs is None else runs, seed, **options)

@@ -170,19 +170,32 @@ def monte_carlo(model: CoopModel, runs: int, seed: int) -> dict[str, Consistency
 class _MonteCarlo(dict):
     """:func:`monte_carlo`'s filters, each run when first asked for: a lesson that stops after
     figure 09 (10b) runs the LKF alone, not the EKFs and the UKF (6 of its 8 CPU s).  Every
-    filter sees the given truth, so the order they run in changes no number."""
+    filter sees the given truth, so the order they run in changes no number.
 
-    def __init__(self, model: CoopModel, truth: Truth) -> None:
+    With an ``executor`` the four filters are submitted to it at once (one task each) and each
+    is awaited when first asked for: the figures are drawn here while the pool filters (a lesson
+    that draws them all, 11 and 11b, on two cores).  The numbers are those of a serial run."""
+
+    def __init__(self, model: CoopModel, truth: Truth, executor: object = None) -> None:
         super().__init__()
         self.model, self.truth = model, truth
+        self.futures = {} if executor is None else {
+            m: executor.submit(_filter, model, m, truth)  # type: ignore[attr-defined]
+            for m in ("lkf", "ekf", "ekf-qtrue", "ukf")}
 
     def __missing__(self, m: str) -> ConsistencyRun:
-        truth = self.truth
-        if m == "lkf":
-            truth = Truth(truth.t, truth.x[:LKF_RUNS], truth.y[:LKF_RUNS])
-        Q = self.model.Qtrue if m == "ekf-qtrue" else None
-        self[m] = run = consistency_test(self.model, m.split("-")[0], Q, truth=truth, keep=True)
+        future = self.futures.get(m)
+        self[m] = run = _filter(self.model, m, self.truth) if future is None else future.result()
         return run
+
+
+def _filter(model: CoopModel, m: str, truth: Truth) -> ConsistencyRun:
+    """One of :class:`_MonteCarlo`'s filters on ``truth`` (the LKF on its first LKF_RUNS runs);
+    module-level, so a process pool can run it."""
+    if m == "lkf":
+        truth = Truth(truth.t, truth.x[:LKF_RUNS], truth.y[:LKF_RUNS])
+    Q = model.Qtrue if m == "ekf-qtrue" else None
+    return consistency_test(model, m.split("-")[0], Q, truth=truth, keep=True)
 
 
 def on_the_log(model: CoopModel) -> dict[str, FilterResult]:
@@ -191,11 +204,14 @@ def on_the_log(model: CoopModel) -> dict[str, FilterResult]:
     return {m: run_filter(m, model, y) for m in ("lkf", "ekf", "ukf")}
 
 
-def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
+def figures(runs: int, seed: int, executor: object = None) -> Iterator[ReportFigure]:
+    """The report's figures in order; ``executor`` (a ``concurrent.futures`` executor, or None:
+    here) filters the Monte Carlo set while the figures before it are drawn (:class:`_MonteCarlo`)."""
     model = CoopModel()
+    mc = None if executor is None else _MonteCarlo(model, truth_runs(model, runs, seed), executor)
     lin = linearization_study(model)
     yield from _linearization_figures(model.t, lin)
-    yield from _monte_carlo_figures(model, lin, runs, seed)
+    yield from _monte_carlo_figures(model, lin, runs, seed, mc)
     yield from _log_figures(model, lin)
 
 
@@ -248,11 +264,12 @@ def _drift_figure(t: np.ndarray, truth, nominal: np.ndarray) -> ReportFigure:
         "hundreds of metres from x*, far outside the LKF's linear range."), fig)
 
 
-def _monte_carlo_figures(model: CoopModel, lin: dict, runs: int,
-                         seed: int) -> Iterator[ReportFigure]:
+def _monte_carlo_figures(model: CoopModel, lin: dict, runs: int, seed: int,
+                         mc: _MonteCarlo | None = None) -> Iterator[ReportFigure]:
     """Figures 06-15c: the LKF's typical run, then NEES and NIS of every filter."""
     t = model.t
-    mc = _MonteCarlo(model, truth_runs(model, runs, seed))  # each filter when first drawn
+    if mc is None:
+        mc = _MonteCarlo(model, truth_runs(model, runs, seed))  # each filter when first drawn
     truth = mc.truth
     drift_fig = _drift_figure(t, truth, lin["nominal"])
     i0 = 0

@@ -98,3 +98,23 @@ def test_a_lesson_that_stops_after_figure_09_runs_the_lkf_alone(monkeypatch):
             break
     assert ran == ["lkf"]
     assert sorted(r002.monte_carlo(r002.CoopModel(), 3, 0)) == ["ekf", "ekf-qtrue", "lkf", "ukf"]
+
+
+def test_an_executor_filters_the_monte_carlo_at_once_with_the_same_numbers():
+    # lessons 11 and 11b pass a pool: the four filters are submitted together, awaited when drawn
+    import concurrent.futures as cf
+
+    import numpy as np
+
+    from gpsaccel.coop.montecarlo import truth_runs
+    from gpsaccel.figures import r002
+
+    model = r002.CoopModel(duration=2.0)
+    truth = truth_runs(model, 3, 0)
+    with cf.ThreadPoolExecutor(2) as pool:
+        pooled = r002._MonteCarlo(model, truth, executor=pool)
+        assert sorted(pooled.futures) == ["ekf", "ekf-qtrue", "lkf", "ukf"]
+        here = r002._MonteCarlo(model, truth)
+        for m in pooled.futures:
+            assert np.array_equal(pooled[m].nees_mean, here[m].nees_mean), m
+            assert np.array_equal(pooled[m].result.x_hat, here[m].result.x_hat), m
