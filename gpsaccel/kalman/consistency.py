@@ -33,10 +33,24 @@ def chi2_bounds(dof: int, n_runs: int = 1, alpha: float = 0.05) -> tuple[float, 
     n_runs = _v.integer("n_runs", n_runs, minimum=1)
     alpha = _v.probability("alpha", alpha)
     k = n_runs * dof
-    from scipy import stats  # here, not at import: scipy.stats costs 0.5 CPU s (see _lazy)
+    return (float(_chi2_ppf(alpha / 2, k) / n_runs),
+            float(_chi2_ppf(1 - alpha / 2, k) / n_runs))
 
-    return (float(stats.chi2.ppf(alpha / 2, k) / n_runs),
-            float(stats.chi2.ppf(1 - alpha / 2, k) / n_runs))
+
+# scipy.stats' chi2 and norm are these scipy.special functions under an argument check
+# (scipy.stats.chi2._ppf, ._cdf, ._sf; norm._ppf, ._isf): called directly, bit for bit the same
+# numbers, without importing scipy.stats (about 1 CPU s, the larger part of a check's start-up;
+# tests/kalman/test_consistency.py holds them equal)
+def _chi2_ppf(q: np.ndarray | float, dof: np.ndarray | float) -> np.ndarray:
+    from scipy import special
+
+    return 2 * special.gammaincinv(np.asarray(dof) / 2, q)
+
+
+def _norm_isf(q: np.ndarray | float) -> np.ndarray:
+    from scipy import special
+
+    return -special.ndtri(q)
 
 
 def normalized_squared(v: np.ndarray, C: np.ndarray) -> np.ndarray:
@@ -141,9 +155,7 @@ def z_threshold(alpha: float, n_tests: int) -> float:
     """
     alpha = _v.probability("alpha", alpha)
     n_tests = _v.integer("n_tests", n_tests, minimum=1)
-    from scipy import stats
-
-    return float(stats.norm.isf(alpha / (2 * n_tests)))
+    return float(_norm_isf(alpha / (2 * n_tests)))
 
 
 @dataclass(frozen=True)
@@ -226,12 +238,13 @@ def z_from_chi2(x: np.ndarray, dof: np.ndarray | int) -> np.ndarray:
     """
     x = np.asarray(x, dtype=float)
     dof = np.asarray(dof, dtype=float)
-    from scipy import stats
+    from scipy import special
 
-    upper = x > stats.chi2.median(dof)
+    upper = x > _chi2_ppf(0.5, dof)                      # the median
+    below = np.maximum(x, 0.0)                           # F = 0 below the support (not NaN)
     with np.errstate(divide="ignore", invalid="ignore"):
-        z = np.where(upper, stats.norm.isf(stats.chi2.sf(x, dof)),
-                     stats.norm.ppf(stats.chi2.cdf(x, dof)))
+        z = np.where(upper, _norm_isf(special.chdtrc(dof, x)),      # Φ⁻¹ of each tail
+                     special.ndtri(special.chdtr(dof, below)))
         c = 2.0 / (9.0 * dof)
         wilson_hilferty = (np.cbrt(x / dof) - 1.0 + c) / np.sqrt(c)
     return np.where(np.isinf(z) & (x > 0), wilson_hilferty, z)  # x = 0 stays at −inf
