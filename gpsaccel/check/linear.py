@@ -45,6 +45,7 @@ from gpsaccel.check.findings import mistake_finding
 from gpsaccel.check.linear_diagnosis import (  # noqa: F401 - the diagnosis's names, re-exported
     TOLERANCE,
     Answer,
+    Candidates,
     Cases,
     Diagnosis,
     answer,
@@ -325,8 +326,10 @@ class LinearProblem(Problem):
     def _diagnosis(self, report: Report, cases: Cases, ans: Answer, x: np.ndarray,
                    P: np.ndarray) -> None:
         tol, t = self.tol, self.t
-        combos, P_out = self.candidates()
-        diag = diagnose(P, x, cases.z, ans.sd, self.catalogue(), combos, P_out, tol)
+        # only what the match reads (linear_diagnosis): the answers are computed again after
+        # every box, none is kept while a student's code runs
+        pool = Candidates(self.catalogue(), 3)
+        diag = diagnose(P, x, cases.z, ans.sd, self.catalogue(), pool.combos, pool, tol)
         names = lambda ms: ", ".join(str(m) for m in ms)  # noqa: E731
         if diag.covariance is not None and diag.mean is not None:
             found = diag.covariance + diag.mean

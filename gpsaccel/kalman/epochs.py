@@ -82,13 +82,18 @@ class EpochFilter:
         """(K, M, P, K_between) of a filter that updates at every step (``fast``): the epochs'
         K, M, P as :attr:`gains`, and K_between (n_gps, n − 1, n, p) the gains of the updates
         between epoch i − 1 and epoch i (row 0 unused)."""
+        return self.fast_recursion(self.n_gps)
+
+    def fast_recursion(self, n_epochs: int
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """:attr:`fast_gains` of the first ``n_epochs`` epochs only (bit for bit its rows)."""
         assert self.fast is not None, "fast_gains is for a filter that updates at every step"
         Phi, Q, steps = self.fast
-        n_gps, (p, n) = self.n_gps, self.H.shape
-        K, M, P = np.zeros((n_gps, n, p)), np.empty((n_gps, n, n)), np.empty((n_gps, n, n))
-        Kb = np.zeros((n_gps, max(steps - 1, 0), n, p))
+        (p, n) = self.H.shape
+        K, M, P = np.zeros((n_epochs, n, p)), np.empty((n_epochs, n, n)), np.empty((n_epochs, n, n))
+        Kb = np.zeros((n_epochs, max(steps - 1, 0), n, p))
         C = self.M0
-        for i in range(n_gps):
+        for i in range(n_epochs):
             for s in range(steps if i else 0):
                 C = Phi @ C @ Phi.T + Q                          # one step: M = Φ P Φᵀ + Q
                 if s < steps - 1:                                # an update with z_{i−1}
@@ -141,24 +146,29 @@ class EpochFilter:
         return x @ Phi.T
 
 
-def batch_gains(filters: Sequence[EpochFilter]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def batch_gains(filters: Sequence[EpochFilter], n_epochs: int | None = None
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Gains and covariances of many filters at once: K (C, n_gps, n, p), M and P (C, n_gps, n, n).
 
     All filters must share n_gps and the state/measurement sizes.  The Joseph update
     (:func:`gpsaccel.kalman.update.joseph_update`) keeps P symmetric and positive definite even
-    for badly scaled mistakes.
+    for badly scaled mistakes.  ``n_epochs``: only the first epochs (bit for bit those rows of the
+    whole run; the diagnosis bounds a candidate's distance by them).  Each filter's rows are its
+    own: the same whichever filters share the stack.
     """
     n_gps = filters[0].n_gps
+    n_epochs = n_gps if n_epochs is None else n_epochs
     skip = {(i, kind): np.array([_skips(f, i, n_gps, kind) for f in filters])
             for i in {0, n_gps - 1} for kind in ("P", "x")}
     hold = np.array([not f.update_P for f in filters])
     F, Qe, H, V, M0 = (np.stack([getattr(f, a) for f in filters])
                        for a in ("F", "Qe", "H", "V", "M0"))
-    K, M, P, _ = gain_recursion(F, Qe, H, V, M0, n_gps, skip=skip,
+    K, M, P, _ = gain_recursion(F, Qe, H, V, M0, n_epochs, skip=skip,
                                 hold=hold if hold.any() else None)
     for c, f in enumerate(filters):
         if f.fast is not None:                        # updates between the epochs: its own loop
-            K[c], M[c], P[c] = f.fast_gains[:3]
+            K[c], M[c], P[c] = (f.fast_gains if n_epochs == n_gps
+                                else f.fast_recursion(n_epochs))[:3]
     return K, M, P
 
 

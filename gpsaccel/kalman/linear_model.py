@@ -10,6 +10,8 @@ which :meth:`LinearIngredients.epoch_filter` assembles into the one epoch recurs
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -22,6 +24,34 @@ from gpsaccel.kalman.update import epoch_transition
 
 if TYPE_CHECKING:  # filterpy pulls in scipy.stats (0.6 CPU s): imported where a filter is made
     from filterpy.kalman import KalmanFilter
+
+#: (Φ, Q, n) -> (Φⁿ, Q_e) while :func:`shared_transitions` is open, else None.
+_TRANSITIONS: dict[tuple, tuple[np.ndarray, np.ndarray]] | None = None
+
+
+@contextmanager
+def shared_transitions() -> Iterator[None]:
+    """Within the block, :meth:`LinearIngredients.epoch_filter` computes the transition of each
+    (Φ, Q, n) once and hands the same arrays to every filter that has it: report 000's 1867
+    candidate filters (:func:`gpsaccel.check.linear_diagnosis.candidates`) have 72 transitions.
+    The same recursion on the same numbers, so bit for bit what each filter computes alone;
+    nothing is kept after the block."""
+    global _TRANSITIONS
+    outer = _TRANSITIONS
+    _TRANSITIONS = {} if outer is None else outer
+    try:
+        yield
+    finally:
+        _TRANSITIONS = outer
+
+
+def _transition(Phi: np.ndarray, Q: np.ndarray, steps: int) -> tuple[np.ndarray, np.ndarray]:
+    if _TRANSITIONS is None:
+        return epoch_transition(Phi, Q, steps)
+    key = (Phi.shape, Phi.dtype.str, Phi.tobytes(), Q.shape, Q.dtype.str, Q.tobytes(), steps)
+    if key not in _TRANSITIONS:
+        _TRANSITIONS[key] = epoch_transition(Phi, Q, steps)
+    return _TRANSITIONS[key]
 
 
 def _matrix(name: str, value: object, rows: int | None = None, cols: int | None = None
@@ -173,7 +203,7 @@ class LinearIngredients:
 
     def epoch_filter(self) -> EpochFilter:
         Q = self.Gamma @ self.W @ self.Gamma.T                 # Q = Γ W Γᵀ
-        F, Qe = epoch_transition(self.Phi, Q, self.steps)
+        F, Qe = _transition(self.Phi, Q, self.steps)
         A = F if self.mean_propagated else np.eye(F.shape[0])
         x0, M0 = self.x0, self.M0
         if self.predict_first:                                 # one propagation before z_0:

@@ -137,3 +137,34 @@ def test_the_forms_compare_against_the_exact_answer_on_the_tracker():
     for row in table.rows:
         assert row.errors.dx_sigma < 1e-10 and row.errors.dP_rel < 1e-11, row
     assert table.exact_min_eig > 0
+
+
+@pytest.mark.parametrize("problem", ["tracker", "calibration"])
+def test_the_diagnosis_computes_only_what_it_reads_and_finds_the_same(problem):
+    # linear_diagnosis.Candidates: every candidate's head bounds its distance, only the
+    # candidates in play run whole; the diagnosis equals the whole stack's, and each candidate's
+    # rows are bit for bit the same (the head's too) whichever candidates share its stack
+    from gpsaccel.check import linear_diagnosis as ld
+    from gpsaccel.kalman.epochs import batch_gains
+
+    prob = registry.problem(problem)
+    cat, cases = prob.catalogue(), prob.simulate(3, 0)
+    ans = prob.answer(cases)
+    combos, P_all = ld.candidates(cat, 2)
+    lazy = ld.Candidates(cat, 2)
+    fast = [c for c, f in enumerate(lazy.filters) if f.fast is not None][:1]
+    some = [len(combos) - 1, *fast, 0]
+    assert np.array_equal(lazy.rows(some), P_all[some])
+    assert np.array_equal(lazy.head(ld.HEAD), P_all[:, :ld.HEAD])
+    assert np.array_equal(batch_gains(lazy.filters[:1], 5)[2], batch_gains(lazy.filters)[2][:1, :5])
+    def named(d):
+        return [None if ms is None else [(m.code, m.variant) for m in ms]
+                for ms in (d.covariance, d.mean, d.nearest)] + [d.nearest_distance]
+
+    x_ref = ans.x_ref
+    students = [ans.P_ref, P_all[len(combos) // 2], P_all[-1] * (1 + 1e-3), P_all[3] + 1e-9]
+    for P0 in students:
+        P = np.broadcast_to(P0, (3, *P0.shape))
+        whole = ld.diagnose(P, x_ref, cases.z, ans.sd, cat, combos, P_all)
+        assert named(ld.diagnose(P, x_ref, cases.z, ans.sd, cat, lazy.combos,
+                                 ld.Candidates(cat, 2))) == named(whole)
