@@ -10,6 +10,7 @@ which :meth:`LinearIngredients.epoch_filter` assembles into the one epoch recurs
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -25,8 +26,8 @@ from gpsaccel.kalman.update import epoch_transition
 if TYPE_CHECKING:  # filterpy pulls in scipy.stats (0.6 CPU s): imported where a filter is made
     from filterpy.kalman import KalmanFilter
 
-#: (Φ, Q, n) -> (Φⁿ, Q_e) while :func:`shared_transitions` is open, else None.
-_TRANSITIONS: dict[tuple, tuple[np.ndarray, np.ndarray]] | None = None
+#: ``.memo``: (Φ, Q, n) -> (Φⁿ, Q_e) while :func:`shared_transitions` is open in this thread.
+_TRANSITIONS = threading.local()
 
 
 @contextmanager
@@ -35,23 +36,23 @@ def shared_transitions() -> Iterator[None]:
     (Φ, Q, n) once and hands the same arrays to every filter that has it: report 000's 1867
     candidate filters (:func:`gpsaccel.check.linear_diagnosis.candidates`) have 72 transitions.
     The same recursion on the same numbers, so bit for bit what each filter computes alone;
-    nothing is kept after the block."""
-    global _TRANSITIONS
-    outer = _TRANSITIONS
-    _TRANSITIONS = {} if outer is None else outer
+    nothing is kept after the block (per thread)."""
+    outer = getattr(_TRANSITIONS, "memo", None)
+    _TRANSITIONS.memo = {} if outer is None else outer
     try:
         yield
     finally:
-        _TRANSITIONS = outer
+        _TRANSITIONS.memo = outer
 
 
 def _transition(Phi: np.ndarray, Q: np.ndarray, steps: int) -> tuple[np.ndarray, np.ndarray]:
-    if _TRANSITIONS is None:
+    memo = getattr(_TRANSITIONS, "memo", None)
+    if memo is None:
         return epoch_transition(Phi, Q, steps)
     key = (Phi.shape, Phi.dtype.str, Phi.tobytes(), Q.shape, Q.dtype.str, Q.tobytes(), steps)
-    if key not in _TRANSITIONS:
-        _TRANSITIONS[key] = epoch_transition(Phi, Q, steps)
-    return _TRANSITIONS[key]
+    if key not in memo:
+        memo[key] = epoch_transition(Phi, Q, steps)
+    return memo[key]
 
 
 def _matrix(name: str, value: object, rows: int | None = None, cols: int | None = None
