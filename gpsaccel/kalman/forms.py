@@ -43,7 +43,7 @@ from typing import Any
 import numpy as np
 from filterpy.kalman import InformationFilter as FilterpyInformationFilter
 from filterpy.kalman import KalmanFilter, SquareRootKalmanFilter
-from scipy.linalg import cholesky, qr
+from scipy.linalg import cholesky, get_lapack_funcs
 
 
 class StandardKalmanFilter(KalmanFilter):
@@ -137,6 +137,11 @@ class FilterpySquareRoot(_FilterpyAdapter):
         kf._Q1_2 = Q_factor
         kf.x = np.array(x0, dtype=float).reshape(-1, 1)  # its own copy: filterpy updates x in place
         self.filter = kf
+        n = Phi.shape[0]
+        self._work = np.zeros((n + Q_factor.shape[1], n), order="F")  # [Φ P^½, Q^½]ᵀ
+        (self._geqrf,) = get_lapack_funcs(("geqrf",), (self._work,))
+        self._lwork = int(self._geqrf(self._work, lwork=-1)[2][0].real)  # scipy's workspace query
+        self._below = np.tril_indices(n, -1)
 
     @property
     def K(self) -> np.ndarray:
@@ -144,14 +149,26 @@ class FilterpySquareRoot(_FilterpyAdapter):
 
     def predict(self) -> None:
         """filterpy's ``SquareRootKalmanFilter.predict`` (x̄ = Φ x̂; M^½ from one QR of
-        [Φ P^½, Q^½]ᵀ), with the QR in scipy's ``mode="r"``: filterpy asks for the full QR and
-        throws its orthogonal factor away.  The same LAPACK factorisation gives the same R, bit for
-        bit (tests/calibration/test_forms.py), without forming Q: the lesson's sweeps run this
-        6000 times per form and point.  No control input: the driver never passes one."""
+        [Φ P^½, Q^½]ᵀ), with the QR as the one LAPACK call (``dgeqrf``) that scipy's ``qr`` makes
+        for it: filterpy asks for the full QR and throws its orthogonal factor away, and scipy's
+        wrappers around the call (``mode="r"`` included) cost twice the factorisation.  The same
+        call on the same matrix gives the same R, bit for bit (tests/calibration/test_forms.py),
+        without forming Q: the lesson's sweeps run this 6000 times per form and point.  No
+        control input: the driver never passes one."""
         kf = self.filter
+        n = kf.dim_x
         kf.x = np.dot(kf.F, kf.x) + np.dot(kf.B, 0)  # filterpy's own expression, to the bit
-        (P2,) = qr(np.hstack([np.dot(kf.F, kf._P1_2), kf._Q1_2]).T, mode="r")
-        kf._P1_2 = P2[:kf.dim_x, :kf.dim_x].T
+        a = self._work
+        a[:n] = np.dot(kf.F, kf._P1_2).T
+        a[n:] = kf._Q1_2.T
+        if not np.isfinite(a).all():  # as scipy's qr refuses it (check_finite)
+            raise ValueError("array must not contain infs or NaNs")
+        r, _, _, info = self._geqrf(a, lwork=self._lwork)
+        if info < 0:
+            raise ValueError(f"illegal value in {-info}th argument of internal geqrf")
+        r = np.ascontiguousarray(r[:n])  # R's leading block, laid out as scipy's np.triu(...)
+        r[self._below] = 0.0  # R's strict lower triangle holds the Householder vectors: np.triu
+        kf._P1_2 = r.T
         kf.x_prior = np.copy(kf.x)
         kf._P1_2_prior = np.copy(kf._P1_2)
 

@@ -68,8 +68,9 @@ def test_unknown_form_is_named():
 
 
 def test_square_root_prediction_is_filterpys_to_the_bit():
-    """The adapter's predict (QR in mode "r") against filterpy's own (full QR), step by step, from
-    a badly conditioned P^½ (the prior sweep's last point) and from the report's."""
+    """The adapter's predict (scipy's one LAPACK call, dgeqrf) against filterpy's own (scipy's full
+    QR), step by step, from a badly conditioned P^½ (the prior sweep's last point) and from the
+    report's; a P^½ that is no longer finite is refused as scipy's qr refuses it."""
     model = CalibrationModel()
     for M0 in (model.M0, model.M0 * 1e12):
         ours = make_form("square-root", model.replace(M0=M0))
@@ -84,3 +85,6 @@ def test_square_root_prediction_is_filterpys_to_the_bit():
         assert ours.filter._P1_2.tobytes() == theirs._P1_2.tobytes()
         assert ours.x.tobytes() == theirs.x.tobytes()
         assert ours.filter._P1_2_prior.tobytes() == theirs._P1_2_prior.tobytes()
+    ours.filter._P1_2 = np.full((3, 3), np.nan)
+    with pytest.raises(ValueError, match="infs or NaNs"):
+        ours.predict()
