@@ -57,9 +57,10 @@ class InformationFilter:
                  x0: np.ndarray, M0: np.ndarray, B: np.ndarray | None = None) -> None:
         self.Phi, self.Q, self.H, self.V, self.B = Phi, Q, H, V, B
         self.x = np.array(x0, dtype=float).reshape(-1, 1)     # x̄ or x̂, whichever is latest
-        self.P = np.asarray(M0, dtype=float).copy()            # M or P, whichever is latest
+        self._P: np.ndarray | None = np.asarray(M0, dtype=float).copy()  # M or P, the latest
         self.Y = _spd_inverse(self.P)                          # its inverse: what is carried
-        self.x_bar, self.M = self.x.copy(), self.P.copy()
+        self.x_bar = self.x.copy()
+        self._M: np.ndarray | None = self.P.copy()  # None: M is the latest P (after a prediction)
         self.K = np.zeros((self.x.shape[0], H.shape[0]))
         self.y = np.zeros((H.shape[0], 1))
         w, U = np.linalg.eigh((np.asarray(Q, dtype=float) + np.asarray(Q, dtype=float).T) / 2)
@@ -75,7 +76,7 @@ class InformationFilter:
         """x̄ = Φ x̂ (+ B u with a known input u),  M⁻¹ = A − A G (I + Gᵀ A G)⁻¹ Gᵀ A.
 
         ``B`` overrides the filter's own ``B`` for this call (filterpy's signature).  A = Φ⁻ᵀ Y Φ⁻¹
-        is the information after Φ alone, Q = G Gᵀ; M = (M⁻¹)⁻¹ is kept for reading.
+        is the information after Φ alone, Q = G Gᵀ; M = (M⁻¹)⁻¹ is formed when read (``P``).
         """
         B = self.B if B is None else B
         self.x = self.Phi @ self.x
@@ -95,9 +96,9 @@ class InformationFilter:
             else:
                 Y = A - AG @ np.linalg.solve(np.eye(C.shape[0]) + C, AG.T)
             self.Y = (Y + Y.T) / 2
-            M = np.linalg.inv(self.Y)  # for reading only: the recursion goes on with Y
-            self.P = (M + M.T) / 2
-        self.x_bar, self.M = self.x, self.P
+            self._P = None  # M = Y⁻¹ is for reading only (the recursion goes on with Y): formed
+            #                 when read, not at each of the fast steps between two updates
+        self.x_bar, self._M = self.x, None  # M is the latest P
 
     def update(self, z: np.ndarray, R: np.ndarray | None = None,
                H: np.ndarray | None = None) -> None:
@@ -115,6 +116,28 @@ class InformationFilter:
         self.K, self.P = _spd_solve(self.Y, H.T @ V_inv)
         self.y = z - H @ self.x_bar
         self.x = self.x_bar + self.K @ self.y
+
+    @property
+    def P(self) -> np.ndarray:
+        """The latest covariance (M after :meth:`predict`, P after :meth:`update`): Y⁻¹,
+        symmetrised, formed on first reading after a prediction."""
+        if self._P is None:
+            M = np.linalg.inv(self.Y)
+            self._P = (M + M.T) / 2
+        return self._P
+
+    @P.setter
+    def P(self, value: np.ndarray) -> None:
+        self._P = value
+
+    @property
+    def M(self) -> np.ndarray:
+        """The a priori covariance of the latest update (or, after a prediction, the latest P)."""
+        return self.P if self._M is None else self._M
+
+    @M.setter
+    def M(self, value: np.ndarray) -> None:
+        self._M = value
 
     @property
     def x_hat(self) -> np.ndarray:
