@@ -17,6 +17,12 @@ UPDATE = """    K = M @ Hr.T @ np.linalg.inv(Hr @ M @ Hr.T + Vr)"""
 ZEROED_K = """    K = M @ H.T @ np.linalg.inv(H @ M @ H.T + V)
     K = K[:, rows]"""
 ACTUAL = "sigma_zeroed = float(np.sqrt(zeroed.P_actual[-1][0, 0]))"
+SIGMAS = "sigma_optimal = float(np.sqrt(optimal.P[-1][0, 0]))\n" + ACTUAL
+VOYAGE = """voyage = simulate_ship(ship, np.random.default_rng(0))
+schedule = ship.schedule()
+z = voyage.measurements(schedule)
+optimal = gpsaccel.run_multirate(ship, z, schedule=schedule, u=voyage.u)
+zeroed = run_zeroed_gain(ship, z, schedule=schedule, covariance="report", u=voyage.u)"""
 SECRET = b"ship-test-secret-0123456789"
 
 
@@ -31,11 +37,13 @@ def graded(tmp_path_factory):
     write_variant("ship", sub / "mistake_q1" / "ship.ipynb", [(UPDATE, ZEROED_K)])
     write_variant("ship", sub / "mistake_q2" / "ship.ipynb",
                   [(ACTUAL, ACTUAL.replace("P_actual", "P"))])
-    # the numbers of the public notebook's voyage (seed 0) typed in: wrong for any other variant
+    # the numbers of the public notebook's voyage (seed 0) typed in instead of its own voyage
+    # (not run: half of a notebook's CPU): wrong for any other variant
     want = ship.zeroed_gain_cost()
     write_variant("ship", sub / "copied" / "ship.ipynb",
-                  last_cell=f"sigma_optimal = {want['sigma_optimal']!r}\n"
-                            f"sigma_zeroed = {want['sigma_actual']!r}")
+                  [(VOYAGE, "# the voyage is not run: its numbers are copied below"),
+                   (SIGMAS, f"sigma_optimal = {want['sigma_optimal']!r}\n"
+                            f"sigma_zeroed = {want['sigma_actual']!r}")])
     grades = grade(sub, "ship", out=sub.parent / "ship-grades", jobs=2, timeout=120, seed=3,
                    secret=SECRET)
     return {g.student: g for g in grades}
