@@ -192,14 +192,20 @@ for sig_target in [os.getppid()] + [int(p) for p in os.listdir("/proc") if p.isd
         except OSError:
             pass
 """, 0),
-    # /proc snooping: classmates' notebooks through other processes' cwd, root, fds
+    # /proc snooping: classmates' notebooks through other processes' cwd, root, fds (bounded by
+    # the attack too: a walk that follows /proc/N/root into /proc/N/root/proc/N/root/... never
+    # ends, and the box's time limit then cost the class a minute)
     "proc snooping": ("""
-import os, glob
+import os, glob, time
 found = []
+stop = time.monotonic() + 2
 for p in glob.glob("/proc/[0-9]*"):
     for link in ("cwd", "root"):
         try:
-            found += glob.glob(os.path.join(p, link, "**", "*.ipynb"), recursive=True)
+            for d, _, files in os.walk(os.path.join(p, link), followlinks=True):
+                found += [os.path.join(d, f) for f in files if f.endswith(".ipynb")]
+                if time.monotonic() > stop:
+                    break
         except OSError:
             pass
 found += glob.glob("{sub}/**/*.ipynb", recursive=True)
