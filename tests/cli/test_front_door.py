@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import os
 import signal
 import subprocess
@@ -34,6 +35,46 @@ def gpsaccel(*args: str, cwd: Path, timeout: float = 120) -> subprocess.Complete
     env = dict(os.environ, PYTHONPATH=str(ROOT), MPLBACKEND="Agg")
     return subprocess.run([sys.executable, "-m", "gpsaccel.cli", *args], cwd=cwd, env=env,
                           capture_output=True, text=True, timeout=timeout)
+
+
+#: One child process that runs the command (``gpsaccel.cli`` as ``__main__``, as ``python -m``
+#: does) once per case, each in its own working folder: a fresh interpreter and import of the
+#: package cost 0.35 CPU s a case, and the refusals need none of their own.
+_CASES = r"""
+import contextlib, io, json, os, runpy, sys, traceback
+results = []
+for argv, cwd in json.loads(sys.stdin.read()):
+    os.chdir(cwd)
+    sys.argv = ["gpsaccel.cli", *argv]
+    out, err, code = io.StringIO(), io.StringIO(), 0
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            runpy.run_module("gpsaccel.cli", run_name="__main__", alter_sys=True)
+        except SystemExit as exc:  # as the interpreter ends: a number, or a message and 1
+            if exc.code is None or isinstance(exc.code, int):
+                code = exc.code or 0
+            else:
+                print(exc.code, file=sys.stderr)
+                code = 1
+        except BaseException:
+            traceback.print_exc()
+            code = 1
+    results.append([int(code), out.getvalue(), err.getvalue()])
+print(json.dumps(results))
+"""
+
+
+def gpsaccel_cases(cases: list[tuple[list[str], Path]], timeout: float = 600
+                   ) -> list[subprocess.CompletedProcess]:
+    """Each ``(argv, cwd)`` run as the command in one child process (:data:`_CASES`)."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT), MPLBACKEND="Agg")
+    proc = subprocess.run([sys.executable, "-c", _CASES], env=env, capture_output=True,
+                          text=True, timeout=timeout,
+                          input=json.dumps([[list(a), str(c)] for a, c in cases]))
+    assert proc.returncode == 0 and proc.stdout.strip(), proc
+    return [subprocess.CompletedProcess([sys.executable, "-m", "gpsaccel.cli", *argv], code,
+                                        out, err)
+            for (argv, _), (code, out, err) in zip(cases, json.loads(proc.stdout), strict=True)]
 
 
 def assert_refused(res: subprocess.CompletedProcess, *words: str) -> None:
@@ -70,11 +111,21 @@ BAD_NUMBERS = [
 ]
 
 
-@pytest.mark.parametrize("argv, flag, expected", BAD_NUMBERS, ids=lambda v: None)
-def test_bad_number_is_refused_before_any_work(tmp_path, argv, flag, expected):
-    res = gpsaccel(*argv, cwd=tmp_path)
+@pytest.fixture(scope="module")
+def bad_numbers(tmp_path_factory):
+    """Every case of BAD_NUMBERS run in an empty folder of its own: (result, folder) by case."""
+    folders = [tmp_path_factory.mktemp("bad-number") for _ in BAD_NUMBERS]
+    results = gpsaccel_cases([(argv, f) for (argv, _, _), f in zip(BAD_NUMBERS, folders,
+                                                                    strict=True)])
+    return list(zip(results, folders, strict=True))
+
+
+@pytest.mark.parametrize("k", range(len(BAD_NUMBERS)), ids=lambda v: None)
+def test_bad_number_is_refused_before_any_work(bad_numbers, k):
+    argv, flag, expected = BAD_NUMBERS[k]
+    res, folder = bad_numbers[k]
     assert_refused(res, f"argument {flag}:", expected, f"gpsaccel {argv[0]}: error")
-    assert files_in(tmp_path) == []
+    assert files_in(folder) == []
 
 
 def _numeric_actions():
@@ -128,8 +179,10 @@ def test_output_paths_are_checked_before_any_work(tmp_path):
         (["check", str(SUBMISSION), "--json", "/proc/x/results.json"], "--json", "not writable"),
         (["lessons", "--html", "/proc/gpsaccel-html"], "--html", "not writable"),
     ]
-    for argv, flag, expected in cases:  # refused by the parser: nothing computed, nothing printed
-        assert_refused(gpsaccel(*argv, cwd=tmp_path, timeout=600), f"argument {flag}:", expected)
+    results = gpsaccel_cases([(argv, tmp_path) for argv, _, _ in cases])
+    for (_, flag, expected), res in zip(cases, results, strict=True):
+        # refused by the parser: nothing computed, nothing printed
+        assert_refused(res, f"argument {flag}:", expected)
     assert files_in(tmp_path) == ["a-file"]
 
 
