@@ -24,33 +24,7 @@ G_EULER = "G = dt * jacobian_B(x, u)"
 
 
 @pytest.fixture(scope="module")
-def nominal_once():
-    """The coop model's noiseless nominal trajectory integrated once for the module instead of
-    about nine times per graded notebook (the grader's every state draw and check integrates it:
-    3 of a notebook's 4 CPU s outside its box).  ``CoopModel.nominal`` is deterministic (DOP853
-    at fixed tolerances), so each call still gets the same array (a copy); patched in this
-    process before the class is graded, so the forked graders inherit it and its cache.  Not in
-    the box: the student's notebook runs in a process of its own."""
-    original = cm.CoopModel.nominal
-    kept: dict = {}
-
-    def nominal(self, x_start=None, rtol=1e-12, atol=1e-10):
-        if x_start is not None:
-            return original(self, x_start, rtol, atol)
-        key = (self.L, self.x0.tobytes(), self.u0.tobytes(), self.t.tobytes(), rtol, atol)
-        if key not in kept:
-            kept[key] = original(self, None, rtol, atol)
-        return kept[key].copy()
-
-    mp = pytest.MonkeyPatch()
-    mp.setattr(cm.CoopModel, "nominal", nominal)
-    CoopModel().nominal()  # the grader's model
-    yield
-    mp.undo()
-
-
-@pytest.fixture(scope="module")
-def graded(tmp_path_factory, nominal_once):
+def graded(tmp_path_factory):
     sub = tmp_path_factory.mktemp("class")
     write_variant("coop", sub / "solved" / "coop.ipynb")
     write_variant("coop", sub / "blank" / "coop.ipynb", last_cell=(

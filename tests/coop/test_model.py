@@ -173,3 +173,35 @@ def test_course_data_is_packaged():
 def test_bad_input_names_the_argument(call, name):
     with pytest.raises(ValueError, match=name):
         call()
+
+
+def test_nominal_is_integrated_once_per_problem_and_each_call_gets_its_own_copy(monkeypatch):
+    """CoopModel.nominal keeps each distinct trajectory (a graded notebook asked for the same one
+    about nine times): the kept array is the integration's, bit for bit, no caller can change what
+    the next one gets, and a different start, ΔT or tolerance is a different problem."""
+    import gpsaccel.coop.model as cm
+
+    monkeypatch.setattr(cm, "_NOMINALS", {})
+    calls = []
+    integrate = cm.CoopModel._integrate
+
+    def counted(self, x_start, rtol, atol):
+        calls.append((tuple(x_start), rtol, atol))
+        return integrate(self, x_start, rtol, atol)
+
+    monkeypatch.setattr(cm.CoopModel, "_integrate", counted)
+    model = CoopModel(duration=5.0)
+    first = model.nominal()
+    np.testing.assert_array_equal(first, integrate(model, model.x0, 1e-12, 1e-10))
+    first[:] = 0.0                                   # the caller's copy, not the kept one
+    again = CoopModel(duration=5.0).nominal()        # a new model of the same problem
+    assert len(calls) == 1 and not np.array_equal(again, first)
+    np.testing.assert_array_equal(again, integrate(model, model.x0, 1e-12, 1e-10))
+    other = model.x0 + np.array([1.0, 0, 0, 0, 0, 0])
+    model.nominal(other)
+    CoopModel(duration=5.0, dt=0.05).nominal()
+    model.nominal(rtol=1e-9)
+    assert len(calls) == 4
+    for k in range(cm._NOMINALS_KEPT + 3):           # bounded: the oldest go first
+        model.nominal(model.x0 + k * 1e-3)
+    assert len(cm._NOMINALS) == cm._NOMINALS_KEPT
