@@ -121,7 +121,7 @@ def _table(results: dict[str, dict[str, tuple[float, float, float]]]) -> list[st
              "CPU after/before | load (1 min) before / after |", "|---|---|---|---|---|---|---|"]
     for name, by in results.items():
         b, a = by.get("before"), by.get("after")
-        cpu = [f"{v[1]:.1f}" if v else "(new)" for v in (b, a)]
+        cpu = [f"{b[1]:.1f}" if b else "(new)", f"{a[1]:.1f}" if a else "not run"]
         wall = [f"{v[0]:.1f}" if v else "-" for v in (b, a)]
         ratio = f"{a[1] / b[1]:.2f}" if a and b else ""
         load = " / ".join(f"{v[2]:.1f}" if v else "-" for v in (b, a))
