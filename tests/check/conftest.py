@@ -1,6 +1,12 @@
 """The hostile fixtures of tests/_hostile.py for the checker's tests: ``backend`` (test_batch.py,
 test_student_filter.py), ``hostile`` and ``watch``, and the machine-wide lock test_batch.py holds
-with the sandbox's hostile modules (tests/sandbox/)."""
+with the sandbox's hostile modules (tests/sandbox/); and :func:`keeping_answers`, a problem that
+computes its reference answers once for a whole test module."""
+
+from __future__ import annotations
+
+from gpsaccel.check import problems
+from gpsaccel.check.problem import Problem
 
 from .._hostile import (  # noqa: F401 - a conftest's names are its fixtures and hooks
     _one_hostile_module_at_a_time,
@@ -8,3 +14,25 @@ from .._hostile import (  # noqa: F401 - a conftest's names are its fixtures and
     pytest_generate_tests,
     watch,
 )
+
+
+def keeping_answers(name: str) -> Problem:
+    """A new instance of the registered problem ``name`` whose ``forget()`` keeps its cached
+    reference answers, for the tests that check many trusted fixtures on the same data.
+
+    A check drops every cached answer before the student's box starts (so none is in the
+    checker's memory while student code runs) and computes the reference and each catalogue
+    mistake again after it: 6-9 CPU s of a coop check, 2 of a calibration one.  The answers are
+    a function of the simulated cases alone (cached on their seed and size), so a module's checks
+    share them here and get the same reports; the order itself (box, then answer) is held by
+    test_calibration.py::test_the_answer_is_computed_only_after_the_box_is_empty, and every
+    test that checks through the registered problem (``problem="coop"``) still forgets.
+    """
+    base = type(problems.get(name))
+
+    class KeepingAnswers(base):  # type: ignore[valid-type,misc]
+        def forget(self) -> None:
+            pass
+
+    KeepingAnswers.__name__ = KeepingAnswers.__qualname__ = f"KeepingAnswers{base.__name__}"
+    return KeepingAnswers()

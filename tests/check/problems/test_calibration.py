@@ -2,7 +2,11 @@
 mutant is flagged with its code, broken submissions become findings (never an exception here).
 
 Small ensembles (N_RUNS) keep this file within its time budget; the checker's decision does not
-depend on N (P and x̂ are compared run by run), only the consistency statistics do.
+depend on N (P and x̂ are compared run by run), only the consistency statistics do.  So the
+mutants, whose verdicts are those comparisons, are checked on MUTANT_RUNS = 2 runs, once each
+for the module (:func:`mutant`), and share the catalogue's candidate filters
+(:func:`keeping_answers`: 2 CPU s a check when computed again after each box); the tests that
+assert a consistency verdict ("consistent", "inconsistent") keep their N_RUNS = 20.
 """
 
 from __future__ import annotations
@@ -17,8 +21,11 @@ from gpsaccel import sandbox as sb
 from gpsaccel.check.problems import calibration as wf
 from gpsaccel.cli import main
 
+from ..conftest import keeping_answers
+
 HERE = Path(__file__).parents[2] / "submissions"
 N_RUNS = 20
+MUTANT_RUNS = 2
 
 
 def _check(name: str, seed: int = 0, **kw) -> check.Report:
@@ -75,9 +82,24 @@ def test_every_catalogue_code_has_a_mutant_here():
     assert set(check.codes()) <= covered, set(check.codes()) - covered
 
 
+@pytest.fixture(scope="module")
+def mutant():
+    """``mutant(name, n_runs)``: the report of mutant ``name`` at seed 3, checked once for the
+    module with the catalogue's candidates kept between checks."""
+    problem = keeping_answers("calibration")
+    reports: dict[tuple[str, int], check.Report] = {}
+
+    def get(name: str, n_runs: int = MUTANT_RUNS) -> check.Report:
+        if (name, n_runs) not in reports:
+            reports[name, n_runs] = _check(name, seed=3, n_runs=n_runs, problem=problem)
+        return reports[name, n_runs]
+
+    return get
+
+
 @pytest.mark.parametrize("name, codes", MUTANTS, ids=[n[:-3] for n, _ in MUTANTS])
-def test_mutant_is_flagged_with_its_code(name, codes):
-    report = _check(name, seed=3)
+def test_mutant_is_flagged_with_its_code(mutant, name, codes):
+    report = mutant(name)
     assert not report.passed
     assert report.codes == codes, report
     for f in report.findings:
@@ -85,16 +107,16 @@ def test_mutant_is_flagged_with_its_code(name, codes):
             assert len(f.message) > 60  # a sentence a student can act on, not just a code
 
 
-def test_report003_shows_both_variance_slips_and_what_they_do():
-    report = _check("report003.py", seed=3)
+def test_report003_shows_both_variance_slips_and_what_they_do(mutant):
+    report = mutant("report003.py", N_RUNS)
     variants = [m["variant"] for m in report.details["matched"]]
     assert "V₂₂ = 0.04" in variants and "M0₁₁ = 10" in variants
     # its P is too small for its errors: the NEES test sees it even on 20 runs
     assert "inconsistent" in [f.code for f in report.findings]
 
 
-def test_p_mismatch_says_where_p_first_differs():
-    report = _check("mutant_diagonal_q.py", seed=3)
+def test_p_mismatch_says_where_p_first_differs(mutant):
+    report = mutant("mutant_diagonal_q.py")
     msg = next(f.message for f in report.findings if f.code == "p-mismatch")
     assert "P at t = 0 is right" in msg and "propagation" in msg
 

@@ -1,7 +1,10 @@
 """Sharper calibration diagnoses: mistakes in what is returned, recognised before the catalogue.
 
 Each fixture would otherwise be reported as a generic p-mismatch ("M0, H or V is wrong"); each gets
-its own code on two seeds.
+its own code on two seeds.  Each diagnosis compares the returned x̂ and P with the optimal filter's
+run by run (or between two runs: ``state-between-calls``), never a statistic over the ensemble, so
+N_RUNS = 2 runs show it; the module's checks share the catalogue's candidate filters
+(:func:`keeping_answers`).
 """
 
 from __future__ import annotations
@@ -13,8 +16,10 @@ import pytest
 
 from gpsaccel import check
 
+from ..conftest import keeping_answers
+
 HERE = Path(__file__).parents[2] / "submissions"
-N_RUNS = 8
+N_RUNS = 2
 
 SHARPER = [
     ("mutant_float32.py", "low-precision", ["float32", "not a wrong M0"]),
@@ -31,10 +36,15 @@ SHARPER = [
 ]
 
 
+@pytest.fixture(scope="module")
+def calibration():
+    return keeping_answers("calibration")
+
+
 @pytest.mark.parametrize("seed", [0, 1])
 @pytest.mark.parametrize("name, code, words", SHARPER, ids=[n[:-3] for n, _, _ in SHARPER])
-def test_sharper_diagnosis(name, code, words, seed):
-    report = check.submission(HERE / name, n_runs=N_RUNS, seed=seed)
+def test_sharper_diagnosis(calibration, name, code, words, seed):
+    report = check.submission(HERE / name, problem=calibration, n_runs=N_RUNS, seed=seed)
     assert report.codes == [code], report
     msg = next(f.message for f in report.findings if f.code == code)
     for w in words:
@@ -42,14 +52,15 @@ def test_sharper_diagnosis(name, code, words, seed):
     assert "M0, H or V" not in msg or code == "low-precision"
 
 
-def test_first_update_skipped_keeps_its_wording_when_z0_was_unused():
-    report = check.submission(HERE / "mutant_first_update_skipped.py", n_runs=N_RUNS)
+def test_first_update_skipped_keeps_its_wording_when_z0_was_unused(calibration):
+    report = check.submission(HERE / "mutant_first_update_skipped.py", problem=calibration,
+                              n_runs=N_RUNS)
     msg = next(f.message for f in report.findings if f.code == "first-update-skipped")
     assert "does not use the GPS fix at t = 0" in msg and "did use z₀" not in msg
 
 
-def test_nearest_mistake_hint_only_when_close(tmp_path):
-    far = check.submission(HERE / "mutant_diagonal_q.py", n_runs=N_RUNS)
+def test_nearest_mistake_hint_only_when_close(calibration, tmp_path):
+    far = check.submission(HERE / "mutant_diagonal_q.py", problem=calibration, n_runs=N_RUNS)
     found = next(f for f in far.findings if f.code == "p-mismatch")
     msg = found.for_student().message
     assert "No catalogued mistake matches" in msg and "first departs at t = 3.2 s" in msg
@@ -63,6 +74,6 @@ def test_nearest_mistake_hint_only_when_close(tmp_path):
     near = tmp_path / "near.py"  # V₂₂ = σ (the std-as-variance slip) off by 2e-7 relative
     near.write_text(src.replace("V = np.diag([1.0, 0.04**2])",
                                 "V = np.diag([1.0, 0.04 * (1 + 2e-7)])"), encoding="utf-8")
-    report = check.submission(near, n_runs=N_RUNS)
+    report = check.submission(near, problem=calibration, n_runs=N_RUNS)
     msg = next(f.message for f in report.findings if f.code == "p-mismatch")
     assert "nearest known mistake is std-as-variance" in msg and "look there first" in msg

@@ -2,7 +2,11 @@
 
 Every correct style passes; every mistake fixture gets its catalogue code on two seeds.  The
 checks run with n_runs=2 (three logs: two truth runs and the course log) to keep the suite
-short; the decision compares with the one reference answer, so it does not need more.
+short; the decision compares with the one reference answer, so it does not need more.  Each file
+is still checked in its own box, but the module's checks share the reference filters and the
+catalogue's (:func:`keeping_answers`: computed once per seed instead of once per check, which
+was 6-9 CPU s of each check); tests/check/test_problem.py and test_folders.py check coop through
+the registered problem, which forgets them before every box.
 """
 
 from __future__ import annotations
@@ -13,6 +17,8 @@ import pytest
 
 from gpsaccel import check
 from gpsaccel.check import problems
+
+from ..conftest import keeping_answers
 
 COOP = Path(__file__).resolve().parents[2] / "submissions" / "coop"
 
@@ -28,9 +34,14 @@ COOP_MUTANTS = {
 }
 
 
+@pytest.fixture(scope="module")
+def coop():
+    return keeping_answers("coop")
+
+
 @pytest.mark.parametrize("name", COOP_CORRECT)
-def test_coop_correct_styles_pass(name):
-    report = check.submission(COOP / name, problem="coop", n_runs=2, seed=0)
+def test_coop_correct_styles_pass(coop, name):
+    report = check.submission(COOP / name, problem=coop, n_runs=2, seed=0)
     assert report.passed, report
     assert "matches-reference" in {f.code for f in report.findings}
     assert "nees-nis" in {f.code for f in report.findings}  # information, never an error
@@ -38,8 +49,8 @@ def test_coop_correct_styles_pass(name):
 
 @pytest.mark.parametrize("seed", [0, 1])
 @pytest.mark.parametrize("name, code", sorted(COOP_MUTANTS.items()))
-def test_coop_mistakes_get_their_code(name, code, seed):
-    report = check.submission(COOP / name, problem="coop", n_runs=2, seed=seed)
+def test_coop_mistakes_get_their_code(coop, name, code, seed):
+    report = check.submission(COOP / name, problem=coop, n_runs=2, seed=seed)
     assert report.codes == [code], report
 
 
@@ -48,7 +59,7 @@ def test_every_coop_code_has_a_fixture():
     assert set(problems.get("coop").codes()) - informational == set(COOP_MUTANTS.values())
 
 
-def test_two_coop_mistakes_are_located_not_misnamed():
-    report = check.submission(COOP / "mutant_two_mistakes.py", problem="coop", n_runs=2)
+def test_two_coop_mistakes_are_located_not_misnamed(coop):
+    report = check.submission(COOP / "mutant_two_mistakes.py", problem=coop, n_runs=2)
     assert report.codes == ["filter-mismatch"], report
     assert "first departs at t = " in str(report)
