@@ -5,6 +5,8 @@ computes its reference answers once for a whole test module."""
 
 from __future__ import annotations
 
+import copy
+
 from gpsaccel.check import problems
 from gpsaccel.check.problem import Problem
 
@@ -16,23 +18,22 @@ from .._hostile import (  # noqa: F401 - a conftest's names are its fixtures and
 )
 
 
-def keeping_answers(name: str) -> Problem:
-    """A new instance of the registered problem ``name`` whose ``forget()`` keeps its cached
-    reference answers, for the tests that check many trusted fixtures on the same data.
+def keeping_answers(problem: str | Problem) -> Problem:
+    """A copy of the problem ``problem`` (a registered name, or a problem object) whose
+    ``forget()`` keeps its cached reference answers, for the tests that check many trusted
+    fixtures on the same data.
 
     A check drops every cached answer before the student's box starts (so none is in the
     checker's memory while student code runs) and computes the reference and each catalogue
     mistake again after it: 6-9 CPU s of a coop check, 2 of a calibration one.  The answers are
-    a function of the simulated cases alone (cached on their seed and size), so a module's checks
-    share them here and get the same reports; the order itself (box, then answer) is held by
+    a function of the simulated cases alone (cached on their seed and size, or on nothing: a
+    linear problem's candidate covariances), so a module's checks share them here and get the
+    same reports; the order itself (box, then answer) is held by
     test_calibration.py::test_the_answer_is_computed_only_after_the_box_is_empty, and every
-    test that checks through the registered problem (``problem="coop"``) still forgets.
+    test that checks through the registered problem (``problem="coop"``) still forgets.  The copy
+    shares the original's caches: the original's ``forget()`` empties them, which only costs a
+    recomputation.
     """
-    base = type(problems.get(name))
-
-    class KeepingAnswers(base):  # type: ignore[valid-type,misc]
-        def forget(self) -> None:
-            pass
-
-    KeepingAnswers.__name__ = KeepingAnswers.__qualname__ = f"KeepingAnswers{base.__name__}"
-    return KeepingAnswers()
+    kept = copy.copy(problems.get(problem))
+    kept.forget = lambda: None  # type: ignore[method-assign]
+    return kept

@@ -11,7 +11,9 @@ catalogue (so every linear problem has them) and in the calibration catalogue.
 
 Each is made by a student-style filter (tests/submissions/cv2d/student.py, a 2-D
 constant-velocity problem defined here, and tests/submissions/calibration_gaps/student.py),
-checked in the basic sandbox on a fixed seed; the correct filters pass.
+checked in the basic sandbox on a fixed seed; the correct filters pass.  Each problem's checks
+share its catalogue's candidate filters (:func:`keeping_answers`: computed once for the module
+instead of after every box).
 """
 
 from __future__ import annotations
@@ -22,6 +24,8 @@ import numpy as np
 import pytest
 
 from gpsaccel import check
+
+from .conftest import keeping_answers
 
 SUBMISSIONS = Path(__file__).resolve().parents[1] / "submissions"
 GAPS = ("covariance-update-skipped", "update-every-step", "phi-sign", "state-order")
@@ -51,9 +55,15 @@ def test_every_linear_problem_has_the_four_codes():
     assert set(GAPS) <= set(check.problems.get("tracker").codes())
 
 
+@pytest.fixture(scope="module")
+def kept():
+    """CV2D and the calibration problem, each keeping its candidates between checks."""
+    return {"cv2d": keeping_answers(CV2D), "calibration": keeping_answers("calibration")}
+
+
 @pytest.mark.parametrize("mistake", [None, *GAPS])
-def test_the_2d_constant_velocity_problem_names_each_gap(tmp_path, mistake):
-    report = check.submission(_student(tmp_path, "cv2d", mistake), problem=CV2D, n_runs=4,
+def test_the_2d_constant_velocity_problem_names_each_gap(kept, tmp_path, mistake):
+    report = check.submission(_student(tmp_path, "cv2d", mistake), problem=kept["cv2d"], n_runs=4,
                               seed=3, sandbox="basic")
     if mistake is None:
         assert report.passed, report
@@ -63,9 +73,9 @@ def test_the_2d_constant_velocity_problem_names_each_gap(tmp_path, mistake):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("mistake", [None, *GAPS])
-def test_the_calibration_problem_names_each_gap(tmp_path, mistake):
+def test_the_calibration_problem_names_each_gap(kept, tmp_path, mistake):
     report = check.submission(_student(tmp_path, "calibration_gaps", mistake),
-                              problem="calibration", n_runs=3, seed=5, sandbox="basic")
+                              problem=kept["calibration"], n_runs=3, seed=5, sandbox="basic")
     if mistake is None:
         assert report.passed, report
     else:

@@ -83,10 +83,16 @@ def test_every_catalogue_code_has_a_mutant_here():
 
 
 @pytest.fixture(scope="module")
-def mutant():
+def calibration():
+    """The calibration problem, keeping the catalogue's candidates between the module's checks."""
+    return keeping_answers("calibration")
+
+
+@pytest.fixture(scope="module")
+def mutant(calibration):
     """``mutant(name, n_runs)``: the report of mutant ``name`` at seed 3, checked once for the
-    module with the catalogue's candidates kept between checks."""
-    problem = keeping_answers("calibration")
+    module."""
+    problem = calibration
     reports: dict[tuple[str, int], check.Report] = {}
 
     def get(name: str, n_runs: int = MUTANT_RUNS) -> check.Report:
@@ -161,12 +167,12 @@ def test_files_written_on_the_fly(tmp_path, source, code, words):
     assert "_runner.py" not in msg and "<frozen" not in msg
 
 
-def test_a_p_that_is_no_covariance_is_flagged(tmp_path):
+def test_a_p_that_is_no_covariance_is_flagged(calibration, tmp_path):
     path = tmp_path / "student.py"
     path.write_text("import numpy as np\n\ndef kalman_filter(z):\n"
                     "    P = np.tile(np.eye(3), (len(z), 1, 1))\n    P[:, 0, 1] = 5\n"
                     "    return np.zeros((len(z), 3)), P\n")
-    report = check.submission(path, n_runs=3)
+    report = check.submission(path, problem=calibration, n_runs=3)
     assert report.codes == ["p-mismatch"], report
     assert "P at t = 0 already differs" in report.findings[0].message
     assert "p-not-positive-definite" in [f.code for f in report.findings]
@@ -179,23 +185,23 @@ def test_endless_loop_is_stopped_at_the_time_limit():
 
 
 def test_lists_are_converted_with_a_note():
-    report = _check("correct_lists.py")
+    report = _check("correct_lists.py", n_runs=MUTANT_RUNS)  # passing: a run-by-run comparison
     assert report.passed, report
     assert "returns-list" in [f.code for f in report.findings if f.severity == "note"]
 
 
 def test_prints_are_captured_truncated_and_warned_about():
-    report = _check("correct_prints_a_lot.py")
+    report = _check("correct_prints_a_lot.py", n_runs=MUTANT_RUNS)
     assert report.passed, report
     warning = next(f for f in report.findings if f.code == "prints-a-lot")
     assert warning.severity == "warning" and "GPS time 150" in warning.message
     assert len(str(report)) < 10_000
 
 
-def test_assert_submission_for_grader_cells():
+def test_assert_submission_for_grader_cells(calibration):
     assert check.assert_submission(HERE / "correct_gps_rate.py", n_runs=5).passed
     with pytest.raises(AssertionError, match="m0-order"):
-        check.assert_submission(HERE / "mutant_m0_order.py", n_runs=5)
+        check.assert_submission(HERE / "mutant_m0_order.py", problem=calibration, n_runs=5)
 
 
 def test_bad_arguments_of_the_caller_raise_value_error():
