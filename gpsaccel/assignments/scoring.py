@@ -32,7 +32,7 @@ from gpsaccel.assignments.questions import (
     variant_number,
 )
 from gpsaccel.check.report import Report
-from gpsaccel.sandbox.outcomes import OUTCOMES
+from gpsaccel.sandbox.outcomes import OUTCOMES, ours
 
 #: Wall-clock limit (s) of one notebook's box (every cell and every read), default.
 TIMEOUT = 120.0
@@ -305,6 +305,8 @@ def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
                                         timeout) for q in qs}
     scores = {q.name: q.score(reports[q.name]) for q in qs}
     codes = {k: r.codes for k, r in reports.items()}
+    if ours(status) or any(ours(c) for cs in codes.values() for c in cs):
+        status = "grader-error"  # the machine's or the checker's, not a grade: graded again
     g = Grade(_untrusted.shown(student), file, scores, possible, status, "", codes,
               time.perf_counter() - t0, sid or _untrusted.student_id(student))
     g.feedback = _feedback_text(g, notes, reports, variant)

@@ -9,6 +9,12 @@ and ``memory`` (GB)).  ``lost.<reason>`` are the pool's items without a result
 (:class:`gpsaccel.sandbox.Lost`), as the batch checker says them (fields ``detail``, ``limit``,
 ``slack``).  These are student-facing texts built from the student's own run and the check's
 limits only, never from an answer.
+
+An outcome is ``ours`` when it says nothing about the student's code: the checker or the machine
+failed (``lost.*``, and ``machine-busy``: the box reached its backstop on a machine too busy to
+give it its time limit, :mod:`gpsaccel.sandbox.box`).  The checker's finding asks for the check to
+be run again; the grader records the notebook as ``grader-error`` (not a grade: graded again,
+:func:`ours`), never as the student's zero.
 """
 
 from __future__ import annotations
@@ -19,18 +25,26 @@ from dataclasses import dataclass
 @dataclass(frozen=True)
 class Outcome:
     """One way a box ends: ``finding`` the checker's template, ``stop`` the grader's clause
-    ("" where the grader does not stop on it)."""
+    ("" where the grader does not stop on it), ``ours`` the checker's or the machine's fault,
+    not the student's (module docstring)."""
 
     finding: str
     stop: str = ""
+    ours: bool = False
 
 
 #: failure code (or ``lost.<reason>``) -> its wording (module docstring).
 OUTCOMES: dict[str, Outcome] = {
     "timeout": Outcome(
-        "Your {function} did not finish within the time limit of {time:g} s: it completed {done} of "
-        "{n_calls} calls{rate}. {timeout_hint}",
+        "Your {function} did not finish within the time limit of {time:g} s ({detail}): it completed "
+        "{done} of {n_calls} calls{rate}. {timeout_hint}",
         stop="it was still running at the time limit of {limit:g} s"),
+    "machine-busy": Outcome(
+        "The computer running this check was too busy to give your code its {time:g} s ({detail}), "
+        "so the check stopped after {done} of {n_calls} calls without a verdict. This says nothing "
+        "about your code: run the check again, later or on a less busy computer.",
+        stop="the grading computer was too busy to give it its {limit:g} s (not the student's "
+             "fault: it is graded again)", ours=True),
     "memory-limit": Outcome(
         "Your code ran out of memory: a check may use {mib:g} MiB of address space, and your file "
         "asked for more (after {done} of {n_calls} calls){tb} A filter needs a few kilobytes: look for "
@@ -82,12 +96,20 @@ OUTCOMES: dict[str, Outcome] = {
         "{function} must return {wanted} ({rows}); on {label} it returned "
         "{returned}{between_calls}.{hints}"),
     "lost.error": Outcome(
-        "the checker failed: {detail}"),
+        "the checker failed: {detail}", ours=True),
     "lost.not-a-report": Outcome(
-        "the check's process returned no report"),
+        "the check's process returned no report", ours=True),
     "lost.too-long": Outcome(
-        "the check took more than {limit:g} s (time limit plus {slack:g} s) and was stopped"),
+        "the check took more than {limit:g} s (time limit plus {slack:g} s) and was stopped",
+        ours=True),
     "lost.died": Outcome(
         "the process checking this file died ({detail}) before it reported; a submission that kills "
-        "its parent process ends like this"),
+        "its parent process ends like this", ours=True),
 }
+
+
+def ours(code: str | None) -> bool:
+    """Whether failure (or finding) ``code`` is the checker's or the machine's, not the
+    student's: the grader then records no grade (module docstring)."""
+    outcome = OUTCOMES.get(code or "")
+    return outcome is not None and outcome.ours

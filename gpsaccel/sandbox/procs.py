@@ -1,5 +1,6 @@
 """Processes: prctl (subreaper, dumpable, death signal), the process table (/proc, psutil), a box's
-processes, and the checked kill that empties a box."""
+processes, the time a process waited for a CPU and the CPU its processes used (the box's fair
+clock), and the checked kill that empties a box."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import signal
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from collections.abc import Set as AbstractSet
 from typing import Protocol
 
@@ -97,6 +98,47 @@ def proc_files(name: str) -> Iterator[tuple[int, bytes]]:
                 yield int(entry.name), f.read()
         except OSError:
             continue
+
+
+def runqueue_wait(pid: int) -> float | None:
+    """Seconds task ``pid`` (a process's main thread) has waited on a run queue, runnable but
+    not running, since it started: the second field of Linux's /proc/<pid>/schedstat (ns on a
+    CPU, ns waiting, timeslices).  None where it cannot be read (not Linux, or the task is
+    gone)."""
+    try:
+        with open(f"/proc/{pid}/schedstat", "rb") as f:
+            return int(f.read().split()[1]) * 1e-9
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def lowered_priority(pid: int) -> bool:
+    """Whether task ``pid`` runs at a lower priority than this process (a larger nice value, or
+    SCHED_IDLE): its waits for a CPU are then of its own making.  It cannot raise it back
+    (RLIMIT_NICE 0, no CAP_SYS_NICE), so a look at the end tells."""
+    try:
+        if os.getpriority(os.PRIO_PROCESS, pid) > os.getpriority(os.PRIO_PROCESS, 0):
+            return True
+        idle = getattr(os, "SCHED_IDLE", None)
+        return idle is not None and os.sched_getscheduler(pid) == idle
+    except (OSError, AttributeError):
+        return False
+
+
+def cpu_seconds(pids: Iterable[int]) -> float:
+    """CPU time (user + system, s) used by processes ``pids``, every thread and every child they
+    waited for included (/proc/<pid>/stat); 0 for a process gone or not readable."""
+    tick = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
+    total = 0
+    for pid in pids:
+        try:
+            with open(f"/proc/{pid}/stat", "rb") as f:
+                raw = f.read()
+            fields = raw[raw.rfind(b")") + 2:].split()
+            total += sum(int(x) for x in fields[11:15])  # utime stime cutime cstime
+        except (OSError, ValueError):
+            continue
+    return total / tick
 
 
 def _psutil_table() -> dict[int, tuple[int, str, str]]:

@@ -15,7 +15,9 @@ class Limits:
     memory : bytes (default 1 GiB): the whole box's memory where a cgroup applies (every
         process, tmpfs file and memfd together), and the address space of each process
         (RLIMIT_AS) everywhere.
-    time : wall-clock limit of the whole box (import and every call), s.
+    time : limit of the whole box (import and every call), s: the time its code ran or waited
+        for itself, not the time it waited for a CPU on a busy machine (Linux; elsewhere
+        wall-clock; :mod:`gpsaccel.sandbox.box`).
     file_size : largest file the student may write, bytes (RLIMIT_FSIZE); under bwrap also the
         size of each writable tmpfs (``/box``, ``/tmp``).
     processes : processes of the box at once (the runner included).
@@ -108,6 +110,8 @@ class BoxResult:
     box_user : the uid the student ran as when the checker is root (a uid of its own, see
         :mod:`gpsaccel.sandbox._boxuser`), else None (the checker's own user).
     memory_peak : the box's peak memory (bytes) when a cgroup measured it.
+    waited : seconds the runner waited for a CPU on a busy machine (not counted in the time
+        limit), or None where the box's clock is wall-clock.
     """
 
     backend: str
@@ -127,3 +131,4 @@ class BoxResult:
     limit_backend: str = "rlimit"
     box_user: int | None = None
     memory_peak: int | None = None
+    waited: float | None = None

@@ -13,7 +13,7 @@ from gpsaccel.sandbox.outcomes import OUTCOMES
 #: Every failure a box reports (gpsaccel.sandbox's docstring and the runner's problems).
 FAILURES = ("timeout", "memory-limit", "output-limit", "file-limit", "process-limit",
             "uses-checker", "result-refused", "crashed", "import-error", "no-function",
-            "exception", "return-value", "not-numeric", "wrong-shape")
+            "exception", "return-value", "not-numeric", "wrong-shape", "machine-busy")
 
 
 def test_every_failure_has_its_wording_and_the_checker_reads_it():
@@ -25,7 +25,7 @@ def test_every_failure_has_its_wording_and_the_checker_reads_it():
 def test_the_grader_stops_with_the_tables_clause():
     stops = {c for c, o in OUTCOMES.items() if o.stop}
     assert stops == {"timeout", "memory-limit", "process-limit", "output-limit", "file-limit",
-                     "crashed", "result-refused", "uses-checker"}
+                     "crashed", "result-refused", "uses-checker", "machine-busy"}
     for code in stops:
         assert scoring._STOPS[code] == OUTCOMES[code].stop
 
