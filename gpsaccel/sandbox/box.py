@@ -4,10 +4,10 @@ process count), empty it, and name what went wrong (:func:`run`).
 The deadline is fair (:class:`_Clock`): the time limit counts the time the box's code ran or waited
 for itself (a sleep, a pipe, the disk), not the time its runner waited on a busy machine's run
 queue, which Linux reports per task (/proc/<pid>/schedstat).  A correct filter of 5.5 CPU s under
-a 20 s limit on 2 cores at load 15.7 is not timed out; an endless loop or a sleep still is.  A backstop bounds the wait: a box that
-reaches it with less than its limit of its own time is ``machine-busy``, the grader's problem
-(:data:`gpsaccel.sandbox.outcomes.OUTCOMES`), not the student's.  Where schedstat is missing (not
-Linux) the limit is wall-clock, as it was.
+a 20 s limit on 2 cores at load 15.7 is not timed out; an endless loop or a sleep still is.  A
+backstop bounds the wait: a box that reaches it with less than its limit of its own time is
+``machine-busy``, the grader's problem (:data:`gpsaccel.sandbox.outcomes.OUTCOMES`), not the
+student's.  Where schedstat is missing (not Linux) the limit is wall-clock, as it was.
 """
 
 from __future__ import annotations
@@ -67,9 +67,11 @@ COUNT_EVERY = 0.25
 FAIR_CLOCK = True
 #: The backstop of the fair clock: a box is stopped, however long it waited for a CPU, once its
 #: wall-clock time reaches its limit times BACKSTOP_FACTOR, but never more than BACKSTOP_MARGIN s
-#: beyond its limit: at the check's default 60 s, 120 s, within the batch's slack (120 s beyond
-#: the limit) and the grader's, so the box's own verdict comes before the pool's ``lost``.
-BACKSTOP_FACTOR = 4.0
+#: beyond its limit: 80 s at ``--timeout 20``, 120 s at the check's default 60 s, 180 s at the
+#: grader's 120 s, within the batch's slack (120 s beyond the limit) and the grader's, so the
+#: box's own verdict comes before the pool's ``lost``.  The factor binds short limits only (tests:
+#: an endless loop under a 3 s limit is still a timeout with a tenth of a CPU).
+BACKSTOP_FACTOR = 10.0
 BACKSTOP_MARGIN = 60.0
 
 
