@@ -63,21 +63,22 @@ the next box: :func:`sweep_stale_boxes`).  Only then does :func:`run` return, so
 computes the reference answer afterwards never holds it while a student process lives.
 
 Limits (:class:`Limits`) and what exceeding them gives (:attr:`BoxResult.failure`): ``timeout``
-(wall-clock), ``memory-limit`` (address space, or the box's cgroup; a ``MemoryError`` or a process
-killed at it), ``output-limit`` (printed bytes; the box is stopped at the limit), ``file-limit``
-(one file, or a box tmpfs, full), ``process-limit``, ``uses-checker`` (an import of gpsaccel was
-attempted), ``result-refused`` (see :class:`FrameReader`), ``link-refused`` (see
-:func:`load_submission`), ``crashed`` (the process ended without saying ``done``), and the
-runner's own: ``import-error``, ``no-function``, ``exception``, ``return-value``,
-``not-numeric``, ``wrong-shape``.
+(the box's own time, not its waits for a CPU on a busy machine: :mod:`.clock`; past the clock's
+backstop without it, ``machine-busy``, the machine's problem, not the student's),
+``memory-limit`` (address space, or the box's cgroup; a ``MemoryError`` or a process killed at
+it), ``output-limit`` (printed bytes; the box is stopped at the limit), ``file-limit`` (one file,
+or a box tmpfs, full), ``process-limit``, ``uses-checker`` (an import of gpsaccel was attempted),
+``result-refused`` (see :class:`FrameReader`), ``link-refused`` (see :func:`load_submission`),
+``crashed`` (the process ended without saying ``done``), and the runner's own: ``import-error``,
+``no-function``, ``exception``, ``return-value``, ``not-numeric``, ``wrong-shape``.
 
 Layout (each module under 500 lines): :mod:`.spec` (what to run, what comes back),
 :mod:`.submission` (a student's files, walked and checked), :mod:`.channel` (the result channel),
 :mod:`.confinement` (the backends, what a box sees, box folders), :mod:`.limits` (rlimits, the box's
 cgroup and uid: :mod:`._cgroup`, :mod:`._boxuser`), :mod:`.procs` (prctl, the process table: /proc
 on Linux, psutil elsewhere; the checked kill), :mod:`.box` (one box run and supervised),
-:mod:`.pool` (a class's items).  The layer imports nothing of gpsaccel above it: it knows
-neither the checks nor the homework.
+:mod:`.clock` (its fair deadline), :mod:`.pool` (a class's items).  The layer imports nothing of
+gpsaccel above it: it knows neither the checks nor the homework.
 """
 
 from __future__ import annotations

@@ -1,14 +1,6 @@
 """One box, run: start the runner under its confinement and limits, supervise it (pipes, deadline,
-process count), empty it, and name what went wrong (:func:`run`).
-
-The deadline is fair (:class:`_Clock`): the time limit counts the time the box's code ran or waited
-for itself (a sleep, a pipe, the disk), not the time its runner waited on a busy machine's run
-queue, which Linux reports per task (/proc/<pid>/schedstat).  A correct filter of 5.5 CPU s under
-a 20 s limit on 2 cores at load 15.7 is not timed out; an endless loop or a sleep still is.  A
-backstop bounds the wait: a box that reaches it with less than its limit of its own time is
-``machine-busy``, the grader's problem (:data:`gpsaccel.sandbox.outcomes.OUTCOMES`), not the
-student's.  Where schedstat is missing (not Linux) the limit is wall-clock, as it was.
-"""
+process count), empty it, and name what went wrong (:func:`run`).  The deadline is the fair
+clock's (:mod:`.clock`): the box's own time, not its waits on a busy machine."""
 
 from __future__ import annotations
 
@@ -20,12 +12,13 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from gpsaccel.sandbox import _boxuser
 from gpsaccel.sandbox.channel import FrameReader, Refused
+from gpsaccel.sandbox.clock import Clock, clock_detail
 from gpsaccel.sandbox.confinement import (
     BOX_PREFIX,
     PACKAGE_DIR,
@@ -50,8 +43,6 @@ from gpsaccel.sandbox.procs import (
     _proc_table,
     box_processes,
     cpu_seconds,
-    lowered_priority,
-    runqueue_wait,
     set_subreaper,
     start_time,
 )
@@ -62,17 +53,6 @@ _POLL = 0.05  # s between looks at the pipes and the process
 #: s between counts of the box's processes, done only where RLIMIT_NPROC does not bind (root): a
 #: count scans all of /proc (about 10 ms for 100 processes)
 COUNT_EVERY = 0.25
-
-#: The fair clock (module docstring); False keeps the wall clock (a knob for tests).
-FAIR_CLOCK = True
-#: The backstop of the fair clock: a box is stopped, however long it waited for a CPU, once its
-#: wall-clock time reaches its limit times BACKSTOP_FACTOR, but never more than BACKSTOP_MARGIN s
-#: beyond its limit: 80 s at ``--timeout 20``, 120 s at the check's default 60 s, 180 s at the
-#: grader's 120 s, within the batch's slack (120 s beyond the limit) and the grader's, so the
-#: box's own verdict comes before the pool's ``lost``.  The factor binds short limits only (tests:
-#: an endless loop under a 3 s limit is still a timeout with a tenth of a CPU).
-BACKSTOP_FACTOR = 10.0
-BACKSTOP_MARGIN = 60.0
 
 
 def run(sub: Submission, calls: Sequence[Call], limits: Limits | None = None,
@@ -210,7 +190,7 @@ class _Supervisor:
         self.open_pipes = 2
         self.exited_at: float | None = None
         self.before: set[int] = set()
-        self.clock: _Clock | None = None
+        self.clock: Clock | None = None
         self.extra = 2 if backend == "bwrap" else 0  # bwrap's own two processes
         # a count of the box's processes is needed only where nothing else binds them: root's
         # processes are not counted by RLIMIT_NPROC, and there is neither a cgroup nor a box uid
@@ -269,11 +249,11 @@ class _Supervisor:
         """Until the deadline, a limit, or the runner's end (its pipes closed, or 0.2 s after
         it exited while a child of the student's holds them)."""
         assert self.proc is not None
-        clock = self.clock = _Clock(self.limits.time, self.proc.pid, self.backend == "bwrap")
+        clock = self.clock = Clock(self.limits.time, self.proc.pid, self._find_runner)
         next_count = time.monotonic() + COUNT_EVERY
         while True:
             now = time.monotonic()
-            if now >= clock.deadline and clock.expired(now, self.before):
+            if now >= clock.deadline and clock.expired(now):
                 self.hit = clock.verdict(now, self._box_cpu)
                 return
             self._read(max(0.0, min(_POLL, clock.deadline - now)))
@@ -285,10 +265,18 @@ class _Supervisor:
                 return
             if now >= next_count:
                 next_count = now + COUNT_EVERY
-                clock.update(self.before)
+                clock.update()
                 if self.count and self._too_many():
                     self.hit = "process-limit"
                     return
+
+    def _find_runner(self) -> int | None:
+        """The runner's pid: the box's first process (basic), else the first of its processes
+        that is not bwrap's (None until it has started)."""
+        assert self.proc is not None
+        if self.backend != "bwrap":
+            return self.proc.pid
+        return _runner_pid(set(box_processes(self.proc.pid, self.before)), _proc_table())
 
     def _box_cpu(self) -> float:
         """CPU seconds the box's live processes have used (with the children they waited for)."""
@@ -412,7 +400,7 @@ class _Supervisor:
 
 
 def _failure(result: BoxResult, hit: str | None, refused: str | None, reader: FrameReader,
-             limits: Limits, clock: _Clock | None = None) -> tuple[str | None, str]:
+             limits: Limits, clock: Clock | None = None) -> tuple[str | None, str]:
     """The failure code of a box, most telling first."""
     if hit == "result-refused":
         return hit, f"the result channel carried {refused}"
@@ -432,7 +420,7 @@ def _failure(result: BoxResult, hit: str | None, refused: str | None, reader: Fr
             return f"{limit}-limit", f"{problem.get('exception')} in the student's code"
         return problem["kind"], ""
     if hit in ("timeout", "machine-busy"):
-        return hit, _clock_detail(hit, limits, clock)
+        return hit, clock_detail(hit, limits.time, clock)
     if reader.done:
         return ("uses-checker", "") if result.uses_checker else (None, "")
     # the runner ended without a last frame: which limit, if any, killed it
@@ -449,77 +437,3 @@ def _failure(result: BoxResult, hit: str | None, refused: str | None, reader: Fr
         return "process-limit", "fork() refused"
     return "crashed", f"exit status {rc}"
 
-
-def _clock_detail(hit: str, limits: Limits, clock: _Clock | None) -> str:
-    """The sandbox's account of a box stopped by its clock: its own time, and its wait."""
-    if clock is None or not clock.fair:
-        return f"still running after {limits.time:g} s"
-    wall = clock.stopped - clock.start
-    if hit == "machine-busy":
-        return (f"in {wall:.0f} s it ran for {clock.own:.1f} s of its {limits.time:g} s and "
-                f"waited {clock.waited:.0f} s for a processor")
-    return (f"still running after {clock.own:.1f} s of its own time, {wall:.1f} s on the clock "
-            f"of which {clock.waited:.1f} s waiting for a processor")
-
-
-class _Clock:
-    """The box's fair deadline (module docstring): the limit plus what the runner has waited on
-    a run queue so far, up to the backstop.
-
-    The wait is the runner's main thread's (the student's functions run in it), plus, under
-    bwrap, its first process's (bwrap's setup, before the runner exists).  Not the largest of the
-    runner's threads: a thread the student starts, or a BLAS worker, waits for its siblings as
-    much as for the machine, and the main thread's wait already covers the time the box's work
-    stood still.  The main thread also waits for the box's own other threads and processes;
-    RLIMIT_CPU (per process) and, at the backstop, the box's CPU (:meth:`verdict`) bound what
-    that can buy: a box that kept itself busy is timed out, not reported as a busy machine."""
-
-    def __init__(self, limit: float, first: int, bwrap: bool) -> None:
-        self.start = time.monotonic()
-        self.limit, self.first, self.bwrap = limit, first, bwrap
-        self.backstop = self.start + limit + min((BACKSTOP_FACTOR - 1) * limit, BACKSTOP_MARGIN)
-        self.fair = FAIR_CLOCK and runqueue_wait(first) is not None
-        self.runner: int | None = None if bwrap else first
-        self.waits: dict[int, float] = {}
-        self.stopped = self.start
-
-    @property
-    def waited(self) -> float:
-        return sum(self.waits.values())
-
-    @property
-    def deadline(self) -> float:
-        return min(self.start + self.limit + self.waited, self.backstop)
-
-    @property
-    def own(self) -> float:
-        """The box's own time when it was stopped: wall-clock less the runner's wait."""
-        return self.stopped - self.start - self.waited
-
-    def update(self, before: set[int]) -> None:
-        """Read the waits again (a task gone keeps its last)."""
-        if not self.fair:
-            return
-        if self.runner is None:  # bwrap: the runner is the first process that is not bwrap's
-            pids = set(box_processes(self.first, before))
-            self.runner = _runner_pid(pids, _proc_table())
-        for pid in {self.first, self.runner} - {None}:
-            assert pid is not None
-            w = runqueue_wait(pid)
-            if w is not None:
-                self.waits[pid] = max(w, self.waits.get(pid, 0.0))
-
-    def expired(self, now: float, before: set[int]) -> bool:
-        """Past the deadline with the waits read again now."""
-        self.update(before)
-        self.stopped = now
-        return now >= self.deadline
-
-    def verdict(self, now: float, box_cpu: Callable[[], float]) -> str:
-        """``timeout`` when the box had its limit of its own time, used as much CPU (its own
-        processes kept it waiting) or lowered its runner's priority (os.nice: its waits are its
-        own); else ``machine-busy``: the backstop, on a machine too busy to tell."""
-        if now - self.start - self.waited >= self.limit or box_cpu() >= self.limit or \
-                (self.runner is not None and lowered_priority(self.runner)):
-            return "timeout"
-        return "machine-busy"

@@ -12,7 +12,7 @@ limits only, never from an answer.
 
 An outcome is ``ours`` when it says nothing about the student's code: the checker or the machine
 failed (``lost.*``, and ``machine-busy``: the box reached its backstop on a machine too busy to
-give it its time limit, :mod:`gpsaccel.sandbox.box`).  The checker's finding asks for the check to
+give it its time limit, :mod:`gpsaccel.sandbox.clock`).  The checker's finding asks for the check to
 be run again; the grader records the notebook as ``grader-error`` (not a grade: graded again,
 :func:`ours`), never as the student's zero.
 """

@@ -17,7 +17,7 @@ class Limits:
         (RLIMIT_AS) everywhere.
     time : limit of the whole box (import and every call), s: the time its code ran or waited
         for itself, not the time it waited for a CPU on a busy machine (Linux; elsewhere
-        wall-clock; :mod:`gpsaccel.sandbox.box`).
+        wall-clock; :mod:`gpsaccel.sandbox.clock`).
     file_size : largest file the student may write, bytes (RLIMIT_FSIZE); under bwrap also the
         size of each writable tmpfs (``/box``, ``/tmp``).
     processes : processes of the box at once (the runner included).

@@ -1,4 +1,4 @@
-"""The box's fair clock (gpsaccel.sandbox.box._Clock): its time limit counts the time the box's code
+"""The box's fair clock (gpsaccel.sandbox.clock): its time limit counts the time the box's code
 ran or waited for itself, not the time it waited for a CPU on a busy machine; past the backstop
 a starved box is the machine's problem (``machine-busy``), never the student's timeout.
 
@@ -21,7 +21,7 @@ from gpsaccel import sandbox as sb
 from gpsaccel.assignments import scoring
 from gpsaccel.check import findings
 from gpsaccel.check.report import Report
-from gpsaccel.sandbox import box as boxmod
+from gpsaccel.sandbox import clock
 from gpsaccel.sandbox.outcomes import OUTCOMES, ours
 
 pytestmark = pytest.mark.skipif(
@@ -66,8 +66,8 @@ def starved():
 def patient(monkeypatch):
     """A backstop far away: the machine's own load must not turn these verdicts into
     machine-busy."""
-    monkeypatch.setattr(boxmod, "BACKSTOP_FACTOR", 1000.0)
-    monkeypatch.setattr(boxmod, "BACKSTOP_MARGIN", 600.0)
+    monkeypatch.setattr(clock, "BACKSTOP_FACTOR", 1000.0)
+    monkeypatch.setattr(clock, "BACKSTOP_MARGIN", 600.0)
 
 
 def _finding(box: sb.BoxResult, limit: float) -> str:
@@ -82,7 +82,7 @@ def test_a_box_starved_by_a_busy_machine_is_not_timed_out(tmp_path, starved, pat
     assert box.failure is None, box.detail
     assert box.seconds > 1.5, "the hogs did not starve the box: the test tests nothing"
     assert box.waited is not None and box.waited > 0.5
-    monkeypatch.setattr(boxmod, "FAIR_CLOCK", False)  # the wall clock: the same box times out
+    monkeypatch.setattr(clock, "FAIR_CLOCK", False)  # the wall clock: the same box times out
     box = _box(tmp_path, WORK, 1.5)
     assert box.failure == "timeout" and box.waited is None, box.detail
 
@@ -102,7 +102,7 @@ def test_a_sleeper_times_out_sleeping_is_its_own_time(tmp_path, patient):
 
 def test_a_box_starved_past_the_backstop_is_the_machines_problem(tmp_path, starved,
                                                                  monkeypatch):
-    monkeypatch.setattr(boxmod, "BACKSTOP_FACTOR", 1.01)  # the backstop at 1.515 s of wall time
+    monkeypatch.setattr(clock, "BACKSTOP_FACTOR", 1.01)  # the backstop at 1.515 s of wall time
     box = _box(tmp_path, WORK, 1.5)
     assert box.failure == "machine-busy", (box.failure, box.detail)
     text = _finding(box, 1.5)
@@ -119,7 +119,7 @@ def test_a_box_that_lowered_its_own_priority_is_timed_out_at_the_backstop(tmp_pa
                                                                           monkeypatch):
     """Its waits for a CPU are its own (os.nice): not the machine's problem.  The backstop at
     6 s of wall time: the starved runner must reach the student's os.nice before it."""
-    monkeypatch.setattr(boxmod, "BACKSTOP_FACTOR", 4.0)
+    monkeypatch.setattr(clock, "BACKSTOP_FACTOR", 4.0)
     box = _box(tmp_path, ENDLESS.replace("while True", "os.nice(19)\n    while True")
                .replace("import numpy", "import os\nimport numpy"), 1.5)
     assert box.failure == "timeout", (box.failure, box.detail)
