@@ -34,7 +34,8 @@ from gpsaccel.assignments.questions import (
 from gpsaccel.check.report import Report
 from gpsaccel.sandbox.outcomes import OUTCOMES, ours
 
-#: Wall-clock limit (s) of one notebook's box (every cell and every read), default.
+#: Time limit (s) of one notebook's box (every cell and every read; its own time, not its waits
+#: on a busy machine: gpsaccel.sandbox.clock), default.
 TIMEOUT = 120.0
 
 #: Seconds a notebook's process may take beyond its boxes' limits (reference answers, feedback)
