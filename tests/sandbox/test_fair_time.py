@@ -6,8 +6,8 @@ The busy machine is made here: this process and six CPU hogs pinned to one core,
 session of its own (with autogroup scheduling one session's tasks share one weight), so the box
 (which inherits the pinning) gets at most a seventh of it: measured at load 11 on 2 cores with
 three hogs, the box of :data:`WORK` took 3.0 s of wall, 2.0 s of it waiting for the core (and
-once, at load 1.5, only 0.4 s for its call: three hogs did not always starve it enough).  The hogs are killed by
-PID.  The tests assert verdicts, never how fast anything ran."""
+once, at load 1.5, only 0.4 s for its call: three hogs did not always starve it enough).  The
+hogs are killed by PID.  The tests assert verdicts, never how fast anything ran."""
 
 from __future__ import annotations
 
