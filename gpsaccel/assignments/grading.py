@@ -199,8 +199,8 @@ def grade(submissions: str | os.PathLike, name: str, out: str | os.PathLike | No
           sandbox: str = "auto", progress: bool = False) -> list[Grade]:
     """Grade every student of ``submissions`` for homework ``name`` (module docstring).
 
-    jobs : notebooks at once (default: CPUs, at most 4); timeout : wall-clock seconds of one
-    notebook's box; seed : the fresh data's seed (default: random, or the recorded one when
+    jobs : notebooks at once (default: CPUs, at most 4); timeout : seconds of one notebook's
+    box, on its fair clock (:mod:`gpsaccel.sandbox.clock`); seed : the fresh data's seed (default: random, or the recorded one when
     regrading one ``student``); secret : the instructor's secret for per-student variants (None:
     every student gets the public notebook's numbers); dask : a Dask address or "dask-local";
     progress : a tqdm bar on stderr when it is a terminal (the last student graded, the ETA).

@@ -44,7 +44,8 @@ class StudentFilter:
     Parameters
     ----------
     path : the student's ``.py`` file, defining ``kalman_filter(z)`` for report 000's problem.
-    timeout : wall-clock limit (s) of one call (import and ``repeat`` runs).
+    timeout : time limit (s) of one call (import and ``repeat`` runs), counted by the box's
+        fair clock (:mod:`gpsaccel.sandbox.clock`: a busy machine's run-queue wait not counted).
     repeat : runs per call, for the time per run (the mean of the runs, measured in the child).
     sandbox : ``"auto"``, ``"bwrap"`` or ``"basic"`` (:mod:`gpsaccel.sandbox`).
 

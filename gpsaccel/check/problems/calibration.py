@@ -212,7 +212,8 @@ def submission(path: str | os.PathLike, n_runs: int = DEFAULT_RUNS, seed: int = 
         kalman_filter and its helper modules and data files (:func:`sandbox.load_submission`).
     n_runs : realizations to run it on (≥ 2; :data:`DEFAULT_RUNS` = 10, see there).
     seed : seed of the realizations (``numpy.random.default_rng(seed)``).
-    timeout : wall-clock limit (s) for the student's box (import and all runs).
+    timeout : time limit (s) for the student's box (import and all runs), on the box's fair
+        clock (:mod:`gpsaccel.sandbox.clock`).
     model, alpha, tol : those of :class:`CalibrationProblem`.
     sandbox : ``"auto"``, ``"bwrap"`` or ``"basic"`` (:mod:`gpsaccel.sandbox`).
     limits : the box's limits (:class:`sandbox.Limits`; its ``time`` is replaced by ``timeout``).
