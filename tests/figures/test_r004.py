@@ -1,28 +1,48 @@
-"""Report 004's figures."""
+"""Report 004's figures, drawn once (10 runs, seed 2) for every test of the module."""
 
 from __future__ import annotations
 
+import pytest
 
-def test_no_legend_lies_over_its_axes(legends_beside_axes):
-    from gpsaccel.figures import iter_report
 
-    for fig in iter_report("004", runs=10, seed=2):
+@pytest.fixture(scope="module")
+def drawn(tmp_path_factory):
+    """The figures drawn once and kept open, and write_figures over them (report 004's
+    ``figures`` answering with copies of the records: write_figures closes what it saves)."""
+    import dataclasses
+
+    import gpsaccel.figures.r004 as r004
+    from gpsaccel.figures import iter_report, write_figures
+
+    figs = list(iter_report("004", runs=10, seed=2))
+    asked = []
+
+    def figures(runs, seed):
+        asked.append((runs, seed))
+        return iter([dataclasses.replace(f) for f in figs])
+
+    out = tmp_path_factory.mktemp("r004")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(r004, "figures", figures)
+        paths = write_figures(["004"], out, runs=10, seed=2, dpi=40)
+    assert asked == [(10, 2)]
+    return figs, paths, out
+
+
+def test_no_legend_lies_over_its_axes(drawn, legends_beside_axes):
+    for fig in drawn[0]:
         legends_beside_axes(fig.figure, f"r004 fig {fig.number}")
 
 
-def test_report_004_figures(tmp_path):
-    from gpsaccel.figures import write_figures
-
-    paths = write_figures(["004"], tmp_path, runs=10, seed=2, dpi=40)
+def test_report_004_figures(drawn):
+    _, paths, out = drawn
     names = [p.name for p in paths]
     assert len(names) == 14
     assert names[10] == "r004-fig11-difference-acceleration.png"
-    assert (tmp_path / "index.html").read_text(encoding="utf-8").count("<figure>") == 14
+    assert (out / "index.html").read_text(encoding="utf-8").count("<figure>") == 14
 
 
-def test_acceleration_difference_panels_show_accelerations():
-    from gpsaccel.figures.r004 import figures
-
-    figs = {f.number: f for f in figures(5, 0)}
+def test_acceleration_difference_panels_show_accelerations(drawn):
+    figs = {f.number: f for f in drawn[0]}
     labels = [ax.get_ylabel() for ax in figs["11"].figure.axes]
     assert labels == ["Δẍ (m/s²)", "Δÿ (m/s²)", "Δψ̈ (rad/s²)"]
