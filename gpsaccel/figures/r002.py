@@ -15,6 +15,7 @@ from collections.abc import Iterator
 import numpy as np
 from matplotlib.figure import Figure
 
+from gpsaccel import _validation as _v
 from gpsaccel import plots, registry
 from gpsaccel.coop.filters import FilterResult, run_filter
 from gpsaccel.coop.model import (
@@ -41,6 +42,8 @@ registry.add_report("002", __name__, FIGURES, title=TITLE)
 DX0 = np.array([0.0, 1.0, 0.0, 0.0, 0.0, 0.1])
 S = plots.STYLE
 NAMES = {"lkf": "LKF", "ekf": "EKF", "ukf": "UKF", "ekf-qtrue": "EKF, Q = Qtrue"}
+#: The Monte Carlo set's filters, in the order of their figures (06-09, 10-15, 14b/15b, 14c/15c).
+MONTE_CARLO = ("lkf", "ekf", "ekf-qtrue", "ukf")
 
 
 def _breaks(v: np.ndarray, unit: str) -> np.ndarray:
@@ -176,12 +179,13 @@ class _MonteCarlo(dict):
     is awaited when first asked for: the figures are drawn here while the pool filters (a lesson
     that draws them all, 11 and 11b, on two cores).  The numbers are those of a serial run."""
 
-    def __init__(self, model: CoopModel, truth: Truth, executor: object = None) -> None:
+    def __init__(self, model: CoopModel, truth: Truth, executor: object = None,
+                 filters: tuple[str, ...] = MONTE_CARLO) -> None:
         super().__init__()
         self.model, self.truth = model, truth
         self.futures = {} if executor is None else {
             m: executor.submit(_filter, model, m, truth)  # type: ignore[attr-defined]
-            for m in ("lkf", "ekf", "ekf-qtrue", "ukf")}
+            for m in dict.fromkeys(_v.choice("filters", m, MONTE_CARLO) for m in filters)}
 
     def __missing__(self, m: str) -> ConsistencyRun:
         future = self.futures.get(m)
@@ -204,11 +208,15 @@ def on_the_log(model: CoopModel) -> dict[str, FilterResult]:
     return {m: run_filter(m, model, y) for m in ("lkf", "ekf", "ukf")}
 
 
-def figures(runs: int, seed: int, executor: object = None) -> Iterator[ReportFigure]:
+def figures(runs: int, seed: int, executor: object = None,
+            filters: tuple[str, ...] = MONTE_CARLO) -> Iterator[ReportFigure]:
     """The report's figures in order; ``executor`` (a ``concurrent.futures`` executor, or None:
-    here) filters the Monte Carlo set while the figures before it are drawn (:class:`_MonteCarlo`)."""
+    here) filters the Monte Carlo set while the figures before it are drawn (:class:`_MonteCarlo`).
+    ``filters``: the Monte Carlo filters started on the executor (a caller that stops before
+    figure 14c leaves out the UKF, which costs five EKFs); any other runs here if a figure asks."""
     model = CoopModel()
-    mc = None if executor is None else _MonteCarlo(model, truth_runs(model, runs, seed), executor)
+    mc = None if executor is None else _MonteCarlo(model, truth_runs(model, runs, seed), executor,
+                                                   filters)
     lin = linearization_study(model)
     yield from _linearization_figures(model.t, lin)
     yield from _monte_carlo_figures(model, lin, runs, seed, mc)

@@ -118,3 +118,24 @@ def test_an_executor_filters_the_monte_carlo_at_once_with_the_same_numbers():
         for m in pooled.futures:
             assert np.array_equal(pooled[m].nees_mean, here[m].nees_mean), m
             assert np.array_equal(pooled[m].result.x_hat, here[m].result.x_hat), m
+
+
+def test_an_executor_starts_only_the_filters_asked_for_and_the_rest_run_when_drawn():
+    # lesson 11 stops at figure 15b: the UKF (five EKFs' cost) is not started on its pool
+    import concurrent.futures as cf
+
+    import numpy as np
+    import pytest
+
+    from gpsaccel.coop.montecarlo import truth_runs
+    from gpsaccel.figures import r002
+
+    model = r002.CoopModel(duration=2.0)
+    truth = truth_runs(model, 3, 0)
+    with cf.ThreadPoolExecutor(2) as pool:
+        some = r002._MonteCarlo(model, truth, executor=pool, filters=("ekf", "lkf", "ekf"))
+        assert sorted(some.futures) == ["ekf", "lkf"]
+        assert np.array_equal(some["ukf"].result.x_hat, r002._MonteCarlo(model, truth)["ukf"]
+                              .result.x_hat)  # not started: run here when asked for
+        with pytest.raises(ValueError, match="filters must be one of"):
+            r002._MonteCarlo(model, truth, executor=pool, filters=("ukf", "pf"))
