@@ -16,8 +16,9 @@ import time
 from pathlib import Path
 
 #: Scripts run on their own, not by ``make bench``: suite_cost.py runs the whole test suite;
-#: lessons.py runs notebooks for many minutes and writes docs/benchmarks/lessons.txt itself (--write).
-SEPARATE = ("suite_cost.py", "lessons.py")
+#: lessons.py runs notebooks for many minutes and writes docs/benchmarks/lessons.txt itself (--write);
+#: suite_per_test.py is a pytest plugin and the table of two of its runs.
+SEPARATE = ("suite_cost.py", "lessons.py", "suite_per_test.py")
 
 
 def _header(script: Path, seconds: float) -> str:
