@@ -82,3 +82,28 @@ def test_the_answers_module_holds_a_matrix_within_the_line_length():
     exec(text, namespace)
     assert namespace["ANSWERS"] == table
     assert max(len(line) for line in text.splitlines()) <= 110
+
+
+def test_measure_refuses_a_busy_machine_and_writes_nothing(monkeypatch, capsys):
+    """The time `measure` writes into a lesson's header is what a student is told to expect: on a
+    busy machine it refuses (exit 2, naming the load and the flag) before running anything."""
+    import os
+
+    from gpsaccel.lessons import __main__ as cli
+
+    ran = []
+    monkeypatch.setattr(cli, "measure", lambda *a, **k: ran.append(a) or {})
+    monkeypatch.setattr(cli, "release", lambda *a, **k: ran.append(a) or [])
+    monkeypatch.setattr(os, "getloadavg", lambda: (7.5, 7.0, 6.0))
+    for argv in (["measure", "00"], ["measure", "00", "--max-load", "3"]):
+        with pytest.raises(SystemExit) as stop:
+            cli.main(argv)
+        assert stop.value.code == 2
+        err = capsys.readouterr().err
+        assert "busy" in err and "7.5" in err and "--max-load" in err
+    with pytest.raises(SystemExit):
+        cli.main(["measure", "00", "--max-load", "0"])
+    assert "--max-load must be > 0" in capsys.readouterr().err
+    assert ran == []
+    assert cli.main(["measure", "00", "--max-load", "8"]) == 0   # accepted: it runs
+    assert len(ran) == 2
