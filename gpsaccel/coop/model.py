@@ -71,14 +71,16 @@ MEASUREMENTS = (("γag (UGV→UAV bearing − θg)", "rad"), ("ρ (range)", "m")
                 ("γga (UAV→UGV bearing − θa)", "rad"), ("ξa GPS", "m"), ("ηa GPS", "m"))
 #: Indices of the angles among the states (θg, θa) and among the measurements (two bearings).
 ANGLE_STATES = (2, 5)
-
-#: CoopModel.nominal's trajectories, keyed by what determines them (ΔT, duration, L, x(0), u0,
-#: tolerances); at most :data:`_NOMINALS_KEPT`, the oldest dropped first.
-_NOMINALS: dict[tuple, np.ndarray] = {}
-_NOMINALS_KEPT = 8
 ANGLE_MEASUREMENTS = (0, 2)
 
 N_STATES, N_INPUTS, N_MEAS = 6, 4, 5
+
+#: CoopModel.nominal's trajectories, keyed by what determines them (ΔT, duration, L, x(0), u0,
+#: tolerances), read-only; at most :data:`_NOMINALS_KEPT`, the oldest dropped first.  No lock:
+#: the checker's threads may share it and its graders fork, and a lock held at a fork would stay
+#: held in the child; ``list(dict)`` and ``dict.pop(key, None)`` are each one step under the GIL.
+_NOMINALS: dict[tuple, np.ndarray] = {}
+_NOMINALS_KEPT = 8
 
 #: Report 002's nominal initial state and constant input.
 X0 = np.array([10.0, 0.0, math.pi / 2, -60.0, 0.0, -math.pi / 2])
@@ -377,9 +379,11 @@ class CoopModel:
                self.u0.tobytes(), float(rtol), float(atol))
         kept = _NOMINALS.get(key)
         if kept is None:
-            kept = _NOMINALS[key] = self._integrate(x_start, rtol, atol)
-            while len(_NOMINALS) > _NOMINALS_KEPT:  # the oldest first (dicts keep order)
-                del _NOMINALS[next(iter(_NOMINALS))]
+            kept = self._integrate(x_start, rtol, atol)
+            kept.flags.writeable = False
+            _NOMINALS[key] = kept
+            for old in list(_NOMINALS)[:-_NOMINALS_KEPT]:  # the oldest first (dicts keep order)
+                _NOMINALS.pop(old, None)
         return kept.copy()
 
     def _integrate(self, x_start: np.ndarray, rtol: float, atol: float) -> np.ndarray:
