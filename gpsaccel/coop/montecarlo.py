@@ -66,6 +66,17 @@ class ConsistencyRun:
     result: FilterResult | None = None
     truth: Truth | None = None
 
+    @classmethod
+    def of(cls, method: str, Q: np.ndarray, alpha: float, t: np.ndarray, nees: np.ndarray,
+           nis: np.ndarray, runtime_s: float, result: FilterResult | None = None,
+           truth: Truth | None = None) -> ConsistencyRun:
+        """The test of the per-run NEES and NIS ``nees``, ``nis`` (N, K): their averages over the
+        runs and the two-sided χ² bounds of N runs at ``alpha``."""
+        N = nees.shape[0]
+        return cls(method, Q, N, alpha, t, nees.mean(axis=0), nis.mean(axis=0),
+                   consistency.chi2_bounds(6, N, alpha), consistency.chi2_bounds(5, N, alpha),
+                   runtime_s, result, truth)
+
     @property
     def nees_fraction(self) -> float:
         return consistency.fraction_inside(self.nees_mean, self.nees_bounds)
@@ -103,11 +114,9 @@ def consistency_test(model: CoopModel, method: str, Q: np.ndarray | None = None,
         raise ValueError(f"result must be the {method.upper()}'s on the truth's {truth.n_runs} "
                          f"runs, got the {result.method.upper()}'s of shape "
                          f"{np.shape(result.x_hat)}")
-    N = truth.n_runs
-    return ConsistencyRun(method, Q, N, alpha, model.t[1:],
-                          result.nees(truth.x)[:, 1:].mean(axis=0), result.nis()[:, 1:].mean(axis=0),
-                          consistency.chi2_bounds(6, N, alpha), consistency.chi2_bounds(5, N, alpha),
-                          float("nan"), result if keep else None, truth if keep else None)
+    return ConsistencyRun.of(method, Q, alpha, model.t[1:], result.nees(truth.x)[:, 1:],
+                             result.nis()[:, 1:], float("nan"), result if keep else None,
+                             truth if keep else None)
 
 
 #: Runs filtered in one call by :func:`_tests`: ~5 ms CPU per 100-second EKF run from 100 runs
@@ -155,11 +164,10 @@ def _tests(model: CoopModel, method: str, jobs: list[tuple[np.ndarray, Truth]], 
     runtime = sum(p[2] for p in parts)
     out: list[ConsistencyRun] = []
     for j, ((Q, tr), start) in enumerate(zip(jobs, np.cumsum([0, *sizes]), strict=False)):
-        N, part = tr.n_runs, slice(start, start + tr.n_runs)
-        out.append(ConsistencyRun(
-            method, Q, N, alpha, model.t[1:], nees[part].mean(axis=0), nis[part].mean(axis=0),
-            consistency.chi2_bounds(6, N, alpha), consistency.chi2_bounds(5, N, alpha),
-            runtime * N / len(nees), parts[j][3] if keep else None, tr if keep else None))
+        part = slice(start, start + tr.n_runs)
+        out.append(ConsistencyRun.of(method, Q, alpha, model.t[1:], nees[part], nis[part],
+                                     runtime * tr.n_runs / len(nees),
+                                     parts[j][3] if keep else None, tr if keep else None))
     return out
 
 
