@@ -50,7 +50,9 @@ def use_folder(folder: str | os.PathLike) -> str:
     The folder holds the master notebook ``NAME.ipynb`` (otter's assign format, with a
     ``# your variant`` cell if it has per-student numbers) and ``graded.py``, which defines
     ``graded_questions()`` (:class:`gpsaccel.assignments.questions.Question` s),
-    ``DEFAULT_VARIANT`` (the public notebook's numbers) and ``variant(number) -> dict``.  It is
+    ``DEFAULT_VARIANT`` (the public notebook's numbers) and ``variant(number) -> dict``, and
+    may define ``warm()`` (what grading any of its notebooks imports or computes first, done once
+    in the class's parent: modules, inputs of its reads, never a reference answer).  It is
     then handed out and graded exactly as a packaged homework (same sandbox, variants, feedback);
     the package is not edited.  ValueError naming what is missing.
     """

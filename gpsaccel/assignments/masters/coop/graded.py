@@ -8,6 +8,8 @@ a log simulated from the student's seed.  See :mod:`gpsaccel.assignments.questio
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from gpsaccel.assignments.coop import dt_linearization, ekf, jacobians, states
@@ -69,11 +71,19 @@ def _q2_grade(draw, answers) -> Report:
 
 
 def _logs(draw) -> list[tuple[str, np.ndarray]]:
+    return [(label, y.copy()) for label, y in _logs_of(draw.seed)]
+
+
+@lru_cache(maxsize=2)
+def _logs_of(seed: int) -> tuple[tuple[str, np.ndarray], ...]:
+    """The logs of q3 for a draw's seed, simulated once per notebook: q3's reads and its grade
+    ask for them three times (a simulation is most of the grader's own CPU for a coop
+    notebook).  Inputs of the student's ``ekf``, not answers; callers get copies."""
     from gpsaccel.coop.model import course_ydata
 
     model = CoopModel()
-    return [("the course log", course_ydata().T.copy()),
-            ("a simulated log", model.simulate(draw.rng()).y[0])]
+    return (("the course log", course_ydata().T.copy()),
+            ("a simulated log", model.simulate(np.random.default_rng(seed)).y[0]))
 
 
 def _q3_reads(draw):
@@ -97,6 +107,12 @@ def _q3_grade(draw, answers) -> Report:
     report.sort()
     return report
 
+
+def warm() -> None:
+    """Imported once in the class's parent (:func:`gpsaccel.assignments.grading.warm`), not in
+    every notebook's process: the checker's modules q1 and q2 grade with.  Modules only."""
+    import gpsaccel.check.dt_model  # noqa: F401
+    import gpsaccel.check.jacobians  # noqa: F401
 
 def graded_questions():
     """The coop homework's graded questions (:mod:`gpsaccel.assignments.questions`)."""

@@ -58,6 +58,20 @@ def _q2_grade(draw, answers) -> Report:
     return cost_answer(*got, **draw.variant)
 
 
+def warm() -> None:
+    """Done once in the class's parent (:func:`gpsaccel.assignments.grading.warm`), not in every
+    notebook's process: the modules q2's reference imports (the package's multirate filter,
+    which is filterpy's, and filterpy pulls in scipy.stats: 1-2 CPU s a notebook) and the ship's
+    covariances q1's cases start from (a voyage filtered; inputs of the student's update, the same
+    for every student, not an answer)."""
+    import filterpy.kalman  # noqa: F401
+
+    import gpsaccel.assignments.variants  # noqa: F401
+    import gpsaccel.kalman.multirate  # noqa: F401
+    import gpsaccel.ship.zeroed_gain  # noqa: F401
+
+    cases()
+
 def graded_questions():
     """The ship homework's graded questions (:mod:`gpsaccel.assignments.questions`)."""
     from gpsaccel.assignments.questions import Question
