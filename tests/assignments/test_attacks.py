@@ -20,7 +20,7 @@ import pytest
 
 from gpsaccel.assignments.grading import SECRET_ENV, grade
 
-from .conftest import kill_pids, read_grades, write_variant
+from .conftest import kill_pids, read_grades
 
 MARK = f"gpsaccel-attack-{uuid.uuid4().hex[:12]}"
 
@@ -285,13 +285,30 @@ def _procs_with(mark: str) -> list[int]:
     return out
 
 
+def _honest(target: Path) -> Path:
+    """A classmate's right notebook: question 1 solved, question 2's numbers those of the
+    student's own ship (typed in: the voyage that computes them would cost the box more CPU than
+    every attack together)."""
+    from gpsaccel.assignments.grading import student_variant
+    from gpsaccel.assignments.ship import zeroed_gain_cost
+
+    own = zeroed_gain_cost(**student_variant("ship", target.parent.name, SECRET))
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [nbformat.v4.new_code_cell(HONEST_Q1.replace(
+        "sigma_optimal = ...", f"sigma_optimal = {own['sigma_optimal']!r}").replace(
+        "sigma_zeroed = ...", f"sigma_zeroed = {own['sigma_actual']!r}"))]
+    target.parent.mkdir(parents=True)
+    nbformat.write(nb, str(target))
+    return target
+
+
 @pytest.fixture(scope="module")
 def attacked(tmp_path_factory):
     root = tmp_path_factory.mktemp("attacks")
     sub = root / "submissions"
     out = root / "grades"
-    victim = write_variant("ship", sub / "Classmate" / "ship.ipynb")
-    write_variant("ship", sub / "Honest Student" / "ship.ipynb")
+    victim = _honest(sub / "Classmate" / "ship.ipynb")
+    _honest(sub / "Honest Student" / "ship.ipynb")
     before = hashlib.sha256(victim.read_bytes()).hexdigest()
     for name, (cell, _) in ATTACKS.items():
         text = cell

@@ -30,11 +30,17 @@ SECRET = b"ship-test-secret-0123456789"
 def graded(tmp_path_factory):
     sub = tmp_path_factory.mktemp("class")
     write_variant("ship", sub / "solved" / "ship.ipynb")
+    # a voyage in the box costs half a notebook's CPU: only the notebooks whose answers come
+    # from it run it (solved, mistake_q2); the others type in their numbers
     write_variant("ship", sub / "blank" / "ship.ipynb",
                   [("def update(x_bar, M, z, H, V):\n", "def update(x_bar, M, z, H, V):\n"
-                    "    return None\n"),
-                   (ACTUAL, "sigma_zeroed = ...")])
-    write_variant("ship", sub / "mistake_q1" / "ship.ipynb", [(UPDATE, ZEROED_K)])
+                    "    return None\n"), (VOYAGE, "# the voyage is not run"),
+                   (SIGMAS, "sigma_optimal = 0.4145\nsigma_zeroed = ...")])
+    own = ship.zeroed_gain_cost(**student_variant("ship", "mistake_q1", SECRET))
+    write_variant("ship", sub / "mistake_q1" / "ship.ipynb",
+                  [(UPDATE, ZEROED_K), (VOYAGE, "# its own voyage's numbers, typed in below"),
+                   (SIGMAS, f"sigma_optimal = {own['sigma_optimal']!r}\n"
+                            f"sigma_zeroed = {own['sigma_actual']!r}")])
     write_variant("ship", sub / "mistake_q2" / "ship.ipynb",
                   [(ACTUAL, ACTUAL.replace("P_actual", "P"))])
     # the numbers of the public notebook's voyage (seed 0) typed in instead of its own voyage
