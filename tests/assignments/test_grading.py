@@ -18,7 +18,7 @@ from gpsaccel.assignments.grading import find_submissions, grade
 from gpsaccel.assignments.questions import question_seed, variant_number
 from gpsaccel.cli import main
 
-from .conftest import read_grades, write_variant
+from .conftest import read_grades, tracker_with_numpy_filter, write_variant
 
 PHI = 'dt = 1 / VARIANT["rate_hz"]\nPhi = np.array([[1.0, dt, -dt**2 / 2],'
 MEAN = "return float(np.mean([ei @ np.linalg.solve(Pi, ei) for ei, Pi in zip(e, P[:, -1])]))"
@@ -199,7 +199,7 @@ def test_cli_assignment_with_a_relative_out_and_grade(tmp_path, monkeypatch, cap
     v = grading.student_variant("tracker", "alice", SECRET)
     assert f"VARIANT = {v!r}" in mine and "BEGIN SOLUTION" not in mine
     sub = tmp_path / "class"
-    write_variant("tracker", sub / "alice" / "tracker.ipynb")
+    tracker_with_numpy_filter(sub / "alice" / "tracker.ipynb")  # no filterpy in the file's box
     assert main(["grade", str(sub), "--assignment", "tracker", "--seed", "1", "--secret-file",
                  "secret"]) == 0
     assert "alice" in capsys.readouterr().out
