@@ -220,20 +220,21 @@ def disk_cache(tmp_path_factory) -> DiskCache:
 
 @pytest.fixture(scope="session")
 def executed_lesson(disk_cache):
-    """``executed_lesson(path, runs=None, timeout=600)``: the notebook at ``path`` executed top to
-    bottom by :func:`gpsaccel.lessons.execute` (a fresh kernel, in its own folder), as a new
-    ``NotebookNode`` each call.  Executed once per notebook content, package source, library
-    versions and ``runs``; a notebook whose cell raises is not cached (the error propagates)."""
+    """``executed_lesson(path, runs=None, timeout=600, crop_figures=True)``: the notebook at ``path``
+    executed top to bottom by :func:`gpsaccel.lessons.execute` (a fresh kernel, in its own folder),
+    as a new ``NotebookNode`` each call.  Executed once per notebook content, package source,
+    library versions, ``runs`` and ``crop_figures``; a notebook whose cell raises is not cached
+    (the error propagates)."""
     import nbformat
 
     from gpsaccel.lessons import execute  # the real one, even where a test patches it
 
-    def run(path, runs: int | None = None, timeout: int = 600):
+    def run(path, runs: int | None = None, timeout: int = 600, crop_figures: bool = True):
         path = Path(path).resolve()
-        key = disk_cache.key("lesson", path.name, path.read_bytes(), repr(runs))
+        key = disk_cache.key("lesson", path.name, path.read_bytes(), repr(runs), repr(crop_figures))
 
         def make(target: Path) -> None:
-            nb = execute(path, timeout=timeout, runs=runs)
+            nb = execute(path, timeout=timeout, runs=runs, crop_figures=crop_figures)
             nbformat.write(nb, str(target))
 
         return nbformat.read(str(disk_cache.path("lessons", key, make)), as_version=4)

@@ -40,3 +40,39 @@ def test_a_slider_that_cannot_open_at_the_lessons_number_is_refused(monkeypatch)
     sliders(tune, W=widgets.SelectionSlider(options=[1e-4, 4e-4, 1e-3], value=4e-4))
     with pytest.raises(ValueError, match="opens at 0.35"):
         sliders(lambda x=0.37: None, x=widgets.FloatSlider(value=0.37, min=0, max=1, step=0.05))
+
+
+@pytest.mark.filterwarnings("ignore::DeprecationWarning")  # traitlets on a dict given whole, as here
+def test_uncropped_figures_reach_the_kernel_as_a_setting_it_reads(monkeypatch, tmp_path):
+    """``execute(crop_figures=False)`` starts the kernel with a command-line setting that the
+    kernel's (traitlets) parser turns into the inline backend's ``print_figure_kwargs`` (a
+    setting nothing read would be ignored silently, and the tests' runs would crop again)."""
+    import contextlib
+
+    import nbformat
+    from matplotlib_inline.config import InlineBackend
+    from traitlets.config import Application
+
+    from gpsaccel.lessons import kernel
+
+    app = Application()
+    app.parse_command_line([kernel.UNCROPPED])
+    assert InlineBackend(config=app.config).print_figure_kwargs == {"bbox_inches": None}
+    assert InlineBackend().print_figure_kwargs == {"bbox_inches": "tight"}  # what it replaces
+
+    seen = []
+
+    class Client:
+        def __init__(self, nb, **options):
+            seen.append(options["extra_arguments"])
+
+        def execute(self):
+            return None
+
+    monkeypatch.setattr("nbclient.NotebookClient", Client)
+    monkeypatch.setattr(kernel, "_local_kernel", lambda: contextlib.nullcontext(None))
+    path = tmp_path / "empty.ipynb"
+    nbformat.write(nbformat.v4.new_notebook(), path)
+    kernel.execute(path)
+    kernel.execute(path, crop_figures=False)
+    assert seen == [[], [kernel.UNCROPPED]]

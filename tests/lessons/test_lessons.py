@@ -22,6 +22,9 @@ from gpsaccel.lessons import numbers
 MASTERS = L.masters()
 IDS = [p.stem for p in MASTERS]
 SMALL_RUNS = 20
+#: How the solutions versions run here: a small ensemble, and figures drawn (a label that cannot
+#: be drawn raises) but not cropped, one draw less per figure: nobody looks at these pictures.
+SMALL = {"runs": SMALL_RUNS, "crop_figures": False}
 _CHECK_CALL = re.compile(r'self_check\("([^"]+)",\s*(answer_\w+)')
 
 
@@ -238,7 +241,7 @@ def _outputs(cell) -> str:
 
 @pytest.mark.parametrize("master", MASTERS, ids=IDS)
 def test_solutions_version_runs_with_a_tick_under_every_self_check(master, executed_lesson):
-    nb = executed_lesson(L.lessons_dir() / "solutions" / master.name, runs=SMALL_RUNS)
+    nb = executed_lesson(L.lessons_dir() / "solutions" / master.name, **SMALL)
     for c in _tagged(nb, L.CHECK):
         out = _outputs(c)
         assert out.startswith("✓") and "\n" == out[-1] and out.count("\n") == 1, \
@@ -279,7 +282,7 @@ def test_student_version_runs_and_shows_no_answer(master, executed_lesson, monke
         [c.source for c in rest if L.ANSWER in tags(c)]
 
     ran = [c for c in executed_lesson(L.lessons_dir() / "solutions" / master.name,
-                                      runs=SMALL_RUNS).cells if c.cell_type == "code"]
+                                      **SMALL).cells if c.cell_type == "code"]
     assert [c.source for c in ran[:len(lesson)]] == [c.source for c in lesson]
     outputs = [_outputs(c) for c in ran[:len(lesson)]]
     monkeypatch.delenv(RECORD_VARIABLE, raising=False)
