@@ -64,6 +64,9 @@ autosummary_generate = True
 # functions under the modules' own names: documented twice otherwise)
 autodoc_default_options = {"members": True, "show-inheritance": False, "ignore-module-all": True}
 autodoc_typehints = "none"
+# no function of gpsaccel has a signature type comment (``# type: (int) -> str``): with them off
+# autodoc does not read and parse again the source of each of its 1300 functions and methods
+autodoc_use_type_comments = False
 numpydoc_show_class_members = False
 numpydoc_xref_param_type = False
 numpydoc_validation_checks: set[str] = set()
@@ -291,8 +294,56 @@ def _numpydoc_template_once() -> None:
     numpydoc.get_doc_object = get_doc_object
 
 
+def _definitions_when_asked() -> None:
+    """Sphinx's ModuleAnalyzer tokenizes every documented module a second time to find where each
+    class and function is defined (a tenth of the build's CPU), which only ``literalinclude
+    :pyobject:`` and sphinx.ext.viewcode ask for (``find_tags``), neither used here: that pass
+    runs when ``find_tags`` is called instead, with the same code, so nothing changes on a page."""
+    from sphinx.pycode import ModuleAnalyzer, parser
+
+    if getattr(parser.Parser.parse_definition, "_deferred", False):
+        return
+    find = parser.Parser.parse_definition
+
+    def parse_definition(self) -> None:
+        self.definitions = {}  # find_tags below, when asked
+
+    def find_tags(self):
+        self.analyze()
+        if not self.tags:
+            found = parser.Parser(self.code)
+            find(found)
+            self.tags = found.definitions
+        return self.tags
+
+    parse_definition._deferred = True  # type: ignore[attr-defined]
+    parser.Parser.parse_definition = parse_definition  # type: ignore[method-assign]
+    ModuleAnalyzer.find_tags = find_tags  # type: ignore[method-assign]
+
+
+def _stems_once() -> None:
+    """The search index stems each word of each page with the pure-Python Snowball stemmer,
+    memoised per page only (35 000 calls, a tenth of the build's CPU): memoised per build here;
+    the stemmer is a function of the word, so the index is the same."""
+    from sphinx.search.en import SearchEnglish
+
+    if getattr(SearchEnglish.stem, "_memo", None) is not None:
+        return
+    stem, memo = SearchEnglish.stem, {}
+
+    def stem_once(self, word: str) -> str:
+        if word not in memo:
+            memo[word] = stem(self, word)
+        return memo[word]
+
+    stem_once._memo = memo  # type: ignore[attr-defined]
+    SearchEnglish.stem = stem_once  # type: ignore[method-assign]
+
+
 def setup(app):
     _numpydoc_template_once()
+    _definitions_when_asked()
+    _stems_once()
     app.connect("autodoc-process-docstring", _clean_docstring, priority=400)  # before numpydoc
     if not STRICT_DOCSTRINGS:
         for handler in logging.getLogger("sphinx").handlers:

@@ -252,7 +252,11 @@ def test_the_wheel_in_a_fresh_environment_outside_the_repository(tmp_path):
                     f"{wheel}{WHEEL_EXTRA}"], check=True, timeout=240)
     work = tmp_path / "student"
     work.mkdir()
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    # a user's environment: not this checkout's PYTHONPATH or venv; and bytecode is written (pip
+    # compiles it at install, uv does not): under a developer's PYTHONDONTWRITEBYTECODE every
+    # process of the steps below, the sandbox's boxes included, compiled numpy and scipy again
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("PYTHONPATH", "VIRTUAL_ENV", "PYTHONDONTWRITEBYTECODE")}
     env["MPLBACKEND"] = "Agg"
     where = subprocess.run([str(venv / "bin" / "python"), "-c",
                             "import gpsaccel, gpsaccel.lessons as l; print(gpsaccel.__file__); "
