@@ -44,7 +44,14 @@ def drawn() -> dict[str, list]:
 
 
 @pytest.fixture(scope="module")
-def written(tmp_path_factory, drawn):
+def legend_checks(drawn, legend_watch) -> dict[str, list[dict]]:
+    """What the legends' check found when each ``drawn`` figure was drawn to be written
+    (conftest's ``watch_legends``; ``written`` draws them)."""
+    return {r: [legend_watch(f.figure) for f in figs] for r, figs in drawn.items()}
+
+
+@pytest.fixture(scope="module")
+def written(tmp_path_factory, drawn, legend_checks):
     """write_figures over the three reports, each report's ``figures`` answering with copies of
     the ``drawn`` records (write_figures closes what it saves)."""
     import dataclasses
@@ -96,8 +103,8 @@ def test_index_lists_every_figure_with_its_caption(written):
 
 
 @pytest.mark.parametrize("report", list(EXPECTED))
-def test_every_axes_is_labelled(report, drawn, legends_beside_axes):
-    for fig in drawn[report]:
+def test_every_axes_is_labelled(report, drawn, legend_checks, written, legends_beside_axes):
+    for fig, seen in zip(drawn[report], legend_checks[report], strict=True):
         assert fig.caption.strip()
         for ax in fig.figure.axes:
             if not ax.axison:  # the system diagram: blocks and arrows, no axes
@@ -112,8 +119,32 @@ def test_every_axes_is_labelled(report, drawn, legends_beside_axes):
         legends = [ax.get_legend() for ax in fig.figure.axes if ax.get_legend() is not None]
         for leg in legends:
             assert all(t.get_text().strip() for t in leg.get_texts())
-        legends_beside_axes(fig.figure, f"r{report} fig {fig.number}")
+        legends_beside_axes(fig.figure, f"r{report} fig {fig.number}", seen)  # as written
 
+
+
+def test_the_legend_check_sees_a_legend_over_its_axes(tmp_path, legend_watch,
+                                                      legends_beside_axes):
+    """The check above, in the draw that writes a figure and without it, catches a legend inside
+    its axes and passes one beside them."""
+    import matplotlib.pyplot as plt
+
+    from gpsaccel.plots import outside_legend
+
+    for place, over in ((lambda ax: ax.legend(loc="center"), True), (outside_legend, False)):
+        fig, ax = plt.subplots(figsize=(3, 2))
+        ax.plot([0, 1], [0, 1], label="a line")
+        ax.set_title("t")
+        place(ax)
+        seen = legend_watch(fig)
+        fig.savefig(tmp_path / "f.png", dpi=40)
+        for where, checked in (("as written", seen), ("drawn again", None)):
+            if over:
+                with pytest.raises(AssertionError, match="lies over the axes 't'"):
+                    legends_beside_axes(fig, where, checked)
+            else:
+                legends_beside_axes(fig, where, checked)
+        plt.close(fig)
 
 
 def test_figures_are_reproducible_from_the_seed(drawn):
