@@ -308,18 +308,23 @@ def run_batch(method: str, model: CoopModel, y: np.ndarray, Q: np.ndarray | None
               R: np.ndarray | None = None, x0: np.ndarray | None = None,
               P0: np.ndarray | None = None, nominal: np.ndarray | None = None,
               ingredients: Ingredients = RIGHT, alpha: float = UKF_ALPHA,
-              beta: float = UKF_BETA, kappa: float = UKF_KAPPA) -> FilterResult:
+              beta: float = UKF_BETA, kappa: float = UKF_KAPPA,
+              steps: int | None = None) -> FilterResult:
     """Filter ``method`` ('lkf', 'ekf', 'ukf') on N logs y (N, K+1, 5) at once (module docstring).
 
     ``Q`` (6, 6), or (N, 6, 6) one per run (a tuning grid in one call: each run's arithmetic is
     that of its own call, bit for bit).  ``ingredients`` makes it a student's filter (EKF and
     LKF; :mod:`gpsaccel.coop.mistakes`); ``alpha``, ``beta``, ``kappa`` are the UKF's
-    sigma-point parameters (:func:`ukf_points`).
+    sigma-point parameters (:func:`ukf_points`).  ``steps``: only the first ``steps`` rows, the
+    same numbers as those rows of the whole run (each row depends only on the rows before it; the
+    checker bounds a catalogue filter's distance to a student's from its first rows).
     """
     method = _v.choice("method", method, METHODS)
     if np.ndim(y) == 3 and np.shape(y)[0] == 0:
         raise ValueError("y holds no run (shape (0, ...)): run_batch needs at least one log")
     y, Q, R, x0, P0 = _check(model, y, Q, R, x0, P0, method, batch=True)
+    if steps is not None:
+        y = y[:, :_v.integer("steps", steps, minimum=1)]
     g = ingredients
     Q = Q * g.q_scale if g.q_scale != 1.0 else Q
     R = np.sqrt(R) if g.r_sqrt else R
@@ -335,7 +340,7 @@ def run_batch(method: str, model: CoopModel, y: np.ndarray, Q: np.ndarray | None
     if g.shift == "output":
         for key in ("x_hat", "P"):
             out[key][:, 1:] = out[key][:, :-1].copy()
-    return FilterResult(method, model.t, **out)
+    return FilterResult(method, model.t[:y.shape[1]], **out)
 
 
 def _loop(flt, model, y, Q, R, x0, P0, g, shared_P: bool) -> dict[str, np.ndarray]:

@@ -14,7 +14,12 @@ import numpy as np
 
 from gpsaccel.check.findings import mistake_finding
 from gpsaccel.check.problem import Argument, Function, Problem
-from gpsaccel.check.problems.compare import distances, first_departure, nan_finding, nearest
+from gpsaccel.check.problems.compare import (
+    distances,
+    first_departure,
+    nan_finding,
+    nearest_within,
+)
 from gpsaccel.check.report import Report
 from gpsaccel.check.wording import STUDENT
 from gpsaccel.kalman import consistency
@@ -102,11 +107,16 @@ class CoopProblem(Problem):
         Q, R = self.Q(function.name), self.model.Rtrue
         return [Call(function.name, (y, Q, R), function.outputs) for y in cases.y]
 
-    def _reference(self, cases: CoopCases, kind: str, mistakes: tuple = ()):
+    def _reference(self, cases: CoopCases, kind: str, mistakes: tuple = (),
+                   steps: int | None = None):
         """The reference (no mistakes) or a catalogue filter on the cases; cached, since every
-        check of a class runs on the same cases."""
+        check of a class runs on the same cases.  ``steps``: its first rows only (not kept)."""
         from gpsaccel.coop import mistakes as cm
+        from gpsaccel.coop.filters import run_batch
 
+        if steps is not None:
+            return run_batch(kind, self.model, cases.y, self.Q(kind), self.model.Rtrue,
+                             ingredients=cm.ingredients(mistakes), steps=steps)
         key = (id(cases), kind, mistakes)
         if key not in self._cache:
             if len(self._cache) > 64:
@@ -173,13 +183,14 @@ class CoopProblem(Problem):
 
         fname = kind
         tol_x, tol_P = self.TOL[kind]
-        cands = []
-        for m in cm.catalogue(self.model, kind):
-            if m.code in ("no-state-wrap", "p-not-symmetric") or not m.checker:
-                continue
-            o = self._reference(cases, kind, (m,))
-            cands.append((m, o.x_hat, o.P))
-        found = nearest(cands, x, P, ref.x_hat, ref.P, tol_x, tol_P, cm.wrapped_difference)
+        cands = [m for m in cm.catalogue(self.model, kind)
+                 if m.code not in ("no-state-wrap", "p-not-symmetric") and m.checker]
+
+        def run(m, steps: int | None) -> tuple[np.ndarray, np.ndarray]:
+            o = self._reference(cases, kind, (m,), steps)
+            return o.x_hat, o.P
+
+        found = nearest_within(cands, run, x, P, ref.P, tol_x, tol_P, cm.wrapped_difference)
         if found and found[1] <= 1.0:
             m = found[0]
             mistake_finding(report, m, f"{fname}: ")
