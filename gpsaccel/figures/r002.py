@@ -10,7 +10,7 @@ on the log, 19c the NIS of the three filters on the log.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Collection, Iterator
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -209,18 +209,72 @@ def on_the_log(model: CoopModel) -> dict[str, FilterResult]:
 
 
 def figures(runs: int, seed: int, executor: object = None,
-            filters: tuple[str, ...] = MONTE_CARLO) -> Iterator[ReportFigure]:
+            filters: tuple[str, ...] = MONTE_CARLO,
+            numbers: Collection[str] | None = None) -> Iterator[ReportFigure]:
     """The report's figures in order; ``executor`` (a ``concurrent.futures`` executor, or None:
     here) filters the Monte Carlo set while the figures before it are drawn (:class:`_MonteCarlo`).
     ``filters``: the Monte Carlo filters started on the executor (a caller that stops before
-    figure 14c leaves out the UKF, which costs five EKFs); any other runs here if a figure asks."""
+    figure 14c leaves out the UKF, which costs five EKFs); any other runs here if a figure asks.
+    ``numbers``: only these figures ("10", "15b", ...; None: all), and only what they need is
+    computed: lesson 11b shows 16-19c, which need no Monte Carlo set at all (it drew and filtered
+    all of them, 6 of its 9 CPU s).  Each figure is the one the whole report draws."""
     model = CoopModel()
-    mc = None if executor is None else _MonteCarlo(model, truth_runs(model, runs, seed), executor,
-                                                   filters)
-    lin = linearization_study(model)
-    yield from _linearization_figures(model.t, lin)
-    yield from _monte_carlo_figures(model, lin, runs, seed, mc)
-    yield from _log_figures(model, lin)
+    if numbers is not None:
+        numbers = {_v.choice("numbers", n, ALL_NUMBERS) for n in numbers}
+    want = _Wanted(numbers)
+    mc = None
+    if executor is not None and want.any(*_MC_FIGURES):
+        mc = _MonteCarlo(model, truth_runs(model, runs, seed), executor, filters)
+    lin = _Lazy(lambda: linearization_study(model))
+    if want.any("01", "02", "03", "04", "05"):
+        yield from want.only(_linearization_figures(model.t, lin()))
+    if want.any(*_MC_FIGURES):
+        yield from _monte_carlo_figures(model, lin, runs, seed, mc, want)
+    if want.any(*_LOG_FIGURES):
+        # the log's figures need only the nominal (the same array the study holds)
+        yield from want.only(_log_figures(model, lin() if lin.done else
+                                          {"nominal": model.nominal()}))
+
+
+#: The figures beyond the report's list (FIGURES), in the order they are drawn among them.
+EXTRAS = ("08b", "14b", "15b", "14c", "15c", "18b", "19b", "19c")
+#: Every figure's number as drawn ("01" ... "19c"), in the order :func:`figures` draws them.
+ALL_NUMBERS = ("01", "02", "03", "04", "05", "06", "07", "08", "08b", "09", "10", "11", "12",
+               "13", "14", "15", "14b", "15b", "14c", "15c", "16", "17", "18", "19", "18b",
+               "19b", "19c")
+_MC_FIGURES = ("06", "07", "08", "08b", "09", "10", "11", "12", "13", "14", "15", "14b", "15b",
+               "14c", "15c")
+_LOG_FIGURES = ("16", "17", "18", "19", "18b", "19b", "19c")
+
+
+class _Wanted:
+    """Which figures a caller asked for (None: all)."""
+
+    def __init__(self, numbers: set[str] | None) -> None:
+        self.numbers = numbers
+
+    def __call__(self, number: str) -> bool:
+        return self.numbers is None or number in self.numbers
+
+    def any(self, *numbers: str) -> bool:
+        return any(self(n) for n in numbers)
+
+    def only(self, figs: Iterator[ReportFigure]) -> Iterator[ReportFigure]:
+        """The wanted ones of a group drawn together (a group is skipped whole by the caller)."""
+        return (f for f in figs if self(f.number))
+
+
+class _Lazy:
+    """A value computed when first asked for (the linearization study: a solve_ivp run that only
+    figures 01-05, 08b and 16-19c use)."""
+
+    def __init__(self, make) -> None:
+        self.make, self.done, self.value = make, False, None
+
+    def __call__(self):
+        if not self.done:
+            self.value, self.done = self.make(), True
+        return self.value
 
 
 def _linearization_figures(t: np.ndarray, lin: dict) -> Iterator[ReportFigure]:
@@ -272,17 +326,23 @@ def _drift_figure(t: np.ndarray, truth, nominal: np.ndarray) -> ReportFigure:
         "hundreds of metres from x*, far outside the LKF's linear range."), fig)
 
 
-def _monte_carlo_figures(model: CoopModel, lin: dict, runs: int, seed: int,
-                         mc: _MonteCarlo | None = None) -> Iterator[ReportFigure]:
-    """Figures 06-15c: the LKF's typical run, then NEES and NIS of every filter."""
+def _monte_carlo_figures(model: CoopModel, lin: _Lazy, runs: int, seed: int,
+                         mc: _MonteCarlo | None = None,
+                         want: _Wanted | None = None) -> Iterator[ReportFigure]:
+    """Figures 06-15c: the LKF's typical run, then NEES and NIS of every filter (those ``want``
+    asks for: a filter no wanted figure needs is not run)."""
     t = model.t
+    want = _Wanted(None) if want is None else want
     if mc is None:
         mc = _MonteCarlo(model, truth_runs(model, runs, seed))  # each filter when first drawn
     truth = mc.truth
-    drift_fig = _drift_figure(t, truth, lin["nominal"])
+    # drawn before the LKF's figures, as always (the nominal's solve_ivp: the first use of lin)
+    drift_fig = _drift_figure(t, truth, lin()["nominal"]) if want("08b") else None
     i0 = 0
     x0 = truth.x[i0]
     for num, m in [("06", "lkf"), ("07", "lkf")]:
+        if not want(num):
+            continue
         r = mc[m].result
         assert r is not None  # monte_carlo keeps each filter's result
         ugv = num == "06"
@@ -295,11 +355,12 @@ def _monte_carlo_figures(model: CoopModel, lin: dict, runs: int, seed: int,
                          ("14", "ekf", "NEES"), ("15", "ekf", "NIS"),
                          ("14b", "ekf-qtrue", "NEES"), ("15b", "ekf-qtrue", "NIS"),
                          ("14c", "ukf", "NEES"), ("15c", "ukf", "NIS")]:
-        yield _consistency_figure(mc[m], num, m, stat)
-        if num == "08":
+        if want(num):
+            yield _consistency_figure(mc[m], num, m, stat)
+        if num == "08" and drift_fig is not None:
             yield drift_fig
-        if num == "09":
-            yield from _ekf_single(mc, t, x0, i0, seed)
+        if num == "09" and want.any("10", "11", "12", "13"):
+            yield from want.only(_ekf_single(mc, t, x0, i0, seed))
 
 
 def _consistency_figure(run: ConsistencyRun, num: str, m: str, stat: str) -> ReportFigure:

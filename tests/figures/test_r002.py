@@ -20,16 +20,36 @@ LISTED = [n.zfill(2) for n in registry.report("002").figures]
 EXTRA = ["08b", "14b", "15b", "14c", "15c", "18b", "19b", "19c"]
 
 
+def _legends_over_axes(figure, renderer) -> list[str]:
+    """The axes whose visible legend overlaps them, in the draw that gave ``renderer`` (the
+    check of tests/figures/conftest.py's ``assert_legends_beside_their_axes``, without its own
+    draw: a layout is the whole cost of a draw here, half of this file's time)."""
+    over = []
+    for ax in figure.axes:
+        legend = ax.get_legend()
+        if legend is not None and legend.get_visible():
+            if legend.get_window_extent(renderer).overlaps(ax.get_window_extent(renderer)):
+                over.append(ax.get_title())
+    return over
+
+
 @pytest.fixture(scope="module")
 def drawn(tmp_path_factory):
     """Report 002's figures drawn once (12 runs): written by write_figures, and kept open for
-    the axes tests (write_figures closes what it writes: it gets copies of the records)."""
+    the axes tests (write_figures closes what it writes: it gets copies of the records).  The
+    legends are checked in the draw that writes each PNG (``legend_over``: figure -> the axes
+    a legend covers), at the PNG's dpi: the layout scales with the dpi."""
     import dataclasses
 
     import gpsaccel.figures.r002 as r002
 
     out = tmp_path_factory.mktemp("r002")
     figs = list(r002.figures(12, 0))
+    legend_over: dict[str, list[str]] = {}
+    for f in figs:
+        f.figure.canvas.mpl_connect(
+            "draw_event", lambda event, n=f.number: legend_over.__setitem__(
+                n, _legends_over_axes(event.canvas.figure, event.renderer)))
     asked = []
 
     def figures(runs, seed):
@@ -40,11 +60,12 @@ def drawn(tmp_path_factory):
         mp.setattr(r002, "figures", figures)
         paths = write_figures(["002"], out, runs=12, seed=0, dpi=40)
     assert asked == [(12, 0)]
-    return figs, paths, out
+    assert sorted(legend_over) == sorted(f.number for f in figs)  # every figure drawn, checked
+    return figs, paths, out, legend_over
 
 
 def test_every_listed_figure_and_the_extras_are_written(drawn):
-    _, paths, out = drawn
+    _, paths, out, _ = drawn
     numbers = []
     for p in paths:
         m = NAME.match(p.name)
@@ -58,7 +79,7 @@ def test_every_listed_figure_and_the_extras_are_written(drawn):
 
 
 def test_every_axes_has_labels_with_units_and_every_figure_a_caption(drawn):
-    figs, _, _ = drawn
+    figs = drawn[0]
     for fig in figs:
         assert fig.caption.strip()
         for ax in fig.figure.axes:
@@ -68,13 +89,27 @@ def test_every_axes_has_labels_with_units_and_every_figure_a_caption(drawn):
             assert any(s.get_xlabel().strip() for s in siblings), f"{where}: no x label"
 
 
-def test_no_legend_lies_over_its_axes(drawn, legends_beside_axes):
-    for fig in drawn[0]:
-        legends_beside_axes(fig.figure, f"r002 fig {fig.number}")
+def test_no_legend_lies_over_its_axes(drawn):
+    # loc="best" still covers a panel whose data fill it; plots.outside_legend puts it right
+    assert {n: over for n, over in drawn[3].items() if over} == {}
+
+
+def test_the_legend_check_sees_a_legend_over_its_axes():
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure()
+    ax = fig.subplots()
+    ax.plot([0, 1], [0, 1], label="a line")
+    ax.set_title("inside")
+    ax.legend(loc="center")
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    fig.draw(renderer)
+    assert _legends_over_axes(fig, renderer) == ["inside"]
 
 
 def test_captions_carry_the_measured_numbers(drawn):
-    figs, _, _ = drawn
+    figs = drawn[0]
     by_number = {f.number: f for f in figs}
     assert re.search(r"\d+\.\d% of steps inside", by_number["14"].caption)
     assert "Q = diag(" in by_number["14"].caption
@@ -93,11 +128,42 @@ def test_a_lesson_that_stops_after_figure_09_runs_the_lkf_alone(monkeypatch):
         return real(model, method, *args, **kwargs)
 
     monkeypatch.setattr(r002, "consistency_test", spy)
-    for f in r002.figures(3, 0):
+    for f in r002.figures(3, 0, numbers=("09", "10")):   # (01-08b: only drawing, no filter)
         if f.number == "09":
             break
     assert ran == ["lkf"]
     assert sorted(r002.monte_carlo(r002.CoopModel(), 3, 0)) == ["ekf", "ekf-qtrue", "lkf", "ukf"]
+
+
+def _data(fig):
+    """What a figure shows: every line's and filled region's points, and the axes' labels."""
+    out = []
+    for ax in fig.axes:
+        out += [line.get_xydata().tobytes() for line in ax.get_lines()]
+        out += [p.vertices.tobytes() for c in ax.collections for p in c.get_paths()]
+        out.append((ax.get_title(), ax.get_xlabel(), ax.get_ylabel()))
+    return out
+
+
+def test_figures_asked_for_by_number_are_those_of_the_whole_report_and_need_only_their_filters(
+        drawn, monkeypatch):
+    # lessons 10b, 11 and 11b draw only the figures they show (11b: no Monte Carlo set at all)
+    import gpsaccel.figures.r002 as r002
+
+    ran = []
+    real = r002.consistency_test
+    monkeypatch.setattr(r002, "consistency_test",
+                        lambda model, method, Q=None, **kw: ran.append(method) or
+                        real(model, method, Q, **kw))
+    whole = {f.number: f for f in drawn[0]}
+    some = list(r002.figures(12, 0, numbers=("19c", "08b", "14b")))
+    assert [f.number for f in some] == ["08b", "14b", "19c"]   # the report's order
+    assert ran == ["ekf"]                                         # 14b's EKF with Q = Qtrue
+    for f in some:
+        assert (f.caption, f.slug) == (whole[f.number].caption, whole[f.number].slug)
+        assert _data(f.figure) == _data(whole[f.number].figure), f.number
+    with pytest.raises(ValueError, match="numbers must be one of"):
+        next(r002.figures(12, 0, numbers=("8b",)))
 
 
 def test_an_executor_filters_the_monte_carlo_at_once_with_the_same_numbers():
