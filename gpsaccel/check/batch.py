@@ -42,7 +42,7 @@ from gpsaccel import registry
 from gpsaccel import sandbox as sb
 from gpsaccel._atomic import write_text
 from gpsaccel.check.problems import submission
-from gpsaccel.check.report import Report
+from gpsaccel.check.report import Report, no_verdict
 from gpsaccel.sandbox.outcomes import OUTCOMES
 
 #: Seconds a check's process may take beyond the student's time limit (simulating the data,
@@ -256,17 +256,23 @@ def _shown_name(r: dict) -> str:
 
 def table(results: Sequence[dict]) -> str:
     """The instructor's table: submission, passed, codes, seconds (names made printable:
-    :func:`printable`)."""
+    :func:`printable`).  "again" where the check gave no verdict (:func:`~gpsaccel.check.report
+    .no_verdict`): not the student's fail."""
     names = [_shown_name(r) for r in results]
     name_w = max([len(n) for n in names] + [10])
     head = f"{'submission':<{name_w}}  {'passed':<6}  {'seconds':>7}  codes"
     lines = [head, "-" * max(len(head), 40)]
-    for name, r in zip(names, results, strict=True):
+    again = [r["passed"] is not True and no_verdict(False, list(r["codes"])) for r in results]
+    for name, r, a in zip(names, results, again, strict=True):
         lines.append(f"{name:<{name_w}}  "
-                     f"{'yes' if r['passed'] is True else 'NO':<6}  {r['seconds']:7.1f}  "
-                     f"{printable(', '.join(r['codes'])) or '-'}")
+                     f"{'yes' if r['passed'] is True else 'again' if a else 'NO':<6}  "
+                     f"{r['seconds']:7.1f}  {printable(', '.join(r['codes'])) or '-'}")
     n_pass = sum(r["passed"] is True for r in results)
-    lines.append(f"{n_pass} of {len(results)} passed")
+    summary = f"{n_pass} of {len(results)} passed"
+    if any(again):
+        summary += (f"; {sum(again)} without a verdict (the machine or the checker, not the "
+                    f"student's code: check them again)")
+    lines.append(summary)
     return "\n".join(lines)
 
 

@@ -159,10 +159,20 @@ def _short(value: object) -> str:
     return str(value)
 
 
+def no_verdict(passed: bool, codes: list[str]) -> bool:
+    """A check that failed only for reasons that are ours, not the student's (the machine too busy
+    to give the box its time, a lost box: :func:`gpsaccel.sandbox.outcomes.ours`): it says nothing
+    about the code, so it reads "NO VERDICT", not "FAILED", and is to be run again."""
+    from gpsaccel.sandbox.outcomes import ours
+
+    return not passed and bool(codes) and all(ours(c) for c in codes)
+
+
 def render(subject: str, passed: bool, codes: list[str], lines: list[str],
            tables: list[str]) -> str:
     """The readable text of a report (one renderer for both audiences; each passes its lines)."""
-    head = f"{subject}: {'PASSED' if passed else 'FAILED'}"
+    verdict = "PASSED" if passed else "NO VERDICT" if no_verdict(passed, codes) else "FAILED"
+    head = f"{subject}: {verdict}"
     if codes:
         head += f" ({', '.join(codes)})"
     out = [head]

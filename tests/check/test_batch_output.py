@@ -93,3 +93,25 @@ def test_basic_is_refused_for_a_class_where_it_is_unsafe(tmp_path, hostile, monk
     assert main(["check", str(path), "--runs", "2", "--allow-unsafe-basic", "--workers",
                  "1"]) == 0
     assert check.submission(path, n_runs=2, sandbox="basic").passed  # a student's own check
+
+
+def test_a_check_without_a_verdict_reads_again_not_no():
+    """A box stopped because the machine was too busy (or lost) says nothing about the student's
+    code: the table shows "again" and counts it apart; a real failure beside it still reads NO."""
+    busy = {"subject": "busy.py", "details": {"path": "busy.py"}, "passed": False, "seconds": 30.0,
+            "codes": ["machine-busy"]}
+    wrong = {"subject": "wrong.py", "details": {"path": "wrong.py"}, "passed": False,
+             "seconds": 1.0, "codes": ["machine-busy", "p-mismatch"]}
+    rows = table([busy, wrong]).splitlines()
+    assert rows[2].split()[:2] == ["busy.py", "again"]
+    assert rows[3].split()[:2] == ["wrong.py", "NO"]
+    assert rows[-1].startswith("0 of 2 passed; 1 without a verdict")
+
+
+def test_the_report_says_no_verdict_when_every_reason_is_ours():
+    from gpsaccel.check.report import render
+
+    assert render("f.py", False, ["machine-busy"], [], []) == "f.py: NO VERDICT (machine-busy)"
+    assert render("f.py", False, ["timeout"], [], []).startswith("f.py: FAILED (timeout)")
+    assert render("f.py", False, [], [], []) == "f.py: FAILED"
+    assert render("f.py", True, [], [], []) == "f.py: PASSED"
