@@ -112,25 +112,28 @@ def wrap_angle(a: np.ndarray | float) -> np.ndarray:
     return out
 
 
-#: The angles' indices as a basic slice (a view, not a fancy-indexed copy): 2, 5 and 0, 2.
-_EVERY: dict[tuple[int, ...], slice] = {(2, 5): slice(2, 6, 3), (0, 2): slice(0, 3, 2)}
+def _every(idx: tuple[int, int]) -> slice:
+    """Two indices as a basic slice: indexing with it is a view, not a fancy-indexed copy."""
+    return slice(idx[0], idx[1] + 1, idx[1] - idx[0])
 
 
-def _wrap_at(v: np.ndarray, idx: tuple[int, ...]) -> np.ndarray:
+_STATE_ANGLES, _MEASUREMENT_ANGLES = _every(ANGLE_STATES), _every(ANGLE_MEASUREMENTS)
+
+
+def _wrap_at(v: np.ndarray, at: slice) -> np.ndarray:
     out = np.array(v, dtype=float, copy=True)
-    at = _EVERY.get(idx, list(idx))
     out[..., at] = wrap_angle(out[..., at])
     return out
 
 
 def wrap_state(x: np.ndarray) -> np.ndarray:
     """A copy of state(s) x (..., 6) with θg and θa wrapped to [−π, π)."""
-    return _wrap_at(x, ANGLE_STATES)
+    return _wrap_at(x, _STATE_ANGLES)
 
 
 def wrap_measurement(y: np.ndarray) -> np.ndarray:
     """A copy of measurement(s) y (..., 5) with both bearings wrapped to [−π, π)."""
-    return _wrap_at(y, ANGLE_MEASUREMENTS)
+    return _wrap_at(y, _MEASUREMENT_ANGLES)
 
 
 def state_residual(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -9,7 +9,7 @@ import pytest
 
 from gpsaccel import registry
 from gpsaccel.figures import write_figures
-from gpsaccel.figures.r002 import DEFAULT_RUNS
+from gpsaccel.figures.r002 import ALL_NUMBERS, DEFAULT_RUNS
 
 matplotlib.use("Agg")
 
@@ -55,6 +55,7 @@ def test_every_listed_figure_and_the_extras_are_written(drawn):
         numbers.append(m.group(1))
         assert p.stat().st_size > 5_000, f"{p.name} looks empty"
     assert sorted(numbers) == sorted(LISTED + EXTRA)
+    assert tuple(f.number for f in drawn[0]) == ALL_NUMBERS  # the order figures() keeps
     index = (out / "index.html").read_text(encoding="utf-8")
     assert index.count("<figcaption>") == len(paths)
     assert DEFAULT_RUNS == 100  # the report's EKF Monte Carlo size

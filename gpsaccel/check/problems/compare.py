@@ -9,7 +9,8 @@ ship filters, 4-7 CPU s.  :func:`nearest_within` runs every candidate's first :d
 whose distance to the student's is a lower bound of its whole distance (the filters are causal:
 a row depends only on the rows before it), then whole runs only of the candidates that bound
 leaves in play, as the calibration checker does (:mod:`gpsaccel.check.linear_diagnosis`).  Its
-answer is :func:`nearest`'s over every whole run, whenever the caller reads it (within ``far``).
+answer is the exhaustive search's over every whole run, whenever the caller reads it (within
+``far``).
 """
 
 from __future__ import annotations
@@ -82,33 +83,19 @@ def _ratio(xm: np.ndarray, Pm: np.ndarray, x: np.ndarray, P: np.ndarray, sd: np.
                float(np.nanmax(np.abs(Pm - P) / (sd[..., :, None] * sd[..., None, :]))) / tol_P)
 
 
-def nearest(candidates: Sequence[tuple[Any, np.ndarray, np.ndarray]], x: np.ndarray,
-             P: np.ndarray, x_ref: np.ndarray, P_ref: np.ndarray, tol_x: float, tol_P: float,
-             diff=None) -> tuple[Any, float] | None:
-    """The candidate (mistake, x̂, P) nearest to the student's (x, P), and its distance in units
-    of the tolerance (≤ 1: it matches); None if there are no candidates.  Distances are in units
-    of the reference σ, as in the comparison.  Every candidate run in full: the definition
-    :func:`nearest_within` keeps to (its test compares them)."""
-    sd = np.sqrt(np.diagonal(P_ref, axis1=-2, axis2=-1))
-    best, best_d = None, np.inf
-    for m, xm, Pm in candidates:
-        ratio = _ratio(xm, Pm, x, P, sd, tol_x, tol_P, diff)
-        if ratio < best_d:
-            best, best_d = m, ratio
-    return None if best is None else (best, best_d)
-
-
 def nearest_within(candidates: Sequence[Any],
                    run: Callable[[Any, int | None], tuple[np.ndarray, np.ndarray]],
                    x: np.ndarray, P: np.ndarray, P_ref: np.ndarray, tol_x: float, tol_P: float,
                    diff=None, far: float = 10.0, head: int = HEAD) -> tuple[Any, float] | None:
-    """:func:`nearest` over the candidates' whole runs when its distance is at most ``far``
-    (units of the tolerance), else None; computing only what decides it (module docstring).
+    """The candidate nearest to the student's (x, P) over the candidates' whole runs, and its
+    distance in units of the tolerance (≤ 1: it matches; distances in units of the reference σ,
+    as in the comparison), when that distance is at most ``far``, else None; computing only what
+    decides it (module docstring).  Its test holds it to the exhaustive search over whole runs.
 
     ``run(candidate, steps)`` is the candidate's (x̂, P) over its first ``steps`` rows (axis 1;
     None: all of them), each row the same number whatever ``steps``.  The candidates are run in
     full in the order of their lower bounds until the next bound exceeds both ``far`` and the
-    nearest whole distance found; a tie goes to the earlier candidate, as in :func:`nearest`.
+    nearest whole distance found; a tie goes to the earlier candidate.
     """
     sd = np.sqrt(np.diagonal(P_ref, axis1=-2, axis2=-1))
     n = x.shape[1]
