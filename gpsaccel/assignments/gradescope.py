@@ -58,10 +58,24 @@ def _record_hash(data: bytes) -> str:
     return f"sha256={digest}"
 
 
+def _license_text(dist, root: Path, name: str) -> str:
+    """A license file the metadata names: in the dist-info's ``licenses/`` (a wheel or editable
+    install), or beside the package folder (run from a source checkout, whose ``*.egg-info``
+    names it without a copy)."""
+    text = dist.read_text(f"licenses/{name}")
+    if text is None and (root.parent / name).is_file():
+        text = (root.parent / name).read_text(encoding="utf-8")
+    if text is None:
+        raise FileNotFoundError(f"gpsaccel's metadata names the license file {name!r}, which is "
+                                "neither in its dist-info nor beside the package: reinstall gpsaccel")
+    return text
+
+
 def package_wheel(out: Path) -> Path:
     """A wheel of the installed gpsaccel (its package folder and metadata, as installed: from a
     wheel or a source checkout), written into ``out``; the lessons' masters are left out as the
-    published wheel leaves them out."""
+    published wheel leaves them out.  The license files the metadata names go with it (the MIT
+    license asks that its text accompany every copy)."""
     from importlib import metadata
 
     import gpsaccel
@@ -80,7 +94,10 @@ def package_wheel(out: Path) -> Path:
             if not name.endswith((".pyc", ".pyo")):
                 files.append(((Path("gpsaccel") / rel / name).as_posix(),
                               (Path(dirpath) / name).read_bytes()))
-    files.append((f"{info}/METADATA", (dist.read_text("METADATA") or "").encode()))
+    meta = dist.read_text("METADATA") or ""
+    files.append((f"{info}/METADATA", meta.encode()))
+    for name in dist.metadata.get_all("License-File") or []:  # PEP 639: the MIT text travels along
+        files.append((f"{info}/licenses/{name}", _license_text(dist, root, name).encode()))
     files.append((f"{info}/WHEEL", b"Wheel-Version: 1.0\nGenerator: gpsaccel\n"
                                    b"Root-Is-Purelib: true\nTag: py3-none-any\n"))
     entry = dist.read_text("entry_points.txt")
