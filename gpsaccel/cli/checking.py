@@ -102,8 +102,8 @@ def _check_settings(args: argparse.Namespace, sandbox, secret_seed) -> tuple:  #
 
 
 def _check_report(args: argparse.Namespace, results: list, settings: dict, seconds: float) -> int:
-    """The JSON first (printing can fail), then the table and the one-line summary; exit 0 when
-    every submission passed."""
+    """The JSON first (printing can fail), then the table and the one-line summary; the exit
+    status is :func:`exit_status`'s."""
     from gpsaccel._untrusted import json_safe
     from gpsaccel.check.batch import printable, table, write_json
 
@@ -120,7 +120,27 @@ def _check_report(args: argparse.Namespace, results: list, settings: dict, secon
           f"{seed}{', drawn' if args.seed is None else ''}), sandbox {backend}, {seconds:.1f} s")
     if args.json is not None:
         print(f"wrote {path}")
-    return 0 if all(r["passed"] for r in results) else 1
+    return exit_status(results)
+
+
+#: ``gpsaccel check``'s exit status: every submission passed; one failed (its code);
+#: 2 is argparse's (a bad argument, before any work); none failed but some gave no verdict
+#: (the machine or the checker: run those again); 130 interrupted.
+PASSED, FAILED, NO_VERDICT = 0, 1, 3
+
+
+def exit_status(results: list[dict]) -> int:
+    """0 when every submission passed, 1 when one failed, 3 when none failed but a check gave no
+    verdict (:func:`gpsaccel.check.report.no_verdict`): a script can tell "a student's code is
+    wrong" from "check these again" without parsing the table."""
+    from gpsaccel.check.report import no_verdict
+
+    failed = [r for r in results if r["passed"] is not True]
+    if not failed:
+        return PASSED
+    if all(no_verdict(False, list(r["codes"])) for r in failed):
+        return NO_VERDICT
+    return FAILED
 
 
 def _problem_flag(value: str) -> str:
@@ -144,7 +164,11 @@ def add_check(sub: argparse._SubParsersAction) -> None:
     from gpsaccel import registry
 
     p = sub.add_parser("check", help="check students' homework files (" +
-                       ", ".join(registry.problems()) + ")")
+                       ", ".join(registry.problems()) + ")",
+                       epilog="exit status: 0 every submission passed; 1 one failed; 2 a bad "
+                              "argument (nothing was checked); 3 none failed but some checks "
+                              "gave no verdict (the machine or the checker: check those again); "
+                              "130 interrupted")
     p.add_argument("paths", nargs="+", type=Path,
                    help="submission files, or folders whose every top-level .py file or "
                         "sub-folder is one submission")
