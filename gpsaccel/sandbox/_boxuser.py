@@ -102,16 +102,23 @@ def uid_pids(uid: int) -> set[int]:
     from /proc by hand: psutil's ``uids()`` has no file-system uid, which a box process may keep
     (``setfsuid``) while its other uids change."""
     out = set()
+    want = str(uid).encode()
     for pid, status in proc_files("status"):
-        uids = state = None
-        for line in status.splitlines():
-            if line.startswith(b"Uid:"):
-                uids = line.split()[1:]
-            elif line.startswith(b"State:"):
-                state = line.split()[1:2]
-        if uids and str(uid).encode() in uids and state not in ([b"Z"], [b"X"]):
+        uids, state = _field(status, b"Uid:"), _field(status, b"State:")[:1]
+        if uids and want in uids and state not in ([b"Z"], [b"X"]):
             out.add(pid)
     return out
+
+
+def _field(status: bytes, name: bytes) -> list[bytes]:
+    """The words after ``name`` on its line of a /proc/<pid>/status text ([] if none): found
+    directly rather than by splitting every line (a box reads every process's status a few
+    times); never the first line, which is ``Name:``."""
+    i = status.find(b"\n" + name)
+    if i < 0:
+        return []
+    end = status.find(b"\n", i + 1)
+    return status[i + 1 + len(name):end if end >= 0 else len(status)].split()
 
 
 def kill_uid(uid: int, rounds: int = 200) -> int:
