@@ -4,7 +4,10 @@ The fourth problem (gpsaccel/check/problems/tracker.py: a constant-velocity trac
 propagation, 2 Hz position fixes) is defined in a few dozen lines of instructor code (counted below).  A
 student-style filter (tests/submissions/tracker/student.py, written step by step, not the
 catalogue's recursion) makes each generic mistake in turn: each gets its code on two seeds, the
-correct filter passes.
+correct filter passes.  Those checks compare run by run, so two truth runs a check show it, and
+they share the tracker's reference and candidate filters (:func:`keeping_answers`; the
+registered problem, which forgets them before every box, is checked in
+test_last_p_equal_to_m_is_named_not_blamed_on_the_propagation and tests/check/test_folders.py).
 """
 
 from __future__ import annotations
@@ -17,6 +20,8 @@ import pytest
 from gpsaccel import check, registry
 from gpsaccel.check.problems.tracker import TRACKER
 from gpsaccel.kalman.linear_model import LinearModel
+
+from .conftest import keeping_answers
 
 STUDENT = Path(__file__).resolve().parents[1] / "submissions" / "tracker" / "student.py"
 
@@ -47,9 +52,14 @@ def _student(tmp_path: Path, mistake: str | None) -> Path:
     return path
 
 
+@pytest.fixture(scope="module")
+def tracker():
+    return keeping_answers("tracker")
+
+
 @pytest.mark.parametrize("seed", [0, 1])
-def test_the_correct_tracker_passes(tmp_path, seed):
-    report = check.submission(_student(tmp_path, None), problem="tracker", n_runs=4, seed=seed,
+def test_the_correct_tracker_passes(tracker, tmp_path, seed):
+    report = check.submission(_student(tmp_path, None), problem=tracker, n_runs=2, seed=seed,
                               sandbox="basic")
     assert report.passed, report
     assert report.details["max_dP_sigma"] < 1e-9 and report.details["max_dx_sigma"] < 1e-9
@@ -57,8 +67,8 @@ def test_the_correct_tracker_passes(tmp_path, seed):
 
 @pytest.mark.parametrize("seed", [0, 1])
 @pytest.mark.parametrize("mistake", sorted(GENERIC))
-def test_each_generic_mistake_gets_its_code(tmp_path, mistake, seed):
-    report = check.submission(_student(tmp_path, mistake), problem="tracker", n_runs=4,
+def test_each_generic_mistake_gets_its_code(tracker, tmp_path, mistake, seed):
+    report = check.submission(_student(tmp_path, mistake), problem=tracker, n_runs=2,
                               seed=seed, sandbox="basic")
     assert report.codes == GENERIC[mistake], report
 
