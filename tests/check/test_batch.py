@@ -60,7 +60,7 @@ def test_a_class_with_hostile_files_keeps_every_honest_verdict(tmp_path, backend
                                                                hostile, watch):
     folder = _class(tmp_path, hostile, ["parent_killer.py", "daemon.py"])
     out = tmp_path / "results.json"
-    proc = _cli([folder, "--runs", "3", "--workers", workers, "--sandbox", backend,
+    proc = _cli([folder, "--runs", "2", "--workers", workers, "--sandbox", backend,
                  "--timeout", "20", "--json", out], hostile)
     stdout, stderr = proc.communicate(timeout=300)
     assert proc.returncode == 1, stderr  # some fail, none crashed the command
@@ -135,8 +135,8 @@ def test_check_many_reports_a_dead_check_and_goes_on(tmp_path, hostile, watch, m
     seen = []
     paths = [hostile.DIR / "parent_killer.py", hostile.SUBMISSIONS / "correct_gps_rate.py"]
     with pytest.raises(ValueError, match="--allow-unsafe-basic"):
-        check_many(paths, n_runs=3, sandbox="basic", max_workers=1)
-    results = check_many(paths, n_runs=3, sandbox="basic", max_workers=1, on_result=seen.append,
+        check_many(paths, n_runs=2, sandbox="basic", max_workers=1)
+    results = check_many(paths, n_runs=2, sandbox="basic", max_workers=1, on_result=seen.append,
                          allow_unsafe_basic=True)
     assert [r["codes"] for r in results] == [["checker-error"], []]
     assert "died (signal SIGKILL)" in results[0]["findings"][0]["message"]
@@ -147,7 +147,7 @@ def test_check_many_reports_a_dead_check_and_goes_on(tmp_path, hostile, watch, m
 def test_check_many_in_process_keeps_order(hostile):
     paths = [hostile.SUBMISSIONS / "broken_no_function.py",
              hostile.SUBMISSIONS / "correct_gps_rate.py"]
-    results = check_many(paths, n_runs=3, executor=None)
+    results = check_many(paths, n_runs=2, executor=None)
     assert [r["subject"] for r in results] == ["broken_no_function.py", "correct_gps_rate.py"]
     assert [r["passed"] for r in results] == [False, True]
 
@@ -172,6 +172,6 @@ def test_cli_names_a_bad_limit_and_a_missing_bwrap(tmp_path, hostile, monkeypatc
     assert "apt-get install bubblewrap" in capsys.readouterr().err
     assert sb.resolve_backend("auto") == "basic"
     out = tmp_path / "r.json"
-    assert main(["check", str(path), "--runs", "3", "--json", str(out)]) == 0
+    assert main(["check", str(path), "--runs", "2", "--json", str(out)]) == 0
     assert "sandbox: basic (bubblewrap not available" in capsys.readouterr().err
     assert json.loads(out.read_text())["settings"]["sandbox"] == "basic"

@@ -3,7 +3,8 @@ mutant is flagged with its code, broken submissions become findings (never an ex
 
 Small ensembles (N_RUNS) keep this file within its time budget; the checker's decision does not
 depend on N (P and x̂ are compared run by run), only the consistency statistics do.  So the
-mutants, whose verdicts are those comparisons, are checked on MUTANT_RUNS = 2 runs, once each
+mutants, whose verdicts are those comparisons, and the broken files, whose findings are about
+what one call does, are checked on MUTANT_RUNS = 2 runs, the mutants once each
 for the module (:func:`mutant`), and share the catalogue's candidate filters
 (:func:`keeping_answers`: 2 CPU s a check when computed again after each box); the tests that
 assert a consistency verdict ("consistent", "inconsistent") keep their N_RUNS = 20.
@@ -142,7 +143,7 @@ BROKEN = [
 
 @pytest.mark.parametrize("name, code, words", BROKEN, ids=[n[:-3] for n, _, _ in BROKEN])
 def test_broken_submission_becomes_a_finding(name, code, words):
-    report = _check(name, timeout=20)
+    report = _check(name, timeout=20, n_runs=MUTANT_RUNS)  # what a call does: one run shows it
     assert not report.passed
     assert report.codes == [code], report
     msg = next(f.message for f in report.findings if f.code == code)
@@ -159,7 +160,7 @@ def test_files_written_on_the_fly(tmp_path, source, code, words):
     """Cases that cannot live in tests/submissions (a syntax error would break ruff there)."""
     path = tmp_path / "student.py"
     path.write_text(source)
-    report = check.submission(path, n_runs=3)
+    report = check.submission(path, n_runs=2)
     assert report.codes == [code], report
     msg = report.findings[0].message
     for w in words:
@@ -199,9 +200,9 @@ def test_prints_are_captured_truncated_and_warned_about():
 
 
 def test_assert_submission_for_grader_cells(calibration):
-    assert check.assert_submission(HERE / "correct_gps_rate.py", n_runs=5).passed
+    assert check.assert_submission(HERE / "correct_gps_rate.py", n_runs=2).passed
     with pytest.raises(AssertionError, match="m0-order"):
-        check.assert_submission(HERE / "mutant_m0_order.py", problem=calibration, n_runs=5)
+        check.assert_submission(HERE / "mutant_m0_order.py", problem=calibration, n_runs=2)
 
 
 def test_bad_arguments_of_the_caller_raise_value_error():
@@ -216,12 +217,12 @@ def test_cli_check_table_and_json(tmp_path, capsys):
     for name in ("correct_gps_rate.py", "mutant_m0_order.py"):
         (tmp_path / name).write_text((HERE / name).read_text(encoding="utf-8"), encoding="utf-8")
     out = tmp_path / "results.json"
-    rc = main(["check", str(tmp_path), "--runs", "5", "--workers", "2", "--json", str(out)])
+    rc = main(["check", str(tmp_path), "--runs", "2", "--workers", "2", "--json", str(out)])
     assert rc == 1  # one submission fails
     text = capsys.readouterr().out
     assert "m0-order" in text and "1 of 2 passed" in text
     data = json.loads(out.read_text(encoding="utf-8"))
-    assert data["settings"]["runs"] == 5
+    assert data["settings"]["runs"] == 2
     by_name = {r["subject"]: r for r in data["results"]}
     assert by_name["correct_gps_rate.py"]["passed"] is True
     assert by_name["mutant_m0_order.py"]["codes"] == ["m0-order"]
