@@ -330,8 +330,8 @@ def mean_mistakes(model: CalibrationModel | None = None) -> tuple[Mistake, ...]:
 def build(model: CalibrationModel, mistakes: tuple[Mistake, ...] = ()) -> EpochFilter:
     """The epoch filter that makes ``mistakes`` (none: the optimal filter)."""
     g = Ingredients.correct(model)
-    for m in mistakes:
-        g = g.with_changes(m.changes)
+    if mistakes:  # every entry's changes in turn, in one copy (a diagnosis builds ~1900)
+        g = g.with_changes(tuple(c for m in mistakes for c in m.changes))
     return g.epoch_filter()
 
 

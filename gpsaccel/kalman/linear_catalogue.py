@@ -120,8 +120,8 @@ class LinearCatalogue:
 
     def build(self, mistakes: tuple[Mistake, ...] = ()) -> EpochFilter:
         g = LinearIngredients.correct(self.model)
-        for m in mistakes:
-            g = with_changes(g, m.changes)
+        if mistakes:  # every entry's changes in turn, in one copy (a diagnosis builds ~1800)
+            g = with_changes(g, tuple(c for m in mistakes for c in m.changes))
         return g.epoch_filter()
 
     def reference(self) -> EpochFilter:
