@@ -27,7 +27,7 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import ClassVar
 
@@ -186,13 +186,13 @@ class Problem:
         calls: list[Call] = []
         spans: list[tuple[Function, int, int]] = []
         for f in present:
-            mine = self.calls(cases, f)
+            mine = _columns_accepted(self.calls(cases, f))
             spans.append((f, len(calls), len(calls) + len(mine)))
             calls += mine
         labels = self.labels(cases) * len(present)
         self.forget()  # no reference answer exists while the student's code runs
         box = sb.run(sub, calls, limits, backend, allow_gpsaccel)
-        box = self._accept_columns(report, sub, box, calls, limits, backend, allow_gpsaccel)
+        _note_columns(report, box, calls)
         report.details["student_seconds"] = round(box.seconds, 3)
         fields = {"signature": " or ".join(f.signature for f in self.functions),
                   **self.message_fields(cases)}
@@ -220,45 +220,25 @@ class Problem:
         assert error is not None
         raise error
 
-    def _accept_columns(self, report: Report, sub: sb.Submission, box: sb.BoxResult,
-                        calls: list[Call], limits: sb.Limits, backend: str,
-                        allow_gpsaccel: bool) -> sb.BoxResult:
-        """A filterpy filter keeps x as a column: an output of shape ``declared + (1,)`` is
-        filterpy's own and is accepted (the box is run again declaring that shape, the axis is
-        dropped) with a note.  Any other box comes back as it is."""
-        found = _column_outputs(box, calls)
-        if found is None:
-            return box
-        column, outs = found
-        wide = [Call(c.function, c.args, tuple(
-            Output(o.name, tuple(o.shape) + (1,), o.dtype) if o.name in column else o
-            for o in c.outputs)) for c in calls]
-        self.forget()
-        again = sb.run(sub, wide, limits, backend, allow_gpsaccel)
-        if again.failure is not None:
-            return box
-        again.results = [{k: (v[..., 0] if k in column else v) for k, v in r.items()}
-                         for r in again.results]
-        for name in sorted(column):
-            o = next(o for o in outs if o.name == name)
+
+def _columns_accepted(calls: list[Call]) -> list[Call]:
+    """The calls with every output declared ``column``: a filterpy filter keeps x as a column,
+    so an output of shape ``declared + (1,)`` is filterpy's own and is accepted, its axis dropped
+    in the box (:class:`gpsaccel.sandbox.Output`); one box, whatever the student stored."""
+    return [Call(c.function, c.args, tuple(replace(o, column=True) for o in c.outputs))
+            for c in calls]
+
+
+def _note_columns(report: Report, box: sb.BoxResult, calls: list[Call]) -> None:
+    """A note for each output the box's first call returned as a column (its reported shape is
+    the declared one plus a trailing 1; the arrays that came back have the declared shape)."""
+    if not calls or not box.results:
+        return
+    returned = box.returned or {}
+    for o in calls[0].outputs:
+        shape = (returned.get(o.name) or {}).get("shape")
+        if isinstance(shape, list) and tuple(shape) == tuple(o.shape) + (1,):
             report.add("filterpy-column", severity="note", text=MESSAGES["filterpy-column"],
-                       where=name, observed={"name": name, "shape": tuple(o.shape) + (1,),
-                                             "wanted": tuple(o.shape)})
-        return again
-
-
-def _column_outputs(box: sb.BoxResult, calls: list[Call]
-                    ) -> tuple[set[str], tuple[Output, ...]] | None:
-    """The outputs a box returned as filterpy's columns (declared shape + (1,)) when that is its
-    only wrong shape, with the call's outputs; None otherwise."""
-    p = box.problem or {}
-    shapes = p.get("shapes") or {}
-    if box.failure != "wrong-shape" or not isinstance(p.get("call"), int):
-        return None
-    outs = calls[p["call"]].outputs
-    column = {o.name for o in outs if tuple(shapes.get(o.name) or ()) == tuple(o.shape) + (1,)}
-    if not column or any(tuple(shapes.get(o.name) or ()) != tuple(o.shape)
-                         for o in outs if o.name not in column):
-        return None
-    return column, outs
+                       where=o.name, observed={"name": o.name, "shape": tuple(shape),
+                                               "wanted": tuple(o.shape)})
 

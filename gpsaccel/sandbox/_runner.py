@@ -15,7 +15,8 @@ CONTROL_DIR holds ``plan.json`` (written by the sandbox)::
      "sys_path": [...],                    # site-packages folders (numpy, scipy, filterpy)
      "block": ["gpsaccel"],                # packages the submission may not import
      "calls": [{"function": "kalman_filter", "n_args": 1,
-                "outputs": [{"name": "x_hat", "shape": [151, 3], "dtype": "float64"}, ...]}]}
+                "outputs": [{"name": "x_hat", "shape": [151, 3], "dtype": "float64",
+                             "column": true}, ...]}]}   # column: [151, 3, 1] is taken too
 
 and ``inputs.npz`` with the arguments of call ``i`` as ``c{i}_{j}``.  The runner imports the
 student's file as a module (its ``if __name__ == "__main__":`` block does not run), makes each call
@@ -310,7 +311,10 @@ def _encode(i: int, name: str, specs: list[dict], values: list) -> bytes | None:
             _problem("not-numeric", call=i, function=name, name=spec_["name"],
                      returned=_describe(value), error=str(exc)[:500])
             return None
-        if arr.shape != tuple(spec_["shape"]):
+        want = tuple(spec_["shape"])
+        if spec_.get("column") and arr.shape == want + (1,):
+            arr = arr[..., 0]  # filterpy's column state; the "returned" shape still says so
+        if arr.shape != want:
             _problem("wrong-shape", call=i, function=name,
                      shapes={s["name"]: _describe(v).get("shape")
                              for s, v in zip(specs, values, strict=True)},

@@ -125,8 +125,8 @@ def _write_control(control: Path, sub: Submission, calls: Sequence[Call], sys_pa
     plan = {"entry": sub.entry, "sys_path": sys_path, "block": [] if allow else list(BLOCKED),
             "block_dirs": [] if allow else _blocked_dirs(),
             "calls": [{"function": c.function, "n_args": len(c.args),
-                       "outputs": [{"name": o.name, "shape": list(o.shape), "dtype": o.dtype}
-                                   for o in c.outputs]} for c in calls]}
+                       "outputs": [{"name": o.name, "shape": list(o.shape), "dtype": o.dtype,
+                                    "column": o.column} for o in c.outputs]} for c in calls]}
     (control / "plan.json").write_text(json.dumps(plan), encoding="utf-8")
     for p in control.iterdir():
         p.chmod(0o444)

@@ -52,11 +52,17 @@ class Limits:
 
 @dataclass(frozen=True)
 class Output:
-    """One array a call must return: its name (for messages), shape and dtype."""
+    """One array a call must return: its name (for messages), shape and dtype.
+
+    ``column``: a trailing axis of length 1 is accepted too (filterpy keeps a state as a column,
+    ``kf.x``: a student who stores it returns ``shape + (1,)``); the box drops that axis before
+    sending, so what comes back is still exactly ``shape``, and the returned shape it reports
+    says it was a column."""
 
     name: str
     shape: tuple[int, ...]
     dtype: str = "float64"
+    column: bool = False
 
     def __post_init__(self) -> None:
         if not all(isinstance(n, (int, np.integer)) and n >= 0 for n in self.shape):

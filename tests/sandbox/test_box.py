@@ -13,23 +13,29 @@ LIMITS = sb.Limits(memory=512 << 20, file_size=16 << 20, output=1 << 20, time=20
 
 def test_generic_calls_of_several_functions(tmp_path, backend):
     """What another checker (coop, ship) builds on: named functions, numpy inputs, declared
-    outputs of any numeric dtype, one array or a tuple."""
+    outputs of any numeric dtype, one array or a tuple; an output declared ``column`` takes
+    filterpy's column form too (its axis dropped in the box) and nothing else."""
     (tmp_path / "student.py").write_text(
         "import numpy as np\n\n"
         "def jacobian(x, u):\n    return np.outer(x, u)\n\n"
-        "def counts(z):\n    return np.arange(len(z)), float(z.sum())\n")
+        "def counts(z):\n    return np.arange(len(z)), float(z.sum())\n\n"
+        "def column(x):\n    return x[:, None]\n")
     sub = sb.load_submission(tmp_path / "student.py", "jacobian")
     x, u = np.array([1.0, 2.0]), np.array([3.0, 4.0, 5.0])
     calls = [sb.Call("jacobian", (x, u), (sb.Output("F", (2, 3)),)),
              sb.Call("counts", (np.ones(4),), (sb.Output("k", (4,), "int64"),
                                                 sb.Output("s", ()))),
-             sb.Call("jacobian", (x, x), (sb.Output("F", (2, 3)),))]
+             sb.Call("column", (x,), (sb.Output("c", (2,), column=True),)),
+             sb.Call("column", (x,), (sb.Output("c", (2, 1), column=True),)),
+             sb.Call("jacobian", (x, x), (sb.Output("F", (2, 3), column=True),))]
     box = sb.run(sub, calls, LIMITS, backend)
     assert box.backend == backend
     np.testing.assert_array_equal(box.results[0]["F"], np.outer(x, u))
     assert box.results[1]["k"].dtype == np.int64 and box.results[1]["s"] == 4.0
-    assert len(box.results) == 2 and box.failure == "wrong-shape"
-    assert box.problem["call"] == 2 and box.problem["got"] == [2, 2]
+    np.testing.assert_array_equal(box.results[2]["c"], x)            # (2, 1) came back as (2,)
+    np.testing.assert_array_equal(box.results[3]["c"], x[:, None])   # already what was declared
+    assert len(box.results) == 4 and box.failure == "wrong-shape"    # (2, 2) is no column of (2, 3)
+    assert box.problem["call"] == 4 and box.problem["got"] == [2, 2]
 
 
 def test_a_students_numpy_py_does_not_run_before_the_checkers_guards(tmp_path, backend):
