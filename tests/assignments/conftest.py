@@ -145,6 +145,17 @@ def student_sides(disk_cache):
     return {name: folder / master_notebook(name).name for name in names}
 
 
+#: The calibration's ``nees_bounds`` with scipy.special's χ² quantile (``chdtri``: what
+#: ``scipy.stats.chi2.ppf`` computes; the bounds agree to 1e-15, the grader's tolerance is 1e-4),
+#: as a student may write it: importing scipy.stats costs a notebook's box 0.9 of its 1 CPU s,
+#: scipy.special 0.25.  An edit for :func:`write_variant`; one honest notebook of the class (the
+#: master's own solution, unchanged) keeps scipy.stats.
+CHI2_SPECIAL = ("    from scipy import stats\n"
+                "    return tuple(stats.chi2.ppf([0.025, 0.975], 3 * N) / N)",
+                "    from scipy.special import chdtri\n"
+                "    return tuple(chdtri(3 * N, [0.975, 0.025]) / N)")
+
+
 #: The tracker's filter written with numpy instead of filterpy (the master's), as a student may:
 #: the same numbers; a file box that imports filterpy (and so scipy.stats) costs 1.5 CPU s more.
 TRACKER_NUMPY_FILTER = '''%%writefile kalman_filter.py

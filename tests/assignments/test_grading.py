@@ -18,7 +18,7 @@ from gpsaccel.assignments.grading import find_submissions, grade
 from gpsaccel.assignments.questions import question_seed, variant_number
 from gpsaccel.cli import main
 
-from .conftest import read_grades, tracker_with_numpy_filter, write_variant
+from .conftest import CHI2_SPECIAL, read_grades, tracker_with_numpy_filter, write_variant
 
 PHI = 'dt = 1 / VARIANT["rate_hz"]\nPhi = np.array([[1.0, dt, -dt**2 / 2],'
 MEAN = "return float(np.mean([ei @ np.linalg.solve(Pi, ei) for ei, Pi in zip(e, P[:, -1])]))"
@@ -27,10 +27,11 @@ STUDENTS = ("Doe, Jane (1001)", "Smith John 1002", "blank 1003", "crash 1004", "
 
 
 def _class(sub):
+    # the master's solution as it is (scipy.stats); the others' bounds with scipy.special
     write_variant("calibration", sub / STUDENTS[0] / "Calibration.IPYNB")
     write_variant("calibration", sub / STUDENTS[1] / "homework" / "calibration.ipynb",
                   [(PHI, PHI.replace("-dt**2", "+dt**2")),
-                   (MEAN, MEAN.replace("np.mean", "np.sum"))])
+                   (MEAN, MEAN.replace("np.mean", "np.sum")), CHI2_SPECIAL])
     write_variant("calibration", sub / STUDENTS[2] / "calibration.ipynb",
                   [("    return x_hat, P", "    return None")],
                   last_cell="Phi = Gamma = H = V = W = M0 = average_nees = nees_bounds = ...")
@@ -39,7 +40,7 @@ def _class(sub):
     write_variant("calibration", sub / STUDENTS[4] / "calibration.ipynb",
                   [("    return x_hat, P",
                     "    import gpsaccel\n    r = gpsaccel.run_multirate(gpsaccel.CalibrationModel(), z)"
-                    "\n    return r.x_hat, r.P")],
+                    "\n    return r.x_hat, r.P"), CHI2_SPECIAL],
                   last_cell="import gpsaccel.check as c\nc.assert_submission = lambda *a, **k: None\n"
                             "Phi = Gamma = H = V = W = M0 = ...")
     (sub / "empty 1006").mkdir()
@@ -127,7 +128,8 @@ def test_summary_table_and_figure(graded):
 
 def test_regrade_one_student_with_the_recorded_seed(graded):
     sub, out = graded["sub"], graded["out"]
-    write_variant("calibration", sub / STUDENTS[4] / "calibration.ipynb")  # handed in again
+    write_variant("calibration", sub / STUDENTS[4] / "calibration.ipynb",  # handed in again
+                  [CHI2_SPECIAL])
     again = grade(sub, "calibration", student=STUDENTS[4], secret=SECRET, timeout=120)
     rows = read_grades(out / "grades.csv")
     assert [g.total for g in again] == [10.0]

@@ -25,7 +25,7 @@ from gpsaccel import _untrusted
 from gpsaccel.assignments import notebook as nbm
 from gpsaccel.assignments.grading import grade
 
-from .conftest import kill_pids, write_variant
+from .conftest import CHI2_SPECIAL, kill_pids, write_variant
 
 ZOE = os.fsdecode(b"Zo\xeby")  # Latin-1, not UTF-8: the run used to crash here and on every rerun
 BAD_FILE = os.fsdecode(b"\xff\xfe.ipynb")
@@ -46,8 +46,8 @@ def _rows(out: Path) -> dict[str, dict[str, str]]:
 
 
 def _class(sub: Path, nested_folders) -> None:
-    write_variant("calibration", sub / "alice" / "calibration.ipynb")
-    write_variant("calibration", sub / ZOE / "calibration.ipynb")
+    write_variant("calibration", sub / "alice" / "calibration.ipynb", [CHI2_SPECIAL])
+    write_variant("calibration", sub / ZOE / "calibration.ipynb", [CHI2_SPECIAL])
     write_variant("calibration", sub / "mallory" / "calibration.ipynb", last_cell=FORGE)
     write_variant("calibration", sub / "deep" / "calibration.ipynb")
     nested_folders.make(sub / "deep", 1500)  # rglob died here: RecursionError, nobody graded
@@ -166,7 +166,8 @@ def test_ctrl_c_during_a_regrade_keeps_the_old_row(hostile):
 
 def test_a_regrade_replaces_its_row_and_is_appended_to_the_record(hostile):
     sub, out = hostile["sub"], hostile["out"]
-    write_variant("calibration", sub / "mallory" / "calibration.ipynb")  # the honest one now
+    write_variant("calibration", sub / "mallory" / "calibration.ipynb",  # the honest one now
+                  [CHI2_SPECIAL])
     again = grade(sub, "calibration", out=out, student="mallory", timeout=60)
     assert [(g.status, g.total) for g in again] == [("graded", 10.0)]
     rows = _rows(out)
