@@ -184,13 +184,19 @@ def kalman_filter(z):
     return x_hat, P_all'''
 
 
-def tracker_with_numpy_filter(target: Path, edits: list[tuple[str, str]] = ()) -> Path:
-    """The solved tracker notebook (with ``edits``), its ``%%writefile`` cell the numpy filter."""
+def tracker_with_numpy_filter(target: Path, edits: list[tuple[str, str]] = (),
+                              filter_edits: list[tuple[str, str]] = ()) -> Path:
+    """The solved tracker notebook (with ``edits``), its ``%%writefile`` cell the numpy filter
+    (with each ``(old, new)`` of ``filter_edits`` replaced once: a mistake in the filter)."""
     path = write_variant("tracker", target, edits)
     nb = nbformat.read(str(path), as_version=4)
     cells = [c for c in nb.cells if c.cell_type == "code"
              and c.source.startswith("%%writefile kalman_filter.py")]
     assert len(cells) == 1, "the tracker's %%writefile cell moved"
-    cells[0].source = TRACKER_NUMPY_FILTER
+    source = TRACKER_NUMPY_FILTER
+    for old, new in filter_edits:
+        assert source.count(old) == 1, f"{old!r} is not once in the numpy filter"
+        source = source.replace(old, new)
+    cells[0].source = source
     nbformat.write(nb, str(path))
     return path

@@ -52,7 +52,10 @@ def _as_otter_hands_it_out(path):
 def graded(tmp_path_factory):
     sub = tmp_path_factory.mktemp("feedback") / "class"
     # the bounds of the right ones with scipy.special (conftest.CHI2_SPECIAL: a cheaper box)
-    for student, edits in (("right", [CHI2_SPECIAL]), ("mistakes", MISTAKES),
+    one_run = ("return tuple(chdtri(3 * N, [0.975, 0.025]) / N)",  # MISTAKES' last, so
+               "return tuple(chdtri(3, [0.975, 0.025]))")
+    for student, edits in (("right", [CHI2_SPECIAL]),
+                           ("mistakes", [*MISTAKES[:-1], CHI2_SPECIAL, one_run]),
                            ("half", [MISTAKES[3], CHI2_SPECIAL])):
         path = write_variant("calibration", sub / student / "calibration.ipynb", edits)
         _as_otter_hands_it_out(path)

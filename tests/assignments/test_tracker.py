@@ -18,8 +18,12 @@ from .conftest import tracker_with_numpy_filter, write_variant
 
 PHI = "Phi = np.array([[1.0, dt], [0.0, 1.0]])"
 M0 = "M0 = np.diag([5.0**2, 2.0**2])"
-R = "kf.R = np.array([[2.0**2]])                     # V"
-UPDATE = "        kf.update(z[k])\n        x_hat[k], P[k] = kf.x, kf.P"
+#: the two filter mistakes, in the numpy filter (conftest.TRACKER_NUMPY_FILTER: a file box
+#: without filterpy, whose import is most of that box's CPU); the master's own, with filterpy,
+#: is the solved notebook
+V = "V = np.array([[2.0**2]])"
+STORE = "        x_hat[k], P_all[k] = x, P\n"
+UPDATE = "        K = P @ H.T"
 SECRET = b"tracker-test-secret-0123456789"
 graded_module = assignment_module("tracker")
 
@@ -36,10 +40,10 @@ def graded(tmp_path_factory):
     # its q2 is right: the filter written with numpy (no filterpy, 1.5 CPU s, in its file's box)
     tracker_with_numpy_filter(sub / "transposed" / "tracker.ipynb",
                               [(PHI, "Phi = np.array([[1.0, 0.0], [dt, 1.0]])")])
-    write_variant("tracker", sub / "sigma_in_R" / "tracker.ipynb",
-                  [(R, R.replace("2.0**2", "2.0"))])
-    write_variant("tracker", sub / "a_priori" / "tracker.ipynb",
-                  [(UPDATE, "        x_hat[k], P[k] = kf.x, kf.P\n        kf.update(z[k])")])
+    tracker_with_numpy_filter(sub / "sigma_in_R" / "tracker.ipynb",
+                              filter_edits=[(V, V.replace("2.0**2", "2.0"))])
+    tracker_with_numpy_filter(sub / "a_priori" / "tracker.ipynb",  # stored before the update
+                              filter_edits=[(STORE, ""), (UPDATE, STORE + UPDATE)])
     grades = grade(sub, "tracker", out=sub.parent / "tracker-grades", jobs=2, timeout=120,
                    seed=5, secret=SECRET)
     return {g.student: g for g in grades}
