@@ -30,8 +30,8 @@ SECRET = b"ship-test-secret-0123456789"
 def graded(tmp_path_factory):
     sub = tmp_path_factory.mktemp("class")
     write_variant("ship", sub / "solved" / "ship.ipynb")
-    # a voyage in the box costs half a notebook's CPU: only the notebooks whose answers come
-    # from it run it (solved, mistake_q2); the others type in their numbers
+    # a voyage in the box costs half a notebook's CPU: only the notebook whose answers come
+    # from it runs it (solved); the others type in their numbers
     write_variant("ship", sub / "blank" / "ship.ipynb",
                   [("def update(x_bar, M, z, H, V):\n", "def update(x_bar, M, z, H, V):\n"
                     "    return None\n"), (VOYAGE, "# the voyage is not run"),
@@ -41,8 +41,13 @@ def graded(tmp_path_factory):
                   [(UPDATE, ZEROED_K), (VOYAGE, "# its own voyage's numbers, typed in below"),
                    (SIGMAS, f"sigma_optimal = {own['sigma_optimal']!r}\n"
                             f"sigma_zeroed = {own['sigma_actual']!r}")])
+    # the zeroed gain's claimed σ (its P, not P_actual) of its own voyage, typed in: the grader
+    # reads only the number, and the solved notebook runs the voyage in its box
+    own = ship.zeroed_gain_cost(**student_variant("ship", "mistake_q2", SECRET))
     write_variant("ship", sub / "mistake_q2" / "ship.ipynb",
-                  [(ACTUAL, ACTUAL.replace("P_actual", "P"))])
+                  [(VOYAGE, "# its own voyage's numbers, the claimed σ for the actual one"),
+                   (SIGMAS, f"sigma_optimal = {own['sigma_optimal']!r}\n"
+                            f"sigma_zeroed = {own['sigma_claimed']!r}")])
     # the numbers of the public notebook's voyage (seed 0) typed in instead of its own voyage
     # (not run: half of a notebook's CPU): wrong for any other variant
     want = ship.zeroed_gain_cost()
