@@ -40,8 +40,10 @@ def graded(tmp_path_factory):
                   [(B_32, "B[2, 0], B[2, 1] = np.tan(u[1]) / L, u[0] / L"), OWN_RUN])
     write_variant("coop", sub / "F without I" / "coop.ipynb",
                   [(F_EULER, "F = dt * jacobian_A(x, u)"), OWN_RUN])
+    # only its q2 is asked about: no EKF of its own in the box, none of the grader's after it
     write_variant("coop", sub / "zoh" / "coop.ipynb", [(G_EULER, (
-        "G = (dt * np.eye(6) + dt**2 / 2 * jacobian_A(x, u)) @ jacobian_B(x, u)")), OWN_RUN])
+        "G = (dt * np.eye(6) + dt**2 / 2 * jacobian_A(x, u)) @ jacobian_B(x, u)")), OWN_RUN],
+        last_cell="ekf = ...")
     released = sub / "released" / "coop.ipynb"  # what the wheel hands out, run as it is
     released.parent.mkdir()
     shutil.copy(student_package_dir() / "coop" / "coop.ipynb", released)
