@@ -1,6 +1,7 @@
 """The package's layers: imports point down only, and the systems never import each other.
 
-Floors, bottom up: infrastructure (``_validation``, ``_blas``, ``_atomic``, ``executors``) ->
+Floors, bottom up: infrastructure (``_validation``, ``_blas``, ``_atomic``, ``_interrupt``,
+``executors``) ->
 ``sandbox`` -> ``kalman`` -> the systems (``calibration``, ``ship``, ``coop``, side by side) ->
 ``check`` (-> ``assignments``, the homework, which only ``cli`` imports) -> ``plots`` ->
 ``figures`` -> ``lessons``, ``cli``.  The sandbox (``gpsaccel/sandbox/``) is a layer of its own
@@ -18,12 +19,13 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1] / "gpsaccel"
-INFRA = {"_validation", "_blas", "_atomic", "executors", "registry", "_version", "_mathjax", "_feedback",
-         "_lazy", "_untrusted"}
+INFRA = {"_validation", "_blas", "_atomic", "_interrupt", "executors", "registry", "_version",
+         "_mathjax", "_feedback", "_lazy", "_untrusted"}
 SYSTEMS = {"calibration", "ship", "coop"}
 # what each unit may import (besides itself); "top" is gpsaccel/__init__.py, the façade
 ALLOWED = {
-    "_validation": set(), "_blas": set(), "_atomic": set(), "executors": {"_validation"},
+    "_validation": set(), "_blas": set(), "_atomic": set(), "_interrupt": set(),
+    "executors": {"_validation"},
     "registry": set(), "_version": set(), "_mathjax": set(), "_feedback": set(), "_lazy": set(),
     "_untrusted": set(),
     "__main__": {"cli"},

@@ -29,14 +29,13 @@ import concurrent.futures as cf
 import multiprocessing as mp
 import multiprocessing.connection as mpc
 import signal
-import threading
 import time
 from collections import deque
-from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from gpsaccel._interrupt import Latch, latched_sigint
 from gpsaccel.sandbox.confinement import sweep_stale_boxes
 from gpsaccel.sandbox.procs import _get_subreaper, _my_children, set_dumpable, set_subreaper, sweep
 
@@ -71,25 +70,10 @@ def run_items(task: Callable[[Any], Any], items: Sequence[Any], jobs: int, deadl
     if not deadline > 0:
         raise ValueError(f"deadline must be a positive number of seconds, got {deadline!r}")
     if executor is None:
-        with _interruptible() as interrupted:
+        with latched_sigint(raise_now=False) as interrupted:  # read by the loop, never lost
             _Forked(task, items, jobs, deadline, done, interrupted).run()
     else:  # Ctrl-C raises where it lands (the executor's own machinery handles it)
         _on_executor(task, items, jobs, deadline, done, executor)
-
-
-@contextmanager
-def _interruptible() -> Iterator[list[int]]:
-    """Ctrl-C sets a flag that the loops read: a KeyboardInterrupt raised wherever the signal
-    lands (inside fork's at-fork handlers, say) can be swallowed, and then nothing stops."""
-    flag: list[int] = []
-    previous = None
-    if threading.current_thread() is threading.main_thread():
-        previous = signal.signal(signal.SIGINT, lambda signum, frame: flag.append(signum))
-    try:
-        yield flag
-    finally:
-        if previous is not None:
-            signal.signal(signal.SIGINT, previous)
 
 
 # ------------------------------------------------------------------------- a process per item
@@ -123,7 +107,7 @@ class _Forked:
     """The fork-per-item loop (module docstring)."""
 
     def __init__(self, task: Callable[[Any], Any], items: Sequence[Any], jobs: int,
-                 deadline: float, done: Done, interrupted: list[int]) -> None:
+                 deadline: float, done: Done, interrupted: Latch) -> None:
         self.task, self.items, self.jobs, self.deadline = task, items, jobs, deadline
         self.done, self.interrupted = done, interrupted
         self.ctx = _context()
@@ -137,8 +121,7 @@ class _Forked:
         self.before = _my_children()  # not the pool's: never swept
         try:
             while self.pending or self.running:
-                if self.interrupted:
-                    raise KeyboardInterrupt
+                self.interrupted.check()
                 self._fill()
                 mpc.wait([r.conn for r in self.running.values()]
                          + [r.proc.sentinel for r in self.running.values()], timeout=0.1)

@@ -17,6 +17,7 @@ import numpy as np
 
 from gpsaccel import _validation as _v
 from gpsaccel._blas import single_threaded_blas
+from gpsaccel._interrupt import latched_sigint
 from gpsaccel.calibration.model import CalibrationModel
 from gpsaccel.calibration.montecarlo.planning import DEFAULT_MAX_LAG, EnsemblePlan, plan
 from gpsaccel.calibration.montecarlo.reduction import EnsembleSums, _run_block
@@ -114,17 +115,23 @@ def whole_blocks(chunk_size: int) -> int:
 
 def _run_ordered(ex, pl: EnsemblePlan, seed: int, n_runs: int, chunk_size: int, window: int,
                  bar) -> EnsembleSums:
-    """Submit chunks with at most ``window`` in flight; merge results in chunk order."""
+    """Submit chunks with at most ``window`` in flight; merge results in chunk order.  Ctrl-C
+    stops it where it lands, and at the latest at the next chunk (:mod:`gpsaccel._interrupt`:
+    an interrupt dropped inside a finaliser would otherwise let every chunk run)."""
     pending: deque = deque()
     chunks = _chunks(n_runs, chunk_size)
     acc = None
     try:
-        for lo, hi in chunks:
-            pending.append(ex.submit(_chunk_sums, pl, seed, lo, hi))
-            while len(pending) >= window:
+        with latched_sigint(raise_now=True) as interrupted:
+            for lo, hi in chunks:
+                interrupted.check()
+                pending.append(ex.submit(_chunk_sums, pl, seed, lo, hi))
+                while len(pending) >= window:
+                    acc = _take(pending.popleft(), acc, bar)
+                    interrupted.check()
+            while pending:
                 acc = _take(pending.popleft(), acc, bar)
-        while pending:
-            acc = _take(pending.popleft(), acc, bar)
+                interrupted.check()
     finally:
         for f in pending:
             f.cancel()
