@@ -15,6 +15,10 @@ from gpsaccel.lessons import HEADLESS_VARIABLE, RUNS_VARIABLE
 
 #: The kernel's command-line setting that saves inline figures uncropped (``crop_figures=False``).
 UNCROPPED = "--InlineBackend.print_figure_kwargs={'bbox_inches': None}"
+#: The kernel's start-up line that draws inline figures without their layout engine
+#: (:func:`draw_without_layout`); it binds no name in the lesson's namespace.
+UNLAID = ("--IPKernelApp.exec_lines="
+          "__import__('gpsaccel.lessons.kernel').lessons.kernel.draw_without_layout()")
 
 
 def execute(path: Path | str, timeout: int = 600, runs: int | None = None,
@@ -25,11 +29,12 @@ def execute(path: Path | str, timeout: int = 600, runs: int | None = None,
     that nobody can move them (:func:`sliders`).  A cell that raises raises
     ``nbclient.exceptions.CellExecutionError`` here.
 
-    ``crop_figures=False`` saves each inline figure as laid out, not cropped to its artists
-    (IPython's ``bbox_inches="tight"`` draws every figure twice: once to measure, once to
-    save): every figure is still drawn, so a label that cannot be drawn still raises, at about
-    a tenth less of a figure-heavy lesson's time.  For a run whose pictures nobody looks at
-    (the test suite's); the pages and JupyterLab show the cropped ones.
+    ``crop_figures=False`` saves each inline figure uncropped (IPython's ``bbox_inches="tight"``
+    draws every figure twice: once to measure, once to save) and without running its layout
+    engine (:func:`draw_without_layout`): every artist of every figure is still drawn, so a
+    label that cannot be drawn still raises, at a fraction of a figure's cost (constrained
+    layout measures every tick label of every axes).  For a run whose pictures nobody looks
+    at (the test suite's); the pages and JupyterLab show the laid-out, cropped ones.
     """
     import nbformat
     from nbclient import NotebookClient
@@ -46,7 +51,7 @@ def execute(path: Path | str, timeout: int = 600, runs: int | None = None,
         with _local_kernel() as km:
             NotebookClient(nb, km=km, timeout=timeout, kernel_name="python3",
                            resources={"metadata": {"path": str(path.parent)}},
-                           extra_arguments=[] if crop_figures else [UNCROPPED]).execute()
+                           extra_arguments=[] if crop_figures else [UNCROPPED, UNLAID]).execute()
     finally:
         if runs is not None:
             if env_before is None:
@@ -58,6 +63,36 @@ def execute(path: Path | str, timeout: int = 600, runs: int | None = None,
         else:
             os.environ[HEADLESS_VARIABLE] = headless_before
     return nb
+
+
+def draw_without_layout() -> None:
+    """In this kernel, draw every inline figure with no layout engine.
+
+    IPython saves an inline figure through ``IPython.core.pylabtools.print_figure``, which
+    ``%matplotlib inline`` binds when it runs (after this, a kernel start-up line): this wraps
+    it to take the figure's layout engine away for the save and give it back after, so the
+    figure itself is unchanged.  Not even a placeholder engine: matplotlib draws a figure that
+    has any engine twice (once, rendering nothing, to lay it out).  Only for :func:`execute`
+    with ``crop_figures=False``.
+    """
+    import matplotlib
+    from IPython.core import pylabtools
+
+    original = pylabtools.print_figure
+    no_default = {"figure.autolayout": False, "figure.constrained_layout.use": False}
+
+    def print_figure(fig, *args, **kwargs):
+        engine = fig.get_layout_engine()
+        if engine is None:
+            return original(fig, *args, **kwargs)
+        with matplotlib.rc_context(no_default):
+            fig.set_layout_engine(None)                   # None: the rc default, here none
+        try:
+            return original(fig, *args, **kwargs)
+        finally:
+            fig.set_layout_engine(engine)
+
+    pylabtools.print_figure = print_figure
 
 
 @contextmanager

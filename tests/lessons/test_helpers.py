@@ -75,4 +75,43 @@ def test_uncropped_figures_reach_the_kernel_as_a_setting_it_reads(monkeypatch, t
     nbformat.write(nbformat.v4.new_notebook(), path)
     kernel.execute(path)
     kernel.execute(path, crop_figures=False)
-    assert seen == [[], [kernel.UNCROPPED]]
+    assert seen == [[], [kernel.UNCROPPED, kernel.UNLAID]]
+
+
+def test_figures_drawn_without_layout_are_drawn_whole_and_left_as_they_were(monkeypatch):
+    """The start-up line ``execute(crop_figures=False)`` gives the kernel (a setting its parser
+    reads) wraps IPython's ``print_figure``: the figure is drawn (a label that cannot be drawn
+    raises) without running its layout engine, and keeps that engine."""
+    from ipykernel.kernelapp import IPKernelApp
+    from IPython.core import pylabtools
+    from matplotlib.figure import Figure
+
+    from gpsaccel.lessons import kernel
+
+    original = pylabtools.print_figure
+    monkeypatch.setattr(pylabtools, "print_figure", original)     # put back after the test
+    app = IPKernelApp()
+    app.parse_command_line([kernel.UNLAID])
+    (line,) = app.exec_lines
+    namespace: dict = {}
+    exec(line, namespace)                                          # as the kernel runs it
+    assert set(namespace) == {"__builtins__"}                      # no name for the lesson
+
+    fig = Figure(layout="constrained")
+    ax = fig.add_subplot()
+    ax.plot([0, 1])
+    engine = fig.get_layout_engine()
+    laid, drawn = [], []
+    monkeypatch.setattr(engine, "execute", laid.append)
+    axes_draw = type(ax).draw
+    monkeypatch.setattr(type(ax), "draw", lambda *a: drawn.append(a) or axes_draw(*a))
+    assert pylabtools.print_figure(fig, bbox_inches=None).startswith(b"\x89PNG")
+    assert laid == [] and len(drawn) == 1 and fig.get_layout_engine() is engine
+    ax.set_title(r"$\foo$")
+    with pytest.raises(ValueError, match="Unknown symbol"):
+        pylabtools.print_figure(fig, bbox_inches=None)
+    assert fig.get_layout_engine() is engine
+    ax.set_title("laid out")
+    drawn.clear()
+    original(fig, bbox_inches=None)
+    assert laid == [fig] and len(drawn) == 2                       # what the wrapper skips
