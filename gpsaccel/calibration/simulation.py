@@ -96,14 +96,48 @@ def euler_integrate(a: np.ndarray, dt: float, p_start: float, v_start: float
 def simulate(model: CalibrationModel, rng: np.random.Generator,
              truth: str = "error-model") -> Realization:
     """Draw one realization of ``model`` with ``rng`` (see the module docstring for both truths)."""
-    if not isinstance(model, CalibrationModel):
-        raise ValueError(f"model must be a CalibrationModel, got {type(model).__name__}")
+    _check_model(model)
     if not isinstance(rng, np.random.Generator):
         raise ValueError(
             f"rng must be a numpy.random.Generator (e.g. numpy.random.default_rng(0)), "
             f"got {type(rng).__name__}"
         )
     truth = _v.choice("truth", truth, TRUTHS)
+    return _draw(model, rng, truth, _Shared.of(model, truth))
+
+
+def _check_model(model: object) -> None:
+    if not isinstance(model, CalibrationModel):
+        raise ValueError(f"model must be a CalibrationModel, got {type(model).__name__}")
+
+
+@dataclass(frozen=True)
+class _Shared:
+    """What every realization of one model and truth has in common, computed once for a batch
+    (:func:`simulate_many`): the true acceleration a(t_j) and, for the closed-form truth, the
+    terms of p(t) and v(t) that no draw enters (about half of a kinematic realization's time).
+
+    ``position`` and ``velocity`` are :meth:`CalibrationModel.position` ``(t, 0, 0)`` and
+    :meth:`~CalibrationModel.velocity` ``(t, 0)``: those evaluate p0 + v0 t + A t² g(ω t) and
+    v0 + A t f(ω t) left to right, so p0 + v0 t + position and v0 + velocity are their values
+    for (p0, v0) to the bit (tests/calibration/test_simulation.py holds it).
+    """
+
+    a: np.ndarray
+    position: np.ndarray | None
+    velocity: np.ndarray | None
+
+    @staticmethod
+    def of(model: CalibrationModel, truth: str) -> _Shared:
+        t = model.t_imu
+        if truth == "error-model":
+            return _Shared(model.acceleration(t), None, None)
+        return _Shared(model.acceleration(t), model.position(t, 0.0, 0.0), model.velocity(t, 0.0))
+
+
+def _draw(model: CalibrationModel, rng: np.random.Generator, truth: str,
+          shared: _Shared) -> Realization:
+    """One realization (``simulate``'s), with the draw-free parts from ``shared``."""
     dt, n_steps = model.dt, model.n_steps
     t = model.t_imu
     gps_steps = np.arange(model.n_gps) * model.gps_every
@@ -113,7 +147,7 @@ def simulate(model: CalibrationModel, rng: np.random.Generator,
     w = np.sqrt(model.W[0, 0]) * rng.standard_normal(n_steps)
     eta = rng.standard_normal((model.n_gps, 2)) @ np.linalg.cholesky(model.V).T
 
-    a = model.acceleration(t)
+    a = shared.a.copy()                      # each realization its own arrays, as always
     a_c = a + b
     a_c[:-1] += w
     p_c, v_c = euler_integrate(a_c, dt, model.p0_mean, model.v0_mean)
@@ -130,7 +164,8 @@ def simulate(model: CalibrationModel, rng: np.random.Generator,
         x[:, 2] = b
         p, v = p_c + x[:, 0], v_c + x[:, 1]
     else:
-        p, v = model.position(t, p0, v0), model.velocity(t, v0)
+        assert shared.position is not None and shared.velocity is not None
+        p, v = p0 + v0 * t + shared.position, v0 + shared.velocity
         x = np.column_stack([p - p_c, v - v_c, np.full(n_steps + 1, b)])
 
     x_gps = x[gps_steps]
@@ -143,10 +178,15 @@ def simulate(model: CalibrationModel, rng: np.random.Generator,
 
 def simulate_many(model: CalibrationModel, n_runs: int, seed: int = 0,
                   truth: str = "error-model") -> list[Realization]:
-    """``n_runs`` independent realizations from ``numpy.random.default_rng(seed)``."""
+    """``n_runs`` independent realizations from ``numpy.random.default_rng(seed)``: those of
+    ``simulate(model, rng, truth)`` called ``n_runs`` times, the truth's draw-free parts computed
+    once."""
     n_runs = _v.integer("n_runs", n_runs, minimum=1)
+    _check_model(model)
+    truth = _v.choice("truth", truth, TRUTHS)
     rng = np.random.default_rng(seed)
-    return [simulate(model, rng, truth) for _ in range(n_runs)]
+    shared = _Shared.of(model, truth)
+    return [_draw(model, rng, truth, shared) for _ in range(n_runs)]
 
 
 def truth_mean(model: CalibrationModel, truth: str) -> np.ndarray:

@@ -55,6 +55,31 @@ def test_kinematic_truth_is_closed_form_minus_euler(model):
     np.testing.assert_allclose(run.a_c[:-1], run.a[:-1] + run.b + run.w, rtol=1e-15)
 
 
+@pytest.mark.parametrize("omega", [0.1, 1e-300, 50.0], ids=["report", "tiny-omega", "fast"])
+def test_a_batch_is_simulate_called_again_and_again_to_the_bit(omega):
+    """``simulate_many`` computes the truth's draw-free parts once for the batch: its runs are
+    those of ``simulate`` called once per run on the one generator, every array to the bit, and
+    the closed-form truth is ``model.position`` / ``model.velocity`` at each run's (p0, v0)."""
+    model = CalibrationModel(omega=omega)
+    for truth in ("error-model", "kinematic"):
+        rng = np.random.default_rng(4)
+        one_by_one = [simulate(model, rng, truth) for _ in range(3)]
+        batch = simulate_many(model, 3, seed=4, truth=truth)
+        for a, b in zip(one_by_one, batch, strict=True):
+            for name, value in vars(a).items():
+                np.testing.assert_array_equal(getattr(b, name), value, strict=True, err_msg=name)
+            assert not np.shares_memory(a.a, b.a)                 # each run its own arrays
+        assert not np.shares_memory(batch[0].a, batch[1].a)
+        if truth == "kinematic":
+            run = batch[-1]
+            np.testing.assert_array_equal(run.p, model.position(model.t_imu, run.p0, run.v0))
+            np.testing.assert_array_equal(run.v, model.velocity(model.t_imu, run.v0))
+    with pytest.raises(ValueError, match="model must be a CalibrationModel"):
+        simulate_many(object(), 2)
+    with pytest.raises(ValueError, match="truth"):
+        simulate_many(model, 2, truth="closed-form")
+
+
 def test_same_generator_state_same_draws_for_both_truths(model):
     a = simulate(model, np.random.default_rng(7), "error-model")
     b = simulate(model, np.random.default_rng(7), "kinematic")
