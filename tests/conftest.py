@@ -54,6 +54,19 @@ FIRST: tuple[str, ...] = (
 SPLIT: tuple[str, ...] = ("tests/lessons/test_lessons.py",)
 
 
+#: Third-party packages that pytest marks for assertion rewriting only because they ship a pytest
+#: plugin: every module of theirs imported in a run is then parsed, rewritten and compiled from
+#: source in each process, their bytecode ignored (hypothesis: 1 CPU s per xdist worker at
+#: collection, against 0.2 s to import it).  Their own asserts are not the suite's.
+NOT_REWRITTEN: tuple[str, ...] = ("hypothesis",)
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    must = getattr(getattr(config.pluginmanager, "rewrite_hook", None), "_must_rewrite", None)
+    if isinstance(must, set):  # pytest's AssertionRewritingHook (absent with --assert=plain)
+        must.difference_update(NOT_REWRITTEN)
+
+
 @pytest.hookimpl(tryfirst=True)  # before -k and -m deselect: every collected item is marked
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     mark_slow(items, SLOW)

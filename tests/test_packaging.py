@@ -111,6 +111,21 @@ sys.exit(main(["run", "--runs", "20", "--out", {str(tmp_path / "out")!r}]))
                           env=dict(os.environ, MPLBACKEND="Agg"), timeout=240)
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "final estimates" in proc.stdout and (tmp_path / "out" / "index.html").is_file()
+    # and its files are report 000's figures, each named as tests/figures/ expects (this run
+    # draws them: a second `gpsaccel run` there cost 3 CPU s)
+    figures = _module(ROOT / "tests" / "figures" / "test_figures.py")
+    names = sorted(p.name for p in (tmp_path / "out").glob("*.png"))
+    assert [figures.NAME.match(n).group(2) for n in names] == figures.EXPECTED["000"], names
+
+
+def _module(path: Path):
+    """The test module (or conftest) at ``path``, loaded on its own for what it defines."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(f"_loaded_{path.parent.name}_{path.stem}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def test_one_version():
@@ -226,14 +241,9 @@ ROSTER = "id,name,email,sis_id\n" + "".join(
 
 def _solved_notebook(name: str, target: Path) -> None:
     """An honest student's notebook of homework ``name`` (the homework tests' own maker)."""
-    import importlib.util
-
     import nbformat
 
-    spec = importlib.util.spec_from_file_location("_homework_conftest",
-                                                  ROOT / "tests" / "assignments" / "conftest.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = _module(ROOT / "tests" / "assignments" / "conftest.py")
     target.parent.mkdir(parents=True)
     nbformat.write(module.solved(name), str(target))
 

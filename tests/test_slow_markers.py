@@ -2,15 +2,15 @@
 run, so a renamed slow test cannot silently join every "not slow" run; and any one test, slow or
 not, runs on its own (``pytest file::test``, ``-k``) without its neighbours' entries looking stale.
 
-Each case runs pytest in a subprocess on a small test file whose conftest applies the suite's own
+Each case runs pytest (in this process) on a small test file whose conftest applies the suite's own
 guard (:func:`conftest.mark_slow`, loaded from tests/conftest.py) with a SLOW list of its own.
 """
 
 from __future__ import annotations
 
 import os
-import subprocess
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
@@ -56,14 +56,41 @@ def pytest_collection_modifyitems(config, items):
 GOOD = ("test_a.py::test_slow", "test_a.py::test_sweep_", "test_a.py::TestGroup::test_inside")
 
 
-def pytest_in(folder: Path, slow: tuple[str, ...], *args: str) -> subprocess.CompletedProcess:
-    (folder / "test_a.py").write_text(TESTS)
-    (folder / "conftest.py").write_text(CONFTEST.format(path=str(SUITE_CONFTEST), slow=slow))
-    env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTEST_", "COV_"))}
-    env["PYTEST_DISABLE_PLUGIN_AUTOLOAD"] = "1"  # hypothesis's plugin alone costs 1 CPU s a run
-    return subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
-                           "--rootdir", str(folder), "-c", os.devnull, *args],
-                          cwd=folder, env=env, capture_output=True, text=True, timeout=120)
+@dataclass
+class Run:
+    returncode: int
+    stdout: str
+    stderr: str
+
+
+@pytest.fixture
+def pytest_in(monkeypatch, capsys):
+    """``pytest_in(folder, slow, *args)``: pytest run on ``folder`` in this process (a pytest
+    process of its own cost 0.7 CPU s a case, nearly all its start-up), with no plugin but
+    pytest's own and the folder's conftest; the modules it imported are forgotten after
+    (``--import-mode=importlib``: this process may hold a module named ``conftest`` already)."""
+
+    def run(folder: Path, slow: tuple[str, ...], *args: str) -> Run:
+        (folder / "test_a.py").write_text(TESTS)
+        (folder / "conftest.py").write_text(CONFTEST.format(path=str(SUITE_CONFTEST), slow=slow))
+        for name in [k for k in os.environ if k.startswith(("PYTEST_", "COV_"))]:
+            monkeypatch.delenv(name)
+        monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
+        monkeypatch.chdir(folder)
+        modules, path = set(sys.modules), list(sys.path)
+        capsys.readouterr()
+        try:
+            code = pytest.main(["-q", "-p", "no:cacheprovider", "-p", "no:faulthandler",
+                                "--import-mode=importlib", "--rootdir", str(folder),
+                                "-c", os.devnull, *args])
+        finally:
+            for name in set(sys.modules) - modules:
+                del sys.modules[name]
+            sys.path[:] = path
+        out, err = capsys.readouterr()
+        return Run(int(code), out, err)
+
+    return run
 
 
 @pytest.mark.parametrize("args, passed", [
@@ -73,20 +100,20 @@ def pytest_in(folder: Path, slow: tuple[str, ...], *args: str) -> subprocess.Com
     (["test_a.py", "-k", "fast"], 1),
     (["test_a.py", "-m", "slow"], 4),
 ])
-def test_any_single_test_runs_and_the_slow_ones_are_marked(tmp_path, args, passed):
+def test_any_single_test_runs_and_the_slow_ones_are_marked(pytest_in, tmp_path, args, passed):
     res = pytest_in(tmp_path, GOOD, *args)
     assert res.returncode == 0, res.stdout + res.stderr
     assert f"{passed} passed" in res.stdout, res.stdout
 
 
 @pytest.mark.parametrize("args", [["test_a.py::test_fast"], ["test_a.py", "-m", "not slow"]])
-def test_an_entry_naming_a_renamed_test_stops_every_run_of_its_file(tmp_path, args):
+def test_an_entry_naming_a_renamed_test_stops_every_run_of_its_file(pytest_in, tmp_path, args):
     res = pytest_in(tmp_path, (*GOOD, "test_a.py::test_renamed"), *args)
     assert res.returncode == 4, res.stdout + res.stderr
     assert "SLOW names tests that do not exist: ['test_a.py::test_renamed']" in res.stderr
 
 
-def test_an_entry_of_a_file_not_collected_is_not_judged(tmp_path):
+def test_an_entry_of_a_file_not_collected_is_not_judged(pytest_in, tmp_path):
     (tmp_path / "test_b.py").write_text("def test_b():\n    pass\n")
     res = pytest_in(tmp_path, (*GOOD, "test_a.py::test_renamed"), "test_b.py")
     assert res.returncode == 0, res.stdout + res.stderr
