@@ -59,6 +59,7 @@ from gpsaccel.coop.model import (
     propagate,
     state_residual,
     wrap_state,
+    wrap_state_inplace,
 )
 from gpsaccel.coop.result import FilterResult
 from gpsaccel.coop.unscented import UKF_ALPHA, UKF_BETA, UKF_KAPPA, Unscented
@@ -213,7 +214,8 @@ class _Linearised:
         return A if self.g.F_form == "A" else self.model.dt * A
 
     def wrap(self, x: np.ndarray) -> np.ndarray:
-        return wrap_state(x) if self.g.wrap_state else np.array(x, dtype=float)
+        # x is always the filter's own new array (a step, an update): wrapped where it is
+        return wrap_state_inplace(x) if self.g.wrap_state else np.array(x, dtype=float)
 
     def start(self, x0: np.ndarray) -> np.ndarray:
         """The filter's state at step 0: x̂_0 (EKF) or δx̂_0 = x̂_0 − x*_0 (LKF)."""

@@ -100,11 +100,15 @@ def wrap_angle(a: np.ndarray | float) -> np.ndarray:
 
     mod(a + π, 2π) − π.  ``np.mod`` (libm's fmod and a floor division) was a sixth of the UKF's
     time; where 0 ≤ a + π < 2π the remainder is a + π itself, exactly, so only the other angles
-    go through it: the same numbers, bit for bit (NaN among them).
+    go through it: the same numbers, bit for bit (NaN among them).  Mostly every angle is
+    inside, which a minimum and a maximum tell in two passes (the masks take five).
     """
     t = np.asarray(a, dtype=float) + math.pi
     if t.ndim == 0 or t.size < _MOD_ALL_BELOW:
         return np.mod(t, _TWO_PI) - math.pi
+    if t.min() >= 0.0 and t.max() < _TWO_PI:  # all inside (a NaN fails both): two reductions
+        t -= math.pi
+        return t
     out = t - math.pi
     outside = ~((t >= 0.0) & (t < _TWO_PI))
     if outside.any():
@@ -120,10 +124,18 @@ def _every(idx: tuple[int, int]) -> slice:
 _STATE_ANGLES, _MEASUREMENT_ANGLES = _every(ANGLE_STATES), _every(ANGLE_MEASUREMENTS)
 
 
-def _wrap_at(v: np.ndarray, at: slice) -> np.ndarray:
-    out = np.array(v, dtype=float, copy=True)
+def _wrap_at(v: np.ndarray, at: slice, copy: bool = True) -> np.ndarray:
+    out = np.array(v, dtype=float, copy=True) if copy else v
     out[..., at] = wrap_angle(out[..., at])
     return out
+
+
+def wrap_state_inplace(x: np.ndarray) -> np.ndarray:
+    """:func:`wrap_state` on a float array the caller owns, in place (no copy); returns it.
+
+    For the filters' own temporaries (sigma points, a propagated step), which a copy per step
+    only made slower."""
+    return _wrap_at(x, _STATE_ANGLES, copy=False)
 
 
 def wrap_state(x: np.ndarray) -> np.ndarray:
@@ -138,12 +150,14 @@ def wrap_measurement(y: np.ndarray) -> np.ndarray:
 
 def state_residual(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """a − b for states (..., 6), the heading differences wrapped (an error or a perturbation)."""
-    return wrap_state(np.asarray(a, dtype=float) - np.asarray(b, dtype=float))
+    return _wrap_at(np.asarray(a, dtype=float) - np.asarray(b, dtype=float), _STATE_ANGLES,
+                    copy=False)  # the difference is new: wrapped where it is
 
 
 def measurement_residual(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """a − b for measurements (..., 5), the bearing differences wrapped (an innovation)."""
-    return wrap_measurement(np.asarray(a, dtype=float) - np.asarray(b, dtype=float))
+    return _wrap_at(np.asarray(a, dtype=float) - np.asarray(b, dtype=float),
+                    _MEASUREMENT_ANGLES, copy=False)
 
 
 # --------------------------------------------------------------------------- f, h, Jacobians
@@ -185,7 +199,7 @@ def f(x: np.ndarray, u: np.ndarray, L: float = 0.5) -> np.ndarray:
 
 def h(x: np.ndarray) -> np.ndarray:
     """y = h(x) for states x (..., 6) → (..., 5), bearings wrapped to [−π, π)."""
-    return wrap_measurement(h_unwrapped(_state(x)))
+    return _wrap_at(h_unwrapped(_state(x)), _MEASUREMENT_ANGLES, copy=False)
 
 
 def h_unwrapped(x: np.ndarray) -> np.ndarray:
@@ -461,7 +475,7 @@ class CoopModel:
         w = rng.standard_normal((K, n_runs, 6)) @ np.linalg.cholesky(Q).T
         v = rng.standard_normal((n_runs, K + 1, 5)) @ np.linalg.cholesky(self.Rtrue).T
         for k in range(K):
-            x[:, k + 1] = wrap_state(propagate(x[:, k], self.u0, self.dt, self.L) + w[k])
+            x[:, k + 1] = wrap_state_inplace(propagate(x[:, k], self.u0, self.dt, self.L) + w[k])
         y = wrap_measurement(h(x) + v)
         y[:, 0] = np.nan
         return Truth(self.t, x, y)
