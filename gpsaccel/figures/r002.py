@@ -10,14 +10,14 @@ on the log, 19c the NIS of the three filters on the log.
 
 from __future__ import annotations
 
-from collections.abc import Collection, Iterator
+from collections.abc import Collection, Iterator, Mapping
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from gpsaccel import _validation as _v
 from gpsaccel import plots, registry
-from gpsaccel.coop.filters import FilterResult, run_filter
+from gpsaccel.coop.filters import FilterResult, run_filter, tuned_q
 from gpsaccel.coop.model import (
     MEASUREMENTS,
     STATES,
@@ -180,12 +180,15 @@ class _MonteCarlo(dict):
     that draws them all, 11 and 11b, on two cores).  The numbers are those of a serial run."""
 
     def __init__(self, model: CoopModel, truth: Truth, executor: object = None,
-                 filters: tuple[str, ...] = MONTE_CARLO) -> None:
+                 filters: tuple[str, ...] = MONTE_CARLO,
+                 done: Mapping[str, ConsistencyRun] | None = None) -> None:
         super().__init__()
         self.model, self.truth = model, truth
+        self.update(_checked_done(model, truth, done or {}))
         self.futures = {} if executor is None else {
             m: executor.submit(_filter, model, m, truth)  # type: ignore[attr-defined]
-            for m in dict.fromkeys(_v.choice("filters", m, MONTE_CARLO) for m in filters)}
+            for m in dict.fromkeys(_v.choice("filters", m, MONTE_CARLO) for m in filters)
+            if m not in self}
 
     def __missing__(self, m: str) -> ConsistencyRun:
         future = self.futures.get(m)
@@ -197,9 +200,36 @@ def _filter(model: CoopModel, m: str, truth: Truth) -> ConsistencyRun:
     """One of :class:`_MonteCarlo`'s filters on ``truth`` (the LKF on its first LKF_RUNS runs);
     module-level, so a process pool can run it."""
     if m == "lkf":
-        truth = Truth(truth.t, truth.x[:LKF_RUNS], truth.y[:LKF_RUNS])
-    Q = model.Qtrue if m == "ekf-qtrue" else None
-    return consistency_test(model, m.split("-")[0], Q, truth=truth, keep=True)
+        truth = _lkf_truth(truth)
+    return consistency_test(model, m.split("-")[0], _q_of(model, m), truth=truth, keep=True)
+
+
+def _lkf_truth(truth: Truth) -> Truth:
+    return Truth(truth.t, truth.x[:LKF_RUNS], truth.y[:LKF_RUNS])
+
+
+def _q_of(model: CoopModel, m: str) -> np.ndarray | None:
+    return model.Qtrue if m == "ekf-qtrue" else None
+
+
+def _checked_done(model: CoopModel, truth: Truth, done: Mapping[str, ConsistencyRun]
+                  ) -> dict[str, ConsistencyRun]:
+    """``done`` (filters the caller ran already), each checked to be what :func:`_filter` would
+    compute: the same method and Q, its result and truth kept, on this very truth set."""
+    out = {}
+    for m, run in done.items():
+        m = _v.choice("done", m, MONTE_CARLO)
+        x = (_lkf_truth(truth) if m == "lkf" else truth).x
+        Q = _q_of(model, m)
+        Q = tuned_q(m.split("-")[0], model) if Q is None else Q
+        if not (isinstance(run, ConsistencyRun) and run.method == m.split("-")[0]
+                and np.array_equal(run.Q, Q) and run.result is not None
+                and run.truth is not None and np.array_equal(run.truth.x, x)):
+            raise ValueError(f"done[{m!r}] must be consistency_test(model, "
+                             f"{m.split('-')[0]!r}, {'Qtrue' if m == 'ekf-qtrue' else 'None'}, "
+                             f"truth=<this runs and seed's truth set>, keep=True)")
+        out[m] = run
+    return out
 
 
 def on_the_log(model: CoopModel) -> dict[str, FilterResult]:
@@ -210,21 +240,26 @@ def on_the_log(model: CoopModel) -> dict[str, FilterResult]:
 
 def figures(runs: int, seed: int, executor: object = None,
             filters: tuple[str, ...] = MONTE_CARLO,
-            numbers: Collection[str] | None = None) -> Iterator[ReportFigure]:
+            numbers: Collection[str] | None = None,
+            done: Mapping[str, ConsistencyRun] | None = None) -> Iterator[ReportFigure]:
     """The report's figures in order; ``executor`` (a ``concurrent.futures`` executor, or None:
     here) filters the Monte Carlo set while the figures before it are drawn (:class:`_MonteCarlo`).
     ``filters``: the Monte Carlo filters started on the executor (a caller that stops before
     figure 14c leaves out the UKF, which costs five EKFs); any other runs here if a figure asks.
     ``numbers``: only these figures ("10", "15b", ...; None: all), and only what they need is
     computed: lesson 11b shows 16-19c, which need no Monte Carlo set at all (it drew and filtered
-    all of them, 6 of its 9 CPU s).  Each figure is the one the whole report draws."""
+    all of them, 6 of its 9 CPU s).  Each figure is the one the whole report draws.
+    ``done``: Monte Carlo filters (keys as ``filters``) the caller has run already on this
+    ``runs`` and ``seed``'s truth set, ``consistency_test(..., truth=truth, keep=True)``; they
+    are used, not run again (lesson 11 passes its two EKFs on its own set); anything else raises
+    a ValueError."""
     model = CoopModel()
     if numbers is not None:
         numbers = {_v.choice("numbers", n, ALL_NUMBERS) for n in numbers}
     want = _Wanted(numbers)
     mc = None
-    if executor is not None and want.any(*_MC_FIGURES):
-        mc = _MonteCarlo(model, truth_runs(model, runs, seed), executor, filters)
+    if (executor is not None or done) and want.any(*_MC_FIGURES):
+        mc = _MonteCarlo(model, truth_runs(model, runs, seed), executor, filters, done)
     lin = _Lazy(lambda: linearization_study(model))
     if want.any(*_LIN_FIGURES):
         yield from want.only(_linearization_figures(model.t, lin()))

@@ -135,6 +135,32 @@ def test_figures_asked_for_by_number_are_those_of_the_whole_report_and_need_only
         next(r002.figures(12, 0, numbers=("8b",)))
 
 
+def test_filters_run_already_are_used_not_run_again_and_must_be_those_of_the_set(
+        drawn, monkeypatch):
+    # lesson 11 hands its two EKFs on its own set (seed 7) to the figures: nothing is filtered
+    # twice, and the figures are those the report draws when it filters them itself
+    import gpsaccel.figures.r002 as r002
+    from gpsaccel.coop.montecarlo import consistency_test, truth_runs
+
+    model = r002.CoopModel()
+    truth = truth_runs(model, 12, 0)
+    plain = consistency_test(model, "ekf", model.Qtrue, truth=truth, keep=True)
+    ran = []
+    monkeypatch.setattr(r002, "consistency_test", lambda *a, **kw: ran.append(a[1]))
+    whole = {f.number: f for f in drawn[0]}
+    some = list(r002.figures(12, 0, numbers=("14b", "15b"), done={"ekf-qtrue": plain}))
+    assert ran == []
+    for f in some:
+        assert f.caption == whole[f.number].caption
+        assert _data(f.figure) == _data(whole[f.number].figure), f.number
+    other = consistency_test(model, "ekf", model.Qtrue, truth=truth_runs(model, 12, 1), keep=True)
+    for done in ({"ekf-qtrue": other}, {"ekf": plain}, {"ukf": plain}):   # another set, another Q
+        with pytest.raises(ValueError, match=r"done\["):
+            next(r002.figures(12, 0, numbers=("14b",), done=done))
+    with pytest.raises(ValueError, match="done must be one of"):
+        next(r002.figures(12, 0, numbers=("14b",), done={"pf": plain}))
+
+
 def test_an_executor_filters_the_monte_carlo_at_once_with_the_same_numbers():
     # lessons 11 and 11b pass a pool: the four filters are submitted together, awaited when drawn
     import concurrent.futures as cf
