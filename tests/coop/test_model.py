@@ -88,6 +88,26 @@ def test_wrap_is_half_open_and_bearings_keep_their_quadrant():
     np.testing.assert_allclose(coop.measurement_residual(a, b)[[0, 2]], [-0.02, 0.02], atol=1e-12)
 
 
+def test_wrap_is_mod_bit_for_bit_on_large_arrays_inside_outside_and_nan():
+    # large arrays skip np.mod where 0 <= a + π < 2π (all inside: a min and a max tell it);
+    # every path must give mod(a + π, 2π) − π exactly, and leave the caller's array alone
+    rng = np.random.default_rng(3)
+    inside = rng.uniform(-math.pi, math.pi, 2000)
+    inside[:2] = -math.pi, math.nextafter(math.pi, 0)
+    outside = inside.copy()
+    outside[::7] *= 5
+    nan = inside.copy()
+    nan[10] = np.nan
+    for a in (inside, outside, nan, inside.reshape(100, 10, 2)[..., ::2]):
+        before = a.copy()
+        expected = np.mod(np.asarray(a) + math.pi, 2 * math.pi) - math.pi
+        assert np.array_equal(coop.wrap_angle(a), expected, equal_nan=True)
+        assert np.array_equal(a, before, equal_nan=True)
+    x = rng.normal(size=(300, 6)) * 4
+    wrapped = coop.wrap_state(x)
+    assert wrapped is not x and np.array_equal(coop.wrap_state_inplace(x.copy()), wrapped)
+
+
 def test_closed_form_step_matches_solve_ivp():
     rng = np.random.default_rng(5)
     xs, us = random_points(rng, 20)
