@@ -223,6 +223,28 @@ def repeated_sets(model: CoopModel, method: str, Q: np.ndarray | None = None,
                   executor=executor)
 
 
+def repeated_sets_by_q(model: CoopModel, method: str, Qs: dict[str, np.ndarray | None],
+                       truths: Sequence[Truth], alpha: float = 0.05, progress: bool = False,
+                       executor: object = None) -> dict[str, list[ConsistencyRun]]:
+    """:func:`repeated_sets` of one filter ('ekf', 'ukf') with several Q on the same ``truths``,
+    in one pass: ``{label: the tests of Qs[label]}`` (None: the tuned Q).
+
+    Every Q's sets go into the same filter calls (one Q per run), so a call's per-step cost is
+    paid once for all of them (lesson 11's EKF with Qtrue and with its tuned Q: half the calls);
+    each number is that of :func:`repeated_sets` with that Q alone, bit for bit.  Not the LKF,
+    whose shared covariance a Q per run would undo (see :func:`_tests`)."""
+    method = _v.choice("method", method, ("ekf", "ukf"))
+    alpha = _v.probability("alpha", alpha)
+    if not truths:
+        raise ValueError("truths holds no set: give at least one Truth")
+    given = {label: tuned_q(method, model) if Q is None else _v.spd_matrix("Q", Q, 6)
+             for label, Q in Qs.items()}
+    tests = _tests(model, method, [(Q, tr) for Q in given.values() for tr in truths], alpha,
+                   progress=progress, executor=executor)
+    n = len(truths)
+    return {label: tests[i * n:(i + 1) * n] for i, label in enumerate(given)}
+
+
 def repeated_truths(model: CoopModel, n_sets: int = 5, n_runs: int = 50, seed: int = 0,
                     executor: object = None) -> list[Truth]:
     """The truth sets of :func:`repeated_sets` (``n_sets`` of ``n_runs`` runs from ``seed``),

@@ -81,6 +81,30 @@ def test_sets_and_candidates_filtered_together_equal_each_alone():
         np.testing.assert_array_equal(a.nis_mean, b.nis_mean)
 
 
+def test_several_qs_on_the_same_sets_are_each_qs_repeated_sets():
+    # lesson 11 filters its three sets with the EKF's Qtrue and its tuned Q in one pass
+    import concurrent.futures as cf
+
+    from gpsaccel.coop.montecarlo import repeated_sets_by_q, repeated_truths
+
+    model = CoopModel(duration=5.0)
+    truths = repeated_truths(model, n_sets=3, n_runs=3, seed=11)
+    with cf.ThreadPoolExecutor(2) as pool:
+        both = repeated_sets_by_q(model, "ekf", {"qtrue": model.Qtrue, "tuned": None},
+                                  truths=truths, executor=pool)
+    assert list(both) == ["qtrue", "tuned"]
+    for label, Q in (("qtrue", model.Qtrue), ("tuned", None)):
+        alone = repeated_sets(model, "ekf", Q, truths=truths)
+        assert len(both[label]) == 3
+        for a, b in zip(both[label], alone, strict=True):
+            assert np.array_equal(a.nees_mean, b.nees_mean) and np.array_equal(a.Q, b.Q)
+            assert np.array_equal(a.nis_mean, b.nis_mean)
+    with pytest.raises(ValueError, match="method"):
+        repeated_sets_by_q(model, "lkf", {"q": None}, truths=truths)
+    with pytest.raises(ValueError, match="truths"):
+        repeated_sets_by_q(model, "ekf", {"q": None}, truths=[])
+
+
 def test_sets_given_as_truths_are_the_sets_repeated_sets_simulates():
     # lesson 11 simulates its sets once and filters them three ways: the same numbers, bit for bit
     from gpsaccel.coop.montecarlo import repeated_truths
