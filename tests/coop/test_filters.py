@@ -11,6 +11,7 @@ from gpsaccel.coop.model import CoopModel
 from gpsaccel.coop.montecarlo import (
     consistency_test,
     repeated_sets,
+    repeated_sets_by_q,
     set_seeds,
     truth_runs,
     tune_q,
@@ -88,10 +89,16 @@ def truths():
 
 
 @pytest.fixture(scope="module")
-def ekf_sets(truths):
-    # the five sets in two filter calls, not five: each set's numbers are its own call's, bit for
-    # bit (tests/coop/test_montecarlo.py), and a call's per-step cost is shared
-    return repeated_sets(MODEL, "ekf", truths=truths)
+def ekf_both(truths):
+    # the five sets with the tuned Q and with Qtrue in three filter calls, not ten: each set's
+    # numbers are its own call's, bit for bit (tests/coop/test_montecarlo.py), and a call's
+    # per-step cost is shared
+    return repeated_sets_by_q(MODEL, "ekf", {"tuned": None, "qtrue": MODEL.Qtrue}, truths=truths)
+
+
+@pytest.fixture(scope="module")
+def ekf_sets(ekf_both):
+    return ekf_both["tuned"]
 
 
 def test_tuned_ekf_passes_nees_and_nis_over_five_sets(ekf_sets):
@@ -105,10 +112,11 @@ def test_tuned_ekf_passes_nees_and_nis_over_five_sets(ekf_sets):
     assert ekf_sets[0].nees_bounds == consistency.chi2_bounds(6, 50, 0.05)
 
 
-def test_ekf_with_qtrue_is_overconfident_along_track(truths):
+def test_ekf_with_qtrue_is_overconfident_along_track(ekf_both):
     # same truth runs, Q = Qtrue: the predicted mean ignores E[cos(θ+δ)] = cos θ·e^(−σ²/2), so the
     # average NEES sits above n = 6 (the tuned Q, which inflates the position terms, fixes it)
-    plain = repeated_sets(MODEL, "ekf", MODEL.Qtrue, truths=truths)
+    plain = ekf_both["qtrue"]
+    assert len(plain) == 5 and np.array_equal(plain[0].Q, MODEL.Qtrue)
     mean_nees = np.mean([r.nees_mean.mean() for r in plain])
     assert mean_nees > 6.4, mean_nees
     assert np.mean([r.nees_fraction for r in plain]) < 0.85
