@@ -17,7 +17,7 @@ from matplotlib.figure import Figure
 
 from gpsaccel import _validation as _v
 from gpsaccel import plots, registry
-from gpsaccel.coop.filters import FilterResult, run_filter, tuned_q
+from gpsaccel.coop.filters import FilterResult, run_batch, run_filter, tuned_q
 from gpsaccel.coop.model import (
     MEASUREMENTS,
     STATES,
@@ -232,6 +232,32 @@ def _checked_done(model: CoopModel, truth: Truth, done: Mapping[str, Consistency
     return out
 
 
+#: How many first steps of a given filter on the log :func:`_checked_log` runs again to compare.
+_LOG_CHECK_STEPS = 20
+
+
+def _checked_log(model: CoopModel, given: Mapping[str, FilterResult]) -> dict[str, FilterResult]:
+    """``given`` if it holds :func:`on_the_log`'s three filters: each of the right method and
+    length, and equal, bit for bit, on its first steps to that filter run here on them (a row
+    depends only on the rows before it: :func:`run_batch`'s ``steps``)."""
+    y = model.log()
+    out: dict[str, FilterResult] = {}
+    for m in ("lkf", "ekf", "ukf"):
+        r = given.get(m)
+        if not (isinstance(r, FilterResult) and r.method == m
+                and r.x_hat.shape == y.shape[:1] + (6,) and _same_head(model, m, y, r)):
+            raise ValueError(f"log[{m!r}] must be run_filter({m!r}, model, model.log()) with "
+                             f"its tuned Q (the three filters, 'lkf', 'ekf', 'ukf')")
+        out[m] = r
+    return out
+
+
+def _same_head(model: CoopModel, m: str, y: np.ndarray, r: FilterResult) -> bool:
+    head = run_batch(m, model, y[None], steps=_LOG_CHECK_STEPS)
+    return bool(np.array_equal(head.x_hat[0], r.x_hat[:_LOG_CHECK_STEPS])
+                and np.array_equal(head.P[0], r.P[:_LOG_CHECK_STEPS]))
+
+
 def on_the_log(model: CoopModel) -> dict[str, FilterResult]:
     """The three filters (tuned Q) on the course's 100-second log."""
     y = model.log()
@@ -241,7 +267,8 @@ def on_the_log(model: CoopModel) -> dict[str, FilterResult]:
 def figures(runs: int, seed: int, executor: object = None,
             filters: tuple[str, ...] = MONTE_CARLO,
             numbers: Collection[str] | None = None,
-            done: Mapping[str, ConsistencyRun] | None = None) -> Iterator[ReportFigure]:
+            done: Mapping[str, ConsistencyRun] | None = None,
+            log: Mapping[str, FilterResult] | None = None) -> Iterator[ReportFigure]:
     """The report's figures in order; ``executor`` (a ``concurrent.futures`` executor, or None:
     here) filters the Monte Carlo set while the figures before it are drawn (:class:`_MonteCarlo`).
     ``filters``: the Monte Carlo filters started on the executor (a caller that stops before
@@ -252,7 +279,9 @@ def figures(runs: int, seed: int, executor: object = None,
     ``done``: Monte Carlo filters (keys as ``filters``) the caller has run already on this
     ``runs`` and ``seed``'s truth set, ``consistency_test(..., truth=truth, keep=True)``; they
     are used, not run again (lesson 11 passes its two EKFs on its own set); anything else raises
-    a ValueError."""
+    a ValueError.  ``log``: the three filters already run on the course's log with their tuned
+    Q, ``{m: run_filter(m, model, model.log())}`` for figures 16-19c (lesson 11b's), checked on
+    their first steps and used, not run again."""
     model = CoopModel()
     if numbers is not None:
         numbers = {_v.choice("numbers", n, ALL_NUMBERS) for n in numbers}
@@ -267,7 +296,7 @@ def figures(runs: int, seed: int, executor: object = None,
         yield from _monte_carlo_figures(model, lin, runs, seed, mc, want)
     if want.any(*_LOG_FIGURES):
         # the log's figures need only the nominal (the same array the study holds)
-        yield from want.only(_log_figures(model, lin() if lin.done else
+        yield from want.only(_log_figures(model, log, lin() if lin.done else
                                           {"nominal": model.nominal()}))
 
 
@@ -411,10 +440,11 @@ def _consistency_figure(run: ConsistencyRun, num: str, m: str, stat: str) -> Rep
         f"Q = diag({qdiag}).{_NIS_NOTE if num == '15b' else ''}"), fig)
 
 
-def _log_figures(model: CoopModel, lin: dict) -> Iterator[ReportFigure]:
+def _log_figures(model: CoopModel, given: Mapping[str, FilterResult] | None,
+                 lin: dict) -> Iterator[ReportFigure]:
     """Figures 16-19c: the three filters on the course's 100-second log."""
     t = model.t
-    logs = on_the_log(model)
+    logs = on_the_log(model) if given is None else _checked_log(model, given)
     y = model.log()
     for num, m, ugv in [("16", "lkf", True), ("17", "lkf", False), ("18", "ekf", True),
                         ("19", "ekf", False), ("18b", "ukf", True), ("19b", "ukf", False)]:

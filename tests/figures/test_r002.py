@@ -164,6 +164,29 @@ def test_filters_run_already_are_used_not_run_again_and_must_be_those_of_the_set
         next(r002.figures(12, 0, numbers=("14b",), done={"pf": plain}))
 
 
+def test_the_log_filters_given_are_used_not_run_again_and_must_be_those_on_the_log(
+        drawn, monkeypatch):
+    # lesson 11b runs the three filters on the course log itself (and times them), then draws
+    # figures 16-19c from them: the report's figures, with no filter run twice
+    import dataclasses
+
+    import gpsaccel.figures.r002 as r002
+
+    model = r002.CoopModel()
+    logs = r002.on_the_log(model)
+    monkeypatch.setattr(r002, "on_the_log", lambda model: pytest.fail("ran the log's filters"))
+    whole = {f.number: f for f in drawn[0]}
+    some = list(r002.figures(12, 0, numbers=("17", "19c"), log=logs))
+    for f in some:
+        assert f.caption == whole[f.number].caption
+        assert _data(f.figure) == _data(whole[f.number].figure), f.number
+    bent = dataclasses.replace(logs["ekf"], x_hat=logs["ekf"].x_hat + 1e-12)
+    for log in ({**logs, "ekf": bent}, {"lkf": logs["lkf"], "ekf": logs["ekf"]},
+                {**logs, "ukf": logs["ekf"]}):
+        with pytest.raises(ValueError, match=r"log\["):
+            next(r002.figures(12, 0, numbers=("16",), log=log))
+
+
 def test_an_executor_filters_the_monte_carlo_at_once_with_the_same_numbers():
     # lessons 11 and 11b pass a pool: the four filters are submitted together, awaited when drawn
     import concurrent.futures as cf
