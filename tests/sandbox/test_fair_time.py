@@ -37,6 +37,11 @@ WORK = ("import numpy as np\n\n"
 ENDLESS = "import numpy as np\n\ndef f(x):\n    while True:\n        pass\n"
 SLEEPER = "import time\nimport numpy as np\n\ndef f(x):\n    time.sleep(600)\n"
 HOGS = 6
+#: The wall-clock box of the same work is run until one was starved past its limit: the share
+#: the hogs leave a box varies with the machine's own load (once, with a second suite running on
+#: both cores, a box of WORK ended 2.1 s after its start, inside its 1.5 s by the clock that
+#: starts with the runner), and a box that was not starved enough says nothing of the wall clock.
+WALL_TRIES = 3
 CALLS = [sb.Call("f", (np.zeros(1),), (sb.Output("s", (1,)),))]
 
 
@@ -100,8 +105,13 @@ def test_a_box_starved_by_a_busy_machine_is_not_timed_out(tmp_path, starved, pat
     assert box.seconds > 1.5, "the hogs did not starve the box: the test tests nothing"
     assert box.waited is not None and box.waited > 0.5
     monkeypatch.setattr(clock, "FAIR_CLOCK", False)  # the wall clock: the same box times out
-    box = _box(tmp_path, WORK, 1.5)
-    assert box.failure == "timeout" and box.waited is None, (box.failure, box.seconds)
+    tries = []
+    for _ in range(WALL_TRIES):  # when the hogs starved it past its limit (module docstring)
+        box = _box(tmp_path, WORK, 1.5)
+        tries.append((box.failure, round(box.seconds, 2)))
+        if box.failure is not None:
+            break
+    assert box.failure == "timeout" and box.waited is None, tries
 
 
 def test_an_endless_loop_still_times_out_with_the_endless_loop_hint(tmp_path, patient):
