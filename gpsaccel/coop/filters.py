@@ -314,12 +314,15 @@ def run_batch(method: str, model: CoopModel, y: np.ndarray, Q: np.ndarray | None
               steps: int | None = None) -> FilterResult:
     """Filter ``method`` ('lkf', 'ekf', 'ukf') on N logs y (N, K+1, 5) at once (module docstring).
 
-    ``Q`` (6, 6), or (N, 6, 6) one per run (a tuning grid in one call: each run's arithmetic is
-    that of its own call, bit for bit).  ``ingredients`` makes it a student's filter (EKF and
-    LKF; :mod:`gpsaccel.coop.mistakes`); ``alpha``, ``beta``, ``kappa`` are the UKF's
-    sigma-point parameters (:func:`ukf_points`).  ``steps``: only the first ``steps`` rows, the
-    same numbers as those rows of the whole run (each row depends only on the rows before it; the
-    checker bounds a catalogue filter's distance to a student's from its first rows).
+    ``Q`` (6, 6), or (N, 6, 6) one per run (a tuning grid in one call: for the EKF and UKF each
+    run's arithmetic is that of its own call, bit for bit; the LKF shares one covariance and one
+    matrix product across its runs when Q is shared, so there a run's last bits can depend on
+    the runs beside it and on whether Q was given per run).  ``ingredients`` makes it a
+    student's filter (EKF and LKF; :mod:`gpsaccel.coop.mistakes`); ``alpha``, ``beta``,
+    ``kappa`` are the UKF's sigma-point parameters (:func:`ukf_points`).  ``steps``: only the
+    first ``steps`` rows, the same numbers as those rows of the whole run (each row depends only
+    on the rows before it; the checker bounds a catalogue filter's distance to a student's from
+    its first rows).
     """
     method = _v.choice("method", method, METHODS)
     if np.ndim(y) == 3 and np.shape(y)[0] == 0:

@@ -129,15 +129,19 @@ def _tests(model: CoopModel, method: str, jobs: list[tuple[np.ndarray, Truth]], 
            ) -> list[ConsistencyRun]:
     """One consistency test per (Q, truth) job, the jobs' runs stacked into few filter calls
     (one Q per run): the per-step cost of a call is shared by every set and candidate in it.
-    Each run's numbers are those of its own call, bit for bit.  ``runtime_s`` is the calls'
-    filter time shared out by runs.  ``progress``: a tqdm.auto bar over the runs, one step per
+    For the EKF and UKF each run's numbers are those of its own call, bit for bit.  The LKF with
+    one shared Q (one job) updates all its runs in one matrix product, whose last bits depend on
+    how many runs a call holds: its numbers may differ in the last bits between calls cut
+    differently (a pool against a serial run); no lesson prints that many digits.  ``runtime_s``
+    is the calls' filter time shared out by runs.  ``progress``: a tqdm.auto bar over the runs, one step per
     call (a lesson's long cell shows that it is working).
 
     ``executor`` (:func:`gpsaccel.executors.resolve_executor`; None: here): where the calls run.
     The runs are cut into calls of at most :data:`_CHUNK_RUNS`, as many as a multiple of the
     pool's workers and of equal size, so every worker gets the same share (a set may be cut between
-    two calls).  The numbers do not depend on the cut: a run's numbers do not depend on the
-    others in its call, and each set's averages are taken over its runs in order.  ``keep`` (one
+    two calls).  The numbers do not depend on the cut (but for the LKF's last bits, above): a
+    run's numbers do not depend on the others in its call, and each set's averages are taken over
+    its runs in order.  ``keep`` (one
     result per job) keeps each job whole in one call."""
     from tqdm.auto import tqdm
 
