@@ -18,7 +18,14 @@ import numpy as np
 from gpsaccel import plots, registry
 from gpsaccel.figures import ReportFigure
 from gpsaccel.kalman.multirate import MultirateResult, run_multirate
-from gpsaccel.ship.comparison import DESCRIPTIONS, FILTERS, compare_ship_filters, compare_wind
+from gpsaccel.ship.comparison import (
+    DESCRIPTIONS,
+    FILTERS,
+    ShipComparison,
+    WindComparison,
+    compare_ship_filters,
+    compare_wind,
+)
 from gpsaccel.ship.model import STATES, ShipModel
 from gpsaccel.ship.simulation import ShipRealization, simulate_ship
 from gpsaccel.ship.zeroed_gain import ZeroedGainResult, run_zeroed_gain
@@ -136,6 +143,15 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
         number += 1
 
     comp = compare_ship_filters(model, n_runs=runs, seed=seed)
+    yield nees_figure(comp)
+    yield sigma_figure(comp)
+    yield wind_figure(compare_wind(model.replace(wind=True), n_runs=runs, seed=seed))
+
+
+def nees_figure(comp: ShipComparison) -> ReportFigure:
+    """Figure 12 from a :func:`~gpsaccel.ship.comparison.compare_ship_filters` result (lesson
+    09b draws it from the comparison it prints, instead of running it again)."""
+    runs, seed = comp.n_runs, comp.seed
     fig, axs = plots.panels(len(FILTERS), title=f"NEES over time, {runs} runs, 9 states")
     for ax, name in zip(axs, FILTERS, strict=True):
         plots.chi2_band(comp.t_epochs, comp.filters[name].nees, comp.bounds, dof=9, n_runs=runs,
@@ -143,10 +159,13 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
         ax.set_title(DESCRIPTIONS[name], fontsize="small")
         if ax is not axs[-1]:
             ax.set_xlabel("")
-    yield ReportFigure("004", "12", "nees", (
+    return ReportFigure("004", "12", "nees", (
         f"Not in the report: run-averaged NEES of the five filters with the covariance each one "
         f"reports, against the 95 % chi-square bounds ({runs} runs, seed {seed})."), fig)
 
+
+def sigma_figure(comp: ShipComparison) -> ReportFigure:
+    """Figure 13 from a :func:`~gpsaccel.ship.comparison.compare_ship_filters` result."""
     zr = comp.filters["zeroed-report"].result
     ra = comp.filters["report-as-written"].result
     assert isinstance(ra, ZeroedGainResult)  # the report's filter carries its true P
@@ -164,13 +183,16 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
               "truth")]
     fig = plots.overlay_panels([("σ of x", "m", lines)],
                                title="Position standard deviation, claimed and true (first 30 s)")
-    yield ReportFigure("004", "13", "sigma-x", (
+    return ReportFigure("004", "13", "sigma-x", (
         "Not in the report: the x-position σ of the multirate filters over the first 30 s. The "
         "zeroed gain's curves lie on the optimal one (the loss is ~1e-5 relative); the report "
         "as written, with the monorate gain at GPS fixes, has about twice the σ and claims "
         "more still."), fig)
 
-    wind = compare_wind(model.replace(wind=True), n_runs=runs, seed=seed)
+
+def wind_figure(wind: WindComparison) -> ReportFigure:
+    """Figure 14 from a :func:`~gpsaccel.ship.comparison.compare_wind` result."""
+    runs = wind.track_error_plain.shape[0]
     wind_panels: list[tuple[str, str, list[tuple[np.ndarray, np.ndarray, str | None, str]]]] = []
     for c, (name, unit) in enumerate((("b_x", "N"), ("b_y", "N"))):
         wind_lines: list[tuple[np.ndarray, np.ndarray, str | None, str]] = [
@@ -188,7 +210,7 @@ def figures(runs: int, seed: int) -> Iterator[ReportFigure]:
     ]))
     fig = plots.overlay_panels(wind_panels, title="Wind bias: estimated, and the track error it removes")
     plain, with_wind = wind.track_rmse
-    yield ReportFigure("004", "14", "wind", (
+    return ReportFigure("004", "14", "wind", (
         f"Not in the report (proposed there): a steady wind ({wind.wind_force[0]:g}, "
         f"{wind.wind_force[1]:g}) N drifting slowly. Top: one run's wind estimate ±1σ. Bottom: "
         f"RMS track error over {runs} runs; {plain:.2f} m without the wind states, "
