@@ -116,15 +116,18 @@ def wrap_angle(a: np.ndarray | float) -> np.ndarray:
     return out
 
 
-def _every(idx: tuple[int, int]) -> slice:
-    """Two indices as a basic slice: indexing with it is a view, not a fancy-indexed copy."""
-    return slice(idx[0], idx[1] + 1, idx[1] - idx[0])
+def angle_index(angles: tuple[int, ...]) -> slice | list[int]:
+    """Angle indices (``ANGLE_STATES``, ``ANGLE_MEASUREMENTS``) as a basic slice when they are two
+    (indexing with it is a view, not a fancy-indexed copy); others as a list."""
+    if len(angles) == 2 and angles[1] > angles[0]:
+        return slice(angles[0], angles[1] + 1, angles[1] - angles[0])
+    return list(angles)
 
 
-_STATE_ANGLES, _MEASUREMENT_ANGLES = _every(ANGLE_STATES), _every(ANGLE_MEASUREMENTS)
+_STATE_ANGLES, _MEASUREMENT_ANGLES = angle_index(ANGLE_STATES), angle_index(ANGLE_MEASUREMENTS)
 
 
-def _wrap_at(v: np.ndarray, at: slice, copy: bool = True) -> np.ndarray:
+def _wrap_at(v: np.ndarray, at: slice | list[int], copy: bool = True) -> np.ndarray:
     out = np.array(v, dtype=float, copy=True) if copy else v
     out[..., at] = wrap_angle(out[..., at])
     return out

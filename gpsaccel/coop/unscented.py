@@ -18,6 +18,7 @@ from gpsaccel.coop.model import (
     ANGLE_STATES,
     N_STATES,
     CoopModel,
+    angle_index,
     h,
     measurement_residual,
     propagate,
@@ -39,18 +40,11 @@ def angle_mean(points: np.ndarray, weights: np.ndarray, angles: tuple[int, ...])
     points = np.asarray(points, dtype=float)
     ref = points[..., :1, :]
     d = points - ref
-    idx = _slice(angles)
+    idx = angle_index(angles)
     d[..., idx] = wrap_angle(d[..., idx])
     mean = ref[..., 0, :] + np.einsum("...md,m->...d", d, weights)
     mean[..., idx] = wrap_angle(mean[..., idx])
     return mean
-
-
-def _slice(angles: tuple[int, ...]) -> slice | list[int]:
-    """Two angle indices as a basic slice (a view: no fancy-indexed copy); others as a list."""
-    if len(angles) == 2 and angles[1] > angles[0]:
-        return slice(angles[0], angles[1] + 1, angles[1] - angles[0])
-    return list(angles)
 
 
 def ukf_points(alpha: float = UKF_ALPHA, beta: float = UKF_BETA, kappa: float = UKF_KAPPA):
