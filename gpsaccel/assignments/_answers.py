@@ -7,15 +7,17 @@ each becomes a :class:`~gpsaccel.check.report.Finding`, never an exception in th
 from __future__ import annotations
 
 import traceback
+from typing import Any
 
 import numpy as np
 
 from gpsaccel.check.report import Report, as_array
 
 
-def call(report: Report, what: str, func: object, *args: object, part: str = "") -> object | None:
-    """``func(*args)``, or None with a finding (not defined, not callable, raised, returned
-    nothing) about ``what`` (of ``part``: partial credit)."""
+def call(report: Report, what: str, func: object, *args: object, part: str = "") -> Any:
+    """``func(*args)`` (whatever the student's function returned), or None with a finding (not
+    defined, not callable, raised, returned nothing) about ``what`` (of ``part``: partial
+    credit)."""
     if func is None or func is Ellipsis:
         report.add("not-defined", text="{where} is not defined yet (or still `...`).",
                    where=what, part=part)

@@ -20,8 +20,9 @@ from __future__ import annotations
 import hashlib
 import hmac
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from typing import cast
 
 import numpy as np
 
@@ -176,9 +177,15 @@ class Question:
     """One graded question of a homework.
 
     name, points : as in the master's ``# BEGIN QUESTION`` cell.
-    parts : (part, points) for a question with separately gradable parts (two functions, several
-        matrices): its :meth:`score` gives each part's share when the findings of the report
-        (:attr:`gpsaccel.check.report.Finding.part`) concern that part only.
+    parts : the separately gradable parts of the question (two functions, several matrices) with
+        their points, ``{part: points}`` or ``((part, points), ...)``, adding up to ``points``:
+        :meth:`score` gives each part's points when no error of the report
+        (:attr:`gpsaccel.check.report.Finding.part`) concerns that part.  Empty: all or nothing.
+    credit : mistake code -> the fraction (0 to 1) of a part's points it keeps when every error
+        of that part is a mistake of these codes (a recognised slip, such as
+        ``{"std-as-variance": 0.5}``: half the part for σ where σ² belongs).  The catalogue names
+        the mistake; the instructor decides what it is worth.  Without parts, the question is
+        one part.  Empty: a part with an error keeps nothing.
     reads : the reads for a draw (empty for a file question).
     grade : the report from the draw and the answers (run outside the box, after it is empty).
     file : a question graded from the file the notebook writes with ``%%writefile FILE`` (its
@@ -192,26 +199,47 @@ class Question:
     grade: Callable[[Draw, list[Answer]], Report] | None = None
     file: str | None = None
     grade_file: Callable[..., Report] | None = None
-    parts: tuple[tuple[str, float], ...] = ()
+    parts: tuple[tuple[str, float], ...] | Mapping[str, float] = ()
+    credit: Mapping[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        if self.parts and not math.isclose(sum(p for _, p in self.parts), self.points):
+        parts = tuple((str(n), float(p)) for n, p in (
+            self.parts.items() if isinstance(self.parts, Mapping) else self.parts))
+        object.__setattr__(self, "parts", parts)
+        object.__setattr__(self, "credit", dict(self.credit))
+        if parts and not math.isclose(sum(p for _, p in parts), self.points):
             raise ValueError(f"parts of {self.name} must add up to its {self.points:g} points, "
-                             f"got {self.parts}")
-        if len({n for n, _ in self.parts}) != len(self.parts):
-            raise ValueError(f"parts of {self.name} must have distinct names, got {self.parts}")
+                             f"got {parts}")
+        if len({n for n, _ in parts}) != len(parts):
+            raise ValueError(f"parts of {self.name} must have distinct names, got {parts}")
+        if any(p < 0 for _, p in parts):
+            raise ValueError(f"parts of {self.name} must have points >= 0, got {parts}")
+        bad = {c: f for c, f in self.credit.items()
+               if not isinstance(c, str) or not 0.0 <= float(f) <= 1.0}
+        if bad:
+            raise ValueError(f"credit of {self.name} maps mistake codes to fractions between 0 "
+                             f"and 1, got {bad}")
 
     def score(self, report: Report) -> float:
         """The points ``report`` earns: all of them when it passes; with :attr:`parts`, the
-        points of every part without an error, unless an error concerns the whole question
-        (a finding without a part, or of a part not declared)."""
+        points of every part without an error, and :attr:`credit`'s fraction of a part whose
+        errors are all credited mistakes; none when an error concerns the whole question (a
+        finding without a part, or of a part not declared)."""
         if report.passed:
             return float(self.points)
-        failed = report.failed_parts()
-        names = {n for n, _ in self.parts}
-        if not self.parts or not failed <= names:
+        codes: dict[str, set[str]] = {}
+        for f in report.findings:
+            if f.severity == "error":
+                codes.setdefault(f.part if self.parts else "", set()).add(f.code)
+        parts = cast("tuple[tuple[str, float], ...]", self.parts) or (("", float(self.points)),)
+        names = {n for n, _ in parts}
+        if not codes.keys() <= names:
             return 0.0
-        return float(sum(p for n, p in self.parts if n not in failed))
+        return float(sum(p * self._kept(codes.get(n, set())) for n, p in parts))
+
+    def _kept(self, codes: set[str]) -> float:
+        """The fraction of a part kept with errors of ``codes`` (1 without any)."""
+        return min((float(self.credit.get(c, 0.0)) for c in codes), default=1.0)
 
 
 def variant_number(secret: bytes, assignment: str, student: str) -> int:
