@@ -54,6 +54,21 @@ def phi_sign_variants(Phi: np.ndarray) -> list[tuple[str, np.ndarray]]:
     return out
 
 
+def _couplings(Phi: np.ndarray, flipped: np.ndarray, states: Sequence[str]) -> str:
+    """Which state enters which through the flipped entries of Φ, in the states' names
+    ("vx enters px", "b enters δp and δv")."""
+    rows, cols = np.nonzero(np.asarray(flipped) != np.asarray(Phi, dtype=float))
+    by_source: dict[int, list[int]] = {}
+    for a, b in zip(rows.tolist(), cols.tolist(), strict=True):
+        by_source.setdefault(b, []).append(a)
+    said = []
+    for b, into in by_source.items():
+        names = [states[a] for a in into]
+        said.append(f"{states[b]} enters " + (names[0] if len(names) == 1 else
+                                               ", ".join(names[:-1]) + f" and {names[-1]}"))
+    return "; ".join(said)
+
+
 def state_orders(n: int) -> list[tuple[int, ...]]:
     """Other orders a student may write the state in: the interleaved and blocked orders of
     pairs ([x, vx, y, vy] ↔ [x, y, vx, vy]) for an even n ≥ 4, else neighbours swapped."""
@@ -83,9 +98,9 @@ def structural_mistakes(Phi: np.ndarray, H: np.ndarray, states: Sequence[str], e
     for variant, flipped in phi_sign_variants(Phi):
         n_flip = variant.count("Φ")
         entries = variant if n_flip == 1 else f"{n_flip} entries ({variant})"
-        out.append(Mistake("phi-sign", f"{variant} sign flipped", text("phi-sign",
-                                                                       entries=entries),
-                           (("Phi", flipped),)))
+        # the variant is what the student reads: which state enters which, in the problem's names
+        out.append(Mistake("phi-sign", f"{variant} sign flipped: how {_couplings(Phi, flipped, states)}",
+                           text("phi-sign", entries=entries), (("Phi", flipped),)))
     H = np.asarray(H, dtype=float)
     for order in state_orders(H.shape[1]):
         used = H[:, list(order)]
@@ -134,9 +149,11 @@ class LinearCatalogue:
         if not np.allclose(m.Phi, m.Phi.T):
             out.append(Mistake("phi-transposed", "Φᵀ", self._text("phi-transposed"),
                                (("Phi", m.Phi.T),)))
-        W_state = (float(m.W[0, 0]) * np.eye(n) if k == 1 else m.W if k == n else None)
+        # Q = W put on the states as they are: W itself (k = n), W·I (k = 1), or W once per
+        # block of k states (k divides n: a 2×2 W = σ²I₂ on [px, py, vx, vy] gives σ²I₄)
+        W_state = np.kron(np.eye(n // k), m.W) if n % k == 0 else None
         if W_state is not None and not np.allclose(m.Gamma @ m.W @ m.Gamma.T, W_state):
-            used = "W·I" if k == 1 else "W"
+            used = "W·I" if k == 1 else "W" if k == n else f"diag({', '.join(['W'] * (n // k))})"
             out.append(Mistake("q-without-gamma", f"Q = {used}",
                                self._text("q-without-gamma", used=f"Q = {used}", m=k),
                                (("Gamma", np.eye(n)), ("W", W_state))))
