@@ -232,7 +232,9 @@ def _model_mistakes(model: CalibrationModel, f: dict[str, float]) -> tuple[Mista
     """One entry each: a sign, the interval, the prior's order, the schedule, the output, W."""
     T, m_p, m_v = f["T"], f["m_p"], f["m_v"]
     entries: tuple[tuple[str, str, tuple[tuple, ...]], ...] = (
-        ("phi-sign", "Φ₁₃ = +Δt²/2", (("sign13", 1.0),)),
+        # the variant is what the student reads of a phi-sign: report 000's own names
+        ("phi-sign", "Φ₁₃ = +Δt²/2: the bias enters δp as if the accelerometer read a − b",
+         (("sign13", 1.0),)),
         ("process-noise-interval", f"Φ, Γ built with T = {T:g} s, one step per GPS interval",
          (("phi_dt", T), ("gamma_dt", T), ("steps", 1))),
         ("m0-order", "M0 = diag(M_v, M_p, M_b)", (("M0", (0, 0), m_v), ("M0", (1, 1), m_p))),
@@ -260,7 +262,8 @@ def _structural_mistakes(model: CalibrationModel, f: dict[str, float]) -> tuple[
            Mistake("update-every-step", "updated at every accelerometer step",
                    MESSAGES["update-every-step"].format(**f), (("update_every_step", True),),
                    alone=True),
-           Mistake("phi-sign", "Φ₁₃ = +Δt²/2 and Φ₂₃ = +Δt", MESSAGES["phi-sign.both"],
+           Mistake("phi-sign", "Φ₁₃ = +Δt²/2 and Φ₂₃ = +Δt: the bias enters δp and δv as if "
+                   "the accelerometer read a − b", MESSAGES["phi-sign.both"],
                    (("sign13", 1.0), ("sign23", 1.0)))]
     H = np.asarray(model.H, dtype=float)
     for order in state_orders(3):

@@ -78,20 +78,36 @@ def _add(report: Report, code: str, text: str, message: str, where: str = "",
     report.add(code, message, text=text, where=where, observed=observed, expected=expected)
 
 
-#: matrix -> what the student reads about its wrong elements (no value of the right matrix).
+#: matrix -> what the student reads about its wrong elements: what the matrix means, never
+#: the right matrix, its structure or its formula (tests/check/test_findings_data.py).
 _ELEMENT_ADVICE = {
     "Φ": "Compare each with its formula in terms of Δt (state [δp, δv, b]).",
     "Γ": "Γ carries one accelerometer sample's noise w into [δp, δv, b].",
-    "H": "H = [I₂ 0]: GPS measures δp and δv, not the bias.",
-    "V": "V = diag(σ_p², σ_v²): the two GPS noises are independent.",
-    "M0": "M0 = diag(M_p, M_v, M_b): p0, v0 and b are independent a priori.",
+    "H": "The GPS measures δp and δv, not the bias.",
+    "V": "V holds the variances of the two GPS noises, position and velocity, which are "
+         "independent.",
+    "M0": "M0 holds the prior variances of δp, δv and b, which are independent a priori.",
     "Q": "Q is the noise the accelerometer adds over one step of your filter.",
 }
 
+#: The calibration's states, as the student's text names them.
+_STATES = ("δp", "δv", "b")
+
+
+def _measures(H: np.ndarray) -> str:
+    """What the student's H measures, row by row, in the states' names (their own matrix)."""
+    rows = []
+    for i, row in enumerate(np.asarray(H, dtype=float), start=1):
+        used = [s for s, h in zip(_STATES, row, strict=True) if h != 0.0]
+        what = ("nothing" if not used else used[0] if len(used) == 1
+                else "a mix of " + ", ".join(used[:-1]) + f" and {used[-1]}")
+        rows.append(f"row {i} measures {what}")
+    return f"Your H's {', '.join(rows)}; the GPS measures δp and δv, not the bias."
+
 
 def _element_finding(report: Report, code: str, name: str, actual: np.ndarray,
-                     expected: np.ndarray, formulas: dict[tuple[int, ...], str], hint: str = ""
-                     ) -> None:
+                     expected: np.ndarray, formulas: dict[tuple[int, ...], str], hint: str = "",
+                     advice: str | None = None) -> None:
     parts, labels, right, mine = [], [], {}, []
     for idx in _wrong_elements(actual, expected):
         label = _elem(name, *idx) if len(idx) == 2 else _elem(name, idx[0])
@@ -104,7 +120,8 @@ def _element_finding(report: Report, code: str, name: str, actual: np.ndarray,
         right[label] = want
     _add(report, code, "Wrong: {values}. {advice}",
          "; ".join(parts) + "." + (f" {hint}" if hint else ""), where=", ".join(labels),
-         expected=right, values=", ".join(mine), advice=_ELEMENT_ADVICE.get(name, ""))
+         expected=right, values=", ".join(mine),
+         advice=_ELEMENT_ADVICE.get(name, "") if advice is None else advice)
 
 
 def _check_phi(report: Report, Phi: np.ndarray, dt: float, model: CalibrationModel) -> None:
@@ -403,7 +420,7 @@ def _check_arrays(report: Report, arrays: dict[str, np.ndarray], step: float, st
                  step=step)
     if "H" in arrays and not _same(arrays["H"], model.H):
         _element_finding(report, "h-element", "H", arrays["H"], model.H, {},
-                         "H = [I₂ 0]: GPS measures δp and δv, not the bias.")
+                         "GPS measures δp and δv, not the bias.", _measures(arrays["H"]))
     for name, check in (("V", _check_V), ("W", _check_W), ("M0", _check_M0)):
         if name in arrays:
             if name in ("V", "M0"):

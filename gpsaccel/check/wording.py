@@ -35,9 +35,7 @@ STUDENT: dict[str, str] = {
     "dt": "The step dt passed to the check is neither the accelerometer interval nor the GPS "
           "interval of the problem.",
     "not-symmetric": "{where} is not symmetric: a covariance matrix always is.",
-    "phi-sign": "A sign of Φ is wrong: look at how each state enters the others (in report "
-                "000, how the accelerometer bias enters position and velocity: the "
-                "accelerometer reads a + b).",
+    "phi-sign": "A sign of Φ is wrong: look at how each state enters the others.",
     "update-every-step": "Your filter updates at every propagation step, reusing the last "
                          "measurement between arrivals: only the steps where a measurement "
                          "arrives update, the others only propagate.",
@@ -82,10 +80,11 @@ STUDENT: dict[str, str] = {
     "nees-per-state": "Your NEES is divided by the number of states; the NEES is eᵀ P⁻¹ e.",
     "nees-value": "Your average NEES is not the ensemble average at the last time: use the "
                   "errors and covariances of the last GPS time, over every run.",
-    "nees-bounds": "Your NEES bounds are not the two-sided 95 % bounds of the average of N runs "
-                   "(N·ε̄ is χ² with n·N degrees of freedom).",
+    "nees-bounds": "Your NEES bounds are not the two-sided 95 % bounds of the average of N runs: "
+                   "work out the distribution of the sum of the runs' NEES.",
     "nees-bounds-one-run": "Your NEES bounds are those of a single run's NEES; the average of N "
-                           "runs is much tighter (N·ε̄ is χ² with n·N degrees of freedom).",
+                           "runs is much tighter: work out the distribution of the sum of the "
+                           "runs' NEES.",
     # ---------------------------------------------------------------- a whole filter
     "p-depends-on-data": "Your P changes from run to run. In a linear Kalman filter P depends "
                          "only on Φ, Q, H, V and M0, never on the measurements.",
