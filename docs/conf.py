@@ -42,8 +42,7 @@ extensions = [
     "sphinx.ext.mathjax",
     "numpydoc",
 ]
-exclude_patterns = ["_build", "**/.ipynb_checkpoints", "benchmarks/README.md",
-                    "examples/**"]  # a course folder to copy, not pages
+exclude_patterns = ["_build", "**/.ipynb_checkpoints", "benchmarks/README.md"]
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist", "html_image"]
 myst_heading_anchors = 3
 myst_update_mathjax = False  # its settings are MathJax 3's; ours is MathJax 2 (below)

@@ -1,5 +1,5 @@
 """The instructor's kit (issue 28): the masters in the package and hidden from a box, the roster,
-the gradebook exports, the similarity report, an instructor's own problem and homework."""
+the gradebook exports, the similarity report (an instructor's own homework: tests/homework/)."""
 
 from __future__ import annotations
 
@@ -31,8 +31,6 @@ def solved(name: str) -> nbformat.NotebookNode:
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module.solved(name)
-
-COURSE = ROOT / "docs" / "examples" / "course"
 
 
 # ------------------------------------------------------------------ masters in the package
@@ -260,77 +258,6 @@ def test_similarity_from_notebooks_leaves_out_what_every_student_shares(tmp_path
     qs = questions_of("calibration")
     pairs = report(tmp_path, grades, qs, {"rate_hz": 200})
     assert [(p.question, p.a, p.b) for p in pairs] == [("q3", "student 1", "student 6")]
-
-
-# ------------------------------------------------------------------ an instructor's own
-def _course(tmp_path: Path) -> Path:
-    shutil.copytree(COURSE, tmp_path / "course")
-    return tmp_path / "course"
-
-
-def _filter_file(course: Path, target: Path, edit: tuple[str, str] | None = None) -> Path:
-    nb = nbformat.read(str(course / "cv2d" / "cv2d.ipynb"), as_version=4)
-    src = next(c.source for c in nb.cells if "%%writefile" in c.source)
-    body = src.split("\n", 1)[1].replace("    # BEGIN SOLUTION\n", "").replace(
-        "    # END SOLUTION", "")
-    if edit:
-        assert edit[0] in body
-        body = body.replace(*edit)
-    target.write_text(body)
-    return target
-
-
-def test_check_an_instructors_own_problem_from_a_file(tmp_path, capsys):
-    course = _course(tmp_path)
-    good = _filter_file(course, tmp_path / "good.py")
-    bad = _filter_file(course, tmp_path / "bad.py", ("3.0**2 * I2", "3.0 * I2"))
-    spec = f"{course / 'cv2d' / 'problems.py'}:cv2d"
-    assert main(["check", str(good), str(bad), "--problem", spec, "--runs", "3",
-                 "--seed", "1"]) == 1
-    out = capsys.readouterr().out
-    verdict = {ln.split()[0].rsplit("/", 1)[-1]: ln.split()[1] for ln in out.splitlines()
-               if ".py " in ln}
-    assert verdict == {"good.py": "yes", "bad.py": "NO"}, out
-    assert "std-as-variance" in out and "problem cv2d" in out
-    assert main(["check", str(good), "--problem", f"{course / 'cv2d' / 'problems.py'}:other"]) == 2
-    assert "defines no problem 'other'" in capsys.readouterr().err
-    assert main(["check", str(good), "--problem", spec, "--dask", "dask-local"]) == 2
-    assert "--dask" in capsys.readouterr().err
-
-
-@pytest.mark.slow
-def test_an_instructors_own_homework_is_handed_out_and_graded(tmp_path, capsys, monkeypatch):
-    """The docs' course: otter assign of a master outside the package, per-student variants,
-    grading in the sandbox with the problem of the instructor's file, the exports."""
-    monkeypatch.chdir(tmp_path)
-    _course(tmp_path)
-    (tmp_path / "secret").write_text("s" * 40)
-    (tmp_path / "roster.csv").write_text("id,name,email\nann,Ann Lee,ann@u.edu\n"
-                                         "ben,Ben Ng,ben@u.edu\n")
-    assert main(["assignment", "course/cv2d", "--out", "hw", "--roster", "roster.csv",
-                 "--secret-file", "secret", "--no-run-tests"]) == 0
-    ann = (tmp_path / "hw" / "students" / "ann")
-    assert (ann / "problems.py").is_file()  # what grader.check needs, beside the notebook
-    text = (ann / "cv2d.ipynb").read_text()
-    assert "'sigma_a'" in text and "BEGIN SOLUTION" not in text
-    assert "VARIANT = {'sigma_a': 0.5, 'sigma_p': 3.0}" not in text  # never the public numbers
-    solution = tmp_path / "hw" / "autograder" / "cv2d.ipynb"
-    for who in ("ann", "ben"):
-        (tmp_path / "class" / who).mkdir(parents=True)
-        shutil.copy(solution, tmp_path / "class" / who / "cv2d.ipynb")
-    nb = nbformat.read(str(solution), as_version=4)
-    cell = next(c for c in nb.cells if c.source.startswith("%%writefile"))
-    cell.source = cell.source.replace("3.0**2 * I2", "3.0 * I2")
-    nbformat.write(nb, str(tmp_path / "class" / "ben" / "cv2d.ipynb"))
-    assert main(["grade", "class", "--assignment", "course/cv2d", "--secret-file", "secret",
-                 "--roster", "roster.csv", "--seed", "3"]) == 0
-    out = capsys.readouterr().out
-    # both handed in the master's solution (ben with one edit): the same code, flagged
-    assert "ann" in out and "q1: ann & ben" in out and "q2: ann & ben" in out
-    rows = {r[0]: r for r in _rows(tmp_path / "class-grades" / "moodle.csv")}
-    assert rows["Ann"][-1] == "10" and rows["Ben"][-1] == "4"
-    feedback = (tmp_path / "class-grades" / "feedback" / "ben.txt").read_text()
-    assert "std-as-variance" in feedback or "variance" in feedback
 
 
 # ------------------------------------------------------------------ variants

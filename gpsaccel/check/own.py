@@ -14,6 +14,7 @@ from __future__ import annotations
 import importlib.util
 import re
 import sys
+import types
 from pathlib import Path
 
 from gpsaccel import registry
@@ -25,7 +26,7 @@ def is_file_spec(value: str) -> bool:
     return bool(sep) and path.endswith(".py")
 
 
-def load_module(path: Path, prefix: str):
+def load_module(path: Path, prefix: str = "gpsaccel_problems") -> types.ModuleType:
     """Run the instructor's file ``path`` once as a module (kept in :data:`sys.modules`, so a
     forked child and pickling find it)."""
     path = path.expanduser().resolve()

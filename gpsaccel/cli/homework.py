@@ -14,7 +14,10 @@ from gpsaccel.cli._flags import Registered, registered_assignments
 def _cmd_assignment(args: argparse.Namespace) -> int:
     """``otter assign`` a homework (the package's or a folder of the instructor's own): the
     student notebook and the autograder zip; with ``--roster`` one notebook per student carrying
-    that student's variant.  Every flag is checked before the minutes of ``otter assign``."""
+    that student's variant.  Every flag is checked before the minutes of ``otter assign``.
+    ``--example DIR`` only writes the example homework (core install: no otter needed)."""
+    if args.example is not None:
+        return _write_example(args)
     import time
 
     from tqdm.auto import tqdm
@@ -23,6 +26,12 @@ def _cmd_assignment(args: argparse.Namespace) -> int:
     from gpsaccel.assignments.grading import read_secret
     from gpsaccel.assignments.roster import read_roster
 
+    if args.name is None:
+        raise ValueError("give the homework NAME and --out DIR (or --example DIR to write the "
+                         "example of a homework of your own)")
+    if args.out is None:
+        raise ValueError(f"--out: give the folder to write ({args.name}'s student notebook and "
+                         f"autograder)")
     name = resolve(args.name)
     if args.roster is None and args.secret_file is not None:
         raise ValueError("--secret-file: the secret makes per-student variants, which need "
@@ -66,6 +75,27 @@ def _cmd_assignment(args: argparse.Namespace) -> int:
     return 0
 
 
+def _write_example(args: argparse.Namespace) -> int:
+    """``--example DIR``: the example homework written into DIR/cv2d, nothing else (any other
+    argument is an error, never ignored)."""
+    given = [flag for flag, value in (("NAME", args.name), ("--out", args.out),
+                                      ("--roster", args.roster),
+                                      ("--secret-file", args.secret_file),
+                                      ("--no-run-tests", args.no_run_tests or None))
+             if value is not None]
+    if given:
+        raise ValueError(f"--example writes the example and does nothing else: leave out "
+                         f"{', '.join(given)}")
+    from gpsaccel.homework import write_example
+
+    folder = write_example(args.example)
+    here = shlex.quote(str(folder))
+    print(f"wrote {folder}: {folder.name}.ipynb (the master), graded.py (its graded questions), "
+          f"problems.py (its problem)\nhand out:  gpsaccel assignment {here} --out hw/"
+          f"{folder.name}\ngrade with: gpsaccel grade SUBMISSIONS --assignment {here}")
+    return 0
+
+
 def _cmd_grade(args: argparse.Namespace) -> int:
     """Grade a class in the sandbox; grades.csv, feedback/, summary.csv/png in --out; with
     --roster the LMS gradebook files; the similarity report."""
@@ -102,10 +132,14 @@ def _cmd_grade(args: argparse.Namespace) -> int:
 
 def add_assignment(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("assignment", help="otter assign a homework: student notebook + autograder")
-    p.add_argument("name", choices=Registered(registered_assignments), metavar="NAME",
+    p.add_argument("name", choices=Registered(registered_assignments), metavar="NAME", nargs="?",
                    help="the homework: %(choices)s, or a folder of your own holding NAME.ipynb "
                         "(the master) and graded.py (its questions)")
-    p.add_argument("--out", type=_v.output_dir, required=True, help="folder to write (replaced)")
+    p.add_argument("--example", type=Path, default=None, metavar="DIR",
+                   help="write the example of a homework of your own into DIR/cv2d (master, "
+                        "graded.py, problems.py: docs/grading.md) and do nothing else")
+    p.add_argument("--out", type=_v.output_dir, default=None,
+                   help="folder to write (replaced); required with NAME")
     p.add_argument("--no-run-tests", action="store_true",
                    help="do not execute the solution against its tests first (faster)")
     p.add_argument("--roster", type=Path, default=None,
