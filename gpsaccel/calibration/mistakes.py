@@ -237,7 +237,7 @@ def _model_mistakes(model: CalibrationModel, f: dict[str, float]) -> tuple[Mista
          (("sign13", 1.0),)),
         ("process-noise-interval", f"Φ, Γ built with T = {T:g} s, one step per GPS interval",
          (("phi_dt", T), ("gamma_dt", T), ("steps", 1))),
-        ("m0-order", "M0 = diag(M_v, M_p, M_b)", (("M0", (0, 0), m_v), ("M0", (1, 1), m_p))),
+        ("m0-order", "M0 with δp and δv swapped", (("M0", (0, 0), m_v), ("M0", (1, 1), m_p))),
         ("first-update-skipped", "no update at t = 0", (("skip_first", True),)),
         ("first-update-skipped.covariance", "P not updated at t = 0",
          (("skip_first", "covariance"),)),

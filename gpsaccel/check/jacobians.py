@@ -255,14 +255,15 @@ def matrix_finding(report: Report, code: str, name: str, actual: np.ndarray,
         right[f"{_elem(display, *idx)}{where}"] = want
     head = f"At {labels[s]} (x = {np.round(X[s], 4).tolist()}):"
     more = len(elems) - MAX_LISTED
-    tail = ([f"And {more} more elements."] if more > 0 else []) + ([unit_hint] if unit_hint
-                                                                   else [])
+    tail = [f"And {more} more elements."] if more > 0 else []
 
-    def text(items_by_cause: dict[str, list[str]]) -> str:
+    def text(items_by_cause: dict[str, list[str]], hint: str = "") -> str:
         return " ".join([head] + ["; ".join(items) + (f". Likely cause: {c}." if c else ".")
-                                  for c, items in items_by_cause.items()] + tail)
+                                  for c, items in items_by_cause.items()] + tail
+                        + ([hint] if hint else []))
 
-    report.add(code, text(groups), text="{said}", where=display, part=display,
+    # the unit hint states the right form (F = I + ΔT·A): the instructor's only
+    report.add(code, text(groups, unit_hint), text="{said}", where=display, part=display,
                observed={"said": text(mine)}, expected=right)
     return False
 

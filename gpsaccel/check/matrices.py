@@ -260,8 +260,8 @@ def _check_M0(report: Report, M0: np.ndarray, model: CalibrationModel) -> None:
     swapped = want.copy()
     swapped[[0, 1], [0, 1]] = want[[1, 0], [1, 0]]
     if _same(M0, swapped):
-        _add(report, "m0-order", "M0 = diag({d}) has position and velocity swapped: the state "
-             "is [δp, δv, b] (report 001 writes it swapped).", f"M0 has position and velocity "
+        _add(report, "m0-order", "Your M0's diagonal ({d}) has position and velocity swapped: "
+             "the state is [δp, δv, b] (report 001 writes it swapped).", f"M0 has position and velocity "
              f"swapped: M0 = diag({want[0, 0]:g} m², {want[1, 1]:g} (m/s)², {want[2, 2]:g} "
              f"(m/s²)²).", where="M0", expected={"M0": np.diag(want).tolist()},
              d=", ".join(f"{M0[k, k]:g}" for k in range(3)))

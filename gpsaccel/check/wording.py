@@ -135,7 +135,7 @@ STUDENT: dict[str, str] = {
     "no-angle-wrap": "The bearing residuals are not wrapped to [−π, π).",
     "no-state-wrap": "Your heading estimates leave [−π, π): wrap them after each update and "
                      "prediction.",
-    "dt-linearization": "Your DT transition F is not I + ΔT·A.",
+    "dt-linearization": "{where} is not the course's DT linearization of the model.",
     "process-noise": "Your prediction does not add Q as given (M = F P Fᵀ + Q).",
     "euler-propagation": "Your mean is propagated with one Euler step per sample; integrate the "
                          "motion exactly over each step.",

@@ -153,7 +153,8 @@ class LinearCatalogue:
         # block of k states (k divides n: a 2×2 W = σ²I₂ on [px, py, vx, vy] gives σ²I₄)
         W_state = np.kron(np.eye(n // k), m.W) if n % k == 0 else None
         if W_state is not None and not np.allclose(m.Gamma @ m.W @ m.Gamma.T, W_state):
-            used = "W·I" if k == 1 else "W" if k == n else f"diag({', '.join(['W'] * (n // k))})"
+            blocks = [f"[{', '.join(m.states[i:i + k])}]" for i in range(0, n, k)]
+            used = "W·I" if k == 1 else "W" if k == n else "W on " + " and on ".join(blocks)
             out.append(Mistake("q-without-gamma", f"Q = {used}",
                                self._text("q-without-gamma", used=f"Q = {used}", m=k),
                                (("Gamma", np.eye(n)), ("W", W_state))))

@@ -152,3 +152,222 @@ def test_partial_parts_of_a_report():
     assert r.failed_parts() == {"average_nees"} and not r.passed
     r.add("not-run", text="y")
     assert r.failed_parts() == {"average_nees", ""}
+
+
+# ============================================ no expected matrix, structure or formula (item 6)
+# The canary above proves that nothing of a finding's ``expected`` field reaches a student. The
+# feedback can still state the answer in its own words: "H = [I₂ 0]: GPS measures δp and δv",
+# "N·ε̄ ~ χ²(3·N)". Below, every wording table and catalogue, and the real checks of every matrix
+# question on wrong answers (each element negated, scaled, transposed, σ for σ², the catalogue's
+# mistakes ...), are rendered for the student; no student text may hold
+#
+# * a matrix's block structure or a covariance's formula, in any notation the package writes
+#   (:data:`STRUCTURE`: I₂, 0₂ₓ₁, [I₂ 0], diag(...)), nor a χ² with its degrees of freedom;
+# * an expected matrix of the question, in any notation (:func:`notations`: numpy's print, lists,
+#   rows, diag(...) of its values), nor an expected formula the finding declares (Φ₁₃'s "−Δt²/2"),
+#   nor the DT model's right forms (F = I + ΔT·A ...) in a DT question's feedback.
+
+import re  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+#: A matrix's structure (an identity or zero block: I₂, 0₂ₓ₁; a block row [I₂ 0]; a covariance's
+#: diag(...)) or a χ² with its degrees of freedom (χ²(3·N), χ²₃, "... degrees of freedom").
+STRUCTURE = re.compile(r"(?<![A-Za-z_])[I0][₀-₉]|\[\s*I\b|\bdiag\(|χ²\s*[(_{₀-₉]|chi2\(|"
+                       r"degrees of freedom")
+
+
+def test_the_structure_rule_sees_what_it_must():
+    for leak in ("H = [I₂ 0]: GPS measures δp and δv", "N·ε̄ ~ χ²(3·N)", "Q = σ²I₄",
+                 "Γ = [0₂ₓ₁; I]", "V = diag(σ_p², σ_v²)", "χ² with n·N degrees of freedom",
+                 "[I, 0]"):
+        assert STRUCTURE.search(leak), leak
+    for fine in ("Your H's row 1 measures δp; the GPS measures δp and δv, not the bias.",
+                 "state [δp, δv, b]", "Φ₁₃ = 1.25e-05", "M0₁₁", "95 % χ² bounds", "x̄₀ = Φ x0",
+                 "Φ₁₀ and Φ₂₀", "V[0,0] = 3", "eᵀ P⁻¹ e"):
+        assert not STRUCTURE.search(fine), fine
+
+
+def notations(value: object) -> set[str]:
+    """The ways the package (and numpy) writes a matrix of two or more numbers."""
+    E = np.asarray(value, dtype=float)
+    if E.size < 2:
+        return set()
+    out = {np.array2string(E), str(E), str(E.tolist()), np.array2string(E, precision=6)}
+    for row in np.atleast_2d(E):
+        if row.size > 1 and np.any(row != row[0]):  # "[0, 0]" says nothing of a matrix
+            out |= {str(row.tolist()), "[" + ", ".join(f"{v:g}" for v in row) + "]",
+                    "[" + " ".join(f"{v:g}" for v in row) + "]"}
+    if E.ndim == 2 and E.shape[0] == E.shape[1]:
+        out.add("diag(" + ", ".join(f"{v:g}" for v in np.diag(E)) + ")")
+    return out
+
+
+def _formulas(value: object) -> set[str]:
+    """The formulas an expected field holds ("−Δt²/2 = -1.25e-05" -> "−Δt²/2")."""
+    if isinstance(value, str):
+        head = value.split(" = ")[0].strip()
+        return {head} if re.search(r"[^\d\s.,eE+\-−()]", head) and len(head) >= 3 else set()
+    if isinstance(value, (list, tuple)):
+        return set().union(*(_formulas(v) for v in value)) if value else set()
+    return set()
+
+
+def leaks(report: Report, answers: tuple[str, ...] = ()) -> list[tuple[str, str, str]]:
+    """(output, what, text) for every student output of ``report`` that states its structure,
+    an expected matrix or formula of its findings, or one of ``answers``."""
+    expected: set[str] = set(answers)
+    for f in report.findings:
+        for v in f.expected.values():
+            expected |= _formulas(v)
+            if not isinstance(v, str):
+                try:
+                    expected |= notations(v)
+                except (TypeError, ValueError):
+                    pass
+    out = []
+    for where, text in _student_outputs(report).items():
+        for m in STRUCTURE.finditer(text):
+            out.append((where, m.group(), text))
+        out += [(where, e, text) for e in expected if e and e in text]
+    return out
+
+
+def _no_leaks(reports: list[tuple[str, Report, tuple[str, ...]]]) -> None:
+    found = [(case, *leak) for case, report, answers in reports
+             for leak in leaks(report, answers) if not report.passed]
+    assert not found, "\n".join(f"{case} [{where}]: {what!r} in {text[:300]!r}"
+                                for case, where, what, text in found[:8])
+
+
+def _wrong(E: np.ndarray) -> list[tuple[str, np.ndarray]]:
+    """Wrong answers for the matrix E, as students write them."""
+    E = np.atleast_2d(np.asarray(E, dtype=float))
+    out = [("×1.7", 1.7 * E), ("negated", -E), ("zeros", np.zeros_like(E)),
+           ("σ for σ²", np.sqrt(np.abs(E))), ("squared", E**2)]
+    if E.shape[0] == E.shape[1]:
+        out += [("transposed", E.T), ("identity", np.eye(E.shape[0]))]
+    if E.shape[0] > 1:
+        out.append(("rows swapped", E[::-1]))
+    for idx in zip(*np.nonzero(E), strict=True):
+        one = E.copy()
+        one[idx] = -one[idx]
+        out.append((f"{idx} negated", one))
+        one = E.copy()
+        one[idx] += 1.0
+        out.append((f"{idx} + 1", one))
+    return [(k, v) for k, v in out if not np.array_equal(v, E)]
+
+
+def _calibration_reports() -> list[tuple[str, Report, tuple[str, ...]]]:
+    from gpsaccel.calibration.model import CalibrationModel, gamma, phi
+    from gpsaccel.check import model_matrices
+    from gpsaccel.kalman.update import epoch_transition
+
+    m = CalibrationModel()
+    one = gamma(m.dt) @ gamma(m.dt).T * m.W
+    out = []
+    for dt, Q in ((m.dt, one), (m.gps_interval, epoch_transition(phi(m.dt), one, m.gps_every)[1])):
+        right = {"Phi": phi(dt), "Gamma": gamma(dt), "H": m.H, "V": m.V, "W": m.W, "M0": m.M0,
+                 "Q": Q}
+        for name, E in right.items():
+            wrongs = _wrong(E) + [("another step", {"Phi": phi, "Gamma": gamma}.get(
+                name, lambda s: E)(m.gps_interval + m.dt - dt))]
+            if name == "M0":
+                wrongs.append(("swapped", np.diag(np.diag(E)[[1, 0, 2]])))
+            for label, W in wrongs:
+                report = model_matrices(**{**right, name: W}, dt=dt, model=m)
+                out.append((f"calibration dt={dt:g} {name} {label}", report, ()))
+    return out
+
+
+def _linear_reports() -> list[tuple[str, Report, tuple[str, ...]]]:
+    from gpsaccel import homework as hw
+    from gpsaccel.assignments.linear import matrices_answer
+    from gpsaccel.assignments.tracker import variant_model
+    from gpsaccel.kalman.linear_model import LinearIngredients
+
+    I2, O2 = np.eye(2), np.zeros((2, 2))
+    cv2d = hw.LinearModel(Phi=np.block([[I2, 0.1 * I2], [O2, I2]]),
+                          Gamma=np.vstack([0.005 * I2, 0.1 * I2]), W=0.25 * I2,
+                          H=np.hstack([I2, O2]), V=9.0 * I2, M0=np.diag([100.0, 100, 1, 1]),
+                          x0=np.zeros(4), every=10, n_epochs=31, dt=0.1,
+                          states=("px", "py", "vx", "vy"))
+    out = []
+    for label, model in (("tracker", variant_model(20, 0.5, 3.0)), ("cv2d", cv2d)):
+        from gpsaccel.assignments.linear import MATRICES, matrices
+
+        right = {k: np.array(v) for k, v in matrices(LinearIngredients.correct(model)).items()
+                 if k in MATRICES}
+        for name, E in right.items():
+            for case, W in _wrong(E) + [("σ²I", model.W[0, 0] * np.eye(model.n))]:
+                if W.shape == E.shape:
+                    out.append((f"{label} {name} {case}",
+                                matrices_answer(model, {**right, name: W}), ()))
+    return out
+
+
+def _nees_reports() -> list[tuple[str, Report, tuple[str, ...]]]:
+    from scipy import stats
+
+    from gpsaccel.assignments.calibration import nees_answer, nees_data, nees_reference
+
+    N = 30
+    x_true, x_hat, P = nees_data(np.random.default_rng(4), N)
+    eps, (lo, hi) = nees_reference(x_true, x_hat, P)
+    out = []
+    for label, value, bounds in (
+            ("one run's bounds", eps, tuple(stats.chi2.ppf([0.025, 0.975], 3))),
+            ("N degrees of freedom", eps, tuple(stats.chi2.ppf([0.025, 0.975], N) / N)),
+            ("other bounds", eps, (lo * 0.9, hi * 1.1)), ("sum", N * eps, (lo, hi)),
+            ("per state", eps / 3, (lo, hi)), ("not two numbers", eps, (lo,))):
+        out.append((f"nees {label}", nees_answer(value, bounds, N, x_true, x_hat, P), ()))
+    return out
+
+
+def _dt_model_reports() -> list[tuple[str, Report, tuple[str, ...]]]:
+    from gpsaccel.check import dt_model
+    from gpsaccel.check.dt_model import DT_RIGHT
+    from gpsaccel.check.jacobians import analytic
+    from gpsaccel.coop.model import CoopModel
+
+    m = CoopModel()
+    X, U = m.x0[None], m.u0[None]
+    A, B, C = (analytic(k, X, U, m)[0] for k in "ABC")
+    right = {"F": np.eye(6) + m.dt * A, "G": m.dt * B, "H": C}
+    slips = {"F": [("A", A), ("ΔT·A", m.dt * A), ("I + A", np.eye(6) + A)],
+             "G": [("B", B)], "H": [("ΔT·C", m.dt * C)]}
+    answers = tuple(v for k, v in DT_RIGHT.items() if k in right)
+    out = []
+    for name, E in right.items():
+        for label, W in slips[name] + _wrong(E)[:8]:
+            out.append((f"dt_model {name} {label}", dt_model(**{**right, name: W}, x=m.x0,
+                                                             u=m.u0), answers))
+    return out
+
+
+@pytest.mark.parametrize("source", ["calibration", "linear", "nees", "dt_model"])
+def test_no_check_of_a_matrix_or_a_formula_states_the_answer(source):
+    reports = {"calibration": _calibration_reports, "linear": _linear_reports,
+               "nees": _nees_reports, "dt_model": _dt_model_reports}[source]()
+    assert sum(not r.passed for _, r, _ in reports) >= 6  # the test sees failing checks
+    _no_leaks(reports)
+
+
+def test_no_wording_table_or_catalogue_states_a_structure():
+    from gpsaccel.check.matrices import _ELEMENT_ADVICE
+    from gpsaccel.check.report import ARRAY_TEXT
+    from gpsaccel.sandbox.outcomes import OUTCOMES
+
+    tables = {"STUDENT": STUDENT, "FINDINGS": FINDINGS, "box MESSAGES": findings.MESSAGES,
+              "ARRAY_TEXT": ARRAY_TEXT, "matrices advice": _ELEMENT_ADVICE,
+              "OUTCOMES": {k: o.finding for k, o in OUTCOMES.items()}}
+    bad = [(table, code, m.group()) for table, words in tables.items()
+           for code, text in words.items() for m in STRUCTURE.finditer(text)]
+    for problem in _problems():
+        for m in _catalogue(problem):
+            report = Report(problem.name)
+            findings.mistake_finding(report, m, "kalman_filter: ")
+            text = report.findings[-1].for_student().message
+            bad += [(problem.name, str(m), hit.group()) for hit in STRUCTURE.finditer(text)]
+    assert not bad, bad

@@ -122,7 +122,7 @@ def test_q_without_gamma_is_recognised_for_a_noise_of_fewer_components_than_stat
     entries = [m for m in LinearCatalogue(model).covariance_mistakes()
                if m.code == "q-without-gamma"]
     (entry,) = entries
-    assert entry.variant == "Q = diag(W, W)"
+    assert entry.variant == "Q = W on [px, py] and on [vx, vy]"  # the problem's own names
     g = LinearIngredients.correct(model)
     for change in entry.changes:
         g = g.__class__(**{**vars(g), change[0]: change[1]})
