@@ -3,7 +3,8 @@
 Floors, bottom up: infrastructure (``_validation``, ``_blas``, ``_atomic``, ``_interrupt``,
 ``executors``) ->
 ``sandbox`` -> ``kalman`` -> the systems (``calibration``, ``ship``, ``coop``, side by side) ->
-``check`` (-> ``assignments``, the homework, which only ``cli`` imports) -> ``plots`` ->
+``check`` (-> ``assignments``, the homework, -> ``homework``, the public API of an instructor's
+own, which only ``cli`` imports) -> ``plots`` ->
 ``figures`` -> ``lessons``, ``cli``.  The sandbox (``gpsaccel/sandbox/``) is a layer of its own
 below ``check``: it imports nothing of gpsaccel but the infrastructure, and nothing outside it uses
 a private name of it (a module or an attribute whose name starts with ``_``: ``sb._prctl``,
@@ -38,7 +39,11 @@ ALLOWED = {
     "exercises": INFRA,
     "lessons": INFRA | {"exercises"},
     "assignments": INFRA | {"kalman", "sandbox", "check"} | SYSTEMS,
-    "cli": INFRA | {"kalman", "plots", "figures", "lessons", "sandbox", "check", "assignments"} | SYSTEMS,
+    # the instructor's public API of a homework of their own (and its shipped example), on
+    # check/ and assignments/; only the command (``--example``) imports it
+    "homework": INFRA | {"kalman", "sandbox", "check", "assignments"} | SYSTEMS,
+    "cli": INFRA | {"kalman", "plots", "figures", "lessons", "sandbox", "check", "assignments",
+                    "homework"} | SYSTEMS,
     "top": INFRA | {"kalman"} | SYSTEMS,
 }
 

@@ -66,6 +66,8 @@ def test_import_gpsaccel_loads_nothing_heavy_not_even_numpy():
     "from gpsaccel import check",
     "import gpsaccel.check.report",
     "from gpsaccel import sandbox",
+    # what an instructor's graded.py imports first (the grader loads it in the class's parent)
+    "from gpsaccel import homework",
 ], ids=lambda code: code.replace(" ", "_")[-60:])
 def test_the_front_door_and_the_first_names_load_no_heavy_module(code):
     assert set(loaded_after(f"try:\n    {code}\nexcept SystemExit:\n    pass")) <= {"numpy"}

@@ -220,6 +220,8 @@ WHEEL_STEPS: list[tuple[str, list[str], str]] = [
     ("copy the lessons", ["lessons", "--copy", "course"], "notebooks into course"),
     ("check a homework file", ["check", str(ROOT / "tests/submissions/correct_joseph.py"),
                                "--runs", "2", "--sandbox", "basic"], "1 submissions"),
+    # the example of a homework of one's own, from the core install (no otter needed for it)
+    ("write the example homework", ["assignment", "--example", "own"], "graded.py"),
 ]
 
 
@@ -319,7 +321,7 @@ def test_the_wheel_in_a_fresh_environment_outside_the_repository(tmp_path):
                             ".iterdir()))"], cwd=work, env=env, capture_output=True, text=True,
                            check=True).stdout.split()
     # the package's own homework (an instructor's folder registered by another test in this
-    # process, tests/test_kit.py's cv2d, is not in the package)
+    # process, tests/homework/'s cv2d example, is not in the package)
     packaged = sorted(n for n in registry.assignments()
                       if registry.assignment(n).module.startswith("gpsaccel.assignments."))
     assert sorted(files) == packaged
@@ -365,3 +367,33 @@ def test_the_wheel_in_a_fresh_environment_outside_the_repository(tmp_path):
         assert (grades / f).is_file(), f
     assert "Alice Smith,,1000,,,10" in (grades / "canvas.csv").read_text()
     assert "Alice Smith & Bob Jones" in out["grade a class"]  # the copy is flagged
+    _own_homework(venv, env, work / "own" / "cv2d", instructor)
+
+
+def _own_homework(venv: Path, env: dict, course: Path, instructor: Path) -> None:
+    """An instructor's own homework from the example the wheel ships (written out by the core
+    install above), nothing else: handed out, and a class of two graded, one with V given as σ:
+    that costs half of V's part (the example's credit), not the whole question."""
+    import nbformat
+
+    gpsaccel_bin = str(venv / "bin" / "gpsaccel")
+    proc = subprocess.run([gpsaccel_bin, "assignment", str(course), "--out", "dist/cv2d",
+                           "--no-run-tests"], cwd=instructor, env=env, capture_output=True,
+                          text=True, timeout=400)
+    assert proc.returncode == 0 and "cv2d-gradescope.zip" in proc.stdout, proc.stderr
+    solution = nbformat.read(str(instructor / "dist/cv2d/autograder/cv2d.ipynb"), as_version=4)
+    for who, edit in (("Ann", None), ("Ben", ('V = VARIANT["sigma_p"] ** 2 * I2',
+                                              'V = VARIANT["sigma_p"] * I2'))):
+        nb = nbformat.from_dict(solution)
+        if edit:
+            (cell,) = [c for c in nb.cells if c.cell_type == "code" and edit[0] in c.source]
+            cell.source = cell.source.replace(*edit)
+        (instructor / "own-class" / who).mkdir(parents=True)
+        nbformat.write(nb, str(instructor / "own-class" / who / "cv2d.ipynb"))
+    proc = subprocess.run([gpsaccel_bin, "grade", "own-class", "--assignment", str(course),
+                           "--no-similarity"], cwd=instructor, env=env, capture_output=True,
+                          text=True, timeout=400)
+    assert proc.returncode == 0, proc.stderr
+    scores = {line.split()[0]: line.split()[1] for line in proc.stdout.splitlines()
+              if line.split()[:1] in (["Ann"], ["Ben"])}
+    assert scores == {"Ann": "10", "Ben": "9.75"}, proc.stdout

@@ -17,7 +17,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def _packaged_assignments() -> list[str]:
-    """The package's own homework: an instructor's folder (tests/test_kit.py's cv2d) registers
+    """The package's own homework: an instructor's folder (the cv2d example of tests/homework/) registers
     one more in the same process, which is not in the package."""
     return sorted(n for n in registry.assignments()
                   if registry.assignment(n).module.startswith("gpsaccel.assignments."))

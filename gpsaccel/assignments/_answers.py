@@ -17,7 +17,15 @@ from gpsaccel.check.report import Report, as_array
 def call(report: Report, what: str, func: object, *args: object, part: str = "") -> Any:
     """``func(*args)`` (whatever the student's function returned), or None with a finding (not
     defined, not callable, raised, returned nothing) about ``what`` (of ``part``: partial
-    credit)."""
+    credit).
+
+    Examples
+    --------
+    >>> from gpsaccel.check.report import Report
+    >>> report = Report("q")
+    >>> call(report, "f(x)", lambda x: 1 / x, 0) is None, report.codes
+    (True, ['exception'])
+    """
     if func is None or func is Ellipsis:
         report.add("not-defined", text="{where} is not defined yet (or still `...`).",
                    where=what, part=part)

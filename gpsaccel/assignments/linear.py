@@ -71,7 +71,16 @@ def compare(report: Report, name: str, given: np.ndarray, expected: np.ndarray, 
     that differ in course notation (Φ₁₂, V₁₁) and how many, never the value they should have
     (``expected`` is the instructor's only), then ``advice``; ``reference`` says what it was
     compared with.  A ``given`` of another shape, or not numbers, is a finding ``shape`` or
-    ``not-a-matrix`` of ``part`` (the student's; the shape asked for is the question's)."""
+    ``not-a-matrix`` of ``part`` (the student's; the shape asked for is the question's).
+
+    Examples
+    --------
+    >>> report = Report("q")
+    >>> compare(report, "F", np.array([[1.0, 0.2], [0.0, 1.0]]), np.array([[1.0, 0.1], [0, 1]]))
+    False
+    >>> print(report.findings[0].for_student().message)
+    F: F₁₂ differs from the reference (wrong at 1 of 4 elements).
+    """
     expected = np.asarray(expected, dtype=float)
     found = Report(report.subject)
     array_ = array(found, name, given, expected.shape)
@@ -119,7 +128,16 @@ def matrices_answer(model: LinearModel, given: Mapping[str, object],
                     title: str = "model matrices", names: Sequence[str] = MATRICES) -> Report:
     """Check the student's matrices ``names`` (of :data:`MATRICES` and ``W``; name -> value in
     ``given``) against ``model``; never raises.  Every finding names its matrix as its part
-    (:class:`~gpsaccel.assignments.questions.Question`'s partial credit)."""
+    (:class:`~gpsaccel.assignments.questions.Question`'s partial credit).
+
+    Examples
+    --------
+    ::
+
+        report = matrices_answer(model, {"Phi": Phi, "Gamma": Gamma, "Q": Q, "H": H, "V": V,
+                                         "M0": M0})
+        print(report)   # e.g. "std-as-variance: V: A standard deviation is used where ..."
+    """
     unknown = sorted(set(names) - set(MATRICES) - {"W"})
     if unknown:
         raise ValueError(f"names must be among {', '.join(MATRICES)}, W; got {unknown}")

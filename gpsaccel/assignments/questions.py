@@ -34,7 +34,13 @@ from gpsaccel.check.report import Report
 @dataclass(frozen=True)
 class Draw:
     """The randomness of one question for one student: ``seed`` (fresh data; never shown to the
-    student) and ``variant`` (the student's numbers; shown to them in their notebook)."""
+    student) and ``variant`` (the student's numbers; shown to them in their notebook).
+
+    Examples
+    --------
+    >>> draw = Draw(seed=7, variant={"sigma_a": 0.3})
+    >>> x = draw.rng().normal(size=4)     # the same numbers for the box's read and the grade
+    """
 
     seed: int
     variant: dict = field(default_factory=dict)
@@ -95,6 +101,13 @@ def replay(reads: list[Read], answers: list[Answer], name: str, pick: int | None
 
     None when the student did not define it (the checkers report that as not defined).  A call
     with arguments no read had is a bug of the grader: RuntimeError.
+
+    Examples
+    --------
+    In a question's grade, with the reads it declared::
+
+        predict = replay(reads, answers, "predict")
+        out = call(report, "predict(x, P)", predict, x, P)   # None, with a finding, if it failed
     """
     mine = [(r, a) for r, a in zip(reads, answers, strict=True) if r.name == name]
     if mine and all(a.status == "not-defined" for _, a in mine):
@@ -155,8 +168,15 @@ def bounded(shape: tuple[int, ...], declared: tuple[int, ...]) -> tuple[int, ...
 
 
 def value(report: Report, name: str, a: Answer, part: str = "") -> np.ndarray | None:
-    """The variable ``name`` the box read, or None with a finding (not defined, wrong shape),
-    of ``part`` (partial credit)."""
+    """The variable ``name`` the box read, or None with a finding (not defined, wrong shape,
+    not numbers) of ``part`` (partial credit).
+
+    Examples
+    --------
+    In a question's grade, one answer per read::
+
+        V = value(report, "V", answers[0], part="V")   # None: the finding is in the report
+    """
     if a.status == "ok":
         return a.values[0]
     if a.status in ("not-defined", "not-run"):
@@ -191,6 +211,14 @@ class Question:
     file : a question graded from the file the notebook writes with ``%%writefile FILE`` (its
         text, read from the notebook, runs in a box of its own without gpsaccel); then
         ``grade_file(path, draw, timeout)`` gives the report.
+
+    Examples
+    --------
+    >>> q = Question("q3", 2, parts={"x_bar": 1, "M": 1}, credit={"process-noise-interval": 0.5})
+    >>> report = Report("q3")
+    >>> _ = report.add("process-noise-interval", text="M adds one step's noise.", part="M")
+    >>> q.score(report)                   # x̄ right (1), M a credited slip (0.5 · 1)
+    1.5
     """
 
     name: str

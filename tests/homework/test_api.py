@@ -215,3 +215,12 @@ def test_the_example_is_in_the_package_and_written_out_once(tmp_path):
 def test_the_docstring_examples_run():
     result = doctest.testmod(hw, extraglobs={"hw": hw}, optionflags=doctest.ELLIPSIS)
     assert result.failed == 0 and result.attempted >= 2
+
+
+def test_the_docstring_examples_of_what_it_re_exports_run():
+    import importlib
+
+    for name in ("questions", "_answers", "linear"):  # assignments.questions is also a function
+        module = importlib.import_module(f"gpsaccel.assignments.{name}")
+        result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
+        assert result.failed == 0 and result.attempted >= 1, module.__name__
