@@ -2,6 +2,10 @@
 
 Each helper raises :class:`ValueError` whose message starts with the argument's name and says what
 was expected, so a student reading a traceback knows which argument to fix.
+
+numpy is imported by the three helpers that need it, not here: the command's parser uses the
+``flag_*`` converters below, and its help and argument errors must not wait for numpy
+(tests/test_lazy_imports.py).
 """
 
 from __future__ import annotations
@@ -9,9 +13,10 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterable, Mapping
 from numbers import Integral, Real
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
+if TYPE_CHECKING:
+    import numpy as np
 
 #: Relative tolerance used when a duration must be a whole number of intervals (30 % 0.2 != 0 in
 #: floating point, but 30 / 0.2 is 150 to within a few ulps).
@@ -82,6 +87,8 @@ def finite_array(name: str, value: object, shape: tuple[int | None, ...] | None 
 
     With ``allow_nan`` a NaN is accepted (it means "not measured"); +-inf never is.
     """
+    import numpy as np
+
     _real(name, value)
     try:
         arr = np.array(value, dtype=float)
@@ -104,6 +111,8 @@ def finite_array(name: str, value: object, shape: tuple[int | None, ...] | None 
 def _real(name: str, value: object) -> None:
     """ValueError if ``value`` holds complex numbers (numpy would drop the imaginary part with
     only a warning)."""
+    import numpy as np
+
     try:
         arr = np.asarray(value)
     except (TypeError, ValueError):
@@ -119,6 +128,8 @@ def spd_matrix(name: str, value: object, n: int | None = None, rtol: float = 1e-
     A scalar is accepted for n == 1.  Symmetry is checked to ``rtol`` of the largest element;
     positive definiteness by a Cholesky factorisation.
     """
+    import numpy as np
+
     _real(name, value)
     arr = np.array(value, dtype=float)
     if arr.ndim == 0 and n in (None, 1):

@@ -17,7 +17,8 @@ The same for the homework (:func:`add_assignment` in ``gpsaccel/assignments/NAME
 grader) and the reports (:func:`add_report` in ``gpsaccel/figures/rNNN.py``, listed in
 :data:`REPORT_PROVIDERS`: ``gpsaccel figures``, the lessons' index of which lesson shows which
 figure, the tests).  Each kind is loaded on its own, so asking for the problems does not import
-matplotlib.
+matplotlib.  The command's help and choices list the problems and the homework without importing
+any (:func:`problem_titles`, :func:`assignment_names`): its answer must not wait for numpy.
 """
 
 from __future__ import annotations
@@ -26,9 +27,21 @@ import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
 
-#: Modules that register problems when imported (a new problem module: one line here).
+#: Modules that register problems when imported (a new problem module: one line here, and its
+#: title in PROBLEM_TITLES).
 PROVIDERS = ("gpsaccel.check.problems.calibration", "gpsaccel.check.problems.coop",
              "gpsaccel.check.problems.ship", "gpsaccel.check.problems.tracker")
+
+#: The titles of the package's own problems, each named as its module in PROVIDERS, for what lists
+#: them before any is imported: the command's help and ``--problem`` choices, which must not wait
+#: for numpy and the checker.  Each module registers its problem with the same title
+#: (tests/test_registry.py holds the two equal).
+PROBLEM_TITLES = {
+    "calibration": "Report 000: GPS/accelerometer calibration filter (3 states, 200 Hz + 5 Hz GPS)",
+    "coop": "Report 002: cooperative localization, EKF and LKF (6 states, 5 measurements)",
+    "ship": "Report 004: the ship's multirate GPS/IMU filter (9 states)",
+    "tracker": "Tracker: constant velocity, 10 Hz propagation, 2 Hz position fixes (2 states)",
+}
 
 
 @dataclass(frozen=True)
@@ -131,6 +144,22 @@ def problem(name: str) -> object:
     return _INSTANCES[name]
 
 
+def problem_titles() -> dict[str, str]:
+    """Name -> title of every problem, importing none (what the command's help shows): the
+    package's own (:data:`PROBLEM_TITLES`), then those registered in this process (an
+    instructor's); an entry registered here gives its own title."""
+    titles = dict(PROBLEM_TITLES)
+    titles.update((e.name, e.title) for e in _PROBLEMS.values())
+    return titles
+
+
+def is_file_spec(value: str) -> bool:
+    """Whether ``value`` names a problem in a file of one's own (``path/to/file.py:NAME``) rather
+    than a registered one (:func:`gpsaccel.check.own.load_problem` runs the file)."""
+    path, sep, _ = value.rpartition(":")
+    return bool(sep) and path.endswith(".py")
+
+
 def systems() -> tuple[str, ...]:
     """The systems that registered problems check, in order."""
     _load()
@@ -196,6 +225,14 @@ def add_assignment(name: str, module: str, *, system: str = "", problem: str = "
 def assignments() -> tuple[str, ...]:
     """The names of every registered homework, in :data:`ASSIGNMENT_PROVIDERS`' order."""
     return _ASSIGNMENTS.names()
+
+
+def assignment_names() -> tuple[str, ...]:
+    """The names of every homework, importing none (the command's choices): the package's own,
+    each named as its module in :data:`ASSIGNMENT_PROVIDERS`, then any registered in this
+    process (an instructor's folder)."""
+    own = tuple(module.rpartition(".")[2] for module in ASSIGNMENT_PROVIDERS)
+    return own + tuple(name for name in _ASSIGNMENTS.entries if name not in own)
 
 
 def assignment(name: str) -> AssignmentEntry:

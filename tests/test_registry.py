@@ -35,6 +35,29 @@ def test_every_homework_with_a_master_is_registered_and_packaged():
         assert entry.module == f"gpsaccel.assignments.{name}"
 
 
+def test_what_the_command_lists_without_importing_is_what_the_modules_register():
+    """The help and choices read the problems' titles and the homework's names without importing
+    a module (registry.problem_titles, registry.assignment_names): they must be what the modules
+    register when imported, in the same order."""
+    packaged = tuple(m.rpartition(".")[2] for m in registry.PROVIDERS)
+    assert tuple(registry.PROBLEM_TITLES) == packaged
+    assert registry.problems()[:len(packaged)] == packaged
+    for name, title in registry.PROBLEM_TITLES.items():
+        assert registry.entry(name).title == title, name
+    assert tuple(registry.problem_titles())[:len(packaged)] == packaged
+    assert set(registry.problem_titles()) == set(registry.problems())
+    assert registry.assignment_names() == registry.assignments()
+    assert tuple(_packaged_assignments()) == tuple(sorted(
+        m.rpartition(".")[2] for m in registry.ASSIGNMENT_PROVIDERS))
+
+
+def test_a_problem_in_a_file_is_told_from_a_registered_name():
+    assert registry.is_file_spec("course/problems.py:cv2d")
+    assert registry.is_file_spec("p.py:")  # a file with no name: load_problem names what is missing
+    for name in ("calibration", "problems.txt:cv2d", "cv2d", "a:b", "p.py"):
+        assert not registry.is_file_spec(name), name
+
+
 def test_every_report_is_registered_by_its_figure_module_in_reading_order():
     assert registry.reports() == tuple(m.rsplit(".r", 1)[1] for m in registry.REPORT_PROVIDERS)
     for number in registry.reports():

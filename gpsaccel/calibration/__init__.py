@@ -3,7 +3,8 @@
 * :mod:`~gpsaccel.calibration.model`: ``CalibrationModel`` (Φ, Γ, H, V, W, M0), Φ(Δt), Γ(Δt), the
   state names and units;
 * :mod:`~gpsaccel.calibration.reports`: each report's model, truth and presets;
-* :mod:`~gpsaccel.calibration.simulation`: one realization (error-model or kinematic truth);
+* :mod:`~gpsaccel.calibration.simulation`: one realization (error-model or kinematic truth, named
+  in :mod:`~gpsaccel.calibration.truths`, which imports nothing);
 * :mod:`~gpsaccel.calibration.montecarlo`: the reports' Monte Carlo as arrays, and its table (a
   package: plan, random streams, reduction to sums, engine, statistics, verdicts);
 * :mod:`~gpsaccel.calibration.compare`: any filters side by side against the exact answer on

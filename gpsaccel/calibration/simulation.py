@@ -31,8 +31,7 @@ import numpy as np
 
 from gpsaccel import _validation as _v
 from gpsaccel.calibration.model import CalibrationModel
-
-TRUTHS = ("error-model", "kinematic")
+from gpsaccel.calibration.truths import TRUTHS
 
 
 @dataclass(frozen=True, eq=False)

@@ -18,12 +18,7 @@ import types
 from pathlib import Path
 
 from gpsaccel import registry
-
-
-def is_file_spec(value: str) -> bool:
-    """Whether ``value`` names a problem in a file (``path/to/file.py:NAME``)."""
-    path, sep, _ = value.rpartition(":")
-    return bool(sep) and path.endswith(".py")
+from gpsaccel.registry import is_file_spec
 
 
 def load_module(path: Path, prefix: str = "gpsaccel_problems") -> types.ModuleType:

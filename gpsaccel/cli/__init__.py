@@ -3,12 +3,15 @@
 This module parses and dispatches; each group of sub-commands is a module of its own
 (:mod:`~gpsaccel.cli.reports`, :mod:`~gpsaccel.cli.lessons`, :mod:`~gpsaccel.cli.checking`,
 :mod:`~gpsaccel.cli.homework`), a small function per command that calls the package, where the
-work lives.  Building the parser imports none of the work (tests/test_lazy_imports.py).
+work lives.  Building the parser imports none of the work, not even numpy: the help of every
+sub-command, ``--version`` and an argument error come back at the cost of Python's start
+(tests/test_lazy_imports.py, tests/cli/test_front_door.py; measured in benchmarks/startup.py).
 """
 
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 from collections.abc import Sequence
 
@@ -42,23 +45,76 @@ def build_parser() -> argparse.ArgumentParser:
 
     parser = _Parser(prog="gpsaccel", description=DESCRIPTION)
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Command)
     for add in SUBCOMMANDS:  # a new sub-command: an add_NAME function and one line above
         add(sub)
     return parser
 
 
+#: What argparse takes for a negative number rather than a flag (its ``_negative_number_matcher``).
+_NEGATIVE = re.compile(r"-\d+|-\d*\.\d+")
+
+
 class _Parser(argparse.ArgumentParser):
-    """argparse with a one-line error: ``gpsaccel check: error: argument --runs: must be ...``.
+    """argparse with a one-line error: ``gpsaccel check: error: argument --runs: must be ...``,
+    which names an unknown flag first.
 
     Every flag's ``type=`` is a validator of :mod:`gpsaccel._validation` (``flag_int``,
     ``flag_float``, ``flag_seed``, ``flag_probability``, ``output_dir``, ``output_file``), so a bad
     number or an unusable output path is refused here, exit 2, before any work; sub-commands
     added later should use the same ones.
+
+    argparse reports a missing argument before an unknown flag (``gpsaccel check --no-such-flag``
+    said "the following arguments are required: paths"): whatever the error, a flag that none of
+    the parser's options matches is what it names.
     """
 
+    _given: Sequence[str] = ()
+
+    def parse_known_args(self, args=None, namespace=None):  # type: ignore[override]
+        self._given = list(sys.argv[1:] if args is None else args)
+        return super().parse_known_args(args, namespace)
+
     def error(self, message: str):  # type: ignore[override]
+        unknown = self.unknown_flags(self._given)
+        if unknown:
+            message = f"unrecognized arguments: {' '.join(unknown)}"
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+    def unknown_flags(self, args: Sequence[str]) -> list[str]:
+        """The flags in ``args`` that no option of this parser takes, matched as argparse matches
+        them: exactly, a long one by a prefix (``--run``), a short one with its value attached
+        (``-vx``), ``--flag=value``.  A negative number is a value, ``--`` ends the flags, and a
+        parser with sub-commands reads only up to the sub-command (its parser judges the rest)."""
+        known = [s for a in self._actions for s in a.option_strings]
+        commands = any(isinstance(a, argparse._SubParsersAction) for a in self._actions)
+        unknown = []
+        for arg in args:
+            if arg == "--":
+                break
+            if not arg.startswith("-") or arg == "-" or _NEGATIVE.fullmatch(arg) or " " in arg:
+                if commands:
+                    break
+                continue
+            flag = arg.split("=", 1)[0]
+            if flag.startswith("--"):
+                matched = any(k.startswith(flag) for k in known)
+            else:
+                matched = flag[:2] in known
+            if not matched:
+                unknown.append(flag)
+        return unknown
+
+
+class _Command(_Parser):
+    """A sub-command's parser: what it does not take is refused under its own name
+    (``gpsaccel check: error: unrecognized arguments: --no-such-flag``), not the top level's."""
+
+    def parse_known_args(self, args=None, namespace=None):  # type: ignore[override]
+        namespace, extras = super().parse_known_args(args, namespace)
+        if extras:
+            self.error(f"unrecognized arguments: {' '.join(extras)}")
+        return namespace, extras
 
 
 #: The extra that installs what a sub-command imports beyond the core (pyproject.toml).

@@ -17,7 +17,8 @@ def dask_spec(value: str | None) -> str | None:
 
 class Registered:
     """argparse choices read from :mod:`gpsaccel.registry` when first needed (a parse or a
-    help text), so building the parser imports no homework module."""
+    help text) by a function that imports no homework module (:func:`registered_assignments`),
+    so neither building the parser nor its help or errors wait for numpy."""
 
     def __init__(self, names: Callable[[], tuple[str, ...]]) -> None:
         self._names = names
@@ -32,4 +33,4 @@ class Registered:
 def registered_assignments() -> tuple[str, ...]:
     from gpsaccel import registry
 
-    return registry.assignments()
+    return registry.assignment_names()

@@ -147,24 +147,24 @@ def _problem_flag(value: str) -> str:
     """--problem: a registered problem's name, or FILE.py:NAME (the file exists; it is run by
     the command, not by the parser)."""
     from gpsaccel import registry
-    from gpsaccel.check.own import is_file_spec
 
-    if is_file_spec(value):
+    if registry.is_file_spec(value):
         if not Path(value.rpartition(":")[0]).is_file():
             raise argparse.ArgumentTypeError(f"{value.rpartition(':')[0]} is not a file "
                                              f"(expected FILE.py:NAME)")
         return value
-    if value not in registry.problems():
+    names = registry.problem_titles()  # importing no problem: the parser does not wait for numpy
+    if value not in names:
         raise argparse.ArgumentTypeError(f"invalid choice: {value!r} (choose from "
-                                         f"{', '.join(registry.problems())}, or FILE.py:NAME)")
+                                         f"{', '.join(names)}, or FILE.py:NAME)")
     return value
 
 
 def add_check(sub: argparse._SubParsersAction) -> None:
     from gpsaccel import registry
 
-    p = sub.add_parser("check", help="check students' homework files (" +
-                       ", ".join(registry.problems()) + ")",
+    titles = registry.problem_titles()
+    p = sub.add_parser("check", help="check students' homework files (" + ", ".join(titles) + ")",
                        epilog="exit status: 0 every submission passed; 1 one failed; 2 a bad "
                               "argument (nothing was checked); 3 none failed but some checks "
                               "gave no verdict (the machine or the checker: check those again); "
@@ -175,8 +175,7 @@ def add_check(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--problem", type=_problem_flag, default="calibration",
                    metavar="NAME|FILE.py:NAME",
                    help="the problem (default calibration), one of gpsaccel.registry's: " +
-                        "; ".join(f"{name}: {registry.entry(name).title}"
-                                  for name in registry.problems()) +
+                        "; ".join(f"{name}: {title}" for name, title in titles.items()) +
                         "; or FILE.py:NAME, a problem of your own defined in FILE.py "
                         "(check.Problem.linear(NAME, ...))")
     p.add_argument("--json", type=_v.output_file, default=None, metavar="FILE",

@@ -179,7 +179,7 @@ def add_run(sub: argparse._SubParsersAction) -> None:
 
 
 def add_compare(sub: argparse._SubParsersAction) -> None:
-    from gpsaccel.calibration.simulation import TRUTHS
+    from gpsaccel.calibration.truths import TRUTHS
 
     p = sub.add_parser("compare", help="filter forms and students' files against the exact "
                                        "answer; --sweep: the conditioning sweeps and their figure")
@@ -223,7 +223,7 @@ def add_coop(sub: argparse._SubParsersAction) -> None:
 
 
 def add_montecarlo(sub: argparse._SubParsersAction) -> None:
-    from gpsaccel.calibration.simulation import TRUTHS
+    from gpsaccel.calibration.truths import TRUTHS
 
     p = sub.add_parser("montecarlo", help="the reports' Monte Carlo validation, with verdicts")
     p.add_argument("--runs", type=_v.flag_int(minimum=2), default=10_000,

@@ -91,6 +91,136 @@ def files_in(folder: Path) -> list[str]:
     return sorted(str(p.relative_to(folder)) for p in folder.rglob("*"))
 
 
+# ------------------------------------------------------------------------------ the front door's cost
+def _subcommands() -> list[str]:
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return list(sub.choices)
+
+
+#: What the answers below must come back without: the work's first imports.  (Their CPU is
+#: benchmarks/startup.py's; a test asserts what ran, never a time.)
+NOT_BEFORE_WORK = ("numpy", "gpsaccel.sandbox", "gpsaccel.check")
+
+#: ``python -m gpsaccel ARGS`` as the command runs it (runpy, __main__), then the loaded modules of
+#: NOT_BEFORE_WORK (a sub-module counts as its package) on the last line of stdout.
+_IMPORTED_BY_THE_COMMAND = r"""
+import json, runpy, sys
+watched = json.loads(sys.argv[1])
+sys.argv = ["gpsaccel", *json.loads(sys.argv[2])]
+try:
+    runpy.run_module("gpsaccel", run_name="__main__", alter_sys=True)
+except SystemExit as exc:
+    code = exc.code
+sys.stdout.flush()
+print("\n" + json.dumps([code, sorted(w for w in watched
+                                       if any(m == w or m.startswith(w + ".") for m in sys.modules))]))
+"""
+
+
+def _front_door_cases() -> list[list[str]]:
+    commands = _subcommands()
+    return [["--help"], ["--version"], ["--no-such-flag"], ["nope"],
+            *([c, "--help"] for c in commands),
+            *([c, "--no-such-flag"] for c in commands),
+            ["check", "x.py", "--runs", "0"], ["check", "x.py", "--problem", "nope"],
+            ["grade", "x", "--assignment", "nope"], ["assignment", "nope", "--out", "x"],
+            ["montecarlo", "--truth", "nope"]]
+
+
+@pytest.fixture(scope="module")
+def front_door(tmp_path_factory):
+    """Each case of _front_door_cases run as the command in a fresh interpreter (a module loaded
+    by an earlier case would hide one loaded by a later): (exit code, loaded, stdout, stderr)."""
+    folder = tmp_path_factory.mktemp("front-door")
+    env = dict(os.environ, PYTHONPATH=str(ROOT), MPLBACKEND="Agg")
+    results = {}
+    for argv in _front_door_cases():
+        proc = subprocess.run([sys.executable, "-c", _IMPORTED_BY_THE_COMMAND,
+                               json.dumps(NOT_BEFORE_WORK), json.dumps(argv)], cwd=folder,
+                              env=env, capture_output=True, text=True, timeout=120)
+        assert proc.returncode == 0, proc
+        out, _, last = proc.stdout.rstrip("\n").rpartition("\n")
+        code, loaded = json.loads(last)
+        results[tuple(argv)] = (code, loaded, out, proc.stderr)
+    assert files_in(folder) == []  # nothing was written
+    return results
+
+
+def test_help_version_and_argument_errors_come_back_before_numpy_the_sandbox_and_checker(
+        front_door):
+    assert len(front_door) >= 2 * 11 + 9
+    for argv, (code, loaded, out, err) in front_door.items():
+        assert loaded == [], (argv, loaded)
+        if "--help" in argv:
+            usage = f"usage: gpsaccel {argv[0] if len(argv) > 1 else ''}".rstrip()
+            assert code == 0 and out.startswith(usage), argv
+        elif argv == ("--version",):
+            from gpsaccel import __version__
+
+            assert code == 0 and out.strip() == f"gpsaccel {__version__}"
+        else:
+            assert code == 2 and len(err.strip().splitlines()) == 1 and out.strip() == "", argv
+            assert err.startswith("gpsaccel"), argv
+
+
+def test_the_help_still_lists_the_registered_choices(front_door):
+    """The problems (with their titles) and the homework come from the registry, read without
+    importing a problem or homework module."""
+    from gpsaccel import registry
+
+    out = front_door[("check", "--help")][2]
+    flat = " ".join(out.split())
+    for name in registry.problems():
+        assert f"{name}: {' '.join(registry.entry(name).title.split())}" in flat, name
+    assert "calibration, coop, ship, tracker" in " ".join(front_door[("--help",)][2].split())
+    for name in registry.assignments():
+        assert name in front_door[("grade", "--help")][2]
+        assert name in front_door[("grade", "x", "--assignment", "nope")][3]
+    assert "error-model" in front_door[("montecarlo", "--help")][2]
+    assert "invalid choice: 'nope'" in front_door[("montecarlo", "--truth", "nope")][3]
+
+
+# ------------------------------------------------------------------------------ unknown flags
+def test_an_unknown_flag_is_named_whatever_else_is_missing(front_door):
+    """``gpsaccel check --no-such-flag`` said "the following arguments are required: paths"."""
+    for command in ["", *_subcommands()]:
+        argv = (command, "--no-such-flag") if command else ("--no-such-flag",)
+        code, _, out, err = front_door[argv]
+        prog = f"gpsaccel {command}".rstrip()
+        assert code == 2 and err.startswith(f"{prog}: error: unrecognized arguments: "
+                                            f"--no-such-flag "), (argv, err)
+
+
+@pytest.mark.parametrize("argv, named", [
+    (["check", "--no-such-flag", "--runs", "0"], "--no-such-flag"),      # and a bad value
+    (["check", "x.py", "--runz", "3"], "--runz"),                         # a typo
+    (["check", "x.py", "--run", "3", "--jsn=out.json"], "--jsn"),         # a prefix is a flag
+    (["grade", "--studnet", "bob"], "--studnet"),                         # no SUBMISSIONS either
+    (["assignment", "calibration", "--out", "x", "-q"], "-q"),
+    (["--bogus", "run"], "--bogus"),                                      # before the command
+    (["run", "extra"], "extra"),                                          # not a flag: named too
+], ids=lambda v: " ".join(v) if isinstance(v, list) else None)
+def test_unknown_flags_are_named_under_the_command_that_met_them(capsys, argv, named):
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"error: unrecognized arguments: {named} " in err[0], err
+    command = argv[0] if not argv[0].startswith("-") else ""
+    assert err[0].startswith(f"gpsaccel {command}".rstrip() + ": error"), err
+
+
+@pytest.mark.parametrize("argv", [
+    ["compare", "--seed", "-1"],                # a negative number is a value, not a flag
+    ["check", "x.py", "--run", "0"],            # a long flag by its prefix (--runs)
+    ["check", "x.py", "--timeout=-1"],
+    ["check", "x.py", "-vv", "--seed", "x"],    # short flags joined
+])
+def test_a_bad_value_is_still_named_by_its_flag(capsys, argv):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "unrecognized" not in err and "error: argument " in err, err
+
+
 # ------------------------------------------------------------------------------ numeric flags
 BAD_NUMBERS = [
     (["check", str(SUBMISSION), "--runs", "0"], "--runs", "integer >= 2"),
