@@ -59,10 +59,9 @@ def _run_ensemble(runs: int | None, seed: int):
 
 
 def _cmd_montecarlo(args: argparse.Namespace) -> int:
-    """The reports' Monte Carlo: verdict table, the report-style numbers, figures in --out."""
+    """The reports' Monte Carlo: verdict table, the report-style numbers; with --out, figures."""
     import time
 
-    from gpsaccel import plots
     from gpsaccel.calibration.model import CalibrationModel
     from gpsaccel.calibration.montecarlo import BLOCK_RUNS, monte_carlo, whole_blocks
     from gpsaccel.executors import resolve_executor
@@ -82,19 +81,28 @@ def _cmd_montecarlo(args: argparse.Namespace) -> int:
     print(mc.consistency(alpha=args.alpha))
     print()
     print(mc.summary())
+    if args.out is None:  # the verdicts are the answer; figures cost more than the ensemble
+        print("\nno figures drawn: --out DIR writes them (montecarlo-TRUTH-*.png)")
+        return 0
+    paths = _montecarlo_figures(mc, args.out)
+    print(f"wrote {len(paths)} figures to {args.out}/ (montecarlo-{mc.truth}-*.png)")
+    return 0
+
+
+def _montecarlo_figures(mc, out: Path) -> list[Path]:  # noqa: ANN001
+    """The ensemble's figures, each drawn, written whole and let go before the next."""
+    from gpsaccel import plots
     from gpsaccel._atomic import savefig
 
-    args.out.mkdir(parents=True, exist_ok=True)
+    out.mkdir(parents=True, exist_ok=True)
     figures = {
-        "pave-minus-p": plots.pave_minus_p(mc, grid=False),
-        "pave-minus-p-grid": plots.pave_minus_p(mc, grid=True),
-        "ensemble-mean-error": plots.ensemble_mean_error(mc, sigma=True),
-        "orthogonality": plots.orthogonality(mc),
+        "pave-minus-p": lambda: plots.pave_minus_p(mc, grid=False),
+        "pave-minus-p-grid": lambda: plots.pave_minus_p(mc, grid=True),
+        "ensemble-mean-error": lambda: plots.ensemble_mean_error(mc, sigma=True),
+        "orthogonality": lambda: plots.orthogonality(mc),
     }
-    for slug, fig in figures.items():
-        savefig(fig, args.out / f"montecarlo-{mc.truth}-{slug}.png", dpi=110)
-    print(f"wrote {len(figures)} figures to {args.out}/ (montecarlo-{mc.truth}-*.png)")
-    return 0
+    return [savefig(draw(), out / f"montecarlo-{mc.truth}-{slug}.png", dpi=110)
+            for slug, draw in figures.items()]
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
@@ -241,7 +249,8 @@ def add_montecarlo(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--max-lag", type=_v.flag_int(minimum=0), default=50,
                    help="residual products kept and tested up to this lag, in GPS epochs "
                         "(default 50; memory grows with it, linearly)")
-    p.add_argument("--out", type=_v.output_dir, default="out", help="folder for figures (out/)")
+    p.add_argument("--out", type=_v.output_dir, default=None, metavar="DIR",
+                   help="draw the ensemble's four figures into DIR (default: none, the table only)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_montecarlo)
 

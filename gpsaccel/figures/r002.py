@@ -68,7 +68,7 @@ def _no_roundoff_zoom(ax) -> None:
 def states_figure(t: np.ndarray, series: list[tuple[np.ndarray, str, dict]], title: str,
                   quantity: str = "") -> Figure:
     """The six states in a 3 x 2 grid, UGV left, UAV right: series = [(x (K,6), label, style)]."""
-    fig = Figure(figsize=(10.0, 7.5), layout="constrained")
+    fig = plots.figure((10.0, 7.5))
     axs = fig.subplots(3, 2, sharex=True)
     for i, (name, unit) in enumerate(STATES):
         ax = axs[i % 3, i // 3]
@@ -104,7 +104,7 @@ def vehicle_figure(t: np.ndarray, states: tuple[int, int, int], est: np.ndarray,
     where the band is visible at all (σ ~ 1 m against a 200 m track).
     """
     ncol = 1 if truth is None and reference is None else 2
-    fig = Figure(figsize=(5.5 * ncol, 7.0), layout="constrained")
+    fig = plots.figure((5.5 * ncol, 7.0))
     axs = fig.subplots(3, ncol, sharex=True, squeeze=False)
     for row, i in enumerate(states):
         name, unit = STATES[i]
@@ -492,7 +492,7 @@ def _ekf_single(mc: dict[str, ConsistencyRun], t: np.ndarray, x0: np.ndarray, i0
                      {"ls": "", "marker": ".", "ms": 2, "color": S["measurement"]}),
                     (yhat[1:], "predicted h(x̄)", {"lw": 0.9, "color": S["estimate"]})],
             "EKF: measurements of the typical run"))
-    fig = Figure(figsize=(10.0, 7.5), layout="constrained")
+    fig = plots.figure((10.0, 7.5))
     axs = fig.subplots(3, 2, sharex=True)
     err = r.errors(truth.x)[i0]
     for i, (name, unit) in enumerate(STATES):

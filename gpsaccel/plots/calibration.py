@@ -14,6 +14,7 @@ from gpsaccel.plots.kinds import (
     axes,
     error_band,
     estimate_vs_truth,
+    figure,
     finish,
     outside_legend,
     panels,
@@ -141,7 +142,7 @@ def error_comparison(run, result, *, fig: Figure | None = None) -> Figure:
 def gains(result, *, title: str = "Kalman gains over time", fig: Figure | None = None) -> Figure:
     """Every element K_ij of the gain at the update epochs (MultirateResult ``result``), a grid."""
     n, p = result.K.shape[1:]
-    fig = fig or Figure(figsize=(9.0, 7.0), layout="constrained")
+    fig = fig or figure((9.0, 7.0))
     grid = fig.subplots(n, p, sharex=True, squeeze=False)
     z_units = [u for _, u in CALIBRATION_STATES[:p]]
     for i in range(n):
@@ -337,7 +338,7 @@ def form_sweep(sweeps: Sequence, *, fig: Figure | None = None) -> Figure:
     (ε = 2⁻⁵³); a ring marks a P that is no longer positive definite, a triangle at the top a form
     that broke down (inf/NaN or an exception).
     """
-    if fig is None:
+    if fig is None:  # constrained: only a layout engine makes room for an "outside" fig.legend
         fig = Figure(figsize=(5.2 * len(sweeps) + 0.6, 7.6), layout="constrained")
     axs = fig.subplots(2, len(sweeps), squeeze=False, sharex="col")
     eps = np.finfo(float).eps / 2

@@ -12,6 +12,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from gpsaccel.plots._layout import HouseFigure
 from gpsaccel.plots.units import CALIBRATION_STATES, product_unit
 
 #: The house style: colours by role, so truth, estimate, measurement and bounds read the same in
@@ -28,11 +29,17 @@ STYLE: dict[str, Any] = {
 }
 
 
+def figure(figsize: tuple[float, float] | None = None) -> Figure:
+    """A new figure in the house size and layout: its axes placed once, when it is drawn, from
+    what they carry (:mod:`gpsaccel.plots._layout`; no layout engine, which doubles every save)."""
+    return HouseFigure(figsize=figsize or STYLE["figsize"])
+
+
 def axes(ax: Axes | None = None, figsize: tuple[float, float] | None = None) -> tuple[Figure, Axes]:
     """The axes to draw on: ``ax`` if given, else a new figure in the house size."""
     if ax is not None:
         return cast(Figure, ax.figure), ax
-    fig = Figure(figsize=figsize or STYLE["figsize"], layout="constrained")
+    fig = figure(figsize)
     return fig, fig.add_subplot()
 
 
@@ -95,7 +102,7 @@ def state_grid(t: np.ndarray, values: np.ndarray, *, title: str, ylabel: str,
     n = values.shape[1]
     names = names or [s for s, _ in CALIBRATION_STATES][:n]
     units = units or [u for _, u in CALIBRATION_STATES][:n]
-    fig = fig or Figure(figsize=STYLE["grid_figsize"], layout="constrained")
+    fig = fig or figure(STYLE["grid_figsize"])
     grid = fig.subplots(n, n, sharex=True, squeeze=False)
     for i in range(n):
         for j in range(n):
@@ -119,7 +126,7 @@ def panels(n: int, fig: Figure | None = None, *, title: str = "",
            height: float = 2.3) -> tuple[Figure, list[Axes]]:
     """``n`` stacked axes sharing the time axis, on ``fig`` (cleared) or on a new figure."""
     if fig is None:
-        fig = Figure(figsize=(STYLE["figsize"][0], 0.8 + height * n), layout="constrained")
+        fig = figure((STYLE["figsize"][0], 0.8 + height * n))
     axs = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
     if title:
         fig.suptitle(title)

@@ -2,12 +2,17 @@
 
 from __future__ import annotations
 
+import os
 import re
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
 
 from gpsaccel.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_run_writes_summary_and_figures(tmp_path, capsys):
@@ -62,3 +67,22 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
     assert main(["figures", "--report", "999", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert "report must be one of" in err and "Traceback" not in err
+
+
+def test_montecarlo_draws_figures_only_with_out(tmp_path, monkeypatch):
+    """The verdicts are the command's answer; its four figures cost more CPU than a 10,000-run
+    ensemble, so they are drawn when --out names a folder (and matplotlib is not even imported
+    without it: a fresh process, as the command runs)."""
+    monkeypatch.chdir(tmp_path)
+    env = dict(os.environ, PYTHONPATH=str(ROOT), MPLBACKEND="Agg")
+    code = ("import sys; from gpsaccel.cli import main; code = main(sys.argv[1:]); "
+            "print(sorted(m for m in ('matplotlib', 'gpsaccel.plots') if m in sys.modules)); "
+            "sys.exit(code)")
+    res = subprocess.run([sys.executable, "-c", code, "montecarlo", "--runs", "20",
+                          "--no-progress"], cwd=tmp_path, env=env, capture_output=True,
+                         text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    lines = res.stdout.strip().splitlines()
+    assert lines[-1] == "[]"
+    assert "no figures drawn: --out DIR writes them" in lines[-2]
+    assert list(tmp_path.iterdir()) == []
