@@ -9,13 +9,18 @@ to init) is not counted; the checker reaps its boxes itself (it is their subreap
 
 from __future__ import annotations
 
+import argparse
 import os
 import resource
 import statistics
 import subprocess
+import sys
+import tempfile
 import time
 from collections.abc import Sequence
+from contextlib import nullcontext
 from dataclasses import dataclass
+from pathlib import Path
 
 
 @dataclass
@@ -64,3 +69,37 @@ def table(rows: Sequence[tuple[str, dict[str, tuple[float, float]]]], versions: 
             cells.append(f"{cpu[1] / cpu[0]:.2f}" if cpu[0] > 0 else "")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+# ------------------------------------------------------------------------------ side by side
+def version_flags(parser: argparse.ArgumentParser, repeats: int) -> None:
+    """``--before DIR`` (a checkout of an earlier version) and ``--repeats N``, the flags of every
+    script that measures two versions side by side."""
+    parser.add_argument("--before", metavar="DIR", default=None,
+                        help="a checkout of an earlier version (its gpsaccel/ is imported)")
+    parser.add_argument("--repeats", type=int, default=repeats)
+
+
+def versions(before: str | None, now: Path) -> dict[str, Path]:
+    """The checkouts to measure, by name: ``now`` alone, or ``before`` (``--before``) then it;
+    each one's ``gpsaccel/`` is put first on ``PYTHONPATH`` (this environment's packages)."""
+    return {"now": now} if before is None else {"before": Path(before).resolve(), "now": now}
+
+
+def medians(cmd: Sequence[str], roots: dict[str, Path], repeats: int, cwd: str | None = None,
+            ok: Sequence[int] | None = (0,)) -> dict[str, tuple[float, float]]:
+    """``python *cmd`` run ``repeats`` times on each version, the versions alternating (so a
+    change of the machine's load meets both); (median CPU, median wall) by version.  ``cwd``: the
+    folder to run in (default: an empty one of its own per run); ``ok``: the exit codes that count
+    as success (None: any)."""
+    samples: dict[str, list[Sample]] = {v: [] for v in roots}
+    for _ in range(repeats):
+        for version, root in roots.items():
+            env = dict(os.environ, PYTHONPATH=str(root), MPLBACKEND="Agg")
+            with nullcontext(cwd) if cwd else tempfile.TemporaryDirectory() as folder:
+                sample = run([sys.executable, *cmd], env=env, cwd=folder)
+            if ok is not None and sample.returncode not in ok:
+                raise SystemExit(f"{' '.join(cmd)} ({version}) failed with exit "
+                                 f"{sample.returncode}:\n{sample.stdout}")
+            samples[version].append(sample)
+    return {v: median(s) for v, s in samples.items()}

@@ -13,9 +13,6 @@ every figure was laid out by matplotlib's constrained layout (docs/cli.md).
 from __future__ import annotations
 
 import argparse
-import os
-import sys
-import tempfile
 from pathlib import Path
 
 import _cpu
@@ -32,27 +29,12 @@ CASES = [
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--before", metavar="DIR", default=None,
-                        help="a checkout of an earlier version (its gpsaccel/ is imported)")
-    parser.add_argument("--repeats", type=int, default=3)
+    _cpu.version_flags(parser, repeats=3)
     args = parser.parse_args(argv)
-    roots = {"now": ROOT}
-    if args.before:
-        roots = {"before": Path(args.before).resolve(), "now": ROOT}
+    roots = _cpu.versions(args.before, ROOT)
     print(f"start: {_cpu.load()}")
-    rows: list[tuple[str, dict[str, tuple[float, float]]]] = []
-    for name, cmd in CASES:
-        samples: dict[str, list[_cpu.Sample]] = {v: [] for v in roots}
-        for _ in range(args.repeats):
-            for version, root in roots.items():
-                env = dict(os.environ, PYTHONPATH=str(root), MPLBACKEND="Agg")
-                with tempfile.TemporaryDirectory() as empty:
-                    sample = _cpu.run([sys.executable, "-m", "gpsaccel.cli", *cmd], env=env,
-                                      cwd=empty)
-                if sample.returncode:
-                    raise SystemExit(f"{name} ({version}) failed:\n{sample.stdout}")
-                samples[version].append(sample)
-        rows.append((name, {v: _cpu.median(s) for v, s in samples.items()}))
+    rows = [(name, _cpu.medians(["-m", "gpsaccel.cli", *cmd], roots, args.repeats))
+            for name, cmd in CASES]
     print(f"end: {_cpu.load()}; medians of {args.repeats}, CPU = user + system, children "
           f"included\n")
     print(_cpu.table(rows, list(roots)))

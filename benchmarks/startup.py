@@ -12,7 +12,6 @@ rfc3987-syntax import, which pyproject.toml's ``jsonschema<4.25`` keeps out).
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import tempfile
 from pathlib import Path
@@ -51,23 +50,14 @@ PACKAGES = [
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--before", metavar="DIR", default=None,
-                        help="a checkout of an earlier version (its gpsaccel/ is imported)")
-    parser.add_argument("--repeats", type=int, default=5)
+    _cpu.version_flags(parser, repeats=5)
     args = parser.parse_args(argv)
-    roots = {"now": ROOT}
-    if args.before:
-        roots = {"before": Path(args.before).resolve(), "now": ROOT}
+    roots = _cpu.versions(args.before, ROOT)
     print(f"start: {_cpu.load()}")
     rows: list[tuple[str, dict[str, tuple[float, float]]]] = []
     with tempfile.TemporaryDirectory() as empty:
-        for name, cmd in CASES:
-            samples: dict[str, list[_cpu.Sample]] = {v: [] for v in roots}
-            for _ in range(args.repeats):
-                for version, root in roots.items():
-                    env = dict(os.environ, PYTHONPATH=str(root), MPLBACKEND="Agg")
-                    samples[version].append(_cpu.run([sys.executable, *cmd], env=env, cwd=empty))
-            rows.append((name, {v: _cpu.median(s) for v, s in samples.items()}))
+        for name, cmd in CASES:  # an argument error exits 2: any exit code is the case's own
+            rows.append((name, _cpu.medians(cmd, roots, args.repeats, cwd=empty, ok=None)))
         for name, cmd in PACKAGES:
             s = [_cpu.run([sys.executable, *cmd], cwd=empty) for _ in range(args.repeats)]
             if any(x.returncode for x in s):
