@@ -72,13 +72,17 @@ or a box tmpfs, full), ``process-limit``, ``uses-checker`` (an import of gpsacce
 ``crashed`` (the process ended without saying ``done``), and the runner's own: ``import-error``,
 ``no-function``, ``exception``, ``return-value``, ``not-numeric``, ``wrong-shape``.
 
+Host-side work on a student's files that is not the student's code (parsing a notebook) runs under
+limits in a forked child: :func:`in_child` (:mod:`.child`), the one way to do so.
+
 Layout (each module under 500 lines): :mod:`.spec` (what to run, what comes back),
 :mod:`.submission` (a student's files, walked and checked), :mod:`.channel` (the result channel),
 :mod:`.confinement` (the backends, what a box sees, box folders), :mod:`.limits` (rlimits, the box's
 cgroup and uid: :mod:`._cgroup`, :mod:`._boxuser`), :mod:`.procs` (prctl, the process table: /proc
 on Linux, psutil elsewhere; the checked kill), :mod:`.box` (one box run and supervised),
-:mod:`.clock` (its fair deadline), :mod:`.pool` (a class's items).  The layer imports nothing of
-gpsaccel above it: it knows neither the checks nor the homework.
+:mod:`.clock` (its fair deadline), :mod:`.pool` (a class's items), :mod:`.child` (host-side work
+under limits).  The layer imports nothing of gpsaccel above it: it knows neither the checks nor
+the homework.
 """
 
 from __future__ import annotations
@@ -94,6 +98,7 @@ from gpsaccel.sandbox.channel import (
                                       FrameReader,
                                       Refused,
 )
+from gpsaccel.sandbox.child import ChildResult, in_child
 from gpsaccel.sandbox.confinement import (
                                       BACKENDS,
                                       BOX_PREFIX,
@@ -121,7 +126,8 @@ from gpsaccel.sandbox.submission import (
 __all__ = [
     "BACKENDS", "BOX_PREFIX", "FRAME_COUNTS", "FRAME_FIELDS", "HIDDEN_WITH_GPSACCEL", "MAX_BYTES",
     "MAX_DEPTH", "MAX_ENTRIES", "MAX_FILES", "MAX_HEADER", "MAX_TEXT", "MAX_VALUE", "PACKAGE_DIR",
-    "BoxResult", "Call", "FrameReader", "Limits", "Lost", "Output", "Refused", "Submission",
-    "SubmissionError", "basic_is_safe", "bwrap_path", "defines", "load_submission", "path_test",
-    "refuse_unsafe_basic", "resolve_backend", "run", "run_items", "sweep_stale_boxes",
+    "BoxResult", "Call", "ChildResult", "FrameReader", "Limits", "Lost", "Output", "Refused",
+    "Submission", "SubmissionError", "basic_is_safe", "bwrap_path", "defines", "in_child",
+    "load_submission", "path_test", "refuse_unsafe_basic", "resolve_backend", "run", "run_items",
+    "sweep_stale_boxes",
 ]
