@@ -36,12 +36,13 @@ def solved(name: str) -> nbformat.NotebookNode:
 # ------------------------------------------------------------------ masters in the package
 @pytest.mark.parametrize("name", registry.assignments())
 def test_every_homework_master_is_in_the_package_under_a_folder_the_box_never_sees(name):
-    from gpsaccel.sandbox import HIDDEN_WITH_GPSACCEL, PACKAGE_DIR
+    from gpsaccel.assignments.notebook import BOX_HIDES
+    from gpsaccel.sandbox import PACKAGE_DIR
 
     folder = packaged_masters() / name
     assert (folder / f"{name}.ipynb").is_file() and (folder / "graded.py").is_file()
     assert master_notebook(name) == folder / f"{name}.ipynb"
-    hidden = [PACKAGE_DIR / rel for rel in HIDDEN_WITH_GPSACCEL]
+    hidden = [PACKAGE_DIR / rel for rel in BOX_HIDES]
     assert any(folder.is_relative_to(h) for h in hidden), (folder, hidden)
 
 

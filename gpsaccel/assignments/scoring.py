@@ -55,7 +55,7 @@ SKIP_MARK = "# not run when graded"
 VARIANT_MARK = "# your variant"
 
 
-_CELL_STATUS = nbm.MAX_NDIM + 3
+_CELL_STATUS = nbm.STATUS_LENGTH
 
 
 def assignment_module(name: str):
@@ -200,8 +200,8 @@ def _calls(n_cells: int, reads: list[nbm.Read]):
     calls = [Call("_gpsaccel_cell", (np.array(i),), head) for i in range(n_cells)]
     for k, r in enumerate(reads):
         outs = tuple(Output(f"out{j}", tuple(s)) for j, s in enumerate(r.shapes))
-        calls.append(Call(f"_gpsaccel_probe_{k}", tuple(np.asarray(a, dtype=float)
-                                                        for a in r.args), head + outs))
+        calls.append(Call("_gpsaccel_probe", (np.array(k), *(np.asarray(a, dtype=float)
+                                                             for a in r.args)), head + outs))
     return calls
 
 
@@ -291,7 +291,7 @@ def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
         (folder / "notebook.py").write_text(nbm.module_source(run, reads), encoding="utf-8")
         sub = sb.load_submission(folder / "notebook.py", "_gpsaccel_cell")
         calls = _calls(len(run.cells), reads)
-        box = sb.run(sub, calls, limits, backend=sandbox, allow_gpsaccel=True)
+        box = sb.run(sub, calls, limits, backend=sandbox, allow_gpsaccel=True, hide=nbm.BOX_HIDES)
     # ---- the box is empty from here on: nothing of the student's runs while answers exist
     results = box.results + [None] * (len(calls) - len(box.results))
     notes += _cell_notes(run.cells, results[:len(run.cells)])

@@ -39,6 +39,19 @@ from gpsaccel.check.findings import MESSAGES, box_findings
 from gpsaccel.check.report import Report
 from gpsaccel.sandbox import Call, Output, defines
 
+#: The folders of gpsaccel (relative to it) that a student's box may not read when it may import
+#: the package (``allow_gpsaccel``: the course's models for data): the checks, the homework's
+#: graded questions and reference answers, the lessons' self-check answers and the lessons'
+#: masters and solutions.  The sandbox keeps them out of reach on every backend
+#: (:func:`gpsaccel.sandbox.run`'s ``hide``); a graded notebook's box hides the same
+#: (:mod:`gpsaccel.assignments.notebook`).
+BOX_HIDES = ("check", "assignments", "exercises", "_lessons/masters", "_lessons/solutions")
+
+
+def _hides(allow_gpsaccel: bool) -> tuple[str, ...]:
+    """What the box hides: nothing more when it may not import gpsaccel at all."""
+    return BOX_HIDES if allow_gpsaccel else ()
+
 
 @dataclass(frozen=True)
 class Argument:
@@ -191,7 +204,7 @@ class Problem:
             calls += mine
         labels = self.labels(cases) * len(present)
         self.forget()  # no reference answer exists while the student's code runs
-        box = sb.run(sub, calls, limits, backend, allow_gpsaccel)
+        box = sb.run(sub, calls, limits, backend, allow_gpsaccel, _hides(allow_gpsaccel))
         _note_columns(report, box, calls)
         report.details["student_seconds"] = round(box.seconds, 3)
         fields = {"signature": " or ".join(f.signature for f in self.functions),

@@ -27,8 +27,8 @@ Backends (the threat model, what each isolates and what not: ``docs/sandbox.md``
     New user, PID, network, IPC, UTS and cgroup namespaces; inside, uid 65534 with no
     capabilities.  The file system is the interpreter's folders (``/usr``, the Python prefix, the
     site-packages) read-only, the checker's own package hidden under an empty tmpfs (or, for a
-    box that may import gpsaccel, its answers and checks under empty folders:
-    :data:`HIDDEN_WITH_GPSACCEL`), ``/proc`` of the box's PID namespace only (the checker's
+    box that may import gpsaccel, the folders its caller hides, ``run(..., hide=...)``, under
+    empty folders), ``/proc`` of the box's PID namespace only (the checker's
     memory and environment are not in it), and three small writable tmpfs: the working
     directory ``/box`` (holding a copy of the submission's own files, nothing else), ``/tmp`` and
     ``/dev/shm``, each of at most ``Limits.file_size`` bytes; the root, ``/dev`` and the folders
@@ -39,9 +39,11 @@ Backends (the threat model, what each isolates and what not: ``docs/sandbox.md``
     A fresh session; resource limits set before exec (address space, CPU time, file size,
     processes, open files, no core files); an environment of ``PATH``, ``HOME`` (the box) and
     ``LANG`` only; a private temporary working directory holding a copy of the submission only;
-    the checker made non-dumpable while the student runs.  It cannot hide files: the student
-    reads what other users may read.  Not run as root it is not safe for grading (the student is
-    the checker's user: :func:`refuse_unsafe_basic`).
+    the checker made non-dumpable while the student runs.  The package (or the folders its
+    caller hides) fenced by the kernel: Landlock, else (root) a mount namespace, else (root)
+    folders closed to other users, else, as root, no box (:mod:`gpsaccel.sandbox.fence`);
+    everything else the student reads as other users may.  Not run as root it is not safe for
+    grading (the student is the checker's user: :func:`refuse_unsafe_basic`).
 ``auto`` is ``bwrap`` when a trial box starts on this machine, else ``basic``.
 
 As root, under both backends, the student runs as a uid of its own that owns nothing and that
@@ -77,17 +79,17 @@ limits in a forked child: :func:`in_child` (:mod:`.child`), the one way to do so
 
 Layout (each module under 500 lines): :mod:`.spec` (what to run, what comes back),
 :mod:`.submission` (a student's files, walked and checked), :mod:`.channel` (the result channel),
-:mod:`.confinement` (the backends, what a box sees, box folders), :mod:`.limits` (rlimits, the box's
+:mod:`.confinement` (the backends, what a box sees, box folders), :mod:`.fence` (what a basic box
+may not read), :mod:`.limits` (rlimits, the box's
 cgroup and uid: :mod:`._cgroup`, :mod:`._boxuser`), :mod:`.procs` (prctl, the process table: /proc
 on Linux, psutil elsewhere; the checked kill), :mod:`.box` (one box run and supervised),
 :mod:`.clock` (its fair deadline), :mod:`.pool` (a class's items), :mod:`.child` (host-side work
-under limits).  The layer imports nothing of gpsaccel above it: it knows neither the checks nor
-the homework.
+under limits).  The layer imports nothing of gpsaccel above it and names none of it: it knows
+neither the checks nor the homework, and its callers say what their boxes may not read.
 """
 
 from __future__ import annotations
 
-from gpsaccel.sandbox._runner import path_test
 from gpsaccel.sandbox.box import run
 from gpsaccel.sandbox.channel import (
                                       FRAME_COUNTS,
@@ -102,7 +104,6 @@ from gpsaccel.sandbox.child import ChildResult, in_child
 from gpsaccel.sandbox.confinement import (
                                       BACKENDS,
                                       BOX_PREFIX,
-                                      HIDDEN_WITH_GPSACCEL,
                                       PACKAGE_DIR,
                                       basic_is_safe,
                                       bwrap_path,
@@ -110,6 +111,7 @@ from gpsaccel.sandbox.confinement import (
                                       resolve_backend,
                                       sweep_stale_boxes,
 )
+from gpsaccel.sandbox.fence import NoFence
 from gpsaccel.sandbox.pool import Lost, run_items
 from gpsaccel.sandbox.spec import BoxResult, Call, Limits, Output
 from gpsaccel.sandbox.submission import (
@@ -124,10 +126,10 @@ from gpsaccel.sandbox.submission import (
 )
 
 __all__ = [
-    "BACKENDS", "BOX_PREFIX", "FRAME_COUNTS", "FRAME_FIELDS", "HIDDEN_WITH_GPSACCEL", "MAX_BYTES",
-    "MAX_DEPTH", "MAX_ENTRIES", "MAX_FILES", "MAX_HEADER", "MAX_TEXT", "MAX_VALUE", "PACKAGE_DIR",
-    "BoxResult", "Call", "ChildResult", "FrameReader", "Limits", "Lost", "Output", "Refused",
-    "Submission", "SubmissionError", "basic_is_safe", "bwrap_path", "defines", "in_child",
-    "load_submission", "path_test", "refuse_unsafe_basic", "resolve_backend", "run", "run_items",
-    "sweep_stale_boxes",
+    "BACKENDS", "BOX_PREFIX", "FRAME_COUNTS", "FRAME_FIELDS", "MAX_BYTES", "MAX_DEPTH",
+    "MAX_ENTRIES", "MAX_FILES", "MAX_HEADER", "MAX_TEXT", "MAX_VALUE", "PACKAGE_DIR",
+    "BoxResult", "Call", "ChildResult", "FrameReader", "Limits", "Lost", "NoFence", "Output",
+    "Refused", "Submission", "SubmissionError", "basic_is_safe", "bwrap_path", "defines",
+    "in_child", "load_submission", "refuse_unsafe_basic", "resolve_backend", "run",
+    "run_items", "sweep_stale_boxes",
 ]

@@ -98,14 +98,12 @@ class _Blocker(importlib.abc.MetaPathFinder):
         return None
 
 
-def path_test(dirs: tuple[str, ...]):  # noqa: ANN201 - a closure, kept self-contained
+def path_test(dirs: tuple[str, ...]):  # noqa: ANN201 - a closure
     """``is_under(path)``: whether ``path`` (str, bytes or os.PathLike) resolves under one of
     ``dirs`` (real paths ending in "/"); a path that cannot be resolved counts as under (it is
     not let through).  Resolved real paths: '//path/to/gpsaccel', 'a/../gpsaccel' or a symlink to
-    it is the folder as much as its own name.  This runner's audit hook uses it; a graded
-    notebook's guard (:mod:`gpsaccel.assignments.notebook`), which runs where the checker cannot
-    be imported, carries its source text.  So it imports what it uses and binds it here (patching
-    os later does not change it)."""
+    it is the folder as much as its own name.  It binds what it uses here (patching os later
+    does not change it)."""
     import os as _os
 
     realpath, fspath = _os.path.realpath, _os.fspath

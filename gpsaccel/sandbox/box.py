@@ -16,7 +16,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from gpsaccel.sandbox import _boxuser
+from gpsaccel.sandbox import _boxuser, fence
 from gpsaccel.sandbox.channel import FrameReader, Refused
 from gpsaccel.sandbox.clock import Clock, clock_detail
 from gpsaccel.sandbox.confinement import (
@@ -29,6 +29,8 @@ from gpsaccel.sandbox.confinement import (
     _site_dirs,
     _write_control,
     bwrap_path,
+    check_hide,
+    hidden_dirs,
     resolve_backend,
     sweep_stale_boxes,
 )
@@ -56,12 +58,21 @@ COUNT_EVERY = 0.25
 
 
 def run(sub: Submission, calls: Sequence[Call], limits: Limits | None = None,
-        backend: str = "auto", allow_gpsaccel: bool = False) -> BoxResult:
+        backend: str = "auto", allow_gpsaccel: bool = False, hide: Sequence[str] = ()
+        ) -> BoxResult:
     """Run ``calls`` on the submission in a new box; return only once every process it started
     is dead, its cgroup removed and its folder deleted.  Never raises for anything the
-    submission does (ValueError for bad arguments).  ``limits`` None is :class:`Limits`()."""
+    submission does (ValueError for bad arguments; :class:`~gpsaccel.sandbox.fence.NoFence`, an
+    OSError, for a basic box as root that must hide folders where nothing can fence them).
+    ``limits`` None is :class:`Limits`().
+
+    ``allow_gpsaccel``: the box may import this package (a notebook using the course's models),
+    except the folders ``hide`` (paths relative to the package, e.g. ``"check"``: the caller
+    says what its box may not read), which no process of the box can read under either
+    backend (bwrap binds empty folders over them; basic: :mod:`gpsaccel.sandbox.fence`)."""
     limits = Limits() if limits is None else limits
     backend = resolve_backend(backend)
+    hide = check_hide(hide, allow_gpsaccel)
     calls = list(calls)
     t0 = time.perf_counter()
     sweep_stale_boxes()
@@ -76,6 +87,10 @@ def run(sub: Submission, calls: Sequence[Call], limits: Limits | None = None,
     try:
         _write_control(tmp / "control", sub, calls, sys_path, allow_gpsaccel)
         confinement = _confine(limits, backend, needed)
+        if backend == "basic":
+            confinement.fence = fence.choose(
+                hidden_dirs(allow_gpsaccel, hide), confinement.uid is not None,
+                str(tmp / "empty"), [p for _, ps in confinement.reveal for p in ps])
         if confinement.uid is not None:
             tmp.chmod(0o711)  # the box's user enters it, lists nothing
         res_r, res_w = os.pipe()
@@ -84,7 +99,7 @@ def run(sub: Submission, calls: Sequence[Call], limits: Limits | None = None,
         owned += [res_r, res_w, out_r, out_w, go_r, go_w]  # closed once, here or by _Supervisor
         try:
             cmd, cwd, env, drop, fds = _launch(backend, tmp, sub, limits, allow_gpsaccel,
-                                               confinement, res_w, go_r)
+                                               confinement, res_w, go_r, hide)
         except SubmissionError as exc:  # a file changed into a link since it was loaded
             return BoxResult(backend, failure=exc.code, detail=str(exc),
                              seconds=time.perf_counter() - t0)
@@ -98,7 +113,7 @@ def run(sub: Submission, calls: Sequence[Call], limits: Limits | None = None,
 
 
 def _launch(backend: str, tmp: Path, sub: Submission, limits: Limits, allow_gpsaccel: bool,
-            confinement: _Confinement, res_w: int, go_r: int
+            confinement: _Confinement, res_w: int, go_r: int, hide: Sequence[str]
             ) -> tuple[list[str], str, dict, bool, list[int]]:
     """The box's command, working folder, environment, whether to drop capabilities, and the
     file descriptors of the submission's files it inherits (bwrap)."""
@@ -107,7 +122,7 @@ def _launch(backend: str, tmp: Path, sub: Submission, limits: Limits, allow_gpsa
         if exe is None:
             raise OSError("bwrap was found usable for this check but its trial box no "
                           "longer starts")
-        cmd, fds = _bwrap_command(exe, tmp, sub, limits, allow_gpsaccel, res_w, go_r)
+        cmd, fds = _bwrap_command(exe, tmp, sub, limits, allow_gpsaccel, res_w, go_r, hide)
         # root without a box user: bwrap's user namespace is the box (no capability outside
         # it); with one, bwrap runs as that user and needs none either
         return cmd, str(tmp), _environment("/box"), confinement.uid is not None, fds
@@ -129,6 +144,8 @@ def _release(owned: list[int], confinement: _Confinement | None) -> None:
             pass
     if confinement is None:
         return
+    if confinement.fence is not None:
+        confinement.fence.close()
     if confinement.uid is not None:
         _boxuser.kill_uid(confinement.uid)
         _boxuser.remove_files(confinement.uid)

@@ -30,16 +30,6 @@ BLOCKED = (PACKAGE_DIR.name,)
 
 BACKENDS = ("auto", "bwrap", "basic")
 
-#: Folders of the package (relative to it) that are not in a bwrap box even when the box may
-#: import gpsaccel (``allow_gpsaccel``: a notebook using the course's models for data): the
-#: checks, the homework's graded questions and reference answers, the lessons' self-check answers
-#: and the lessons' masters and solutions.  An empty read-only folder is bound over each, so no
-#: call (an ``open`` through ctypes included) finds their files; the audit hook of the notebook's
-#: module (:mod:`gpsaccel.assignments.notebook`) is the only fence under ``basic``.
-HIDDEN_WITH_GPSACCEL = ("check", "assignments", "exercises", "_lessons/masters",
-                        "_lessons/solutions")
-
-
 #: uid/gid of the student inside a bwrap box.
 BOX_UID = 65534
 
@@ -160,7 +150,8 @@ def _python() -> str:
 
 
 def _bwrap_command(exe: str, tmp: Path, sub: Submission, limits: Limits, allow: bool,
-                   result_fd: int, go_fd: int | None = None) -> tuple[list[str], list[int]]:
+                   result_fd: int, go_fd: int | None = None, hide: Sequence[str] = ()
+                   ) -> tuple[list[str], list[int]]:
     """The bwrap command line, and the file descriptors it must inherit (one per copied file)."""
     # /tmp first: the interpreter's folders may live below it (a venv in /tmp), and a bind made
     # before the tmpfs would be hidden by it
@@ -193,7 +184,7 @@ def _bwrap_command(exe: str, tmp: Path, sub: Submission, limits: Limits, allow: 
     pkg = str(PACKAGE_DIR)
     if allow:
         ro(pkg)
-        cmd.extend(_hide_answers(tmp, bound))
+        cmd.extend(_hide_answers(tmp, bound, hide))
     elif any(pkg == b or pkg.startswith(b + "/") for b in bound):
         cmd.extend(["--tmpfs", pkg])  # an editable or installed gpsaccel: hidden
     # every writable mount has a size: /box, /tmp, /dev/shm; the root, /dev and the folders
@@ -220,18 +211,40 @@ def _bwrap_command(exe: str, tmp: Path, sub: Submission, limits: Limits, allow: 
     return cmd, fds
 
 
-def _hide_answers(tmp: Path, bound: list[str]) -> list[str]:
-    """bwrap arguments binding an empty read-only folder over :data:`HIDDEN_WITH_GPSACCEL` in
-    every copy of the package the box can see (this one, an installed one in site-packages)."""
+def check_hide(hide: Sequence[str], allow: bool) -> tuple[str, ...]:
+    """``hide`` as given, checked: folders relative to the package, for a box that may import
+    it (without ``allow`` the whole package is out of the box's reach)."""
+    if isinstance(hide, str):
+        raise ValueError(f"hide must be a sequence of folders, got the string {hide!r}")
+    hide = tuple(hide)
+    if hide and not allow:
+        raise ValueError("hide names folders of gpsaccel a box that may import it does not see; "
+                         "without allow_gpsaccel the box sees none of the package")
+    for rel in hide:
+        if not isinstance(rel, str) or not rel or os.path.isabs(rel) or ".." in rel.split("/"):
+            raise ValueError(f"hide: each folder must be a path relative to the gpsaccel "
+                             f"package, got {rel!r}")
+    return hide
+
+
+def hidden_dirs(allow: bool, hide: Sequence[str]) -> list[str]:
+    """The folders no process of a box may read: every copy of the package (this one, an
+    installed or editable one the interpreter would find) when the box may not import it, else
+    the folders ``hide`` of each copy that exist (real paths)."""
+    copies = list(dict.fromkeys([str(PACKAGE_DIR), *_blocked_dirs()]))
+    dirs = copies if not allow else [os.path.join(pkg, rel) for pkg in copies for rel in hide]
+    return list(dict.fromkeys(os.path.realpath(d) for d in dirs if os.path.isdir(d)))
+
+
+def _hide_answers(tmp: Path, bound: list[str], hide: Sequence[str]) -> list[str]:
+    """bwrap arguments binding an empty read-only folder over the folders ``hide`` of every
+    copy of the package the box can see (this one, an installed one in site-packages)."""
     empty = tmp / "empty"
     args: list[str] = []
-    for pkg in dict.fromkeys([str(PACKAGE_DIR), *_blocked_dirs()]):
-        for rel in HIDDEN_WITH_GPSACCEL:
-            real = os.path.realpath(os.path.join(pkg, rel))
-            # only what the box sees (a lessons link to a folder outside the binds is not there)
-            if os.path.isdir(real) and any(real.startswith(b + "/") for b in bound) \
-                    and real not in args:
-                args.extend(["--ro-bind", str(empty), real])
+    for real in hidden_dirs(True, hide):
+        # only what the box sees (a lessons link to a folder outside the binds is not there)
+        if any(real.startswith(b + "/") for b in bound) and real not in args:
+            args.extend(["--ro-bind", str(empty), real])
     if args:
         empty.mkdir(mode=0o555, exist_ok=True)
     return args

@@ -13,6 +13,7 @@ from pathlib import Path
 import psutil
 
 from gpsaccel.sandbox import _boxuser, _cgroup
+from gpsaccel.sandbox.fence import Fence
 from gpsaccel.sandbox.procs import PR_CAPBSET_DROP, PR_SET_NO_NEW_PRIVS, PR_SET_PDEATHSIG, _libc, _prctl
 from gpsaccel.sandbox.spec import Limits
 
@@ -46,12 +47,13 @@ def _nproc(limits: Limits) -> int:
 @dataclass
 class _Confinement:
     """What confines one box beyond its rlimits: the uid it runs as (root only), its cgroup, the
-    mounts that reveal the interpreter to that uid."""
+    mounts that reveal the interpreter to that uid, the fence of a basic box's hidden folders."""
 
     uid: int | None = None
     cgroup: _cgroup.BoxCgroup | None = None
     reveal: list[tuple[str, list[str]]] = field(default_factory=list)
     lock: int | None = None  # held while the uid is this box's
+    fence: Fence | None = None
 
     @property
     def limit_backend(self) -> str:
@@ -85,8 +87,10 @@ def _preexec(limits: Limits, nproc: int, drop_caps: bool, cap_last: int,
              confinement: _Confinement | None = None) -> None:
     """In the child, before exec: join the box's cgroup, limits, no core files; as root also the
     mounts revealing the interpreter, an empty capability bounding set, the box's uid, no new
-    privileges (runs after fork; everything it calls was looked up before the fork)."""
+    privileges; last the fence of a basic box's hidden folders (runs after fork; everything it
+    calls was looked up before the fork)."""
     c = confinement or _Confinement()
+    libc = _libc()
     if c.cgroup is not None:
         for f in c.cgroup.procs_files:
             fd = os.open(f, os.O_WRONLY)
@@ -97,10 +101,14 @@ def _preexec(limits: Limits, nproc: int, drop_caps: bool, cap_last: int,
     if c.reveal:  # before the rlimits: the parent's descriptors are still open here (close_fds
         # comes after preexec_fn), so with RLIMIT_NOFILE set first, a grader holding more than
         # open_files descriptors could not open the folders to reveal and no box would start
-        libc = _libc()
         if libc is None:
             raise OSError("the box's reveal needs Linux's libc")
         _boxuser.apply_reveal(libc, c.reveal)
+    landlock = c.fence is not None and c.fence.kind == "landlock"
+    if c.fence is not None and c.fence.kind == "mount":  # as root, over the revealed folders
+        if libc is None:
+            raise OSError("the box's fence needs Linux's libc")
+        c.fence.apply(libc)
     cpu = int(limits.time) + 2
     for res, value in ((resource.RLIMIT_AS, limits.memory), (resource.RLIMIT_CPU, cpu),
                        (resource.RLIMIT_FSIZE, limits.file_size),
@@ -116,5 +124,8 @@ def _preexec(limits: Limits, nproc: int, drop_caps: bool, cap_last: int,
         os.setresgid(c.uid, c.uid, c.uid)
         os.setresuid(c.uid, c.uid, c.uid)
     _prctl(PR_SET_PDEATHSIG, signal.SIGKILL)  # after the uid: a change of uid clears it
-    if drop_caps:
+    if drop_caps or landlock:  # Landlock restricts only a process that cannot gain privileges
         _prctl(PR_SET_NO_NEW_PRIVS, 1)
+    if landlock:
+        assert c.fence is not None and libc is not None
+        c.fence.apply(libc)

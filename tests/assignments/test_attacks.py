@@ -263,9 +263,10 @@ for fd in range(3, 64):
     # the grader's wrappers replaced: they can only return other arrays of the declared shapes
     "patched wrappers": ("""
 import numpy as np
-def _gpsaccel_probe(name, value_only, args, shapes):
+_reads = _gpsaccel_probe.__self__.reads
+def _gpsaccel_probe(k, *args):
     status = np.zeros(9, dtype=np.int64)
-    return (status, np.zeros(320, dtype=np.uint8), *[np.zeros(s) for s in shapes])
+    return (status, np.zeros(320, dtype=np.uint8), *[np.zeros(s) for s in _reads[int(k)][2]])
 """, 0),
 }
 

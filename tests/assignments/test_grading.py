@@ -222,11 +222,31 @@ def test_packaged_student_side_is_the_masters_and_holds_no_solution(name, studen
     assert "BEGIN SOLUTION" not in text and "HIDDEN" not in text and "_graded" not in text
 
 
-def test_what_the_import_fence_refuses_is_not_in_a_bwrap_box():
-    """The notebook module's audit hook (both backends) and bwrap's empty folders (the real
-    fence) name the same sub-packages: one added to the hook must be hidden from the box too."""
-    from gpsaccel.sandbox import HIDDEN_WITH_GPSACCEL, PACKAGE_DIR
+def test_the_notebook_module_is_data_and_calls_only():
+    """What is generated per notebook holds no program: an import of the box-side module, a call
+    of its guard with the hidden folders' modules (the list the sandbox fences, so the two
+    cannot part) and a call of its start with the cells and reads as literals; a student's
+    text that tries to close its string literal stays inside it."""
+    import ast
 
-    for name in nbm.HIDDEN_PACKAGES:
-        top, _, rest = name.partition(".")
-        assert top == PACKAGE_DIR.name and rest.replace(".", "/") in HIDDEN_WITH_GPSACCEL, name
+    import numpy as np
+
+    hostile = "x = 1\n'''\n\"\"\")\nimport os; os.system('ls')  # "
+    nb = nbm.Notebook([nbm.Cell(2, hostile), nbm.Cell(5, "%time y = 1")])
+    src = nbm.module_source(nb, [nbm.Read("f", (np.zeros(3),), ((3,), (2, 2))),
+                                 nbm.Read("y", (), ((),), value=True)])
+    body = ast.parse(src).body
+    assert [type(n).__name__ for n in body] == ["ImportFrom", "Expr", "Assign"]
+    assert body[0].module == "gpsaccel.boxside" and [a.name for a in body[0].names] == ["notebook"]
+    guard, start = body[1].value, body[2].value
+    assert isinstance(guard, ast.Call) and isinstance(start, ast.Call)
+    assert ast.unparse(guard.func) == "_gpsaccel_box.guard"
+    assert ast.literal_eval(guard.args[0]) == tuple(
+        "gpsaccel." + rel.replace("/", ".") for rel in nbm.BOX_HIDES)
+    assert ast.unparse(start.func) == "_gpsaccel_box.start"
+    assert ast.unparse(start.args[0]) == "globals()"
+    assert ast.literal_eval(start.args[1]) == [
+        (2, hostile + "\n"), (5, "get_ipython().run_line_magic('time', 'y = 1')\n")]
+    assert ast.literal_eval(start.args[2]) == [("f", False, [(3,), (2, 2)]), ("y", True, [()])]
+    with pytest.raises(ValueError, match="Python name"):
+        nbm.module_source(nb, [nbm.Read("f(); import os", ())])

@@ -239,6 +239,9 @@ def test_boxes_at_once_in_one_process_get_uids_of_their_own():
 
 
 # ------------------------------------------------------------------ the answers are not there
+#: What a box that may import gpsaccel hides (the checks' and the homework's list).
+HIDE = check.problem.BOX_HIDES
+
 _RAW_READ = '''
 import ctypes, os
 import numpy as np
@@ -248,9 +251,7 @@ libc = ctypes.CDLL(None, use_errno=True)
 ROOT = os.path.dirname(gpsaccel.__file__)
 
 
-def raw_read(rel):
-    """Bytes read by libc open/read (no Python-level file call, so no audit event), or -errno."""
-    fd = libc.open(os.path.join(ROOT, rel).encode(), os.O_RDONLY)
+def _read_fd(fd):
     if fd < 0:
         return -ctypes.get_errno()
     buf = ctypes.create_string_buffer(1 << 16)
@@ -259,28 +260,78 @@ def raw_read(rel):
     return n
 
 
+def raw_read(path):
+    """Bytes read by libc open/read (no Python-level file call, so no audit event), or -errno."""
+    return _read_fd(libc.open(path.encode(), os.O_RDONLY))
+
+
+def raw_openat(path):
+    top = libc.open(b"/", os.O_RDONLY | os.O_DIRECTORY)
+    n = _read_fd(libc.openat(top, path.lstrip("/").encode(), os.O_RDONLY))
+    libc.close(top)
+    return n
+
+
+def through_symlink(path):
+    """A link made in /tmp to the file's folder, then the file read through it."""
+    link = "/tmp/lnk-%d" % os.getpid()
+    libc.unlink(link.encode())
+    libc.symlink(os.path.dirname(path).encode(), link.encode())
+    return raw_read(link + "/" + os.path.basename(path))
+
+
+def through_hard_link(path):
+    link = "/tmp/hl-%d" % os.getpid()
+    libc.unlink(link.encode())
+    if libc.link(path.encode(), link.encode()) != 0:
+        return -ctypes.get_errno()
+    return raw_read(link)
+
+
+WAYS = [raw_read, raw_openat, lambda p: raw_read("/proc/self/root" + p),
+        lambda p: raw_read("/proc/self/cwd/" + os.path.relpath(p)),
+        lambda p: raw_read(os.path.join(ROOT, "kalman", "..", os.path.relpath(p, ROOT))),
+        through_symlink, through_hard_link]
+
+
 def f(x):
-    return np.array([raw_read(rel) for rel in REL], dtype=float), np.array(
-        [len(os.listdir(os.path.join(ROOT, d))) for d in DIRS], dtype=float)
+    read = [way(os.path.join(ROOT, rel)) for rel in REL for way in WAYS]
+    return np.array(read, dtype=float)
 '''
 
 
-@pytest.mark.skipif(not sb.bwrap_path(), reason="needs a working bubblewrap")
-def test_a_box_that_may_import_gpsaccel_finds_no_check_nor_answer_file(tmp_path):
+def test_a_box_that_may_import_gpsaccel_reads_no_check_nor_answer_file(backend, tmp_path):
     """A notebook's box imports the course's models (allow_gpsaccel) but reads no file of the
-    checks, the graded questions or the answers, not even with libc calls no audit hook sees:
-    bwrap binds empty folders over them (a public module of the same package is readable)."""
+    folders its caller hides (the checks, the graded questions, the answers), by any way of
+    opening them: libc's open and openat (no audit event), /proc/self/root and cwd, a path
+    through a public folder, a symbolic or hard link made in /tmp.  bwrap binds empty folders
+    over them (ENOENT); basic fences them (Landlock: EACCES, EXDEV or EPERM for a link; a mount
+    namespace: ENOENT).  A public module of the same package is read."""
     rel = ["check/batch.py", "check/problem.py", "assignments/ship.py",
-           "assignments/__init__.py", "exercises/answers.py", "calibration/model.py"]
-    dirs = [d for d in sb.HIDDEN_WITH_GPSACCEL if (sb.PACKAGE_DIR / d).resolve().is_relative_to(
-        sb.PACKAGE_DIR)]
+           "assignments/__init__.py", "assignments/masters/calibration/graded.py",
+           "exercises/answers.py", "calibration/model.py"]
     f = tmp_path / "s.py"
-    f.write_text(f"REL = {rel!r}\nDIRS = {dirs!r}\n" + _RAW_READ)
+    f.write_text(f"REL = {rel!r}\n" + _RAW_READ)
+    ways = 7
     box = sb.run(sb.load_submission(f, "f"), [sb.Call("f", (np.zeros(1),), (
-        sb.Output("read", (len(rel),)), sb.Output("listed", (len(dirs),))))], LIMITS, "bwrap",
-        allow_gpsaccel=True)
-    assert box.failure is None, box.detail
-    read = box.results[0]["read"]
-    assert list(read[:-1]) == [-float(errno.ENOENT)] * (len(rel) - 1)
-    assert read[-1] == min((sb.PACKAGE_DIR / rel[-1]).stat().st_size, 1 << 16)
-    assert list(box.results[0]["listed"]) == [0.0] * len(dirs)
+        sb.Output("read", (len(rel) * ways,)),))], LIMITS, backend, allow_gpsaccel=True,
+        hide=HIDE)
+    assert box.failure is None, (box.detail, box.problem)
+    read = box.results[0]["read"].reshape(len(rel), ways)
+    refused = {-errno.ENOENT, -errno.EACCES, -errno.EXDEV, -errno.EPERM}
+    assert set(read[:-1].ravel().tolist()) <= refused, read
+    size = min((sb.PACKAGE_DIR / rel[-1]).stat().st_size, 1 << 16)
+    assert read[-1, :6].tolist() == [size] * 6  # every way but a hard link (root's file)
+
+
+def test_a_box_that_may_not_import_gpsaccel_reads_none_of_it(backend, tmp_path):
+    """Without allow_gpsaccel no file of the package is readable, through libc either."""
+    f = tmp_path / "s.py"
+    f.write_text("REL = ['calibration/model.py', 'check/problem.py']\n"
+                 + _RAW_READ.replace("import gpsaccel\n", "").replace(
+                     "os.path.dirname(gpsaccel.__file__)", repr(str(sb.PACKAGE_DIR))))
+    box = sb.run(sb.load_submission(f, "f"), [sb.Call("f", (np.zeros(1),), (
+        sb.Output("read", (2 * 7,)),))], LIMITS, backend)
+    assert box.failure is None, (box.detail, box.problem)
+    assert set(box.results[0]["read"].tolist()) <= {-errno.ENOENT, -errno.EACCES,
+                                                     -errno.EXDEV, -errno.EPERM}

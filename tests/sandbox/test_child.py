@@ -113,3 +113,19 @@ def test_bad_limits_are_refused_by_name():
         with pytest.raises(ValueError, match=name):
             sb.in_child(print, **kwargs)
 
+
+def test_a_hostile_notebook_costs_its_own_limits_only(tmp_path):
+    """The notebook parse (:func:`gpsaccel.assignments.notebook.load`) of a cell of 600 ``%env``
+    lines (IPython's transformer gives up on it with a RuntimeError, after 8-9 CPU s) and of
+    JSON nested past the recursion limit: each the student's unreadable notebook, at the cost
+    of the parse's own limits, never an exception of the grader's."""
+    from gpsaccel.assignments import notebook as nbm
+
+    env = tmp_path / "env.ipynb"
+    env.write_text(json.dumps({"cells": [{"cell_type": "code", "source": "%env A=1\n" * 600}]}))
+    with pytest.raises(nbm.NotebookError, match=f"more than {nbm.LOAD_CPU} CPU seconds"):
+        nbm.load(env)
+    deep = tmp_path / "deep.ipynb"
+    deep.write_text("[" * 100_000)
+    with pytest.raises(nbm.NotebookError, match="nested too deep"):
+        nbm.load(deep)
