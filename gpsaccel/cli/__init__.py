@@ -15,6 +15,7 @@ import re
 import sys
 from collections.abc import Sequence
 
+from gpsaccel._interrupt import Stopped, exit_status
 from gpsaccel.cli.checking import add_check
 from gpsaccel.cli.homework import add_assignment, add_grade
 from gpsaccel.cli.lessons import add_lab, add_lessons
@@ -127,7 +128,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     Exit codes: 0 success; 1 a sub-command's own "not all passed" (``check``); 2 bad input
     (ValueError) or a file-system error (OSError: disk full, permission, ...); 130 interrupted
-    (Ctrl-C), after which no half-written file is left (:mod:`gpsaccel._atomic`).
+    (Ctrl-C; 143 SIGTERM, 129 SIGHUP where a class run took them as Ctrl-C: 128 + the signal),
+    after which no half-written file is left (:mod:`gpsaccel._atomic`).
     """
     try:
         args = build_parser().parse_args(argv)
@@ -150,9 +152,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         where = f": {exc.filename}" if getattr(exc, "filename", None) else ""
         print(f"gpsaccel {args.command}: error: {exc.strerror or exc}{where}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print(f"gpsaccel {args.command}: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM / SIGHUP where a run latches them
+        print(f"gpsaccel {args.command}: interrupted{_stopped(exc)}", file=sys.stderr)
+        return exit_status(exc)
+
+
+def _stopped(exc: KeyboardInterrupt) -> str:
+    """``" by SIGTERM: 2 of 5 finished and kept, ..."`` for a run that said what it kept."""
+    return f" by {exc}" if isinstance(exc, Stopped) else ""
 
 
 if __name__ == "__main__":

@@ -16,6 +16,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
     import time
 
     from gpsaccel import sandbox
+    from gpsaccel._interrupt import exit_status as stopped_status
     from gpsaccel._untrusted import json_safe
     from gpsaccel.check.batch import (
         Interrupted,
@@ -75,7 +76,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
         if args.json is not None:
             print(f"wrote {args.json} ({len(done)} of {len(files)} checked)")
         print("gpsaccel check: interrupted", file=sys.stderr)
-        return 130
+        return stopped_status(exc)  # 130 for Ctrl-C, 128 + SIGTERM's or SIGHUP's number
     return _check_report(args, results, settings, time.perf_counter() - t0)
 
 
@@ -125,7 +126,7 @@ def _check_report(args: argparse.Namespace, results: list, settings: dict, secon
 
 #: ``gpsaccel check``'s exit status: every submission passed; one failed (its code);
 #: 2 is argparse's (a bad argument, before any work); none failed but some gave no verdict
-#: (the machine or the checker: run those again); 130 interrupted.
+#: (the machine or the checker: run those again); 130 interrupted (143 by SIGTERM, 129 by SIGHUP).
 PASSED, FAILED, NO_VERDICT = 0, 1, 3
 
 
@@ -168,7 +169,7 @@ def add_check(sub: argparse._SubParsersAction) -> None:
                        epilog="exit status: 0 every submission passed; 1 one failed; 2 a bad "
                               "argument (nothing was checked); 3 none failed but some checks "
                               "gave no verdict (the machine or the checker: check those again); "
-                              "130 interrupted")
+                              "130 interrupted (143 by SIGTERM, 129 by SIGHUP)")
     p.add_argument("paths", nargs="+", type=Path,
                    help="submission files, or folders whose every top-level .py file or "
                         "sub-folder is one submission")

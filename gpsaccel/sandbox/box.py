@@ -16,6 +16,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from gpsaccel._interrupt import stop_after_cleanup
 from gpsaccel.sandbox import _boxuser, fence
 from gpsaccel.sandbox.channel import FrameReader, Refused
 from gpsaccel.sandbox.clock import Clock, clock_detail
@@ -73,7 +74,12 @@ def run(sub: Submission, calls: Sequence[Call], limits: Limits | None = None,
     limits = Limits() if limits is None else limits
     backend = resolve_backend(backend)
     hide = check_hide(hide, allow_gpsaccel)
-    calls = list(calls)
+    with stop_after_cleanup():  # SIGTERM, SIGHUP: the box emptied, then the process ends
+        return _run(sub, list(calls), limits, backend, allow_gpsaccel, hide)
+
+
+def _run(sub: Submission, calls: list[Call], limits: Limits, backend: str, allow_gpsaccel: bool,
+         hide: tuple[str, ...]) -> BoxResult:
     t0 = time.perf_counter()
     sweep_stale_boxes()
     tmp = Path(tempfile.mkdtemp(prefix=f"{BOX_PREFIX}{os.getpid()}-"))

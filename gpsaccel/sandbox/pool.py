@@ -1,7 +1,7 @@
 """One process pool for every class-wide job (``gpsaccel check DIR``, ``gpsaccel grade``): each item
 in a process forked for it alone, with a deadline, under a subreaper that sweeps what a dead item
-left, and Ctrl-C that leaves nothing running; or the same items on a Dask cluster (or any
-:class:`concurrent.futures.Executor`) with the same deadlines.
+left, and Ctrl-C, SIGTERM or SIGHUP that leave nothing running; or the same items on a Dask cluster
+(or any :class:`concurrent.futures.Executor`) with the same deadlines.
 
     from gpsaccel.sandbox import pool
     pool.run_items(task, items, jobs=2, deadline=180, done=lambda i, out: ...)
@@ -14,8 +14,16 @@ that item's only: there is no pool to break, the next item gets a fresh process.
 Why fork per item: the item's process runs a student's box and then computes the answers; a
 student who kills it (the box's code reaching its parent) loses only their own item, and the
 answers of one item never live in a process that later runs another student's code.  The forked
-process ignores SIGINT (Ctrl-C is the pool's) and is not dumpable for its whole life (it holds
-answers while other boxes run).
+process ignores SIGINT, SIGTERM and SIGHUP (stopping is the pool's), dies with the pool
+(``PR_SET_PDEATHSIG``) and is not dumpable for its whole life (it holds answers while other boxes
+run).
+
+Stopping: SIGINT (Ctrl-C), SIGTERM (``timeout``, ``systemctl stop``, ``docker stop``, a batch
+scheduler) and SIGHUP (the terminal closed) are latched (:func:`gpsaccel._interrupt.latched_stop`)
+and read by the loop between polls: it SIGKILLs every running item, whose boxes end with it (bwrap's
+``--die-with-parent``, the runner's death signal), sweeps what they left (re-parented to the pool,
+the subreaper) and raises :class:`gpsaccel._interrupt.Stopped`, a KeyboardInterrupt naming the
+signal and what finished, which the callers handle as Ctrl-C: they keep what finished.
 
 Under Dask the items run in the workers (each box still a box of its own); the pool submits at most
 ``jobs`` at once, so an item's clock starts when it is submitted, and an item past its deadline is
@@ -28,6 +36,7 @@ from __future__ import annotations
 import concurrent.futures as cf
 import multiprocessing as mp
 import multiprocessing.connection as mpc
+import os
 import signal
 import time
 from collections import deque
@@ -35,9 +44,17 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from gpsaccel._interrupt import Latch, latched_sigint
+from gpsaccel._interrupt import Latch, latched, latched_stop
 from gpsaccel.sandbox.confinement import sweep_stale_boxes
-from gpsaccel.sandbox.procs import _get_subreaper, _my_children, set_dumpable, set_subreaper, sweep
+from gpsaccel.sandbox.procs import (
+    PR_SET_PDEATHSIG,
+    _get_subreaper,
+    _my_children,
+    _prctl,
+    set_dumpable,
+    set_subreaper,
+    sweep,
+)
 
 
 @dataclass(frozen=True)
@@ -63,22 +80,28 @@ def run_items(task: Callable[[Any], Any], items: Sequence[Any], jobs: int, deadl
     ``done(i, result or Lost)`` as each ends.  ``executor`` None forks a process per item (Linux
     and macOS); anything else is an executor or a specification
     :func:`gpsaccel.executors.resolve_executor` accepts (``"dask-local"``, ``"tcp://..."``).
-    Ctrl-C kills every running item and whatever their boxes left, then raises
-    KeyboardInterrupt."""
+    Ctrl-C, SIGTERM or SIGHUP kills every running item and whatever their boxes left, then
+    raises :class:`gpsaccel._interrupt.Stopped` (a KeyboardInterrupt)."""
     if jobs < 1:
         raise ValueError(f"jobs must be >= 1, got {jobs}")
     if not deadline > 0:
         raise ValueError(f"deadline must be a positive number of seconds, got {deadline!r}")
     if executor is None:
-        with latched_sigint(raise_now=False) as interrupted:  # read by the loop, never lost
+        with latched_stop(raise_now=False) as interrupted:  # read by the loop, never lost
             _Forked(task, items, jobs, deadline, done, interrupted).run()
-    else:  # Ctrl-C raises where it lands (the executor's own machinery handles it)
-        _on_executor(task, items, jobs, deadline, done, executor)
+    else:  # SIGTERM, SIGHUP raise where they land, as Ctrl-C does (the executor's own
+        # machinery handles it)
+        with latched((signal.SIGTERM, signal.SIGHUP), raise_now=True):
+            _on_executor(task, items, jobs, deadline, done, executor)
 
 
 # ------------------------------------------------------------------------- a process per item
-def _child(conn: mpc.Connection, task: Callable[[Any], Any], item: Any) -> None:
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the pool's to handle
+def _child(conn: mpc.Connection, task: Callable[[Any], Any], item: Any, pool: int) -> None:
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):  # stopping is the pool's
+        signal.signal(sig, signal.SIG_IGN)
+    _prctl(PR_SET_PDEATHSIG, signal.SIGKILL)  # a pool killed outright takes its items along
+    if os.getppid() != pool:  # the pool died before the death signal was set
+        os._exit(1)
     set_dumpable(False)  # for its whole life: after its box it holds answers
     try:
         out: Any = task(item)
@@ -121,7 +144,7 @@ class _Forked:
         self.before = _my_children()  # not the pool's: never swept
         try:
             while self.pending or self.running:
-                self.interrupted.check()
+                self.interrupted.check(self._kept())
                 self._fill()
                 mpc.wait([r.conn for r in self.running.values()]
                          + [r.proc.sentinel for r in self.running.values()], timeout=0.1)
@@ -137,11 +160,18 @@ class _Forked:
             sweep_stale_boxes()
             set_subreaper(bool(was_subreaper))
 
+    def _kept(self) -> str:
+        """What a stop keeps: the items that finished."""
+        finished = len(self.items) - len(self.pending) - len(self.running)
+        return (f"{finished} of {len(self.items)} finished and kept, {len(self.running)} "
+                f"stopped, {len(self.pending)} not started")
+
     def _fill(self) -> None:
         while self.pending and len(self.running) < self.jobs:
             i = self.pending.popleft()
             recv, send = self.ctx.Pipe(duplex=False)
-            proc = self.ctx.Process(target=_child, args=(send, self.task, self.items[i]),
+            proc = self.ctx.Process(target=_child, args=(send, self.task, self.items[i],
+                                                         os.getpid()),
                                     daemon=True, name=f"gpsaccel-item-{i}")
             proc.start()
             send.close()

@@ -1,6 +1,7 @@
 """A hostile class graded to the end (issue 27, items 4 and 5): every student has a row and a
 feedback file of their own, each hostile one its own status, every other student is graded; a
-regrade interrupted with Ctrl-C leaves the old row; a regrade is appended to the class record.
+regrade interrupted with Ctrl-C or SIGTERM leaves the old row; a regrade is appended to the class
+record.
 
 Kept cheap: three notebooks run in a box (two honest, one forging a shape); the others end
 before any box (a folder nested 1500 deep, an unparseable notebook, a cell of magics stopped at a
@@ -165,6 +166,53 @@ def test_ctrl_c_during_a_regrade_keeps_the_old_row(hostile):
     assert info["regrades"][-1]["student"] == "alice" and info["regrades"][-1]["interrupted"]
 
 
+def test_sigterm_during_a_regrade_is_ctrl_c(hostile):
+    """SIGTERM (``timeout``, ``docker stop``) as Ctrl-C: the box is killed before the grader exits
+    (nothing of the run alive when it has exited, counted then), the grader says what it kept,
+    the old row stays and the regrade is recorded as interrupted; exit status 143."""
+    sub, out = hostile["sub"], hostile["out"]
+    before = _rows(out)["alice"]
+    write_variant("calibration", sub / "alice" / "calibration.ipynb",
+                  first_cell="import subprocess\nsubprocess.Popen(['sleep', '120'])\n"
+                             "while True:\n    pass")  # a child of its own, and a loop
+    record = out / "grading.json"
+    regrades = len(json.loads(record.read_text(encoding="utf-8")).get("regrades") or [])
+    proc = subprocess.Popen([sys.executable, "-m", "gpsaccel", "grade", str(sub), "--assignment",
+                             "calibration", "--out", str(out), "--student", "alice",
+                             "--timeout", "60"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    seen: set[int] = set()
+    try:
+        me = psutil.Process(proc.pid)
+
+        def sleeping() -> bool:  # the regrade is recorded, then its box's child sleeps
+            if len(json.loads(record.read_text(encoding="utf-8")).get("regrades") or []) \
+                    == regrades:
+                return False
+            kids = me.children(recursive=True)
+            seen.update(p.pid for p in kids)
+            return any(_cmdline(p)[:1] == ["sleep"] for p in kids)
+
+        _wait(sleeping)
+        os.kill(proc.pid, signal.SIGTERM)
+        stdout, stderr = proc.communicate(timeout=120)
+        left = [p for p in seen if _alive(p)]
+    finally:
+        kill_pids([proc.pid, *seen])
+    assert proc.returncode == 143, (stdout, stderr)
+    assert not left, left
+    assert b"interrupted by SIGTERM: 0 of 1 finished and kept, 1 stopped" in stderr
+    assert _rows(out)["alice"] == before
+    info = json.loads(record.read_text(encoding="utf-8"))
+    assert info["regrades"][-1]["student"] == "alice" and info["regrades"][-1]["interrupted"]
+
+
+def _alive(pid: int) -> bool:
+    try:
+        return psutil.Process(pid).status() != psutil.STATUS_ZOMBIE
+    except psutil.NoSuchProcess:
+        return False
+
+
 def test_a_regrade_replaces_its_row_and_is_appended_to_the_record(hostile):
     sub, out = hostile["sub"], hostile["out"]
     write_variant("calibration", sub / "mallory" / "calibration.ipynb",  # the honest one now
@@ -176,5 +224,5 @@ def test_a_regrade_replaces_its_row_and_is_appended_to_the_record(hostile):
     assert rows["deep"]["status"] == "file-limit" and rows["alice"]["total"] == "10"
     info = json.loads((out / "grading.json").read_text(encoding="utf-8"))
     assert info["student"] is None and [r["student"] for r in info["regrades"]] == \
-        ["alice", "mallory"]
+        ["alice", "alice", "mallory"]  # two interrupted (Ctrl-C, SIGTERM), then this one
     assert info["regrades"][-1]["seed"] == 7 and not info["regrades"][-1]["interrupted"]

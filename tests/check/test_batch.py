@@ -107,7 +107,31 @@ def test_ctrl_c_kills_every_student_process_and_writes_what_is_done(tmp_path, ba
             proc.wait()
 
 
-def _interrupt(proc, out, watch, hostile):
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP])
+def test_sigterm_and_sighup_stop_a_class_check_as_ctrl_c_does(tmp_path, backend, sig, hostile,
+                                                              watch):
+    """``timeout``, ``systemctl stop``, ``docker stop`` and a closed terminal stop the check as
+    Ctrl-C does: what finished is written, every box is killed before the checker exits (counted
+    when it has exited, no clock), and the status is the shell's 128 + the signal."""
+    folder = tmp_path / "class"
+    folder.mkdir()
+    shutil.copy(hostile.SUBMISSIONS / "correct_gps_rate.py", folder / "a_correct.py")
+    for name in ("b_spins.py", "c_spins.py"):
+        (folder / name).write_text(
+            "import ctypes\n\nctypes.CDLL(None).prctl(15, b'gpsacc-hostile', 0, 0, 0)\n\n\n"
+            "def kalman_filter(z):\n    while True:\n        pass\n")
+    out = tmp_path / "results.json"
+    proc = _cli([folder, "--runs", "2", "--workers", 2, "--sandbox", backend,
+                 "--timeout", str(10 * hostile.HANG), "--json", out], hostile)
+    try:
+        _interrupt(proc, out, watch, hostile, sig)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+
+
+def _interrupt(proc, out, watch, hostile, sig=signal.SIGINT):
     deadline = time.monotonic() + hostile.HANG  # a hang guard; the event is started()
     log = log_path(out)
 
@@ -117,9 +141,10 @@ def _interrupt(proc, out, watch, hostile):
     while not started() and time.monotonic() < deadline and proc.poll() is None:
         time.sleep(0.05)
     assert started(), "the check did not get going"
-    proc.send_signal(signal.SIGINT)
+    proc.send_signal(sig)
     stdout, stderr = proc.communicate(timeout=hostile.HANG)
-    assert proc.returncode == 130, (stdout, stderr)
+    assert proc.returncode == 128 + sig, (stdout, stderr)
+    assert not hostile.alive(watch.seen), f"alive when the check exited: {hostile.alive(watch.seen)}"
     assert "interrupted" in stderr
     data = json.loads(out.read_text(encoding="utf-8"))
     assert data["settings"]["interrupted"] is True

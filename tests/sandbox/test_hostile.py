@@ -9,6 +9,8 @@ starts processes asserts by PID that none is alive when the check returns.
 
 from __future__ import annotations
 
+import os
+
 import pytest
 
 from gpsaccel import check
@@ -126,5 +128,42 @@ def test_ctrl_c_during_a_single_check_kills_the_box(tmp_path, backend, hostile, 
             proc.wait()
     left = hostile.wait_gone(watch.seen)
     assert not left, f"alive after Ctrl-C: {left}"
+
+
+def test_sigterm_during_a_single_check_empties_the_box_then_ends_the_process(tmp_path, backend,
+                                                                            hostile, watch):
+    """A box run outside a pool (a notebook's check.submission, Gradescope's one notebook):
+    SIGTERM, which would end the process at once, first empties the box (its processes, its
+    cgroup, its folder), then ends the process by SIGTERM; nothing of the box is alive when the
+    process is gone (counted then, no clock)."""
+    import glob
+    import signal
+    import subprocess
+    import sys
+    import tempfile
+    import time
+
+    spin = tmp_path / "spin.py"
+    spin.write_text("import ctypes, os\n\nctypes.CDLL(None).prctl(15, b'gpsacc-hostile', 0, 0, 0)"
+                    "\n\n\ndef kalman_filter(z):\n    os.fork()\n    while True:\n        pass\n")
+    code = (f"from gpsaccel import check\n"
+            f"check.submission({str(spin)!r}, n_runs=2, timeout={2 * hostile.HANG}, "
+            f"sandbox={backend!r})\n")
+    proc = subprocess.Popen([sys.executable, "-c", code], env=hostile.env(),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        deadline = time.monotonic() + hostile.HANG  # a hang guard; the event: two processes
+        while len(watch.seen) < 2 and time.monotonic() < deadline and proc.poll() is None:
+            time.sleep(0.05)
+        assert len(watch.seen) == 2, proc.communicate(timeout=hostile.HANG)
+        proc.send_signal(signal.SIGTERM)
+        proc.communicate(timeout=hostile.HANG)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == -signal.SIGTERM
+    assert not hostile.alive(watch.seen), f"alive after SIGTERM: {hostile.alive(watch.seen)}"
+    assert not glob.glob(os.path.join(tempfile.gettempdir(), f"gpsaccel-box-{proc.pid}-*"))
 
 

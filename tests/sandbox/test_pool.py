@@ -1,9 +1,13 @@
 """The sandbox's one pool (gpsaccel.sandbox.run_items): each item's own result or the reason it has
-none, a deadline forked or on an executor (the path Dask takes), nothing left running."""
+none, a deadline forked or on an executor (the path Dask takes), nothing left running, after
+SIGTERM and SIGHUP too."""
 
 from __future__ import annotations
 
 import os
+import signal
+import subprocess
+import sys
 import time
 
 import psutil
@@ -78,3 +82,62 @@ def test_bad_arguments_are_named(bad):
     kwargs = {"jobs": 1, "deadline": 1.0, **bad}
     with pytest.raises(ValueError, match=next(iter(bad))):
         sb.run_items(_task, ["a"], kwargs["jobs"], kwargs["deadline"], lambda i, o: None)
+
+
+_STOPPED = """
+import os, sys, time
+from gpsaccel import sandbox as sb
+from gpsaccel._interrupt import exit_status
+
+def task(item):
+    if os.fork() == 0:  # a grandchild, as a box's process: re-parented to the pool, swept
+        time.sleep(120)
+        os._exit(0)
+    with open({pids!r}, "a") as f:
+        f.write(f"{{os.getpid()}}\\n")
+    time.sleep(120)
+
+try:
+    sb.run_items(task, ["a", "b", "c"], 2, 300, print)
+except KeyboardInterrupt as exc:
+    print(type(exc).__name__, exc, flush=True)
+    sys.exit(exit_status(exc))
+"""
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP])
+def test_sigterm_and_sighup_stop_the_pool_as_ctrl_c_does(tmp_path, sig):
+    """The pool latches them: every running item and what it left are killed before it raises
+    a KeyboardInterrupt naming the signal and what it kept; nothing of the run outlives the
+    pool's process (counted when it has exited, no clock)."""
+    pids = tmp_path / "pids"
+    proc = subprocess.Popen([sys.executable, "-c", _STOPPED.format(pids=str(pids))],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    run: set[int] = set()
+    try:
+        deadline = time.monotonic() + 600  # a hang guard; the event is two items running
+        while not (pids.exists() and len(pids.read_text().split()) == 2):
+            assert time.monotonic() < deadline and proc.poll() is None, proc.communicate()
+            time.sleep(0.05)
+        run = {c.pid for c in psutil.Process(proc.pid).children(recursive=True)}
+        assert len(run) == 4  # two items, a grandchild each
+        proc.send_signal(sig)
+        out, err = proc.communicate(timeout=600)
+    finally:
+        for pid in [proc.pid, *run]:
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+        proc.wait()
+    assert proc.returncode == 128 + sig, err
+    name = signal.Signals(sig).name
+    assert out == f"Stopped {name}: 0 of 3 finished and kept, 2 stopped, 1 not started\n"
+    assert not [p for p in run if _alive(p)]
+
+
+def _alive(pid: int) -> bool:
+    try:
+        return psutil.Process(pid).status() != psutil.STATUS_ZOMBIE
+    except psutil.NoSuchProcess:
+        return False
