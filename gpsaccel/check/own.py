@@ -1,7 +1,8 @@
 """An instructor's own problem, from a Python file of their own: ``FILE.py:NAME``.
 
 ``gpsaccel check --problem problems.py:cv2d`` runs ``problems.py`` (the instructor's file, in the
-instructor's process: it is not a student's) and uses its problem ``cv2d``: one the file
+checker's own process, as whoever runs the command: trusted code, never a student's; why not in a
+box: docs/checker.md) and uses its problem ``cv2d``: one the file
 registered (``check.Problem.linear("cv2d", ...)`` registers itself) or a module-level variable
 ``cv2d`` holding a :class:`~gpsaccel.check.problem.Problem`.  From then on it is a registered
 problem like the package's: the same sandbox, catalogue and feedback; nothing in the package is

@@ -178,7 +178,8 @@ def add_check(sub: argparse._SubParsersAction) -> None:
                    help="the problem (default calibration), one of gpsaccel.registry's: " +
                         "; ".join(f"{name}: {title}" for name, title in titles.items()) +
                         "; or FILE.py:NAME, a problem of your own defined in FILE.py "
-                        "(check.Problem.linear(NAME, ...))")
+                        "(check.Problem.linear(NAME, ...)), run in this process as trusted "
+                        "code: never a file a student handed in")
     p.add_argument("--json", type=_v.output_file, default=None, metavar="FILE",
                    help="write every finding and number to FILE (e.g. results.json)")
     p.add_argument("--runs", type=_v.flag_int(minimum=2), default=None,
