@@ -227,3 +227,26 @@ def test_no_import_circle():
 def test_the_circle_finder_finds_one():
     arrows = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}, "e": set()}
     assert _circles(arrows) == [{"a", "b", "c"}]
+
+
+#: Not yet through sandbox.in_child (its owner converts it: issue 41 item 2).
+FORKS_PENDING = {"assignments/similarity.py"}
+
+
+def test_processes_under_limits_only_through_the_sandbox():
+    """Forking, multiprocessing and rlimits live in the sandbox (and the executors): any other
+    host-side work on a student's files runs through ``sandbox.in_child``."""
+    offenders = set()
+    for path in _modules():
+        rel = path.relative_to(ROOT).as_posix()
+        if rel.startswith("sandbox/") or rel == "executors.py":
+            continue
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+                [node.module or ""] if isinstance(node, ast.ImportFrom) else []
+            attr = ast.unparse(node) if isinstance(node, ast.Attribute) else ""
+            if any(n.split(".")[0] in ("multiprocessing", "resource") for n in names) or \
+                    attr in ("os.fork", "os.forkpty", "resource.setrlimit"):
+                offenders.add(rel)
+    assert offenders <= FORKS_PENDING, sorted(offenders - FORKS_PENDING)
