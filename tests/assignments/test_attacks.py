@@ -1,8 +1,8 @@
 """Hostile notebooks, one per attack of issue 19 (and a few more): each scores only what its honest
 content earns, changes no file outside its box, leaves no process and cannot stop the run.
 
-All of them are graded in one class run (module fixture, two at a time) next to two honest
-classmates whose grades must not move.  Every process an attack starts carries the marker
+All of them are graded in one class run (module fixture, two at a time; once under bwrap and once
+under basic as root) next to two honest classmates whose grades must not move.  Every process an attack starts carries the marker
 :data:`MARK` in its command line; after the run a scan of ``/proc`` must find none (and kills by
 PID whatever it finds, so a failing test leaves nothing on the shared machine).  Floods are
 bounded by the attack itself as well as by the sandbox.
@@ -30,9 +30,19 @@ def _bwrap() -> bool:
     return os.path.isdir("/proc") and resolve_backend("auto") == "bwrap"
 
 
-# the "kill the grader" attack signals every process it can see: only inside bwrap's PID namespace
-# is that nobody but itself (under the basic backend it would be every process of this user)
-pytestmark = pytest.mark.skipif(not _bwrap(), reason="needs Linux with a working bubblewrap")
+def _basic_as_root() -> bool:
+    from gpsaccel.sandbox import basic_is_safe
+
+    return os.path.isdir("/proc") and basic_is_safe()
+
+
+# the "kill the grader" attack signals every process it can see: inside bwrap's PID namespace that
+# is nobody but itself, and under basic as root only the box's own uid (not as root it would be
+# every process of this user: never run there)
+BACKENDS = [pytest.param("bwrap", marks=pytest.mark.skipif(
+                not _bwrap(), reason="needs Linux with a working bubblewrap")),
+            pytest.param("basic", marks=pytest.mark.skipif(
+                not _basic_as_root(), reason="basic isolates a student only as root"))]
 
 SECRET = b"instructor-secret-for-the-attack-tests"
 
@@ -303,8 +313,8 @@ def _honest(target: Path) -> Path:
     return target
 
 
-@pytest.fixture(scope="module")
-def attacked(tmp_path_factory):
+@pytest.fixture(scope="module", params=BACKENDS)
+def attacked(tmp_path_factory, request):
     root = tmp_path_factory.mktemp("attacks")
     sub = root / "submissions"
     out = root / "grades"
@@ -325,7 +335,7 @@ def attacked(tmp_path_factory):
     os.environ[SECRET_ENV] = SECRET.decode()
     try:
         grades = grade(sub, "ship", out=out, jobs=2, timeout=60, seed=7, secret=SECRET,
-                       sandbox="bwrap")
+                       sandbox=request.param)
     finally:
         del os.environ[SECRET_ENV]
         left = _procs_with(MARK)
@@ -368,6 +378,7 @@ def test_the_limits_name_the_attack(attacked):
     assert "MemoryError" in g["memory flood"].feedback
 
 
+@pytest.mark.skipif(not _basic_as_root(), reason="basic isolates a student only as root")
 def test_under_basic_a_box_that_kills_its_grader_costs_only_its_own_grade(tmp_path):
     # the basic backend cannot hide the grader's process: a student may kill its parent (only
     # its parent here: under basic, "every process" would be every process of this user)
