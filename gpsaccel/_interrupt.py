@@ -52,8 +52,11 @@ class Latch:
         return self.signals > 0
 
     def check(self, kept: str = "") -> None:
-        """Raise :class:`Stopped` if a signal came (even one whose exception was dropped)."""
+        """Raise if a signal came (even one whose exception was dropped): :class:`Stopped`, or
+        for Ctrl-C with nothing to say the KeyboardInterrupt Python raises."""
         if self.signals:
+            if self.signum == signal.SIGINT and not kept:
+                raise KeyboardInterrupt
             raise Stopped(self.signum, kept)
 
 
@@ -120,6 +123,15 @@ def stop_after_cleanup() -> Iterator[None]:
     finally:
         for s in mine:
             signal.signal(s, signal.SIG_DFL)
+
+
+def why(exc: BaseException) -> str:
+    """What follows "interrupted" in a message: ``" by SIGTERM: 2 of 5 finished and kept, ..."``
+    (nothing for a plain Ctrl-C)."""
+    if not isinstance(exc, Stopped):
+        return ""
+    by = "" if exc.signum == signal.SIGINT else f" by {signal.Signals(exc.signum).name}"
+    return by + (f": {exc.kept}" if exc.kept else "")
 
 
 def exit_status(exc: BaseException | None) -> int:

@@ -13,7 +13,7 @@ import sys
 
 import pytest
 
-from gpsaccel._interrupt import Stopped, exit_status, latched_sigint, latched_stop
+from gpsaccel._interrupt import Stopped, exit_status, latched_sigint, latched_stop, why
 from gpsaccel.calibration import CalibrationModel
 from gpsaccel.calibration.montecarlo import engine
 
@@ -92,6 +92,11 @@ def test_a_stop_latch_records_each_stop_signal_and_raises_it_named(sig):
     assert isinstance(info.value, Stopped) and info.value.signum == sig
     assert str(info.value) == f"{signal.Signals(sig).name}: 2 of 5 finished and kept"
     assert exit_status(info.value) == 128 + sig
+    by = "" if sig == signal.SIGINT else f" by {signal.Signals(sig).name}"
+    assert why(info.value) == f"{by}: 2 of 5 finished and kept"
+    with pytest.raises(KeyboardInterrupt) as info:
+        latch.check()  # nothing kept: Ctrl-C as Python raises it, the others named
+    assert isinstance(info.value, Stopped) == (sig != signal.SIGINT) and why(info.value) == by
 
 
 def test_the_exit_status_follows_the_signal_through_a_re_raise():

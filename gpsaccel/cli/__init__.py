@@ -15,7 +15,7 @@ import re
 import sys
 from collections.abc import Sequence
 
-from gpsaccel._interrupt import Stopped, exit_status
+from gpsaccel._interrupt import exit_status, why
 from gpsaccel.cli.checking import add_check
 from gpsaccel.cli.homework import add_assignment, add_grade
 from gpsaccel.cli.lessons import add_lab, add_lessons
@@ -153,13 +153,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"gpsaccel {args.command}: error: {exc.strerror or exc}{where}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM / SIGHUP where a run latches them
-        print(f"gpsaccel {args.command}: interrupted{_stopped(exc)}", file=sys.stderr)
+        print(f"gpsaccel {args.command}: interrupted{why(exc)}", file=sys.stderr)
         return exit_status(exc)
-
-
-def _stopped(exc: KeyboardInterrupt) -> str:
-    """``" by SIGTERM: 2 of 5 finished and kept, ..."`` for a run that said what it kept."""
-    return f" by {exc}" if isinstance(exc, Stopped) else ""
 
 
 if __name__ == "__main__":

@@ -133,48 +133,13 @@ def _wait(predicate, seconds: float = 120.0) -> None:
         time.sleep(0.05)
 
 
-def test_ctrl_c_during_a_regrade_keeps_the_old_row(hostile):
+def _stop_a_regrade(hostile, first_cell: str, running, sig: int):
+    """Alice hands in again (``first_cell`` first), her regrade starts; once it is recorded and
+    ``running(kids)`` holds for the grader's descendants, ``sig``; the grader's exit status, its
+    stderr, and its descendants alive when it had exited.  Her old row stays meanwhile."""
     sub, out = hostile["sub"], hostile["out"]
     before = _rows(out)["alice"]
-    write_variant("calibration", sub / "alice" / "calibration.ipynb",
-                  first_cell="while True:\n    pass")  # handed in again; it loops in its box
-    record = out / "grading.json"
-    proc = subprocess.Popen([sys.executable, "-m", "gpsaccel", "grade", str(sub), "--assignment",
-                             "calibration", "--out", str(out), "--student", "alice",
-                             "--timeout", "60"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    seen: set[int] = set()
-    try:
-        me = psutil.Process(proc.pid)
-
-        def in_the_box() -> bool:  # the regrade is recorded, then its notebook's box runs
-            if not json.loads(record.read_text(encoding="utf-8")).get("regrades"):
-                return False
-            kids = me.children(recursive=True)
-            seen.update(p.pid for p in kids)
-            return any(_cmdline(p) not in ([], me.cmdline()) for p in kids)  # exec'd: the box
-
-        _wait(in_the_box)
-        assert _rows(out)["alice"] == before  # the old row stays while the regrade runs
-        os.kill(proc.pid, signal.SIGINT)
-        stdout, stderr = proc.communicate(timeout=120)
-    finally:
-        kill_pids([proc.pid, *seen])
-    assert proc.returncode != 0, (stdout, stderr)
-    assert _rows(out)["alice"] == before
-    info = json.loads(record.read_text(encoding="utf-8"))
-    assert info["student"] is None and info["seed"] == 7  # the class record is kept
-    assert info["regrades"][-1]["student"] == "alice" and info["regrades"][-1]["interrupted"]
-
-
-def test_sigterm_during_a_regrade_is_ctrl_c(hostile):
-    """SIGTERM (``timeout``, ``docker stop``) as Ctrl-C: the box is killed before the grader exits
-    (nothing of the run alive when it has exited, counted then), the grader says what it kept,
-    the old row stays and the regrade is recorded as interrupted; exit status 143."""
-    sub, out = hostile["sub"], hostile["out"]
-    before = _rows(out)["alice"]
-    write_variant("calibration", sub / "alice" / "calibration.ipynb",
-                  first_cell="import subprocess\nsubprocess.Popen(['sleep', '120'])\n"
-                             "while True:\n    pass")  # a child of its own, and a loop
+    write_variant("calibration", sub / "alice" / "calibration.ipynb", first_cell=first_cell)
     record = out / "grading.json"
     regrades = len(json.loads(record.read_text(encoding="utf-8")).get("regrades") or [])
     proc = subprocess.Popen([sys.executable, "-m", "gpsaccel", "grade", str(sub), "--assignment",
@@ -184,26 +149,49 @@ def test_sigterm_during_a_regrade_is_ctrl_c(hostile):
     try:
         me = psutil.Process(proc.pid)
 
-        def sleeping() -> bool:  # the regrade is recorded, then its box's child sleeps
+        def started() -> bool:  # the regrade is recorded, then its notebook's box runs
             if len(json.loads(record.read_text(encoding="utf-8")).get("regrades") or []) \
                     == regrades:
                 return False
             kids = me.children(recursive=True)
             seen.update(p.pid for p in kids)
-            return any(_cmdline(p)[:1] == ["sleep"] for p in kids)
+            return running(kids, me)
 
-        _wait(sleeping)
-        os.kill(proc.pid, signal.SIGTERM)
-        stdout, stderr = proc.communicate(timeout=120)
+        _wait(started)
+        assert _rows(out)["alice"] == before  # the old row stays while the regrade runs
+        os.kill(proc.pid, sig)
+        _, stderr = proc.communicate(timeout=120)
         left = [p for p in seen if _alive(p)]
     finally:
         kill_pids([proc.pid, *seen])
-    assert proc.returncode == 143, (stdout, stderr)
-    assert not left, left
-    assert b"interrupted by SIGTERM: 0 of 1 finished and kept, 1 stopped" in stderr
     assert _rows(out)["alice"] == before
     info = json.loads(record.read_text(encoding="utf-8"))
+    assert info["student"] is None and info["seed"] == 7  # the class record is kept
     assert info["regrades"][-1]["student"] == "alice" and info["regrades"][-1]["interrupted"]
+    return proc.returncode, stderr, left
+
+
+def test_ctrl_c_during_a_regrade_keeps_the_old_row(hostile):
+    def in_the_box(kids, me) -> bool:
+        return any(_cmdline(p) not in ([], me.cmdline()) for p in kids)  # exec'd: the box
+
+    code, stderr, _ = _stop_a_regrade(hostile, "while True:\n    pass", in_the_box,
+                                      signal.SIGINT)
+    assert code == 130, stderr
+
+
+def test_sigterm_during_a_regrade_is_ctrl_c(hostile):
+    """SIGTERM (``timeout``, ``docker stop``) as Ctrl-C: the box is killed before the grader exits
+    (nothing of the run alive when it has exited, counted then), the grader says what it kept,
+    the old row stays and the regrade is recorded as interrupted; exit status 143."""
+    def sleeping(kids, me) -> bool:  # the box's own child runs
+        return any(_cmdline(p)[:1] == ["sleep"] for p in kids)
+
+    code, stderr, left = _stop_a_regrade(
+        hostile, "import subprocess\nsubprocess.Popen(['sleep', '120'])\nwhile True:\n    pass",
+        sleeping, signal.SIGTERM)
+    assert code == 143 and not left, (stderr, left)
+    assert b"interrupted by SIGTERM: 0 of 1 finished and kept, 1 stopped" in stderr
 
 
 def _alive(pid: int) -> bool:

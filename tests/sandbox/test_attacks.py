@@ -300,6 +300,22 @@ def f(x):
 '''
 
 
+#: How many ways of opening a file _RAW_READ tries, and what a refused one gives.
+WAYS = 7
+REFUSED = {-errno.ENOENT, -errno.EACCES, -errno.EXDEV, -errno.EPERM}
+
+
+def read_in_box(tmp_path, rel: list[str], backend: str, hide) -> np.ndarray:
+    """(file, way) -> bytes read, or -errno, by a box that may import gpsaccel but not ``hide``."""
+    f = tmp_path / "s.py"
+    f.write_text(f"REL = {rel!r}\n" + _RAW_READ)
+    box = sb.run(sb.load_submission(f, "f"), [sb.Call("f", (np.zeros(1),), (
+        sb.Output("read", (len(rel) * WAYS,)),))], LIMITS, backend, allow_gpsaccel=True,
+        hide=hide)
+    assert box.failure is None, (box.detail, box.problem, box.output)
+    return box.results[0]["read"].reshape(len(rel), WAYS)
+
+
 def test_a_box_that_may_import_gpsaccel_reads_no_check_nor_answer_file(backend, tmp_path):
     """A notebook's box imports the course's models (allow_gpsaccel) but reads no file of the
     folders its caller hides (the checks, the graded questions, the answers), by any way of
@@ -310,16 +326,8 @@ def test_a_box_that_may_import_gpsaccel_reads_no_check_nor_answer_file(backend, 
     rel = ["check/batch.py", "check/problem.py", "assignments/ship.py",
            "assignments/__init__.py", "assignments/masters/calibration/graded.py",
            "exercises/answers.py", "calibration/model.py"]
-    f = tmp_path / "s.py"
-    f.write_text(f"REL = {rel!r}\n" + _RAW_READ)
-    ways = 7
-    box = sb.run(sb.load_submission(f, "f"), [sb.Call("f", (np.zeros(1),), (
-        sb.Output("read", (len(rel) * ways,)),))], LIMITS, backend, allow_gpsaccel=True,
-        hide=HIDE)
-    assert box.failure is None, (box.detail, box.problem)
-    read = box.results[0]["read"].reshape(len(rel), ways)
-    refused = {-errno.ENOENT, -errno.EACCES, -errno.EXDEV, -errno.EPERM}
-    assert set(read[:-1].ravel().tolist()) <= refused, read
+    read = read_in_box(tmp_path, rel, backend, HIDE)
+    assert set(read[:-1].ravel().tolist()) <= REFUSED, read
     size = min((sb.PACKAGE_DIR / rel[-1]).stat().st_size, 1 << 16)
     assert read[-1, :6].tolist() == [size] * 6  # every way but a hard link (root's file)
 
@@ -331,7 +339,6 @@ def test_a_box_that_may_not_import_gpsaccel_reads_none_of_it(backend, tmp_path):
                  + _RAW_READ.replace("import gpsaccel\n", "").replace(
                      "os.path.dirname(gpsaccel.__file__)", repr(str(sb.PACKAGE_DIR))))
     box = sb.run(sb.load_submission(f, "f"), [sb.Call("f", (np.zeros(1),), (
-        sb.Output("read", (2 * 7,)),))], LIMITS, backend)
+        sb.Output("read", (2 * WAYS,)),))], LIMITS, backend)
     assert box.failure is None, (box.detail, box.problem)
-    assert set(box.results[0]["read"].tolist()) <= {-errno.ENOENT, -errno.EACCES,
-                                                     -errno.EXDEV, -errno.EPERM}
+    assert set(box.results[0]["read"].tolist()) <= REFUSED

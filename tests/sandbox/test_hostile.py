@@ -95,37 +95,48 @@ def test_every_correct_fixture_passes_under_every_backend(name, backend, hostile
     assert report.details["sandbox"] == backend
 
 
-def test_ctrl_c_during_a_single_check_kills_the_box(tmp_path, backend, hostile, watch):
-    """A notebook's check.submission interrupted: nothing of the student's spins on."""
-    import signal
+def _single_check(tmp_path, backend, hostile, watch, sig, processes):
+    """A spinning submission (``processes`` of it: the runner, and a child when 2) checked by
+    ``check.submission`` in a process of its own, given ``sig`` once they all run; the process
+    (ended) and its stderr."""
     import subprocess
     import sys
     import time
 
     spin = tmp_path / "spin.py"
-    spin.write_text("import ctypes\n\nctypes.CDLL(None).prctl(15, b'gpsacc-hostile', 0, 0, 0)\n\n\n"
-                    "def kalman_filter(z):\n    while True:\n        pass\n")
+    spin.write_text("import ctypes, os\n\nctypes.CDLL(None).prctl(15, b'gpsacc-hostile', 0, 0, 0)"
+                    "\n\n\ndef kalman_filter(z):\n" + "    os.fork()\n" * (processes - 1) +
+                    "    while True:\n        pass\n")
     code = (f"from gpsaccel import check\n"
             f"check.submission({str(spin)!r}, n_runs=2, timeout={2 * hostile.HANG}, "
             f"sandbox={backend!r})\n")
     proc = subprocess.Popen([sys.executable, "-c", code], env=hostile.env(),
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
-        # the event: the student's process exists (its marker, set when the box imports it);
-        # the deadline only guards against a hang
+        # the event: the student's processes exist (their marker, set when the box imports the
+        # file); the deadline only guards against a hang
         deadline = time.monotonic() + hostile.HANG
-        while not watch.seen and time.monotonic() < deadline and proc.poll() is None:
+        while len(watch.seen) < processes and time.monotonic() < deadline and \
+                proc.poll() is None:
             time.sleep(0.05)
-        assert watch.seen, proc.communicate(timeout=hostile.HANG)
-        proc.send_signal(signal.SIGINT)
-        # the box's time limit (2 HANG) is beyond the guard below, so only the interrupt can end
+        assert len(watch.seen) == processes, proc.communicate(timeout=hostile.HANG)
+        proc.send_signal(sig)
+        # the box's time limit (2 HANG) is beyond the guard below, so only the signal can end
         # the check; then the box's processes must go (they spin forever otherwise)
         _, err = proc.communicate(timeout=hostile.HANG)
-        assert b"KeyboardInterrupt" in err
     finally:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+    return proc, err
+
+
+def test_ctrl_c_during_a_single_check_kills_the_box(tmp_path, backend, hostile, watch):
+    """A notebook's check.submission interrupted: nothing of the student's spins on."""
+    import signal
+
+    _, err = _single_check(tmp_path, backend, hostile, watch, signal.SIGINT, 1)
+    assert b"KeyboardInterrupt" in err
     left = hostile.wait_gone(watch.seen)
     assert not left, f"alive after Ctrl-C: {left}"
 
@@ -138,30 +149,9 @@ def test_sigterm_during_a_single_check_empties_the_box_then_ends_the_process(tmp
     process is gone (counted then, no clock)."""
     import glob
     import signal
-    import subprocess
-    import sys
     import tempfile
-    import time
 
-    spin = tmp_path / "spin.py"
-    spin.write_text("import ctypes, os\n\nctypes.CDLL(None).prctl(15, b'gpsacc-hostile', 0, 0, 0)"
-                    "\n\n\ndef kalman_filter(z):\n    os.fork()\n    while True:\n        pass\n")
-    code = (f"from gpsaccel import check\n"
-            f"check.submission({str(spin)!r}, n_runs=2, timeout={2 * hostile.HANG}, "
-            f"sandbox={backend!r})\n")
-    proc = subprocess.Popen([sys.executable, "-c", code], env=hostile.env(),
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    try:
-        deadline = time.monotonic() + hostile.HANG  # a hang guard; the event: two processes
-        while len(watch.seen) < 2 and time.monotonic() < deadline and proc.poll() is None:
-            time.sleep(0.05)
-        assert len(watch.seen) == 2, proc.communicate(timeout=hostile.HANG)
-        proc.send_signal(signal.SIGTERM)
-        proc.communicate(timeout=hostile.HANG)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
+    proc, _ = _single_check(tmp_path, backend, hostile, watch, signal.SIGTERM, 2)
     assert proc.returncode == -signal.SIGTERM
     assert not hostile.alive(watch.seen), f"alive after SIGTERM: {hostile.alive(watch.seen)}"
     assert not glob.glob(os.path.join(tempfile.gettempdir(), f"gpsaccel-box-{proc.pid}-*"))
