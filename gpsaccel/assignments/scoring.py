@@ -285,7 +285,7 @@ def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
         reads += r
     limits = sb.Limits(memory=BOX_MEMORY, time=float(timeout), processes=BOX_PROCESSES)
     notes: list[str] = []
-    with tempfile.TemporaryDirectory(prefix="gpsaccel-nb-") as tmp:
+    with _scratch("nb") as tmp:
         folder = Path(tmp) / "submission"
         folder.mkdir()
         (folder / "notebook.py").write_text(nbm.module_source(run, reads), encoding="utf-8")
@@ -314,6 +314,16 @@ def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
     return g
 
 
+def _scratch(kind: str) -> tempfile.TemporaryDirectory:
+    """A temporary folder for the files a box is loaded from, named as the sandbox names its box
+    folders (``gpsaccel-box-<pid>-``): removed on exit, and, when this process is killed inside it
+    (a notebook past its deadline, Ctrl-C), by the pool's sweep of the folders whose process is
+    dead (:func:`gpsaccel.sandbox.sweep_stale_boxes`) instead of staying in ``/tmp``."""
+    from gpsaccel import sandbox as sb
+
+    return tempfile.TemporaryDirectory(prefix=f"{sb.BOX_PREFIX}{os.getpid()}-{kind}-")
+
+
 def _grader_error(q: Question, exc: Exception) -> Report:
     """The question's report when the grader itself raised: that question only, and the student
     sees the exception's type, never its text (which may hold the expected value)."""
@@ -340,7 +350,7 @@ def _grade_file(q: Question, nb: nbm.Notebook, draw: Draw, timeout: float) -> Re
                 "asks for the function in that file (keep the cell's first line as it is).",
                 observed={"file": q.file})
         return rep
-    with tempfile.TemporaryDirectory(prefix="gpsaccel-file-") as tmp:
+    with _scratch("file") as tmp:
         path = Path(tmp) / q.file
         path.write_text(found[1], encoding="utf-8", errors="replace")  # a lone surrogate too
         try:

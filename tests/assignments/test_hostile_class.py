@@ -214,3 +214,34 @@ def test_a_regrade_replaces_its_row_and_is_appended_to_the_record(hostile):
     assert info["student"] is None and [r["student"] for r in info["regrades"]] == \
         ["alice", "alice", "mallory"]  # two interrupted (Ctrl-C, SIGTERM), then this one
     assert info["regrades"][-1]["seed"] == 7 and not info["regrades"][-1]["interrupted"]
+
+
+def test_a_grade_stopped_in_a_box_leaves_no_temporary_folder(tmp_path):
+    """Ctrl-C while a notebook runs in its box: the notebook's process is killed inside its
+    scratch folder, which then stayed in /tmp (``gpsaccel-nb-*/submission``) after every such
+    run; named as a box folder, the pool's sweep removes it.  The run's TMPDIR is a folder of
+    this test, so only its own leftovers are counted."""
+    sub, tmp = tmp_path / "sub", tmp_path / "tmp"
+    tmp.mkdir()
+    write_variant("calibration", sub / "alice" / "calibration.ipynb",
+                  first_cell="while True:\n    pass")
+    proc = subprocess.Popen([sys.executable, "-m", "gpsaccel", "grade", str(sub), "--assignment",
+                             "calibration", "--out", str(tmp_path / "out"), "--timeout", "60",
+                             "--no-similarity"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            env=dict(os.environ, TMPDIR=str(tmp)))
+    seen: set[int] = set()
+    try:
+        me = psutil.Process(proc.pid)
+
+        def in_its_folder() -> bool:  # the notebook's scratch folder exists: its box starts
+            seen.update(p.pid for p in me.children(recursive=True))
+            return any("-nb-" in p.name for p in tmp.iterdir())
+
+        _wait(in_its_folder)
+        assert all(p.name.startswith(("gpsaccel-box-", "gpsaccel-uids")) for p in tmp.iterdir())
+        os.kill(proc.pid, signal.SIGINT)
+        stdout, stderr = proc.communicate(timeout=120)
+    finally:
+        kill_pids([proc.pid, *seen])
+    assert proc.returncode != 0, (stdout, stderr)
+    assert sorted(p.name for p in tmp.iterdir()) in ([], ["gpsaccel-uids"])
