@@ -65,6 +65,17 @@ def test_self_check_prints_one_line_and_returns_nothing(capsys, monkeypatch):
         self_check("99.2", 1.0)
 
 
+def test_a_miss_names_the_lesson_section_to_read_again(capsys, monkeypatch):
+    monkeypatch.setattr("gpsaccel.exercises.answers.ANSWERS", {"00.2": 0.5, "99.5": 0.5})
+    self_check("00.2", 2.0, hint="h")
+    assert capsys.readouterr().out == ("✗ exercise 00.2: about 4× too large. Hint: h. Read again: "
+                                       "lesson 00, 'Forty predictions to the next fix'.\n")
+    self_check("00.2", 0.5)
+    assert capsys.readouterr().out == "✓ exercise 00.2: right\n"
+    self_check("99.5", 2.0)                       # a key the table does not know: no pointer
+    assert capsys.readouterr().out == "✗ exercise 99.5: about 4× too large.\n"
+
+
 def test_record_mode_writes_the_answer_instead_of_checking(tmp_path, monkeypatch, capsys):
     record = tmp_path / "a.jsonl"
     monkeypatch.setenv(RECORD_VARIABLE, str(record))

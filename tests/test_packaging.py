@@ -219,7 +219,7 @@ WHEEL_STEPS: list[tuple[str, list[str], str]] = [
     ("version", ["--version"], f"gpsaccel {gpsaccel.__version__}"),
     ("copy the lessons", ["lessons", "--copy", "course"], "notebooks into course"),
     ("check a homework file", ["check", str(ROOT / "tests/submissions/correct_joseph.py"),
-                               "--runs", "2", "--sandbox", "basic"], "1 submissions"),
+                               "--runs", "2", "--sandbox", "basic"], "1 submission, problem calibration"),
     # the example of a homework of one's own, from the core install (no otter needed for it)
     ("write the example homework", ["assignment", "--example", "own"], "graded.py"),
 ]

@@ -57,17 +57,23 @@ def summary(grades: list[Grade], possible: dict[str, float]) -> list[dict]:
 
 
 def write_summary(rows: list[dict], grades: list[Grade], out: Path) -> None:
-    """``summary.csv`` (question, code, students) and ``summary.png`` (the same as bars)."""
+    """``summary.csv`` (question, code, students, and the lesson section that teaches the code's
+    fix: :mod:`gpsaccel._taught`) and ``summary.png`` (the same as bars)."""
+    from gpsaccel._taught import taught
+
     buf = io.StringIO()
     w = csv.writer(buf)
-    w.writerow(["question", "possible", "mean", "full marks", "students", "code", "count"])
+    w.writerow(["question", "possible", "mean", "full marks", "students", "code", "count",
+                "lesson", "section"])
     for r in rows:
         base = [r["question"], f"{r['possible']:g}", f"{r['mean']:.3f}", r["full"],
                 r["students"]]
         if not r["codes"]:
-            w.writerow([*base, "", ""])
+            w.writerow([*base, "", "", "", ""])
         for code, n in r["codes"].items():
-            w.writerow([*base, code, n])
+            section = taught(code)
+            w.writerow([*base, _cell(code), n, section.number if section else "",
+                        section.heading if section else ""])
     statuses = Counter(g.status for g in grades)
     w.writerow([])
     for s, n in statuses.most_common():

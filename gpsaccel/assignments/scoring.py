@@ -364,7 +364,8 @@ def _feedback_text(g: Grade, notes: list[str], reports: dict[str, Report],
                    variant: dict) -> str:
     """The student's feedback: the notes about their notebook (its own cells' errors, where it
     stopped) and, per question, the student's projection of each finding
-    (:meth:`gpsaccel.check.report.Finding.for_student`: no expected value reaches this text)."""
+    (:meth:`gpsaccel.check.report.Finding.for_student`: no expected value reaches this text),
+    each error and warning with the lesson section that teaches its fix under it."""
     lines = [f"{g.student}: {g.total:g} / {g.max_total:g} points ({g.status})"]
     if variant:
         lines.append("Your variant: " + ", ".join(f"{k} = {v}" for k, v in variant.items()))
@@ -385,5 +386,7 @@ def _feedback_text(g: Grade, notes: list[str], reports: dict[str, Report],
                 continue  # each failure once
             seen.add(text)
             lines.append("    - " + text)
+            if f.see():
+                lines.append("      " + f.see())
         lines.append("")
     return "\n".join(lines)

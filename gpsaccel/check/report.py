@@ -11,14 +11,18 @@ student text is a template (``text``, with ``{fields}``) that is formatted with 
 Two renderers, so that feedback never hands out an answer *by construction*:
 
 * the student's (:meth:`Finding.for_student`, :meth:`Report.for_student`, ``str(report)``,
-  :meth:`Report.to_dict`): it works on a :class:`StudentFinding`, a projection that has no
-  ``expected`` and no ``detail`` field, so nothing it prints can come from them;
+  :meth:`Report.to_dict`, and :func:`brief`, the first look of ``gpsaccel check FILE``): it works
+  on a :class:`StudentFinding`, a projection that has no ``expected`` and no ``detail`` field, so
+  nothing it prints can come from them;
 * the instructor's (:meth:`Finding.for_instructor`, :meth:`Report.instructor_text`,
   ``to_dict(instructor=True)``), which shows the expected values too.
 
 A finding made the old way (``add(code, message)``, prose only) keeps its prose for the
 instructor; its student text is the code's template from :data:`gpsaccel.check.wording.STUDENT`
 (or a plain sentence naming the code), never the prose.  No regular expression scrubs any text.
+
+Every finding of a student's text says where the course teaches its fix: the lesson section of
+its code (:mod:`gpsaccel._taught`), under each error and warning and in the JSON (``taught``).
 
 ``severity`` is ``"error"`` (the check fails), ``"warning"`` (worth reading, the check still
 passes) or ``"note"`` (information, e.g. the statistics of a correct filter).  A :class:`Report`
@@ -36,6 +40,7 @@ from typing import Any
 
 import numpy as np
 
+from gpsaccel._taught import Section, taught
 from gpsaccel.check.wording import STUDENT, UNWORDED
 
 SEVERITIES = ("error", "warning", "note")
@@ -91,9 +96,28 @@ class StudentFinding:
     def __str__(self) -> str:
         return f"[{self.severity}] {self.code}: {self.message}"
 
+    @property
+    def taught(self) -> Section | None:
+        """The lesson section that teaches this code's fix (None: no lesson names it)."""
+        return taught(self.code)
+
+    def see(self) -> str:
+        """Where the course teaches the fix, as the student's text says it under the finding
+        ("" for a note, which asks for nothing)."""
+        return see(self.code, self.severity)
+
     def to_dict(self) -> dict:
+        section = self.taught
         return {"code": self.code, "severity": self.severity, "message": self.message,
-                "where": self.where, "observed": _jsonable(self.observed), "part": self.part}
+                "where": self.where, "observed": _jsonable(self.observed), "part": self.part,
+                "taught": section.to_dict() if section else None}
+
+
+def see(code: str, severity: str = "error") -> str:
+    """The line under a finding of ``code``: the lesson section that teaches its fix ("" for a
+    note or a code no lesson teaches)."""
+    section = taught(code)
+    return f"→ {section.cite()}" if section and severity != "note" else ""
 
 
 @dataclass(frozen=True)
@@ -168,19 +192,24 @@ def no_verdict(passed: bool, codes: list[str]) -> bool:
     return not passed and bool(codes) and all(ours(c) for c in codes)
 
 
-def render(subject: str, passed: bool, codes: list[str], lines: list[str],
+def render(subject: str, passed: bool, codes: list[str], lines: list[str | tuple[str, str]],
            tables: list[str]) -> str:
-    """The readable text of a report (one renderer for both audiences; each passes its lines)."""
+    """The readable text of a report (one renderer for both audiences; each passes its lines, a
+    line with what goes under it: where the course teaches the fix, :func:`see`)."""
     verdict = "PASSED" if passed else "NO VERDICT" if no_verdict(passed, codes) else "FAILED"
     head = f"{subject}: {verdict}"
     if codes:
         head += f" ({', '.join(codes)})"
     out = [head]
     for line in lines:
-        first, *rest = line.split("\n")  # later lines (a traceback) are kept as they are
+        text, under = (line, "") if isinstance(line, str) else line
+        first, *rest = text.split("\n")  # later lines (a traceback) are kept as they are
         out.append(textwrap.fill(first, width=100, initial_indent="  - ",
                                  subsequent_indent="    ", break_on_hyphens=False))
         out.extend("      " + x for x in rest)
+        if under:
+            out.append(textwrap.fill(under, width=100, initial_indent="    ",
+                                     subsequent_indent="      ", break_on_hyphens=False))
     for table in tables:
         out.append("")
         out.append(textwrap.indent(table, "  "))
@@ -206,7 +235,22 @@ class StudentReport:
 
     def __str__(self) -> str:
         return render(self.subject, self.passed, self.codes,
-                      [str(f) for f in self.findings], self.tables)
+                      [(str(f), f.see()) for f in self.findings], self.tables)
+
+
+def brief(result: Mapping) -> str:
+    """The student's first look at one check (``gpsaccel check FILE`` without ``-v``): the verdict
+    and each finding's first line — where and what — with the lesson section under each error
+    and warning; no table.  ``result`` is a report's student dictionary
+    (:meth:`StudentReport.to_dict`, which ``gpsaccel check`` receives from each check's process),
+    so it holds no expected value to print."""
+    lines: list[str | tuple[str, str]] = []
+    for f in result.get("findings", []):
+        severity, code = str(f.get("severity", "error")), str(f.get("code", ""))
+        first = str(f.get("message", "")).split("\n")[0]
+        lines.append((f"[{severity}] {code}: {first}", see(code, severity)))
+    return render(str(result.get("subject", "")), result.get("passed") is True,
+                  [str(c) for c in result.get("codes", [])], lines, [])
 
 
 @dataclass
@@ -283,8 +327,8 @@ class Report:
     def instructor_text(self) -> str:
         """The instructor's readable report (expected values shown)."""
         return render(self.subject, self.passed, self.codes,
-                      [f"[{f.severity}] {f.code}: {f.for_instructor()}" for f in self.findings],
-                      self.tables)
+                      [(f"[{f.severity}] {f.code}: {f.for_instructor()}", see(f.code, f.severity))
+                       for f in self.findings], self.tables)
 
     def __str__(self) -> str:
         """The student's readable report (what a test cell and ``gpsaccel check`` print)."""

@@ -102,11 +102,19 @@ def _check_settings(args: argparse.Namespace, sandbox, secret_seed) -> tuple:  #
     return limits, backend, seed, settings
 
 
+#: What the student's first look (one file, no ``-v``) says ``-v`` adds ({path}: as given).
+MORE = ("gpsaccel check -v {path} prints the whole report: the comparison with the optimal "
+        "filter, the mistake the catalogue matched, the consistency tables.")
+
+
 def _check_report(args: argparse.Namespace, results: list, settings: dict, seconds: float) -> int:
-    """The JSON first (printing can fail), then the table and the one-line summary; the exit
-    status is :func:`exit_status`'s."""
+    """The JSON first (printing can fail), then what the reader needs and the one-line summary:
+    one file is a student's first look (each finding's line and the lesson that teaches its
+    fix, :func:`gpsaccel.check.report.brief`); a class is the instructor's table and which
+    lesson teaches each mistake it made.  The exit status is :func:`exit_status`'s."""
     from gpsaccel._untrusted import json_safe
     from gpsaccel.check.batch import printable, table, write_json
+    from gpsaccel.check.report import brief
 
     seed, backend = settings["seed"], settings["sandbox"]
     results = json_safe(results)  # a name that is not UTF-8 written \xNN, never a crash
@@ -115,13 +123,37 @@ def _check_report(args: argparse.Namespace, results: list, settings: dict, secon
     if args.verbose:
         for r in results:
             print(printable(r["text"], keep_newlines=True), end="\n\n")
-    print(table(results))
+    if len(results) == 1 and not args.verbose:
+        import textwrap
+
+        print(printable(brief(results[0]), keep_newlines=True))
+        print(textwrap.fill(printable(MORE.format(path=" ".join(map(str, args.paths)))),
+                            width=100, break_on_hyphens=False, break_long_words=False))
+    else:
+        print(table(results))
+        _class_lines(results)
     runs = results[0]["details"].get("n_runs", args.runs) if results else args.runs
-    print(f"{len(results)} submissions, problem {args.problem}, {runs} runs each (seed "
-          f"{seed}{', drawn' if args.seed is None else ''}), sandbox {backend}, {seconds:.1f} s")
+    print(f"{len(results)} submission{'' if len(results) == 1 else 's'}, problem {args.problem}, "
+          f"{runs} runs each (seed {seed}{', drawn' if args.seed is None else ''}), sandbox "
+          f"{backend}, {seconds:.1f} s")
     if args.json is not None:
         print(f"wrote {path}")
     return exit_status(results)
+
+
+def _class_lines(results: list[dict]) -> None:
+    """Under the class's table: how many submissions made each mistake, and which lesson section
+    teaches its fix (:func:`gpsaccel._taught.class_lines`)."""
+    from collections import Counter
+
+    from gpsaccel._taught import class_lines
+    from gpsaccel.check.batch import printable
+
+    counts = Counter(str(c) for r in results for c in dict.fromkeys(r["codes"]))
+    if counts:
+        print("mistakes, and where the course teaches each:")
+        for line in class_lines(counts, noun="submission"):
+            print("  " + printable(line))
 
 
 #: ``gpsaccel check``'s exit status: every submission passed; one failed (its code);

@@ -120,6 +120,7 @@ def _cmd_grade(args: argparse.Namespace) -> int:
     for g in grades:
         print(f"{g.student:<{width}}  {g.total:>5g} / {g.max_total:g}  {g.status:<13} "
               f"{g.seconds:5.1f} s")
+    _mistake_lines(grades)
     print(f"wrote {out / 'grades.csv'}, {out / 'grades.json'}, {out / 'feedback'}/, "
           f"{out / 'summary.csv'}, {out / 'summary.png'} (seed in {out / 'grading.json'})")
     from gpsaccel.assignments.classwide import after_grading
@@ -128,6 +129,20 @@ def _cmd_grade(args: argparse.Namespace) -> int:
                               similarity=not args.no_similarity):
         print(line)
     return 0
+
+
+def _mistake_lines(grades: list) -> None:
+    """Per question, how many students made each mistake and which lesson section teaches its
+    fix (:func:`gpsaccel._taught.class_lines`; the same counts as summary.csv)."""
+    from collections import Counter
+
+    from gpsaccel._taught import class_lines
+    from gpsaccel._untrusted import clean
+
+    for q in grades[0].possible:
+        counts = Counter(c for g in grades for c in dict.fromkeys(g.codes.get(q, [])))
+        for line in class_lines(counts):
+            print(clean(f"{q}: {line}"))
 
 
 def add_assignment(sub: argparse._SubParsersAction) -> None:

@@ -20,6 +20,7 @@ import os
 import numpy as np
 
 from gpsaccel._feedback import describe_miss
+from gpsaccel._taught import taught
 
 #: When set (by ``python -m gpsaccel.lessons measure``), :func:`self_check` appends each key and the
 #: answer it was given to this JSON-lines file instead of checking it.
@@ -46,7 +47,8 @@ def self_check(key: str, answer, *, hint: str = "", name: str | None = None, dig
     """Print whether ``answer`` is right for exercise ``key`` (``"NN.k"``); returns nothing.
 
     ✓ when it agrees to ``digits`` significant digits (a count exactly); otherwise ✗ with what is
-    wrong (shape, sign, direction and rough size) and ``hint``, never the expected value.
+    wrong (shape, sign, direction and rough size), ``hint`` and the lesson section to read again
+    (:mod:`gpsaccel._taught`), never the expected value.
     """
     label = name or f"exercise {key}"
     record = os.environ.get(RECORD_VARIABLE)
@@ -56,7 +58,11 @@ def self_check(key: str, answer, *, hint: str = "", name: str | None = None, dig
             f.write(json.dumps({"key": key, "value": value, "digits": digits}) + "\n")
         print(f"(recorded the answer of {label})")
         return
-    print(_verdict(label, answer, _expected(key), hint, digits))
+    line = _verdict(label, answer, _expected(key), hint, digits)
+    section = taught(key)
+    if line.startswith("✗") and section is not None:
+        line += ("" if line.endswith(".") else ".") + f" Read again: {section.cite()}."
+    print(line)
 
 
 def _verdict(label: str, answer, expected, hint: str, digits: int) -> str:

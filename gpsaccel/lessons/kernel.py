@@ -1,7 +1,10 @@
 """Executing a lesson top to bottom in a kernel of its own, as nobody's front end.
 
 The kernel talks over Unix sockets in a private folder (:func:`_local_kernel`) and is told, through
-:data:`~gpsaccel.lessons.HEADLESS_VARIABLE`, that no slider can move.
+:data:`~gpsaccel.lessons.HEADLESS_VARIABLE`, that no slider can move.  Its temporary folder
+(``TMPDIR``) is a private one too, looked at once the kernel has stopped: what a lesson left there
+is recorded in the executed notebook (:data:`LEFT`), so a test can hold every lesson to leaving
+nothing behind in a student's ``/tmp``, and then removed.
 """
 
 from __future__ import annotations
@@ -20,6 +23,15 @@ UNCROPPED = "--InlineBackend.print_figure_kwargs={'bbox_inches': None}"
 UNLAID = ("--IPKernelApp.exec_lines="
           "__import__('gpsaccel.lessons.kernel').lessons.kernel.draw_without_layout()")
 
+#: Where :func:`execute` records what the lesson left in its temporary folder once its kernel
+#: stopped: ``nb.metadata["gpsaccel"]["left_in_tmp"]``, the names (none for a lesson that cleans
+#: up after itself).
+LEFT = "left_in_tmp"
+
+#: Kept in a temporary folder on purpose, by the sandbox of a lesson that runs the checker: the
+#: lock files of its box users (:mod:`gpsaccel.sandbox`), shared by every check of the machine.
+KEPT_IN_TMP = ("gpsaccel-uids",)
+
 
 def execute(path: Path | str, timeout: int = 600, runs: int | None = None,
             crop_figures: bool = True):
@@ -35,6 +47,10 @@ def execute(path: Path | str, timeout: int = 600, runs: int | None = None,
     label that cannot be drawn still raises, at a fraction of a figure's cost (constrained
     layout measures every tick label of every axes).  For a run whose pictures nobody looks
     at (the test suite's); the pages and JupyterLab show the laid-out, cropped ones.
+
+    The kernel's ``TMPDIR`` is a fresh folder, and the kernel is stopped as JupyterLab stops it
+    (a shutdown request, so its clean-up runs); whatever is left there is listed in
+    ``nb.metadata["gpsaccel"]["left_in_tmp"]`` (:data:`LEFT`) and then removed.
     """
     import nbformat
     from nbclient import NotebookClient
@@ -48,10 +64,13 @@ def execute(path: Path | str, timeout: int = 600, runs: int | None = None,
     os.environ[HEADLESS_VARIABLE] = "1"
     os.environ.setdefault("MPLBACKEND", "Agg")
     try:
-        with _local_kernel() as km:
-            NotebookClient(nb, km=km, timeout=timeout, kernel_name="python3",
-                           resources={"metadata": {"path": str(path.parent)}},
-                           extra_arguments=[] if crop_figures else [UNCROPPED, UNLAID]).execute()
+        with tempfile.TemporaryDirectory(prefix="gpsaccel-lesson-tmp-") as scratch:
+            with _local_kernel() as km:
+                NotebookClient(nb, km=km, timeout=timeout, kernel_name="python3",
+                               resources={"metadata": {"path": str(path.parent)}},
+                               extra_arguments=[] if crop_figures else [UNCROPPED, UNLAID]
+                               ).execute(env=dict(os.environ, TMPDIR=scratch))
+            left = sorted(set(os.listdir(scratch)) - set(KEPT_IN_TMP))
     finally:
         if runs is not None:
             if env_before is None:
@@ -62,6 +81,7 @@ def execute(path: Path | str, timeout: int = 600, runs: int | None = None,
             os.environ.pop(HEADLESS_VARIABLE, None)
         else:
             os.environ[HEADLESS_VARIABLE] = headless_before
+    nb.metadata.setdefault("gpsaccel", {})[LEFT] = left
     return nb
 
 
@@ -102,7 +122,9 @@ def _local_kernel():
     The default TCP transport makes every kernel warn "Kernel is running over TCP without
     encryption" on the terminal of ``gpsaccel lessons``; the kernel runs on this machine only, so
     IPC sockets (readable by this user alone) are both quieter and safer.  The kernel is shut down
-    and the folder removed on exit.
+    as a front end shuts it down (a request it answers by running its exit handlers: a lesson's
+    ``tempfile.TemporaryDirectory`` is removed then; killed only if it does not stop within
+    jupyter_client's wait) and the folder removed on exit.
     """
     from jupyter_client.manager import KernelManager
 
@@ -112,4 +134,4 @@ def _local_kernel():
             yield km
         finally:
             if km.has_kernel:
-                km.shutdown_kernel(now=True)
+                km.shutdown_kernel()

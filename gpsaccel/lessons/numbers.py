@@ -48,7 +48,8 @@ GIVEN: dict[str, str] = {
     "0.45": "√0.2, σ of the ship's velocity and heading measurements",
     "0.007": "√4.9e-5, σ of the ship's accelerometers (m/s²)",
     # cooperative localization (report 002)
-    "0.025": "P0's heading variances (rad²)",
+    "0.025": "P0's heading variances (rad²); α/2, the lower quantile of the 95 % χ² bounds",
+    "0.975": "1 − α/2, the upper quantile of the two-sided 95 % χ² bounds",
     "0.95": "the 95 % level of the χ² bounds",
     # numbers the reports print (quoted, then measured against ours)
     "0.013": "report 000's max(P_ave − P)",

@@ -232,12 +232,36 @@ def docs_page() -> tuple[Path, str]:
     return path, _TABLE.sub(lambda m: m.group(1) + lessons_table() + "\n" + m.group(2), text)
 
 
+def taught_table() -> str:
+    """The table of docs/checker.md: every code a student can be shown and the lesson section
+    that teaches its fix (:data:`gpsaccel._taught.TAUGHT`; a lesson self-check's key is left
+    out), each linked to the section on the rendered site."""
+    from gpsaccel._taught import TAUGHT
+
+    rows = ["| code | where the course teaches it |", "|---|---|"]
+    for code, s in sorted((c, s) for c, s in TAUGHT.items() if not c[:1].isdigit()):
+        link = f"[lesson {s.number}, {s.heading}](_lessons/{s.notebook}#{s.anchor})"
+        rows.append(f"| `{code}` | {link}{f' (exercise {s.exercise})' if s.exercise else ''} |")
+    return "\n".join(rows)
+
+
+_TAUGHT_TABLE = re.compile(r"(<!-- taught-table -->\n).*?(<!-- /taught-table -->)", re.S)
+
+
+def checker_page() -> tuple[Path, str]:
+    """docs/checker.md with its table of where each code is taught as the release writes it."""
+    path = Path(__file__).resolve().parents[2] / "docs" / "checker.md"   # the checkout's
+    text = path.read_text(encoding="utf-8")
+    return path, _TAUGHT_TABLE.sub(lambda m: m.group(1) + taught_table() + "\n" + m.group(2),
+                                   text)
+
+
 def release(only: list[str] | None = None) -> list[Path]:
-    """Write the student and solutions versions of every master (and the table of
-    docs/lessons.md); returns the notebooks written."""
-    path, text = docs_page()
-    if path.read_text(encoding="utf-8") != text:
-        write_text(path, text)
+    """Write the student and solutions versions of every master (and the tables of
+    docs/lessons.md and docs/checker.md); returns the notebooks written."""
+    for path, text in (docs_page(), checker_page()):
+        if path.read_text(encoding="utf-8") != text:
+            write_text(path, text)
     written = []
     for master in masters(only):
         for target, text in released(master).items():

@@ -89,10 +89,14 @@ def errors_with_sigma(run, result, states: Sequence[int] = (0, 1, 2), k: float =
             sd_fast = np.sqrt(result.M_fast[fast, i, i])
             ax.plot(result.t[fast], run.x[fast, i] - result.x_fast[fast, i], color=STYLE["error"],
                     lw=0.6, alpha=0.5, label="error between fixes")
-            ax.plot(result.t[fast], k * sd_fast, color=STYLE["bound"], lw=0.6, alpha=0.6)
+            kk = f"{k:g}" if k != 1 else ""
+            ax.plot(result.t[fast], k * sd_fast, color=STYLE["bound"], lw=0.6, alpha=0.6,
+                    label=f"±{kk}σ between fixes (a priori, √M)")
             ax.plot(result.t[fast], -k * sd_fast, color=STYLE["bound"], lw=0.6, alpha=0.6)
         error_band(result.t_gps[slow], e[slow, i], result.sigma[slow, i], k,
-                   label=f"{name} − {name}̂", unit=unit, ax=ax)
+                   label=f"{name} − {name}̂", unit=unit, ax=ax,
+                   bound_label=("±σ at the fixes (a posteriori, √P)" if between_fixes and k == 1
+                                else None))
         if shade is not None:
             ax.axvspan(*shade, color=STYLE["measurement"], alpha=0.3, lw=0, label="no GPS")
             outside_legend(ax)

@@ -17,6 +17,7 @@ from gpsaccel.assignments import grading
 from gpsaccel.assignments.calibration import nees_reference
 from gpsaccel.assignments.grading import grade, is_otter_cell
 from gpsaccel.assignments.questions import Draw, question_seed
+from gpsaccel.check.report import see
 
 from .conftest import CHI2_SPECIAL, write_variant
 
@@ -91,6 +92,14 @@ def test_mistakes_are_named_and_partly_credited(graded):
     assert set(g.codes["q1"]) == {"phi-sign", "std-as-variance"}
     assert "std-as-variance" in g.codes["q2"]
     assert set(g.codes["q3"]) == {"nees-sum", "nees-bounds-one-run"}
+
+
+def test_each_mistake_says_which_lesson_section_teaches_its_fix(graded):
+    lines = graded["mistakes"].feedback.splitlines()
+    for code in ("phi-sign", "std-as-variance", "nees-sum", "nees-bounds-one-run"):
+        i = next(i for i, ln in enumerate(lines) if ln.startswith(f"    - {code}: "))
+        assert lines[i + 1] == "      " + see(code), lines[i:i + 2]
+    assert "      → lesson 02, 'The derivation' (exercise 5)" in lines
 
 
 def _reference_numbers(student: str) -> set[str]:

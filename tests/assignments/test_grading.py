@@ -117,7 +117,8 @@ def test_summary_table_and_figure(graded):
     with open(graded["out"] / "summary.csv", newline="", encoding="utf-8") as f:
         rows = list(csv.reader(f))
     q3 = [r for r in rows if r[:1] == ["q3"]]
-    assert ["nees-sum", "1"] in [r[5:7] for r in q3]
+    assert ["nees-sum", "1", "08", "The consistency test: NEES and its bounds"] in \
+        [r[5:9] for r in q3]
     # two full marks (3 points) and one half (nees_bounds right) among six
     assert float(q3[0][2]) == pytest.approx(7.5 / 6)
     png = (graded["out"] / "summary.png").read_bytes()

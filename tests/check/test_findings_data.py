@@ -18,7 +18,7 @@ from gpsaccel.assignments._answers import assert_report
 from gpsaccel.assignments.grading import Grade, _feedback_text
 from gpsaccel.check import batch, findings
 from gpsaccel.check.linear import FINDINGS, LinearProblem
-from gpsaccel.check.report import Finding, Report, StudentFinding
+from gpsaccel.check.report import Finding, Report, StudentFinding, brief
 from gpsaccel.check.wording import STUDENT, UNWORDED
 
 CANARY = 987654.321
@@ -56,6 +56,7 @@ def _student_outputs(report: Report) -> dict[str, str]:
     result = batch.student_result(report)  # gpsaccel check: its table's text and its JSON
     return {"feedback": _feedback_text(g, [], {"q1": report}, {}), "grader.check": cell,
             "check table": result["text"], "check json": json.dumps(result, ensure_ascii=False),
+            "check first look": brief(result),
             "student json": json.dumps(report.to_dict(), ensure_ascii=False)}
 
 

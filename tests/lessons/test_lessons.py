@@ -84,6 +84,17 @@ def test_the_docs_table_is_what_the_release_writes():
         assert f"`{master.stem}`" in text
 
 
+def test_the_checkers_table_of_where_each_code_is_taught_is_what_the_release_writes():
+    from gpsaccel._taught import TAUGHT
+
+    path, text = L.checker_page()
+    assert path.read_text(encoding="utf-8") == text, "docs/checker.md: run the release step"
+    for code, section in TAUGHT.items():
+        if not code[:1].isdigit():
+            assert f"| `{code}` | [lesson {section.number}, {section.heading}](_lessons/" \
+                   f"{section.notebook}#{section.anchor})" in text, code
+
+
 def test_no_released_file_without_a_master():
     stems = {p.stem for p in MASTERS}
     for folder in (L.lessons_dir(), L.lessons_dir() / "solutions"):
@@ -246,6 +257,29 @@ def test_solutions_version_runs_with_a_tick_under_every_self_check(master, execu
         out = _outputs(c)
         assert out.startswith("✓") and "\n" == out[-1] and out.count("\n") == 1, \
             f"{master.name}: the self-check says {out!r} to the solution"
+
+
+@pytest.mark.parametrize("master", MASTERS, ids=IDS)
+def test_a_lesson_leaves_nothing_in_the_temporary_folder(master, executed_lesson):
+    """Run All, then the kernel stopped as JupyterLab stops it: nothing the lesson made (a
+    student's files it checks, the checker's boxes) is left in its TMPDIR (a private folder
+    :func:`gpsaccel.lessons.execute` looks at; mkdtemp() was left behind on every run)."""
+    nb = executed_lesson(L.lessons_dir() / "solutions" / master.name, **SMALL)
+    assert nb.metadata["gpsaccel"]["left_in_tmp"] == [], master.name
+
+
+def test_the_temporary_folder_check_sees_what_a_lesson_leaves(tmp_path):
+    """A kernel's mkdtemp() is seen, its TemporaryDirectory removed at shutdown."""
+    import nbformat
+
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [nbformat.v4.new_code_cell(
+        "import tempfile\nkept = tempfile.TemporaryDirectory(prefix='kept-')\n"
+        "left = tempfile.mkdtemp(prefix='left-')")]
+    path = tmp_path / "t.ipynb"
+    nbformat.write(nb, str(path))
+    [left] = L.execute(path).metadata["gpsaccel"]["left_in_tmp"]
+    assert left.startswith("left-")
 
 
 _UNANSWERED = re.compile(r"answer_\w+ = None(\s*#[^\n]*)?")
