@@ -23,6 +23,8 @@ SLOW: tuple[str, ...] = (
     # every one executes a notebook, renders one, or runs otter in a kernel
     "tests/lessons/test_lessons.py::test_solutions_version_runs_with_a_tick_under_every_self_check",
     "tests/lessons/test_lessons.py::test_student_version_runs_and_shows_no_answer",
+    "tests/lessons/test_lessons.py::test_a_lesson_leaves_nothing_in_the_temporary_folder",
+    "tests/lessons/test_lessons.py::test_the_temporary_folder_check_sees_what_a_lesson_leaves",
     "tests/lessons/test_figures.py",
     "tests/cli/test_lessons.py::test_lessons_html",
     "tests/cli/test_lessons.py::test_lessons_kernel",
