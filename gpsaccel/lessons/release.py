@@ -222,14 +222,18 @@ def lessons_table() -> str:
     return "\n".join(rows)
 
 
-_TABLE = re.compile(r"(<!-- lessons-table -->\n).*?(<!-- /lessons-table -->)", re.S)
+def _page_with_table(name: str, marker: str, table: str) -> tuple[Path, str]:
+    """docs/``name`` (the checkout's) with what stands between its ``<!-- marker -->`` and
+    ``<!-- /marker -->`` lines replaced by ``table``."""
+    path = Path(__file__).resolve().parents[2] / "docs" / name
+    block = re.compile(rf"(<!-- {marker} -->\n).*?(<!-- /{marker} -->)", re.S)
+    text = path.read_text(encoding="utf-8")
+    return path, block.sub(lambda m: m.group(1) + table + "\n" + m.group(2), text)
 
 
 def docs_page() -> tuple[Path, str]:
     """docs/lessons.md with its table as the release writes it."""
-    path = Path(__file__).resolve().parents[2] / "docs" / "lessons.md"   # the checkout's
-    text = path.read_text(encoding="utf-8")
-    return path, _TABLE.sub(lambda m: m.group(1) + lessons_table() + "\n" + m.group(2), text)
+    return _page_with_table("lessons.md", "lessons-table", lessons_table())
 
 
 def taught_table() -> str:
@@ -245,15 +249,9 @@ def taught_table() -> str:
     return "\n".join(rows)
 
 
-_TAUGHT_TABLE = re.compile(r"(<!-- taught-table -->\n).*?(<!-- /taught-table -->)", re.S)
-
-
 def checker_page() -> tuple[Path, str]:
     """docs/checker.md with its table of where each code is taught as the release writes it."""
-    path = Path(__file__).resolve().parents[2] / "docs" / "checker.md"   # the checkout's
-    text = path.read_text(encoding="utf-8")
-    return path, _TAUGHT_TABLE.sub(lambda m: m.group(1) + taught_table() + "\n" + m.group(2),
-                                   text)
+    return _page_with_table("checker.md", "taught-table", taught_table())
 
 
 def release(only: list[str] | None = None) -> list[Path]:
