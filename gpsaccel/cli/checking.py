@@ -143,13 +143,16 @@ def _check_report(args: argparse.Namespace, results: list, settings: dict, secon
 
 def _class_lines(results: list[dict]) -> None:
     """Under the class's table: how many submissions made each mistake, and which lesson section
-    teaches its fix (:func:`gpsaccel._taught.class_lines`)."""
+    teaches its fix (:func:`gpsaccel._taught.class_lines`); a check without a verdict (the
+    machine's, :func:`gpsaccel.check.report.no_verdict`) made none."""
     from collections import Counter
 
     from gpsaccel._taught import class_lines
     from gpsaccel.check.batch import printable
+    from gpsaccel.check.report import no_verdict
 
-    counts = Counter(str(c) for r in results for c in dict.fromkeys(r["codes"]))
+    counts = Counter(str(c) for r in results if not no_verdict(False, list(r["codes"]))
+                     for c in dict.fromkeys(r["codes"]))
     if counts:
         print("mistakes, and where the course teaches each:")
         for line in class_lines(counts, noun="submission"):

@@ -83,15 +83,18 @@ def test_a_class_gets_the_table_and_which_lesson_teaches_each_mistake(tmp_path, 
     results = [batch.student_result(_report(f"s{i}.py")) for i in range(3)]
     ok = Report("s3.py")
     ok.add("matches-optimal", severity="note", text="Right.")
-    results.append(batch.student_result(ok))
-    assert _check_report(_args(tmp_path, 4), results, SETTINGS, 1.0) == 1
+    busy = Report("s4.py")
+    busy.add("machine-busy", text="Too busy.")
+    results += [batch.student_result(ok), batch.student_result(busy)]
+    assert _check_report(_args(tmp_path, 5), results, SETTINGS, 1.0) == 1
     out = capsys.readouterr().out
-    assert "submission  passed" in out and "1 of 4 passed" in out
+    assert "submission  passed" in out and "1 of 5 passed" in out
+    assert "machine-busy`" not in out  # the machine's, no one's mistake
     assert "  3 submissions: `exception` → lesson 08, 'Step 5: when the check cannot run your " \
            "code'" in out
     assert "  3 submissions: `std-as-variance` → lesson 06, 'Report 003: variances and " \
            "standard deviations mixed up'" in out
-    assert "inconsistent" not in out.split("passed\n", 1)[1]  # a warning is no class mistake
+    assert "inconsistent" not in out.split("mistakes, and where", 1)[1]  # a warning is none
 
 
 def test_the_command_on_a_wrong_filter(capsys):
