@@ -66,7 +66,7 @@ def test_uncropped_figures_reach_the_kernel_as_a_setting_it_reads(monkeypatch, t
         def __init__(self, nb, **options):
             seen.append(options["extra_arguments"])
 
-        def execute(self):
+        def execute(self, **kwargs):  # env= (the private TMPDIR)
             return None
 
     monkeypatch.setattr("nbclient.NotebookClient", Client)
