@@ -1,0 +1,20 @@
+"""expect: process-noise — no process noise at all (Q left at zero)."""
+import numpy as np
+
+
+def kalman_filter(z):
+    F = np.array([[1.0, 0.1], [0.0, 1.0]])
+    Q = np.zeros((2, 2))
+    H = np.array([[1.0, 0.0]])
+    x, P = np.array([0.0, 1.0]), np.diag([25.0, 4.0])
+    xs, Ps = np.zeros((len(z), 2)), np.zeros((len(z), 2, 2))
+    for k in range(len(z)):
+        if k:
+            for _ in range(5):
+                x = F @ x
+                P = F @ P @ F.T + Q
+        K = P @ H.T @ np.linalg.inv(H @ P @ H.T + 4.0)
+        x = x + K @ (z[k] - H @ x)
+        P = (np.eye(2) - K @ H) @ P @ (np.eye(2) - K @ H).T + 4.0 * K @ K.T
+        xs[k], Ps[k] = x, P
+    return xs, Ps
