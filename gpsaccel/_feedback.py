@@ -26,14 +26,16 @@ _SIZES: tuple[tuple[float, Callable[[float], str]], ...] = (
 
 #: kind -> the student's words (a :class:`Miss` of kind "size" is worded by :data:`_SIZES`).
 _KINDS = {"zero-expected": "should be zero", "zero": "is zero, and should not be",
-          "sign": "has the wrong sign"}
+          "sign": "has the wrong sign",
+          "overflow": "is so far off that its ratio to the right value overflows (it runs away)"}
 
 
 @dataclass(frozen=True)
 class Miss:
-    """How an answer misses, as data: ``kind`` ("zero-expected", "zero", "sign" or "size"),
-    ``way`` ("large"/"small") and ``size`` (the index in :data:`_SIZES`, or the rounded power
-    of ten of the ratio beyond them, as a negative ``-power``)."""
+    """How an answer misses, as data: ``kind`` ("zero-expected", "zero", "sign", "size", or
+    "overflow": the ratio is beyond floating point), ``way`` ("large"/"small") and ``size`` (the
+    index in :data:`_SIZES`, or the rounded power of ten of the ratio beyond them, as a negative
+    ``-power``)."""
 
     kind: str
     way: str = ""
@@ -48,7 +50,10 @@ def classify(answer: float, expected: float) -> Miss:
         return Miss("zero")
     if np.sign(answer) != np.sign(expected):
         return Miss("sign")
-    r = abs(answer) / abs(expected)
+    with np.errstate(over="ignore", divide="ignore"):
+        r = abs(answer) / abs(expected)
+    if not math.isfinite(r) or r == 0:
+        return Miss("overflow")
     way = "large" if r > 1 else "small"
     r = max(r, 1 / r)
     for i, (bound, _) in enumerate(_SIZES):

@@ -10,13 +10,19 @@ a linear recursion of the same shape::
     x̂_i = x̄_i + K_i (z_i − H x̄_i)
 
 For the optimal filter ``A = F = Φⁿ`` with n = gps_every = 40 and ``Q_e = Σ_{j<n} Φʲ ΓWΓᵀ Φʲᵀ``
-(exactly what 40 one-step predictions do).  A mistake changes one ingredient of this recursion
-(:class:`Ingredients`; the recursion itself, :class:`~gpsaccel.kalman.epochs.EpochFilter` and
-:func:`~gpsaccel.kalman.epochs.batch_gains`, is the system-free one of
-:mod:`gpsaccel.kalman.epochs`): ``phi-sign`` flips the sign of Φ₁₃, ``process-noise-interval`` builds Φ and
-Γ with the GPS interval and steps once, ``m0-order`` swaps M0's first two diagonal elements,
-``mean-not-propagated`` sets ``A = I``, and so on (:func:`covariance_mistakes`,
-:func:`mean_mistakes`).
+(exactly what 40 one-step predictions do).  A mistake changes one ingredient of this recursion:
+the report's model (Φ(Δt), Γ(Δt), W, H, V, M0, x0) is a
+:class:`~gpsaccel.kalman.linear_model.LinearModel` (:func:`linear_model`), and a filter for it is
+that model's :class:`~gpsaccel.kalman.linear_model.LinearIngredients` (:func:`ingredients`), the
+recursion itself :class:`~gpsaccel.kalman.epochs.EpochFilter` and
+:func:`~gpsaccel.kalman.epochs.batch_gains` of :mod:`gpsaccel.kalman.epochs`.  ``phi-sign`` flips
+the sign of Φ₁₃, ``process-noise-interval`` builds Φ and Γ with the GPS interval and steps once,
+``m0-order`` swaps M0's first two diagonal elements, ``mean-not-propagated`` sets ``A = I``, and
+so on (:func:`covariance_mistakes`, :func:`mean_mistakes`).  The ideas every system shares
+(:mod:`gpsaccel.kalman.entries`: Joseph's sign, V left out of S, a prior off by a power of ten, no
+process noise or one ∝ Δt, Γ's order, every other fix skipped, z one epoch late, an information
+vector with V, x0 from the first fix, the other single signs of Φ) are the generic catalogue's,
+worded by report 000's table where it has its own text.
 
 The gains K_i and covariances M_i, P_i do not depend on the data, so :func:`batch_gains` computes
 them once — for many candidate filters at once, as stacked arrays — and :meth:`EpochFilter.apply`
@@ -33,71 +39,24 @@ std-as-variance), see :func:`combinations`.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
-from gpsaccel.calibration.model import CalibrationModel, gamma, phi
+from gpsaccel.calibration.model import STATE_NAMES, CalibrationModel, gamma, phi
+from gpsaccel.kalman import entries
 from gpsaccel.kalman.epochs import EpochFilter, batch_gains  # noqa: F401 - re-exported
 from gpsaccel.kalman.linear_catalogue import (
     LINEAR_MESSAGES,
+    output_mistakes,
     predict_before_first_update,
+    shared_mistakes,
     state_orders,
+    structural_mistakes,
+    transposed_mistakes,
 )
-from gpsaccel.kalman.linear_model import LinearIngredients
+from gpsaccel.kalman.linear_model import LinearIngredients, LinearModel
 from gpsaccel.kalman.mistakes import Mistake, combinations, with_changes  # noqa: F401
-
-
-@dataclass(frozen=True, eq=False)
-class Ingredients:
-    """What a student chooses when writing the filter; :meth:`epoch_filter` assembles it.
-
-    phi_dt, sign13 : Φ = Φ(phi_dt) with Φ₁₃ = sign13·phi_dt²/2.
-    gamma_dt, W : one-step process noise Q = Γ(gamma_dt) W Γ(gamma_dt)ᵀ.
-    steps : one-step predictions between GPS updates (40; 1 when stepping over the GPS interval).
-    H, V, M0, x0 : measurement matrix, GPS noise, prior covariance and mean.
-    sign23 : Φ₂₃ = sign23·phi_dt.
-    mean_propagated : False is the mean-not-propagated mistake (x̄_k = x̂_{k−1}).
-    output, skip_first : see :class:`EpochFilter`; predict_first, update_P, update_every_step :
-    see :class:`~gpsaccel.kalman.epochs.LinearIngredients`.
-    """
-
-    phi_dt: float
-    sign13: float
-    gamma_dt: float
-    W: float
-    steps: int
-    H: np.ndarray
-    V: np.ndarray
-    M0: np.ndarray
-    x0: np.ndarray
-    n_gps: int
-    mean_propagated: bool = True
-    output: str = "posterior"
-    skip_first: bool | str = False
-    predict_first: bool = False
-    sign23: float = -1.0
-    update_P: bool = True
-    update_every_step: bool = False
-
-    @classmethod
-    def correct(cls, model: CalibrationModel) -> Ingredients:
-        return cls(model.dt, -1.0, model.dt, float(model.W[0, 0]), model.gps_every, model.H,
-                   model.V, model.M0, model.x0, model.n_gps)
-
-    def epoch_filter(self) -> EpochFilter:
-        """The generic ingredients (:class:`gpsaccel.kalman.epochs.LinearIngredients`) of
-        Φ(phi_dt) with its Φ₁₃ sign, Γ(gamma_dt) and W: the one epoch recursion of the core."""
-        return LinearIngredients(phi(self.phi_dt, self.sign13, self.sign23),
-                                 gamma(self.gamma_dt), np.array([[self.W]]), self.steps, self.H,
-                                 self.V, self.M0, self.x0, self.n_gps, self.mean_propagated,
-                                 self.output, self.skip_first, predict_first=self.predict_first,
-                                 update_P=self.update_P,
-                                 update_every_step=self.update_every_step).epoch_filter()
-
-    def with_changes(self, changes: tuple[tuple, ...]) -> Ingredients:
-        """Apply ``(field, value)`` or ``(field, (row, col), value)`` changes (see :class:`Mistake`)."""
-        return with_changes(self, changes)
-
 
 _SUB = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
 
@@ -108,12 +67,12 @@ def _plural(n: int, word: str) -> str:
 
 #: Report 000's wording, one table: code (or code.part) -> template.  Its catalogue's entries (the
 #: fields are the model's numbers, :func:`_fields`, and each entry's own) and its checker's findings
-#: where they say more than the generic text (:class:`gpsaccel.check.whole_filter
+#: where they say more than the generic text (:class:`gpsaccel.check.problems.calibration
 #: .CalibrationProblem` reads this table over :data:`gpsaccel.kalman.linear_messages.MESSAGES`
 #: and the sandbox's :data:`gpsaccel.check.findings.MESSAGES`).
 MESSAGES: dict[str, str] = {
     # ------------------------------------------------------------ the catalogue's entries
-    "phi-sign": "Φ₁₃ has the wrong sign: the bias enters position as −Δt²/2 = {half_dt2:.4g}, "
+    "phi-sign.13": "Φ₁₃ has the wrong sign: the bias enters position as −Δt²/2 = {half_dt2:.4g}, "
                 "and your filter uses +Δt²/2. Likely cause: the accelerometer reads a + b, so the "
                 "integrated accelerometer runs ahead by the bias and δp = p − p_c loses b·Δt²/2 "
                 "per step (report 001 prints the + sign).",
@@ -220,32 +179,56 @@ def _fields(model: CalibrationModel) -> dict[str, float]:
             "tenth": n // 10 * dt}
 
 
+def linear_model(model: CalibrationModel) -> LinearModel:
+    """Report 000's model as the core's :class:`~gpsaccel.kalman.linear_model.LinearModel`: Φ(Δt),
+    Γ(Δt), W, H, V, M0, x0 at the accelerometer's step, a GPS fix every ``gps_every`` steps."""
+    return LinearModel(phi(model.dt), gamma(model.dt), model.W, model.H, model.V, model.M0,
+                       model.x0, model.gps_every, model.n_gps, model.dt, STATE_NAMES,
+                       ("δp", "δv"))
+
+
+def ingredients(model: CalibrationModel) -> LinearIngredients:
+    """The optimal filter's ingredients (a mistake changes some of them)."""
+    return LinearIngredients.correct(linear_model(model))
+
+
+def _text(model: CalibrationModel):
+    """``text(key, **fields)``: report 000's wording over the generic table, with its numbers."""
+    f = _fields(model)
+    table = {**LINEAR_MESSAGES, **MESSAGES}
+    return lambda key, **fields: table[key].format(**{**f, **fields})
+
+
 def covariance_mistakes(model: CalibrationModel | None = None) -> tuple[Mistake, ...]:
     """Mistakes that change P (and, through the gains and Φ, x̂) on ``model``'s numbers."""
     model = CalibrationModel() if model is None else model
     f = _fields(model)
-    return (_model_mistakes(model, f) + _propagation_mistakes(model, f)
-            + _variance_mistakes(model, f))
+    lm, text = linear_model(model), _text(model)
+    out = (_model_mistakes(model, f) + _propagation_mistakes(model, f)
+           + tuple(entries.std_as_variance(lm, text, element=entries.subscript)))
+    out += tuple(transposed_mistakes(lm, text)) + tuple(output_mistakes(lm, text)[3:])
+    return out + tuple(shared_mistakes(lm, text, skip=("process-noise-interval",))[0])
 
 
 def _model_mistakes(model: CalibrationModel, f: dict[str, float]) -> tuple[Mistake, ...]:
     """One entry each: a sign, the interval, the prior's order, the schedule, the output, W."""
+    lm, text = linear_model(model), _text(model)
     T, m_p, m_v = f["T"], f["m_p"], f["m_v"]
-    entries: tuple[tuple[str, str, tuple[tuple, ...]], ...] = (
+    entries_: tuple[tuple[str, str, tuple[tuple, ...]], ...] = (
         # the variant is what the student reads of a phi-sign: report 000's own names
-        ("phi-sign", "Φ₁₃ = +Δt²/2: the bias enters δp as if the accelerometer read a − b",
-         (("sign13", 1.0),)),
-        ("process-noise-interval", f"Φ, Γ built with T = {T:g} s, one step per GPS interval",
-         (("phi_dt", T), ("gamma_dt", T), ("steps", 1))),
+        ("phi-sign.13", "Φ₁₃ = +Δt²/2: the bias enters δp as if the accelerometer read a − b",
+         (("Phi", phi(model.dt, +1.0)),)),
         ("m0-order", "M0 with δp and δv swapped", (("M0", (0, 0), m_v), ("M0", (1, 1), m_p))),
         ("first-update-skipped", "no update at t = 0", (("skip_first", True),)),
         ("first-update-skipped.covariance", "P not updated at t = 0",
          (("skip_first", "covariance"),)),
         ("returns-a-priori", "returns (x̄, M)", (("output", "prior"),)),
-        ("w-value", "W = V₂₂", (("W", f["V22"]),)),
+        ("w-value", "W = V₂₂", (("W", np.array([[f["V22"]]])),)),
     )
-    out = [Mistake(key.split(".")[0], variant, MESSAGES[key].format(**f), changes)
-           for key, variant, changes in entries]
+    out = [Mistake(key.split(".")[0], variant, text(key), changes)
+           for key, variant, changes in entries_]
+    out[1:1] = entries.fix_interval(lm, text, variant=f"Φ, Γ built with T = {T:g} s, one step "
+                                                      f"per GPS interval")
     out.insert(5, predict_before_first_update(LINEAR_MESSAGES["predict-before-first-update"]
                                               .format(measurement="GPS fix", every=f["n"],
                                                       step="accelerometer step")))
@@ -253,18 +236,20 @@ def _model_mistakes(model: CalibrationModel, f: dict[str, float]) -> tuple[Mista
 
 
 def _structural_mistakes(model: CalibrationModel, f: dict[str, float]) -> tuple[Mistake, ...]:
-    """The generic catalogue's structural entries (:func:`gpsaccel.kalman.epochs
-    .structural_mistakes`: P never updated, an update at every step, H for another state order)
-    on this model, in its wording; Φ's sign as its own ``sign13``/``sign23`` ingredients."""
-    names = ("δp", "δv", "b")
-    out = [Mistake("covariance-update-skipped", "P never updated",
-                   MESSAGES["covariance-update-skipped.never"], (("update_P", False),)),
-           Mistake("update-every-step", "updated at every accelerometer step",
-                   MESSAGES["update-every-step"].format(**f), (("update_every_step", True),),
-                   alone=True),
-           Mistake("phi-sign", "Φ₁₃ = +Δt²/2 and Φ₂₃ = +Δt: the bias enters δp and δv as if "
-                   "the accelerometer read a − b", MESSAGES["phi-sign.both"],
-                   (("sign13", 1.0), ("sign23", 1.0)))]
+    """The generic catalogue's structural entries (:func:`gpsaccel.kalman.linear_catalogue
+    .structural_mistakes`: P never updated, an update at every step, Φ's other signs) on this
+    model, in its wording; both bias entries of Φ and H for another state order in report 000's
+    words."""
+    lm, text = linear_model(model), _text(model)
+    both = "Φ₁₃ and Φ₂₃"
+    out = structural_mistakes(lm.Phi, lm.H, STATE_NAMES, model.gps_every, text,
+                              step="accelerometer step", dt=model.dt, phi_signs=False,
+                              orders=False)
+    out.append(Mistake("phi-sign", "Φ₁₃ = +Δt²/2 and Φ₂₃ = +Δt: the bias enters δp and δv as if "
+                       "the accelerometer read a − b", MESSAGES["phi-sign.both"],
+                       (("Phi", phi(model.dt, +1.0, +1.0)),)))
+    out += entries.phi_sign(lm, text, skip=("Φ₁₃", both))
+    names = STATE_NAMES
     H = np.asarray(model.H, dtype=float)
     for order in state_orders(3):
         used = H[:, list(order)]
@@ -293,29 +278,6 @@ def _propagation_mistakes(model: CalibrationModel, f: dict[str, float]) -> tuple
     return tuple(out)
 
 
-def _variance_mistakes(model: CalibrationModel, f: dict[str, float]) -> tuple[Mistake, ...]:
-    """σ for σ² (and σ² squared again) in each variance of V, W and M0 (one element each)."""
-    V11, V22, W = f["V11"], f["V22"], f["W"]
-    places: list[tuple[str, tuple[int, int] | None, float]] = [
-        ("V", (0, 0), V11), ("V", (1, 1), V22), ("W", None, W),
-        *(("M0", (k, k), f[key]) for k, key in enumerate(("m_p", "m_v", "m_b")))]
-    out = []
-    for name, idx, right in places:
-        for value, label in ((np.sqrt(right), "sigma"), (right**2, "squared")):
-            if np.isclose(value, right, rtol=1e-6):
-                continue  # σ = σ² (a variance of 1): this slip cannot be seen
-            value = float(value)
-            elem = name if idx is None else name + f"{idx[0] + 1}{idx[1] + 1}".translate(_SUB)
-            change = (name, value) if idx is None else (name, idx, value)
-            out.append(Mistake(
-                "std-as-variance", f"{elem} = {value:.4g}",
-                MESSAGES["std-as-variance"].format(
-                    elem=elem, value=value, right=right, sigma=np.sqrt(right),
-                    label=MESSAGES[f"std-as-variance.{label}"]),
-                (change,)))
-    return tuple(out)
-
-
 def mean_mistakes(model: CalibrationModel | None = None) -> tuple[Mistake, ...]:
     """Mistakes that change only how the estimate is carried (P is untouched)."""
     model = CalibrationModel() if model is None else model
@@ -327,14 +289,14 @@ def mean_mistakes(model: CalibrationModel | None = None) -> tuple[Mistake, ...]:
         Mistake("x0-total-state", f"x̄₀ = [{x0_total[0]:g}, {x0_total[1]:g}, 0]",
                 MESSAGES["x0-total-state"].format(p0=x0_total[0], v0=x0_total[1]),
                 (("x0", x0_total),)),
-    )
+    ) + tuple(shared_mistakes(linear_model(model), _text(model))[1])
 
 
 def build(model: CalibrationModel, mistakes: tuple[Mistake, ...] = ()) -> EpochFilter:
     """The epoch filter that makes ``mistakes`` (none: the optimal filter)."""
-    g = Ingredients.correct(model)
-    if mistakes:  # every entry's changes in turn, in one copy (a diagnosis builds ~1900)
-        g = g.with_changes(tuple(c for m in mistakes for c in m.changes))
+    g = ingredients(model)
+    if mistakes:  # every entry's changes in turn, in one copy (a diagnosis builds thousands)
+        g = with_changes(g, tuple(c for m in mistakes for c in m.changes))
     return g.epoch_filter()
 
 
@@ -378,7 +340,14 @@ class CalibrationCatalogue:
         return mean_mistakes(self.model)
 
     def build(self, mistakes: tuple[Mistake, ...] = ()) -> EpochFilter:
-        return build(self.model, mistakes)
+        g = self._ingredients
+        if mistakes:  # every entry's changes in turn, in one copy (a diagnosis builds thousands)
+            g = with_changes(g, tuple(c for m in mistakes for c in m.changes))
+        return g.epoch_filter()
+
+    @cached_property
+    def _ingredients(self) -> LinearIngredients:
+        return ingredients(self.model)
 
     def reference(self) -> EpochFilter:
         return reference(self.model)

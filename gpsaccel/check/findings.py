@@ -223,15 +223,19 @@ def returned_notes(report: Report, returned: Mapping[str, Mapping], text: Mappin
 
 
 def mistake_finding(report: Report, mistake: object, prefix: str = "", where: str = "",
-                    severity: str = "error", part: str = "", **observed: object) -> None:
+                    severity: str = "error", part: str = "",
+                    student: Mapping[str, str] | None = None, **observed: object) -> None:
     """A catalogue entry the student's output matches, as a finding: the student reads the
-    code's wording (:data:`gpsaccel.check.wording.STUDENT`) and the entry's variant (what their
-    filter does); the entry's message, which may quote the problem's right numbers, is the
-    instructor's.  ``prefix`` (e.g. the function's name) leads both."""
+    code's wording (``student``'s, a problem's own, over :data:`gpsaccel.check.wording.STUDENT`)
+    and the entry's variant (what their filter does); the entry's message, which may quote the
+    problem's right numbers, is the instructor's.  ``prefix`` (e.g. the function's name) leads
+    both; ``where`` fills the wording's place (the entry's own, :attr:`Mistake.where`, when the
+    caller has none)."""
     from gpsaccel.check.wording import STUDENT, UNWORDED
 
     code, variant = mistake.code, mistake.variant  # type: ignore[attr-defined]
-    template = STUDENT.get(code, UNWORDED.replace("{code}", code))
+    where = where or getattr(mistake, "where", "")
+    template = {**STUDENT, **(student or {})}.get(code, UNWORDED.replace("{code}", code))
     report.add(code, f"{prefix}{mistake.message}", severity,  # type: ignore[attr-defined]
                text="{prefix}" + template + " Your output matches a filter that makes this "
                "mistake ({variant}).", where=where,

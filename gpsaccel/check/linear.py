@@ -74,6 +74,11 @@ from gpsaccel.sandbox import Call, Output
 #: The nearest catalogued mistake is shown as a hint only within this factor of the tolerance.
 HINT_FACTOR = 10.0
 
+#: Largest error or covariance element the consistency statistics are formed from: they square
+#: and sum them over runs and times (1e150² is still finite); a filter that ran away further is
+#: judged by the comparison alone.
+RUNAWAY = 1e150
+
 #: Largest distances (σσ in P, σ in x̂) at which a float32 filter counts as "right but low
 #: precision" (measured on report 000's 6000 steps: 8e-5 σσ in P, 0.035 σ in x̂).
 LOW_PRECISION = (1e-3, 0.1)
@@ -86,6 +91,30 @@ FINDINGS = MESSAGES
 def _float32_exact(a: np.ndarray) -> bool:
     """Every value of ``a`` is a float32 number (what a float32 computation returns)."""
     return bool(np.all(a.astype(np.float32).astype(np.float64) == a))
+
+
+def _positive(P: np.ndarray) -> np.ndarray:
+    """(...) bool: each matrix of P (..., n, n) finite and positive definite (its symmetric
+    part's smallest eigenvalue > 0), each scaled by its largest element first so that a P of a
+    filter that ran away (1e308) is judged too."""
+    ok = np.isfinite(P).all(axis=(-1, -2))
+    S = P[ok] / 2 + np.swapaxes(P[ok], -1, -2) / 2
+    scale = np.abs(S).max(axis=(-1, -2), keepdims=True)
+    scale[scale == 0] = 1.0
+    ok[ok] = np.linalg.eigvalsh(S / scale).min(axis=-1) > 0
+    return ok
+
+
+def _covariances(P: np.ndarray) -> bool:
+    """Whether every matrix of P (..., n, n) is finite with a positive diagonal and a Cholesky
+    factor (a covariance)."""
+    if not np.isfinite(P).all() or (np.diagonal(P, axis1=-2, axis2=-1) <= 0).any():
+        return False
+    try:
+        np.linalg.cholesky((P + np.swapaxes(P, -1, -2)) / 2)
+    except np.linalg.LinAlgError:
+        return False
+    return True
 
 
 class LinearProblem(Problem):
@@ -174,6 +203,13 @@ class LinearProblem(Problem):
     # ---------------------------------------------------------------------- the verdict
     def evaluate(self, report: Report, cases: Cases, function: Function,
                  results: list[dict[str, np.ndarray]], returned: dict) -> None:
+        # a filter that runs away returns 1e108 or 1e308, its own result: judged as any other,
+        # its distances overflowing to inf (far), never a warning or an error of the checker
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore", under="ignore"):
+            self._evaluate(report, cases, results, returned)
+
+    def _evaluate(self, report: Report, cases: Cases, results: list[dict[str, np.ndarray]],
+                  returned: dict) -> None:
         x = np.stack([r["x_hat"] for r in results])
         P = np.stack([r["P"] for r in results])
         if not self._finite(report, x, P):
@@ -201,10 +237,14 @@ class LinearProblem(Problem):
             if bad.any():
                 runs = np.flatnonzero(bad.reshape(bad.shape[0], -1).any(axis=1))
                 first = np.argwhere(bad[runs[0]])[0]
+                before = np.abs(arr[runs[0], :first[0]])
+                top = float(before.max()) if before.size else 0.0
+                cause = self.text("nan-output.runaway" if top > RUNAWAY else "nan-output.causes",
+                                  top=top)
                 self.add(report, "nan-output", name=name,
                          what="NaN" if np.isnan(arr).any() else "inf", bad_runs=runs.size,
                          n_runs=arr.shape[0], run=int(runs[0]), t=float(self.t[first[0]]),
-                         row=int(first[0]))
+                         row=int(first[0]), cause=cause)
                 return False
         return True
 
@@ -234,16 +274,21 @@ class LinearProblem(Problem):
                        P: np.ndarray, returned: dict) -> bool:
         """Mistakes in what is returned or how calls share state, recognised before the
         catalogue (module docstring, step 1); True when one was reported."""
-        tol, sd, t = self.tol, ans.sd, self.t
+        sd = ans.sd
         dP = covariance_distance(P, ans.P_ref[None], sd)                   # (N, k, n, n)
         dx = np.abs(x - ans.x_ref) / sd                                     # (N, k, n)
-        for check in (self._aliased, self._between_calls, self._low_precision, self._scaled,
-                      self._shifted, self._skipped_update):
+        checks = (self._aliased, self._between_calls, self._low_precision, self._scaled,
+                  self._shifted)
+        return self._first_of(report, checks, cases, ans, x, P, dx, dP, returned)
+
+    def _first_of(self, report: Report, checks, cases, ans, x, P, dx, dP, returned) -> bool:
+        """Report the first of ``checks`` that recognises the output; True when one did."""
+        for check in checks:
             found = check(cases, ans, x, P, dx, dP, returned)
             if found is not None:
                 code, fields = found
-                self.add(report, code, expected=fields.pop("expected", None), tol=tol,
-                         t_last=float(t[-1]), **fields)
+                self.add(report, code, expected=fields.pop("expected", None), tol=self.tol,
+                         t_last=float(self.t[-1]), **fields)
                 if code == "state-between-calls":
                     report.findings = [f for f in report.findings
                                        if f.code != "p-depends-on-data"]
@@ -288,13 +333,24 @@ class LinearProblem(Problem):
         return None
 
     def _shifted(self, cases, ans, x, P, dx, dP, returned):
+        """x̂ and P (or one of them, the other right) stored one epoch off."""
+        P_right, x_right = dP.max() <= self.tol, dx.max() <= self.tol
         for shift, late in ((1, "late"), (-1, "early")):
             where = self.text(f"epoch-shift.{late}")
             a = slice(1, None) if shift == 1 else slice(None, -1)
             b = slice(None, -1) if shift == 1 else slice(1, None)
-            if (covariance_distance(P[:, a], ans.P_ref[None, b], ans.sd[b]).max() <= self.tol
-                    and (np.abs(x[:, a] - ans.x_ref[:, b]) / ans.sd[b]).max() <= self.tol):
-                return "epoch-shift", {"where": where, "end": "first" if shift == 1 else "last"}
+            P_moved = covariance_distance(P[:, a], ans.P_ref[None, b], ans.sd[b]).max() <= self.tol
+            x_moved = (np.abs(x[:, a] - ans.x_ref[:, b]) / ans.sd[b]).max() <= self.tol
+            if P_moved and x_moved:
+                what, other = "x̂ and P are", ""
+            elif P_moved and x_right:
+                what, other = "P is", self.text("epoch-shift.other", right="x̂")
+            elif x_moved and P_right:
+                what, other = "x̂ is", self.text("epoch-shift.other", right="P")
+            else:
+                continue
+            return "epoch-shift", {"where": where, "end": "first" if shift == 1 else "last",
+                                   "what": what, "other": other}
         return None
 
     def _skipped_update(self, cases, ans, x, P, dx, dP, returned):
@@ -335,22 +391,32 @@ class LinearProblem(Problem):
             found = diag.covariance + diag.mean
             report.details["matched"] = [{"code": m.code, "variant": m.variant} for m in found]
             for m in found:
-                mistake_finding(report, m)
+                mistake_finding(report, m, where=m.where, student=self.student)
             report.tables.append(f"catalogue: on every run your (x̂, P) match, to {tol:g} σ, "
                                  f"the filter that makes\n" + "\n".join(f"  {m}" for m in found))
             return
+        if self._first_of(report, (self._skipped_update,), cases, ans, x, P,
+                          np.abs(x - ans.x_ref) / ans.sd,
+                          covariance_distance(P, ans.P_ref[None], ans.sd), {}):
+            return  # one update missing at a row (after the catalogue: fixes-skipped is one)
         if diag.covariance is not None:  # P recognised, x̂ not
             for m in diag.covariance:
-                mistake_finding(report, m)
-            xm = self.catalogue().build(diag.covariance).apply(cases.z)[0]
-            dx = np.abs(x - xm) / ans.sd
-            i = np.unravel_index(int(np.argmax(dx)), dx.shape)
-            lead = ("Your P is the optimal one, so your model (Φ, Q, H, V, M0) is right, but"
-                    if not diag.covariance else f"Your P matches {names(diag.covariance)}, and")
-            self.add(report, "gain-or-residual", lead=lead, dx=float(dx.max()),
-                     where=self._where(i, "x"), step=self.step)
+                mistake_finding(report, m, where=m.where, student=self.student)
             report.details["matched"] = [{"code": m.code, "variant": m.variant}
                                          for m in diag.covariance]
+            flt = self.catalogue().build(diag.covariance)
+            if not _covariances(flt.P_out):
+                # that filter's P is no covariance (Joseph's form with a minus): its gains, and so
+                # x̂, depend on rounding, and x̂ cannot be compared; P says what is wrong
+                report.details["x_not_compared"] = "the matched filter's P is not a covariance"
+                return
+            xm = flt.apply(cases.z)[0]
+            dx = np.abs(x - xm) / ans.sd
+            i = np.unravel_index(int(np.argmax(dx)), dx.shape)
+            lead = self.text("gain-or-residual.optimal" if not diag.covariance else
+                             "gain-or-residual.matched", names=names(diag.covariance))
+            self.add(report, "gain-or-residual", lead=lead, dx=float(dx.max()),
+                     where=self._where(i, "x"), step=self.step)
             return
         dP = covariance_distance(P, ans.P_ref[None], ans.sd).max(axis=(0, 2, 3))
         first = int(np.argmax(dP > tol))
@@ -378,16 +444,22 @@ class LinearProblem(Problem):
         e = cases.x_true - x                               # (N, k, n)
         sym = np.abs(P - np.swapaxes(P, -1, -2)).max(axis=(-1, -2)) <= 1e-9 * np.abs(P).max(
             axis=(-1, -2))
-        eig_min = np.linalg.eigvalsh((P + np.swapaxes(P, -1, -2)) / 2).min(axis=-1)
-        bad = ~sym | (eig_min <= 0)
+        bad = ~sym | ~_positive(P)
         if bad.any():
             times = np.flatnonzero(bad.any(axis=0))
             report.add("p-not-positive-definite", severity="warning", text="Your P is not a "
                        "covariance at {n} times (first t = {t:g} s): it is not symmetric "
-                       "positive definite, so NEES cannot be formed. A Joseph update, or "
-                       "symmetrising P = (P + Pᵀ)/2, keeps it one.",
+                       "positive definite, so NEES cannot be formed. {advice}",
                        where=f"t = {t[times[0]]:g} s",
-                       observed={"n": times.size, "t": float(t[times[0]])})
+                       observed={"n": times.size, "t": float(t[times[0]]),
+                                 "advice": self.text("p-not-positive-definite.joseph-sign"
+                                                     if "joseph-sign" in report.codes else
+                                                     "p-not-positive-definite.advice")})
+            return
+        if not max(np.abs(e).max(), np.abs(P).max()) < RUNAWAY:  # squares would overflow
+            report.tables.append("consistency: not computed, your x̂ or P runs beyond what "
+                                 f"floating point can square and sum (up to "
+                                 f"{max(np.abs(x).max(), np.abs(P).max()):.3g}).")
             return
         var = np.diagonal(P, axis1=-2, axis2=-1)
         z_mean = z_sample_mean(e.mean(axis=0), var.mean(axis=0), N)

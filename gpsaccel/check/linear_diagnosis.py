@@ -35,6 +35,34 @@ TOLERANCE = 1e-6
 #: Epochs of every candidate computed first, to bound its distance from below (:class:`Candidates`).
 HEAD = 8
 
+#: What a match allows beyond the tolerance, relative to how far a candidate's P runs beyond the
+#: optimal filter's: ROUNDING·(√|P_c,ii P_c,jj| − σ_i σ_j) where that is positive.  A mistaken
+#: filter that runs away (Joseph's form with a minus: negative variances at the first fix, P at
+#: 1e10 times the optimal after a few) computes the same numbers in another order only to about
+#: 1e-6 of their size (measured on report 000's), far beyond the tolerance in units of the
+#: optimal σ; a candidate in the optimal filter's range gets no allowance.
+ROUNDING = 1e-5
+
+#: The same for x̂, relative to |x̂_c| (rounding only: a mean that runs away, 1e100, is matched
+#: to 1e-9 of itself).
+ROUNDING_X = 1e-9
+
+
+def match_distance(P: np.ndarray, P_c: np.ndarray, sd: np.ndarray) -> np.ndarray:
+    """|P − P_c|_ij / (σ_i σ_j) elementwise (σ = ``sd``, the optimal filter's), less the
+    :data:`ROUNDING` allowance of the candidate's run beyond the optimal (never below 0)."""
+    s = np.sqrt(np.abs(np.diagonal(P_c, axis1=-2, axis2=-1)))
+    scale = sd[..., :, None] * sd[..., None, :]
+    with np.errstate(invalid="ignore", over="ignore"):
+        slack = ROUNDING * np.maximum(s[..., :, None] * s[..., None, :] - scale, 0.0)
+        return np.maximum(covariance_distance(P, P_c, sd) - slack / scale, 0.0)
+
+
+def mean_distance(x: np.ndarray, x_c: np.ndarray, sd: np.ndarray) -> np.ndarray:
+    """|x̂ − x̂_c| / σ less the :data:`ROUNDING_X` allowance of |x̂_c| (never below 0)."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        return np.maximum((np.abs(x - x_c) - ROUNDING_X * np.abs(x_c)) / sd, 0.0)
+
 
 @dataclass(frozen=True, eq=False)
 class Cases:
@@ -124,13 +152,13 @@ def _distances(P_student: np.ndarray, sd: np.ndarray, P_out: np.ndarray | Candid
     ``tol``; with :class:`Candidates`, +inf (NaN where its bound is NaN) for those that cannot
     be the nearest nor match."""
     if isinstance(P_out, np.ndarray):
-        d = covariance_distance(P_student[0][None], P_out, sd).reshape(len(P_out), -1).max(axis=1)
+        d = match_distance(P_student[0][None], P_out, sd).reshape(len(P_out), -1).max(axis=1)
         for c in np.flatnonzero(d <= tol):
-            d[c] = covariance_distance(P_student, P_out[c][None], sd).max()
+            d[c] = match_distance(P_student, P_out[c][None], sd).max()
         return d
     k = min(HEAD, P_student.shape[1])
     C = len(P_out.combos)
-    lower = covariance_distance(P_student[0][None, :k], P_out.head(k), sd[:k]).reshape(
+    lower = match_distance(P_student[0][None, :k], P_out.head(k), sd[:k]).reshape(
         C, -1).max(axis=1)
     d = np.where(np.isnan(lower), np.nan, np.inf)
     done = np.zeros(C, dtype=bool)
@@ -140,11 +168,11 @@ def _distances(P_student: np.ndarray, sd: np.ndarray, P_out: np.ndarray | Candid
     while todo.any():
         idx = np.flatnonzero(todo)
         P_idx = P_out.rows(idx)
-        d[idx] = covariance_distance(P_student[0][None], P_idx, sd).reshape(len(idx), -1).max(
+        d[idx] = match_distance(P_student[0][None], P_idx, sd).reshape(len(idx), -1).max(
             axis=1)
         for j, c in enumerate(idx):
             if d[c] <= tol:
-                d[c] = covariance_distance(P_student, P_idx[j][None], sd).max()
+                d[c] = match_distance(P_student, P_idx[j][None], sd).max()
         done[idx] = True
         finite = d[done][~np.isnan(d[done])]
         bound = max(tol, float(finite.min())) if finite.size else np.inf
@@ -168,7 +196,7 @@ def diagnose(P_student: np.ndarray, x_student: np.ndarray, z: np.ndarray, sd: np
     for ci in matching:
         for mc in mean_combos:
             x, _ = catalogue.build(combos[ci] + mc).apply(z)
-            if np.max(np.abs(x_student - x) / sd) <= tol:
+            if np.max(mean_distance(x_student, x, sd)) <= tol:
                 return Diagnosis(combos[ci], mc, None, float(d[ci]))
     if matching:
         return Diagnosis(combos[matching[0]], None, None, float(d[matching[0]]))

@@ -99,6 +99,9 @@ class Problem:
     messages: dict[str, str] = {}
     #: a box failure -> the code this problem reports it under.
     renames: dict[str, str] = {}
+    #: code -> the student's template of a catalogue finding, over
+    #: :data:`gpsaccel.check.wording.STUDENT` (a problem's own words: report 000's physics).
+    student: dict[str, str] = {}
 
     #: ``Problem.linear(name, Phi=..., Gamma=..., W=..., H=..., V=..., M0=..., x0=..., every=...,
     #: n_epochs=...)``: a problem for any linear model, checked against the generic catalogue of

@@ -36,9 +36,9 @@ STUDENT: dict[str, str] = {
           "interval of the problem.",
     "not-symmetric": "{where} is not symmetric: a covariance matrix always is.",
     "phi-sign": "A sign of Φ is wrong: look at how each state enters the others.",
-    "update-every-step": "Your filter updates at every propagation step, reusing the last "
-                         "measurement between arrivals: only the steps where a measurement "
-                         "arrives update, the others only propagate.",
+    "update-every-step": "Your filter updates at every propagation step, between the arrivals "
+                         "too: only the steps where a measurement arrives update, the others "
+                         "only propagate.",
     "state-order": "Your H is written for another order of the state than the problem's: its "
                    "columns must follow the problem's state order, as Φ and M0 do.",
     "phi-interval": "Your Φ is built with another time step than the one it is checked for.",
@@ -97,8 +97,8 @@ STUDENT: dict[str, str] = {
                      "throughout.",
     "p-scaled": "Your P is a multiple of the right one at every time: look at the line that "
                 "symmetrises or scales P.",
-    "epoch-shift": "Your outputs are shifted by one epoch: store x̂ and P of time t_k in row k, "
-                   "right after the update with z[k].",
+    "epoch-shift": "Your outputs (x̂, P or both) are stored one epoch off: store x̂ and P of "
+                   "time t_k in row k, right after the update with z[k].",
     "last-update-missing": "Your filter is right except at the last time: the update with the "
                            "last measurement is missing.",
     "update-skipped": "At {where} your x̂ and P are the a priori ones: the update there is "
@@ -136,10 +136,34 @@ STUDENT: dict[str, str] = {
     "no-state-wrap": "Your heading estimates leave [−π, π): wrap them after each update and "
                      "prediction.",
     "dt-linearization": "{where} is not the course's DT linearization of the model.",
-    "process-noise": "Your prediction does not add Q as given (M = F P Fᵀ + Q).",
+    "process-noise": "Your prediction's process noise is not the Q of one step (M = Φ P Φᵀ + "
+                     "Q): it is left out, or grows with the step in another way than the "
+                     "model's.",
+    "gamma-order": "Your Γ's rows are in another order than the state's: each row of Γ says how "
+                   "the noise enters that state.",
+    "residual-covariance": "Your gain's residual covariance S is not H M Hᵀ + V: the "
+                           "measurement's noise variances belong in it.",
+    "joseph-sign": "Your covariance update has a sign wrong: Joseph's form is (I − K H) M "
+                   "(I − K H)ᵀ + K V Kᵀ.",
+    "prior-scale": "Your prior covariance M0 is off by a power of ten.",
+    "fixes-skipped": "Your filter skips the update at some measurement times (every other "
+                     "one): every time a measurement arrives, the filter updates.",
+    "measurement-late": "Your update uses the measurement of the time before: the residual "
+                        "takes the measurement of the time being updated.",
+    "information-vector": "Your information vector weighs z by V where V⁻¹ belongs (your P is "
+                          "right, your x̂ is not).",
+    "x0-wrong": "Your filter does not start from the prior mean x0 the problem gives.",
+    "input-shift": "The known input u is used one step off: u[k] drives the step from t_k to "
+                   "t_(k+1).",
+    "missing-as-zero": "A measurement that did not arrive (NaN) is used as a measurement of 0: "
+                       "leave the components that did not arrive out of the update.",
     "euler-propagation": "Your mean is propagated with one Euler step per sample; integrate the "
                          "motion exactly over each step.",
     "jacobian-point": "A Jacobian is evaluated at the wrong state.",
+    "jacobian-sign": "A Jacobian your filter uses has a sign wrong (∂f/∂x: how each heading "
+                     "moves the positions).",
+    "jacobian-blocks": "A Jacobian your filter uses has its columns for the two vehicles "
+                       "swapped (∂h/∂x: the relative position is the UAV's minus the UGV's).",
     "zeroed-gain": "Your update zeroes the gain's columns of the sensors that did not report; "
                    "use only the rows that arrived.",
     "report-covariance": "Your P is (I − K H) M, the covariance of the optimal gain only; use "

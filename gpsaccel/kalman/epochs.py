@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from gpsaccel.kalman.update import gain, joseph_update
+from gpsaccel.kalman.update import covariance_update, gain, joseph_update
 
 
 # ------------------------------------------------------------------------------ the epoch filter
@@ -52,9 +52,29 @@ class EpochFilter:
         updates the mean there but leaves P = M (so every later gain follows the skipped P).
     update_P : False never updates P (P_i = M_i at every epoch; the gains K_i = M_i Hᵀ S⁻¹ still
         update the mean): covariance-update-skipped everywhere.
-    fast : None, or (Φ, Q, n) of one propagation step when the filter updates at *every* step
-        (n per epoch interval) with the last measurement it has, z_{i−1}, until z_i arrives
+    fast : None, or (Φ, Q, n, which) of one propagation step when the filter updates at *every*
+        step (n per epoch interval) with a measurement it has: ``which`` "last" the last one,
+        z_{i−1}, until z_i arrives, or "next" the one that comes at the end of the interval, z_i
         (update-every-step); A, F, Qe are then unused between epochs.
+
+    What a student may get wrong in the update itself (each None or "joseph": right):
+
+    V_gain : the V of the gain's S = H M Hᵀ + V_gain, where P's update uses V
+        (residual-covariance: V left out of S, or its standard deviations there).
+    form : how P is updated from M, one of :data:`gpsaccel.kalman.update.COVARIANCE_FORMS`
+        ("minus", "plus": joseph-sign).
+    updates : None updates at every epoch; "even" only at epochs 0, 2, 4, ..., "odd" only at
+        1, 3, 5, ... (fixes-skipped; the others only propagate, and are stored).
+
+    and in the mean only (P is untouched):
+
+    z_shift : None; "first" updates epoch i with z_{i−1} (epoch 0 with z_0), "wrap" with
+        z_{i−1} and epoch 0 with z_{−1}, Python's last row (measurement-late).
+    z_weight : (p, p) or None: the residual takes z_weight·z for z.  An information filter whose
+        y adds Hᵀ V z (V where V⁻¹ belongs) is x̂ = x̄ + K (V² z − H x̄): z_weight = V V
+        (information-vector).
+    x0_from_z : x̄₀ = x0 + H⁺ (z₀ − H x0): the prior mean started at the first measurement
+        (x0-wrong).
     """
 
     A: np.ndarray
@@ -70,6 +90,12 @@ class EpochFilter:
     skip_last: bool | str = False
     update_P: bool = True
     fast: tuple | None = None
+    V_gain: np.ndarray | None = None
+    form: str = "joseph"
+    updates: str | None = None
+    z_shift: str | None = None
+    z_weight: np.ndarray | None = None
+    x0_from_z: bool = False
 
     @cached_property
     def gains(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -88,7 +114,7 @@ class EpochFilter:
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """:attr:`fast_gains` of the first ``n_epochs`` epochs only (bit for bit its rows)."""
         assert self.fast is not None, "fast_gains is for a filter that updates at every step"
-        Phi, Q, steps = self.fast
+        Phi, Q, steps = self.fast[:3]
         (p, n) = self.H.shape
         K, M, P = np.zeros((n_epochs, n, p)), np.empty((n_epochs, n, n)), np.empty((n_epochs, n, n))
         Kb = np.zeros((n_epochs, max(steps - 1, 0), n, p))
@@ -123,10 +149,14 @@ class EpochFilter:
         x_bar = np.empty((n_runs, self.n_gps, n))
         x_hat = np.empty_like(x_bar)
         xb = np.broadcast_to(np.asarray(self.x0, dtype=float), (n_runs, n))
+        if self.x0_from_z:                                    # x̄₀ = x0 + H⁺ (z₀ − H x0)
+            xb = xb + (z[:, 0] - xb @ self.H.T) @ np.linalg.pinv(self.H).T
+        z = self._used_z(z)
         Kb = self.fast_gains[3] if self.fast is not None else None
         for i in range(self.n_gps):
             if i and Kb is not None:
-                xb = self._between(x_hat[:, i - 1], z[:, i - 1], Kb[i])
+                zb = z[:, i] if self.fast[3] == "next" else z[:, i - 1]  # type: ignore[index]
+                xb = self._between(x_hat[:, i - 1], zb, Kb[i])
             elif i:
                 xb = x_hat[:, i - 1] @ self.A.T
             x_bar[:, i] = xb
@@ -135,6 +165,15 @@ class EpochFilter:
         if self.output == "prior":
             return x_bar, M
         return x_hat, P
+
+    def _used_z(self, z: np.ndarray) -> np.ndarray:
+        """The measurements the mean's residuals take (``z_weight``, ``z_shift``)."""
+        if self.z_weight is not None:
+            z = z @ np.asarray(self.z_weight).T
+        if self.z_shift is not None:
+            first = z[:, :1] if self.z_shift == "first" else z[:, -1:]
+            z = np.concatenate([first, z[:, :-1]], axis=1)
+        return z
 
     def _between(self, x: np.ndarray, z: np.ndarray, Kb: np.ndarray) -> np.ndarray:
         """x̄_i of a filter that updates at every step with z_{i−1} (``fast``), from x̂_{i−1}."""
@@ -158,13 +197,16 @@ def batch_gains(filters: Sequence[EpochFilter], n_epochs: int | None = None
     """
     n_gps = filters[0].n_gps
     n_epochs = n_gps if n_epochs is None else n_epochs
-    skip = {(i, kind): np.array([_skips(f, i, n_gps, kind) for f in filters])
-            for i in {0, n_gps - 1} for kind in ("P", "x")}
+    skip = _skip_masks(filters, n_gps, n_epochs)
     hold = np.array([not f.update_P for f in filters])
     F, Qe, H, V, M0 = (np.stack([getattr(f, a) for f in filters])
                        for a in ("F", "Qe", "H", "V", "M0"))
+    V_gain = (np.stack([f.V if f.V_gain is None else f.V_gain for f in filters])
+              if any(f.V_gain is not None for f in filters) else None)
+    forms = np.array([f.form for f in filters])
     K, M, P, _ = gain_recursion(F, Qe, H, V, M0, n_epochs, skip=skip,
-                                hold=hold if hold.any() else None)
+                                hold=hold if hold.any() else None, V_gain=V_gain,
+                                forms=forms if (forms != "joseph").any() else None)
     for c, f in enumerate(filters):
         if f.fast is not None:                        # updates between the epochs: its own loop
             K[c], M[c], P[c] = (f.fast_gains if n_epochs == n_gps
@@ -174,7 +216,8 @@ def batch_gains(filters: Sequence[EpochFilter], n_epochs: int | None = None
 
 def gain_recursion(F: np.ndarray, Qe: np.ndarray, H: np.ndarray, V: np.ndarray, M0: np.ndarray,
                    n_gps: int, inverse: bool = False, symmetrise: bool = True,
-                   skip: dict | None = None, hold: np.ndarray | None = None
+                   skip: dict | None = None, hold: np.ndarray | None = None,
+                   V_gain: np.ndarray | None = None, forms: np.ndarray | None = None
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(K, M, P, S) of the epoch recursion (module docstring) for n_gps epochs: the one loop.
 
@@ -183,6 +226,8 @@ def gain_recursion(F: np.ndarray, Qe: np.ndarray, H: np.ndarray, V: np.ndarray, 
     (:func:`gpsaccel.kalman.update.gain`).  ``symmetrise``: P ← (P + Pᵀ)/2 after each update.
     ``skip``: {(epoch, "P" or "x"): (C,) bool} the filters that skip that update at that epoch.
     ``hold``: (C,) bool, the filters whose P is never updated (P_i = M_i at every epoch).
+    ``V_gain``: the V of each filter's gain (:class:`EpochFilter`); ``forms``: (C,) each
+    filter's covariance update (:func:`gpsaccel.kalman.update.covariance_update`).
     """
     lead, (n, p) = F.shape[:-2], (F.shape[-1], H.shape[-2])
     K = np.zeros(lead + (n_gps, n, p))
@@ -194,7 +239,8 @@ def gain_recursion(F: np.ndarray, Qe: np.ndarray, H: np.ndarray, V: np.ndarray, 
     for i in range(n_gps):
         Mi = M0 if i == 0 else F @ P[..., i - 1, :, :] @ Ft + Qe    # M_i = F P_{i−1} Fᵀ + Q_e
         M[..., i, :, :] = Mi
-        Ki, S[..., i, :, :] = gain(Mi, H, V, inverse=inverse)    # K_i = M Hᵀ (H M Hᵀ + V)⁻¹
+        Ki, S[..., i, :, :] = _gain(Mi, H, V if V_gain is None else V_gain,
+                                    inverse)                     # K_i = M Hᵀ (H M Hᵀ + V)⁻¹
         Kp = Ki
         if (i, "P") in skip:
             Kp = np.where(skip[i, "P"][:, None, None], 0.0, Ki)   # P_i = M_i
@@ -202,15 +248,52 @@ def gain_recursion(F: np.ndarray, Qe: np.ndarray, H: np.ndarray, V: np.ndarray, 
         if hold is not None:
             Kp = np.where(hold[:, None, None], 0.0, Kp)          # P never updated
         Pi = joseph_update(Mi, Kp, H, V)
+        if forms is not None:                                    # a student's covariance update
+            for form in set(forms) - {"joseph"}:
+                c = forms == form
+                Pi[c] = covariance_update(Mi[c], Kp[c], H[c], V[c], form)
         K[..., i, :, :] = Ki
         P[..., i, :, :] = (Pi + np.swapaxes(Pi, -1, -2)) / 2 if symmetrise else Pi
     return K, M, P, S
 
 
-def _skips(f: EpochFilter, i: int, n_gps: int, kind: str) -> bool:
-    """Whether filter ``f`` skips the covariance ("P") or the mean ("x") update at epoch i."""
-    how = (f.skip_first if i == 0 else False) or (f.skip_last if i == n_gps - 1 else False)
-    return bool(how) if kind == "P" else how is True
+def _gain(M: np.ndarray, H: np.ndarray, V: np.ndarray, inverse: bool
+          ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`gpsaccel.kalman.update.gain`; in a stack of candidate filters, one whose S is
+    singular (a mistaken filter can lose V from S and rank from M) gets a NaN gain, and so NaN
+    from there on, which matches nothing, instead of stopping the others."""
+    try:
+        return gain(M, H, V, inverse=inverse)
+    except np.linalg.LinAlgError:
+        if M.ndim < 3:
+            raise
+    S = H @ M @ np.swapaxes(H, -1, -2) + V
+    finite = np.isfinite(S).all(axis=(-1, -2))
+    bad = ~finite
+    bad[finite] = np.linalg.matrix_rank(S[finite]) < S.shape[-1]
+    V = np.where(bad[:, None, None], np.eye(S.shape[-1]), V)      # any S that solves ...
+    M = np.where(bad[:, None, None], 0.0, M)
+    K = gain(M, H, V, inverse=inverse)[0]
+    K[bad] = np.nan                                                # ... then NaN for those
+    return K, S
+
+
+def _skip_masks(filters: Sequence[EpochFilter], n_gps: int, n_epochs: int) -> dict:
+    """{(epoch, "P" or "x"): (C,) bool} the filters that skip the covariance or the mean update
+    at that epoch (:func:`gain_recursion`'s ``skip``), for the epochs where any does: the first
+    or last one skipped (``skip_first``, ``skip_last``: True both, "covariance" P only) and every
+    other one (``updates``: neither)."""
+    P = np.zeros((len(filters), n_gps), dtype=bool)
+    x = np.zeros_like(P)
+    for c, f in enumerate(filters):
+        for i, how in ((0, f.skip_first), (n_gps - 1, f.skip_last)):
+            P[c, i] |= bool(how)
+            x[c, i] |= how is True
+        if f.updates is not None:                    # fixes-skipped: neither x̂ nor P updated
+            P[c, 1 if f.updates == "even" else 0::2] = True
+            x[c, 1 if f.updates == "even" else 0::2] = True
+    return {(i, kind): m[:, i] for i in range(n_epochs) if P[:, i].any()
+            for kind, m in (("P", P), ("x", x))}
 
 
 #: The names that moved out (module docstring) -> their module, read from it on first use.

@@ -26,6 +26,10 @@ MESSAGES: dict[str, str] = {
                        "not the state's process noise.",
     "std-as-variance": "{elem} = {value:.4g} in your filter; it should be {right:.4g}: {label}. "
                        "A covariance holds variances σ² (here σ = {sigma:.4g}, σ² = {right:.4g}).",
+    "std-as-variance.sigma": "a standard deviation used where a variance belongs",
+    "std-as-variance.squared": "a variance squared again, as if it were a standard deviation",
+    "std-as-variance.whole": "Every diagonal element of your {name} is wrong the same way: "
+                             "{label}. A covariance holds variances σ².",
     "m0-order": "M0 has {a} and {b} swapped: the state is [{states}], so M0's diagonal is "
                 "[{right}]; your filter starts with [{used}].",
     "returns-a-priori": "Your filter returns the a priori estimate and covariance (x̄, M: "
@@ -67,6 +71,58 @@ MESSAGES: dict[str, str] = {
                          "interval), reusing the last measurement between arrivals; a "
                          "measurement arrives every {interval:g} s, so only those {step}s "
                          "update (the others only propagate).",
+    "update-every-step.next": "Your filter updates at every {step} ({every} per measurement "
+                              "interval) with the measurement that arrives at the end of the "
+                              "interval, before it has arrived; a measurement arrives every "
+                              "{interval:g} s, so only those {step}s update (the others only "
+                              "propagate).",
+    "process-noise-interval": "Your filter steps once per measurement interval with Φ and Γ "
+                              "written for the whole interval T = {interval:g} s. That is exact "
+                              "for the mean, but the noise of {every} steps of {dt:g} s adds up "
+                              "as Σ_(j<{every}) Φʲ Γ W Γᵀ Φʲᵀ, not as Γ(T) W Γ(T)ᵀ: propagate "
+                              "{every} steps, or sum Q over them.",
+    "process-noise.zero": "Your prediction adds no process noise (Q = 0): M = Φ P Φᵀ + Q with "
+                          "Q = Γ W Γᵀ. Without it the filter grows overconfident and stops "
+                          "listening to the measurements.",
+    "process-noise.continuous": "Your Q is that of a continuous white noise of spectral density "
+                                "W (∫₀^Δt e^(Aτ) G W Gᵀ e^(Aᵀτ) dτ, filterpy's "
+                                "Q_continuous_white_noise: it grows like Δt), where the model's "
+                                "noise is one value per step held over it: Q = Γ W Γᵀ (like "
+                                "Δt²).",
+    "process-noise.dt": "Your Q is Γ W Γᵀ multiplied by the step Δt = {dt:g} s, as if W were a "
+                        "density; W is the variance of the noise of one step: Q = Γ W Γᵀ.",
+    "gamma-order": "Your Γ's rows are written for the state order [{order}]; the state is "
+                   "[{states}], and each row of Γ says how the noise enters that state.",
+    "gamma-order.transposed": "Your filter uses Γᵀ where Γ belongs: Q = Γ W Γᵀ with Γ's rows the "
+                              "states and its columns the noises.",
+    "residual-covariance.none": "Your gain leaves V out of the residual covariance: K = M Hᵀ "
+                                "(H M Hᵀ)⁻¹, where S = H M Hᵀ + V (the measurement's own noise is "
+                                "part of the residual).",
+    "residual-covariance.sqrt": "Your gain's residual covariance adds the standard deviations √V "
+                                "where the variances belong: S = H M Hᵀ + V.",
+    "joseph-sign.minus": "Your covariance update is Joseph's form with a minus: (I − K H) M "
+                         "(I − K H)ᵀ − K V Kᵀ. The measurement's noise adds uncertainty: "
+                         "+ K V Kᵀ.",
+    "joseph-sign.plus": "Your covariance update writes I + K H where Joseph's form has I − K H: "
+                        "P = (I − K H) M (I − K H)ᵀ + K V Kᵀ.",
+    "prior-scale": "Your prior covariance is {factor:g} × M0: every variance of the prior is off "
+                   "by a power of ten (a unit, or σ² against σ, slipped).",
+    "fixes-skipped": "Your filter updates only at every other measurement ({which}) and only "
+                     "propagates at the others (a counter or a % 2 test in the condition that "
+                     "decides when to update): every measurement time updates.",
+    "measurement-late": "Your update at each epoch uses the measurement of the epoch before "
+                        "(z[k − 1] for z[k]{first}): the residual takes the measurement of the "
+                        "time being updated, r = z_k − H x̄_k.",
+    "measurement-late.first": ", z[0] at the first",
+    "measurement-late.wrap": ", and z[−1], the last row, at the first: Python's negative index",
+    "information-vector": "Your information filter's vector adds Hᵀ V z where Hᵀ V⁻¹ z belongs "
+                          "(its matrix Y = M⁻¹ + Hᵀ V⁻¹ H is right, so P is): y = M⁻¹ x̄ + Hᵀ V⁻¹ "
+                          "z, then solve Y x̂ = y.",
+    "x0-wrong.zero": "Your filter starts from x̄₀ = 0; the prior mean of [{states}] is x0 = "
+                     "[{x0}].",
+    "x0-wrong.first": "Your filter starts from the first measurement (x̄₀ = H⁺ z₀) and then "
+                      "updates with z₀ again, so z₀ counts twice. Start from the prior mean x0 = "
+                      "[{x0}] and let the first update bring z₀ in.",
     "phi-sign": "Your Φ has {entries} with the wrong sign; the propagation is otherwise right. "
                 "Check how each state enters the others.",
     "state-order": "Your H is written for the state order [{order}]; the problem's state is "
@@ -75,8 +131,13 @@ MESSAGES: dict[str, str] = {
     # ----------------------------------------------------------- the checker's findings
     "matches-optimal": "P and x̂ match the optimal filter to {tol:g} σ on all {n_runs} runs.",
     "nan-output": "{name} contains {what} in {bad_runs} of {n_runs} runs; in run {run} first at "
-                  "t = {t:g} s (row {row}). Likely causes: an array made with np.empty and never "
-                  "filled at that row, a division by zero, or the inverse of a singular matrix.",
+                  "t = {t:g} s (row {row}). {cause}",
+    "nan-output.causes": "Likely causes: an array made with np.empty and never filled at that "
+                         "row, a division by zero, or the inverse of a singular matrix.",
+    "nan-output.runaway": "Before that it had grown to {top:.3g}: your filter runs away "
+                          "(each step multiplies its error) until floating point overflows; "
+                          "look at how x̂ is formed (the gain; in an information form, x̂ "
+                          "solves Y x̂ = y).",
     "p-depends-on-data": "Your P changes from run to run (by up to {spread:.3g} σσ). In a linear "
                          "Kalman filter P depends only on Φ, Q, H, V and M0, never on the "
                          "measurements: compute P without z.",
@@ -100,9 +161,10 @@ MESSAGES: dict[str, str] = {
     "p-scaled": "Your P is the optimal P multiplied by one same factor at every time{sym}. "
                 "{x_note} M0, H and V are not the problem: look at the line that symmetrises or "
                 "scales P.",
-    "epoch-shift": "Your outputs are shifted by one epoch, {where} (every row but the {end} "
-                   "matches the optimal filter shifted). Store x̂ and P of time t_k in row k, "
-                   "right after the update with z[k].",
+    "epoch-shift": "Your {what} shifted by one epoch, {where} (every row but the {end} "
+                   "matches the optimal filter shifted{other}). Store x̂ and P of time t_k in "
+                   "row k, right after the update with z[k].",
+    "epoch-shift.other": "; your {right} is stored right",
     "epoch-shift.late": "one time late: row k holds the estimate of time k − 1",
     "epoch-shift.early": "one time early: row k holds the estimate of time k + 1",
     "last-update-missing": "Your filter is right except at the last time (t = {t:g} s), where "
@@ -123,8 +185,12 @@ MESSAGES: dict[str, str] = {
                            "missing there; every earlier row matches.",
     "gain-or-residual": "{lead} your x̂ differs from what that filter gives on the same z by up "
                         "to {dx:.3g} σ ({where}). The mistake is in how x̂ is formed: check "
-                        "K = M Hᵀ (H M Hᵀ + V)⁻¹, x̄ = Φ x̂ at every {step}, the residual "
-                        "r = z − H x̄ and x̂ = x̄ + K r, with z at the matching time.",
+                        "the prior mean x0 it starts from, K = M Hᵀ (H M Hᵀ + V)⁻¹, x̄ = Φ x̂ at "
+                        "every {step}, the residual r = z − H x̄ and x̂ = x̄ + K r, with z at the "
+                        "matching time.",
+    "gain-or-residual.optimal": "Your P is the optimal one, so Φ, Q, H, V and M0 are right (P does "
+                                "not depend on x0 or on z), but",
+    "gain-or-residual.matched": "Your P matches {names}, and",
     "p-mismatch": "Your P does not match the optimal filter (it differs by up to {d:.3g} σσ)."
                   "{hint} {where}{depart} {matrices}",
     "p-mismatch.first": "P at t = 0 already differs: the first update uses only M0, H and V, so "
@@ -133,6 +199,13 @@ MESSAGES: dict[str, str] = {
                         "from t = {t:g} s on: the propagation between measurements is wrong "
                         "(Φ, Q = Γ W Γᵀ, or the number of steps).",
     "p-mismatch.matrices": "Check your Φ, Γ, W, H, V and M0 against the problem's.",
+    "p-not-positive-definite.advice": "The Joseph form P = (I − K H) M (I − K H)ᵀ + K V Kᵀ, "
+                                      "with these signs, keeps it one (and P = (P + Pᵀ)/2 "
+                                      "against rounding).",
+    "p-not-positive-definite.joseph-sign": "That is what the sign slip in your covariance "
+                                           "update (above) does: the Joseph form with the right "
+                                           "signs, (I − K H) M (I − K H)ᵀ + K V Kᵀ, keeps P a "
+                                           "covariance.",
     "hint.near": " The nearest known mistake is {names}: your P is within {d:.3g} σσ of it "
                  "({ratio:.2g}× the tolerance), so look there first.",
     "hint.none": " No catalogued mistake matches.",

@@ -175,9 +175,12 @@ class LinearModel:
 class LinearIngredients:
     """What a student chooses writing a filter for a :class:`LinearModel`.
 
-    Phi, Gamma, W : one-step Φ and the process noise Q = Γ W Γᵀ; steps : predictions between
-    updates; H, V, M0, x0 : as in the model; mean_propagated : False is x̄_i = x̂_{i−1};
-    output, skip_first, skip_last : see :class:`EpochFilter`.
+    Phi, Gamma, W : one-step Φ and the process noise Q = Γ W Γᵀ (``Q``, when given, is the
+    one-step process noise instead); steps : predictions between updates; H, V, M0, x0 : as in
+    the model; mean_propagated : False is x̄_i = x̂_{i−1}; update_every_step : False, or an update
+    at every step with the "last" measurement (True is "last") or the "next" one; output,
+    skip_first, skip_last, update_P, V_gain, form, updates, z_shift, z_weight, x0_from_z : see
+    :class:`EpochFilter`.
     """
 
     Phi: np.ndarray
@@ -195,7 +198,14 @@ class LinearIngredients:
     skip_last: bool | str = False
     predict_first: bool = False
     update_P: bool = True
-    update_every_step: bool = False
+    update_every_step: bool | str = False
+    Q: np.ndarray | None = None
+    V_gain: np.ndarray | None = None
+    form: str = "joseph"
+    updates: str | None = None
+    z_shift: str | None = None
+    z_weight: np.ndarray | None = None
+    x0_from_z: bool = False
 
     @classmethod
     def correct(cls, model: LinearModel) -> LinearIngredients:
@@ -203,12 +213,15 @@ class LinearIngredients:
                    model.x0, model.n_epochs)
 
     def epoch_filter(self) -> EpochFilter:
-        Q = self.Gamma @ self.W @ self.Gamma.T                 # Q = Γ W Γᵀ
+        Q = self.Gamma @ self.W @ self.Gamma.T if self.Q is None else self.Q   # Q = Γ W Γᵀ
         F, Qe = _transition(self.Phi, Q, self.steps)
         A = F if self.mean_propagated else np.eye(F.shape[0])
         x0, M0 = self.x0, self.M0
         if self.predict_first:                                 # one propagation before z_0:
             x0, M0 = A @ x0, F @ M0 @ F.T + Qe                 # x̄_0 = A x0, M_0 = F M0 Fᵀ + Q_e
-        fast = (self.Phi, Q, self.steps) if self.update_every_step else None
+        which = "last" if self.update_every_step is True else self.update_every_step
+        fast = (self.Phi, Q, self.steps, which) if which else None
         return EpochFilter(A, F, Qe, self.H, self.V, x0, M0, self.n_epochs,
-                           self.output, self.skip_first, self.skip_last, self.update_P, fast)
+                           self.output, self.skip_first, self.skip_last, self.update_P, fast,
+                           self.V_gain, self.form, self.updates, self.z_shift, self.z_weight,
+                           self.x0_from_z)

@@ -22,7 +22,7 @@ if TYPE_CHECKING:
     from gpsaccel.kalman.epochs import EpochFilter
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Mistake:
     """One entry of a catalogue.
 
@@ -38,6 +38,11 @@ class Mistake:
     informational : a finding of it is a note (the filter is right, written less robustly).
     checker : False for an entry only the homework tries (its question's contract differs).
     homework : True for an entry the homework names (in catalogue order).
+    where : where the mistake shows in the student's output, for an entry that always shows in
+        the same place ("every measurement time", "the last epoch (t = 20 s)"); "" otherwise.
+    combined : the largest combination of entries it is matched in (3 for the entries a report
+        combines, 2 for the ideas every system shares: the candidates a linear diagnosis builds
+        grow as the cube of the entries otherwise).
 
     Every system's catalogue (calibration, ship, coop, any linear model) is a tuple of these:
     the checker, the lessons and the homework read the same entries.
@@ -53,6 +58,8 @@ class Mistake:
     informational: bool = False
     checker: bool = True
     homework: bool = False
+    where: str = ""
+    combined: int = 3
 
     @property
     def title(self) -> str:
@@ -68,17 +75,45 @@ class Mistake:
         """The ingredients (and elements) it changes; mistakes that share one do not combine."""
         return frozenset(c[0] if len(c) == 2 else (c[0], c[1]) for c in self.changes)
 
+    @property
+    def fields(self) -> frozenset:
+        """The ingredients it changes, whole or in part (an element's field too)."""
+        return frozenset(c[0] for c in self.changes)
+
+    def overlaps(self, other: Mistake) -> bool:
+        """Whether the two change a same ingredient: the same element, or one changes a field
+        whole that the other changes in part (M0 × 10 and M0₁₁ = σ do not combine)."""
+        whole = {c[0] for c in self.changes if len(c) == 2}
+        other_whole = {c[0] for c in other.changes if len(c) == 2}
+        return bool(self.touches & other.touches or whole & other.fields
+                    or other_whole & self.fields)
+
     def __str__(self) -> str:
         return f"{self.code} ({self.variant})"
 
+    def _key(self) -> tuple:
+        return (self.code, self.variant, self.message, self.kinds)
+
+    def __eq__(self, other: object) -> bool:
+        """Two entries are the same mistake when code, title, message and filters agree (their
+        changes may hold arrays, which do not compare to one truth value)."""
+        return isinstance(other, Mistake) and self._key() == other._key()
+
+    def __hash__(self) -> int:
+        return hash(self._key())
+
 
 def combinations(mistakes: Sequence[Mistake], size: int) -> Iterator[tuple[Mistake, ...]]:
-    """All ``size``-tuples of ``mistakes`` that touch disjoint ingredients (so they can co-occur)."""
+    """All ``size``-tuples of ``mistakes`` that change disjoint ingredients (so they can co-occur:
+    :meth:`Mistake.overlaps`), of entries that are matched in combinations that large
+    (:attr:`Mistake.combined`; never an ``alone`` one)."""
+    if size > 1:
+        mistakes = [m for m in mistakes if not m.alone and m.combined >= size]
+    index = {id(m): i for i, m in enumerate(mistakes)}
+    clash = [[a.overlaps(b) for b in mistakes] for a in mistakes]   # each pair once
     for combo in itertools.combinations(mistakes, size):
-        if size > 1 and any(m.alone for m in combo):
-            continue
-        touched = [m.touches for m in combo]
-        if all(a.isdisjoint(b) for a, b in itertools.combinations(touched, 2)):
+        idx = [index[id(m)] for m in combo]
+        if not any(clash[a][b] for a, b in itertools.combinations(idx, 2)):
             yield combo
 
 

@@ -83,9 +83,40 @@ def joseph_update(M: np.ndarray, K: np.ndarray, H: np.ndarray, V: np.ndarray) ->
     return A @ M @ _T(A) + K @ V @ _T(K)
 
 
+#: The covariance updates a filter may write (:func:`covariance_update`): the Joseph form, the
+#: short form (I − K H) M (right for the optimal gain only), and Joseph's form with a sign wrong.
+COVARIANCE_FORMS = ("joseph", "short", "minus", "plus")
+
+
+def covariance_update(M: np.ndarray, K: np.ndarray, H: np.ndarray, V: np.ndarray,
+                      form: str = "joseph") -> np.ndarray:
+    """The a posteriori covariance a filter computes from M with the gain K (..., n, n)::
+
+        "joseph"  (I − K H) M (I − K H)ᵀ + K V Kᵀ     the covariance of any gain
+        "short"   (I − K H) M                         the optimal gain's only (report 004's)
+        "minus"   (I − K H) M (I − K H)ᵀ − K V Kᵀ     Joseph's form with the wrong sign
+        "plus"    (I + K H) M (I + K H)ᵀ + K V Kᵀ     ... or with I + K H
+
+    The last two are a student's slips (the catalogues' ``joseph-sign``); "joseph" is exactly
+    :func:`joseph_update`.
+    """
+    if form == "joseph":
+        return joseph_update(M, K, H, V)
+    if form == "short":
+        return (np.eye(M.shape[-1]) - K @ H) @ M
+    if form == "minus":
+        A = np.eye(M.shape[-1]) - K @ H
+        return A @ M @ _T(A) - K @ V @ _T(K)
+    if form == "plus":
+        A = np.eye(M.shape[-1]) + K @ H
+        return A @ M @ _T(A) + K @ V @ _T(K)
+    raise ValueError(f"form must be one of {COVARIANCE_FORMS}, got {form!r}")
+
+
 def partial_update(x_bar: np.ndarray, M: np.ndarray, z: np.ndarray, H: np.ndarray,
                    V: np.ndarray, rows: np.ndarray, K: np.ndarray | None = None,
-                   zeroed: bool = False, short_form: bool = False
+                   zeroed: bool = False, short_form: bool = False, *,
+                   V_gain: np.ndarray | None = None, form: str | None = None
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(x̂, P, K): the update with the components ``rows`` of z that arrived; the only one.
 
@@ -99,16 +130,20 @@ def partial_update(x_bar: np.ndarray, M: np.ndarray, z: np.ndarray, H: np.ndarra
 
     x̂ = x̄ + K r with r = z − H x̄ on the rows that arrived and 0 elsewhere.  P is the Joseph form,
     the covariance of any gain, or with ``short_form`` (I − K H) M, which holds for the optimal
-    gain only (the report's).  Nothing arrived: x̂ = x̄, P = M, K = 0 (in Joseph form).
+    gain only (the report's); ``form`` names any of :data:`COVARIANCE_FORMS` instead.
+    ``V_gain``: the V that the gain's S = H M Hᵀ + V_gain uses, where a filter's gain and its
+    covariance update disagree (a student's ``residual-covariance``); P is updated with V.
+    Nothing arrived: x̂ = x̄, P = M, K = 0 (in Joseph form).
     """
     rows = np.asarray(rows, dtype=int)
     p, n = H.shape
+    Vg = V if V_gain is None else V_gain
     if K is None:
         K = np.zeros((n, p))
         if rows.size and zeroed:
-            K[:, rows] = gain(M, H, V)[0][:, rows]          # (the solve keeps a non-symmetric M)
+            K[:, rows] = gain(M, H, Vg)[0][:, rows]         # (the solve keeps a non-symmetric M)
         elif rows.size:
-            K[:, rows] = gain(M, H[rows], V[np.ix_(rows, rows)])[0]
+            K[:, rows] = gain(M, H[rows], Vg[np.ix_(rows, rows)])[0]
     r = np.zeros(np.shape(x_bar)[:-1] + (p,))
     if np.ndim(x_bar) == 1:                                  # one run: matrix @ vector
         r[rows] = z[rows] - H[rows] @ x_bar
@@ -116,7 +151,8 @@ def partial_update(x_bar: np.ndarray, M: np.ndarray, z: np.ndarray, H: np.ndarra
     else:                                                    # runs in rows
         r[..., rows] = z[..., rows] - x_bar @ H[rows].T
         x_hat = x_bar + r @ K.T
-    P = (np.eye(n) - K @ H) @ M if short_form else joseph_update(M, K, H, V)
+    form = form or ("short" if short_form else "joseph")
+    P = covariance_update(M, K, H, V, form)
     return x_hat, P, K
 
 

@@ -36,44 +36,29 @@ def test_vectorised_reference_equals_run_multirate(z, method):
         assert np.max(np.abs(P - P_r) / (sd[:, :, None] * sd[:, None, :])) < 1e-11
 
 
-class _PlusPhi(CalibrationModel):
-    """The report-000 model with Φ₁₃ = +Δt²/2, run through the package's driver."""
-
-    @property
-    def Phi(self):
-        return cat.phi(self.dt, +1.0)
-
-
-class _PlusBoth(CalibrationModel):
-    """Φ₁₃ = +Δt²/2 and Φ₂₃ = +Δt (the bias as if the accelerometer read a − b)."""
-
-    @property
-    def Phi(self):
-        return cat.phi(self.dt, +1.0, +1.0)
-
-
-class _TotalX0(CalibrationModel):
-    @property
-    def x0(self):
-        return np.array([self.p0_mean, self.v0_mean, 0.0])
+#: The model's own matrices a mistake may change (its fields), and the rest it may replace (a
+#: subclass's property, as the driver reads them).
+_FIELDS = ("M0", "V", "W")
+_PROPERTIES = ("Phi", "Gamma", "Q", "x0")
 
 
 def _model_for(mistake: cat.Mistake) -> CalibrationModel | None:
-    """The same mistake expressed as a CalibrationModel, where the model can express it."""
-    c = mistake.changes
-    if mistake.code == "phi-sign":
-        return _PlusBoth() if ("sign23", 1.0) in c else _PlusPhi()
-    if mistake.code == "x0-total-state":
-        return _TotalX0()
-    if mistake.code in ("m0-order", "std-as-variance", "w-value"):
-        kw = {"M0": MODEL.M0.copy(), "V": MODEL.V.copy(), "W": MODEL.W.copy()}
-        for change in c:
-            if len(change) == 2:
-                kw[change[0]] = np.array([[change[1]]])
-            else:
-                kw[change[0]][change[1]] = change[2]
-        return CalibrationModel(**kw)
-    return None
+    """The same mistake expressed as a CalibrationModel run through the package's driver, where
+    a model can express it (a change of its matrices, not of the filter's loop)."""
+    kw = {name: np.array(getattr(MODEL, name), dtype=float) for name in _FIELDS}
+    replaced: dict[str, np.ndarray] = {}
+    for change in mistake.changes:
+        name = change[0]
+        if name not in _FIELDS + _PROPERTIES:
+            return None
+        if len(change) == 2:
+            (kw if name in _FIELDS else replaced)[name] = np.array(change[1], dtype=float)
+        else:
+            kw[name][change[1]] = change[2]
+    if kw["W"].shape != (1, 1):
+        return None  # Q = W·I: W is then the state's 3 x 3, which the model cannot hold
+    props = {name: property(lambda self, v=value: v) for name, value in replaced.items()}
+    return type("_Mistaken", (CalibrationModel,), props)(**kw)
 
 
 EXPRESSIBLE = [m for m in cat.catalogue(MODEL) if _model_for(m) is not None]
@@ -92,7 +77,7 @@ def test_mutant_equals_driver_on_mistaken_model(z, mistake):
 
 def test_gps_rate_mistake_keeps_the_exact_mean_transition():
     """Φ(T) = Φ(Δt)⁴⁰ exactly, so process-noise-interval changes only the noise."""
-    pni = cat.mutant("process-noise-interval", MODEL)
+    pni = cat.mutant("process-noise-interval", MODEL)  # Φ(Δt)⁴⁰ as the 40 steps compose it
     ref = cat.reference(MODEL)
     np.testing.assert_allclose(pni.A, ref.A, rtol=0, atol=1e-15)
     assert not np.allclose(pni.Qe, ref.Qe)

@@ -54,12 +54,17 @@ def test_the_ship_variants_are_combinations_of_its_entries():
 
     entries = set(ship.catalogue("filter"))
     vs = ship.variants()
-    assert vs[0].ingredients == ship.Ingredients()
+    assert vs[0].mistakes == ()
+    report = [v for v in vs[1:] if set(v.codes) <= set(ship.REPORT_CODES)]
+    assert len(report) == 11  # the valid combinations of the report's four entries
     for v in vs[1:]:
         assert set(v.mistakes) <= entries and v.codes
         g = v.ingredients
         assert (g.zeroed, g.report_covariance, g.monorate_gain, g.no_input) == tuple(
-            c in v.codes for c in ship.CODES)
+            c in v.codes for c in ship.REPORT_CODES)
+    # every other entry is matched on its own, and each entry is in some variant
+    assert all(len(v.mistakes) == 1 for v in vs[1:] if v not in report)
+    assert {m for v in vs for m in v.mistakes} == entries
     assert not any("report-covariance" in v.codes and "zeroed-gain" not in v.codes for v in vs)
 
 

@@ -1,4 +1,4 @@
-"""Not in the catalogue: the residual uses the previous GPS fix z[k-1] (P is right, x̂ is not)."""
+"""measurement-late: the residual uses the previous GPS fix z[k-1] (z[0] at the first; P is right)."""
 import numpy as np
 
 dt = 0.005

@@ -154,6 +154,8 @@ class CalibrationProblem(LinearProblem):
     step = "accelerometer step"
     messages = cat.MESSAGES  # report 000's one table: its catalogue's and its checker's wording
     renames = {"no-function": "no-kalman-filter"}
+    student = {"phi-sign": "A sign of Φ is wrong: look at how the accelerometer bias enters "
+                           "position and velocity (the accelerometer reads a + b)."}
 
     def __init__(self, model: CalibrationModel | None = None, alpha: float = 0.01,
                  tol: float = TOLERANCE) -> None:

@@ -1,7 +1,8 @@
 """expect: information-vector — information form with x̂ = Y·y (it should solve Y x̂ = y): the
 estimate runs away (to ~1e100 and beyond), and is the student's own result.
-accept: gain-or-residual — a run-away estimate cannot be matched to 1e-6 σ (its rounding alone is
-larger), so its P (right) and the location of x̂'s departure are what can be said."""
+accept: gain-or-residual, nan-output — a run-away estimate cannot be matched to 1e-6 σ (its rounding
+alone is larger): its P (right) and where x̂ departs are what can be said, or, where it overflows
+to inf and NaN first, where and that it ran away."""
 import numpy as np
 
 dt = 0.005

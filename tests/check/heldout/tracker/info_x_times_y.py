@@ -1,6 +1,6 @@
 """expect: information-vector — x̂ = Y·y where Y x̂ = y should be solved: it runs away.
-accept: gain-or-residual — a run-away estimate cannot be matched to 1e-6 σ; its P is right and
-x̂'s departure is located."""
+accept: gain-or-residual, nan-output — a run-away estimate cannot be matched to 1e-6 σ: its P is
+right and x̂'s departure is located (or, overflowed to NaN, where and that it ran away)."""
 import numpy as np
 
 
