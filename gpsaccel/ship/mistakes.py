@@ -20,24 +20,43 @@ The report's filter differs in up to three ways, and a student can forget the in
                       (every sensor every step) instead of the filter's own;
 ``no-input``          the prediction without B u_k.
 
-:func:`run` runs any combination on an ensemble at once: the gains do not depend on the data,
-so one covariance recursion serves every run and the means move as (R, 9) arrays.
-:func:`variants` lists every combination the checker matches against (:func:`run` with none of
-them is the optimal filter, equal to :func:`gpsaccel.kalman.multirate.run_multirate` to
-rounding).
+Besides the report's, the slips every system shares (:mod:`gpsaccel.kalman.entries`, one
+definition each: a sign of Φ, σ for σ² in V, W or M0, a prior off by a power of ten, Joseph's
+sign, V left out of S, no process noise or Q·Δt, z one step late, x̂₀ = 0, every other GPS fix
+skipped) and the ship's own: NaN rows used as measurements of 0 (``missing-as-zero``), u one step
+off (``input-shift``), the outputs one row late (``epoch-shift``).  Each is a change of
+:class:`Ingredients`.
+
+:func:`run` runs any combination on an ensemble at once, through the one stepping loop of the
+package (:func:`gpsaccel.kalman.update.step_schedule`, an epoch at every step) with the zeroed-gain
+hook as its update (:class:`gpsaccel.ship.zeroed_gain.ZeroedGainUpdate`, which applies any of
+these gains and carries the true covariance of the error alongside): the gains do not depend on
+the data, so one covariance recursion serves every run and the means move as (R, 9) arrays.
+What the hook cannot express is done around it, and said where: the input (``no-input``,
+``input-shift``) in the prediction, which z the update sees (``missing-as-zero``,
+``measurement-late``, every other GPS fix) before the loop, the rows returned
+(``epoch-shift``) after it.  :func:`variants` lists every combination the checker matches
+against (:func:`run` with none of them is the optimal filter, equal to
+:func:`gpsaccel.kalman.multirate.run_multirate` to rounding).
 """
 
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from functools import lru_cache
 
 import numpy as np
 
+from gpsaccel.kalman import entries
+from gpsaccel.kalman.linear_messages import MESSAGES as LINEAR_MESSAGES
+from gpsaccel.kalman.linear_model import LinearModel
 from gpsaccel.kalman.mistakes import Mistake, apply
-from gpsaccel.kalman.update import joseph_update, partial_update
-from gpsaccel.ship.model import ShipModel
+from gpsaccel.kalman.schedule import Schedule
+from gpsaccel.kalman.update import partial_update, step_schedule
+from gpsaccel.ship.model import GPS_ROWS, STATES, ShipModel
 from gpsaccel.ship.plan import driving_input
+from gpsaccel.ship.zeroed_gain import ZeroedGainUpdate
 
 #: The ship's wording, one table: code -> the filter entry's message (``{cost}``: the σ excess of
 #: the student's filter's true covariance over the optimal, said in words by the checker);
@@ -57,6 +76,20 @@ MESSAGES: dict[str, str] = {
                      "from its own M: {cost}.",
     "no-input": "Your prediction leaves out the known input: x̄_(k+1) = Φ x̂_k + B u_k (u[k] "
                 "drives the step from t_k to t_(k+1)).",
+    "missing-as-zero": "Your filter uses the sensors that did not report (NaN in z) as "
+                       "measurements of 0, so every step updates with all nine rows: leave the "
+                       "rows that did not arrive out (H_a, V_aa, z_a).",
+    "input-shift.early": "Your prediction from t_k to t_(k+1) uses u[k + 1], the next step's "
+                         "input (the last row repeated at the end): u[k] drives the step from "
+                         "t_k to t_(k+1).",
+    "input-shift.late": "Your prediction from t_k to t_(k+1) uses u[k − 1], the step before's "
+                        "(none at the first): u[k] drives the step from t_k to t_(k+1).",
+    "epoch-shift": "Your outputs are one row late: row k holds x̂ and P of step k − 1 (row 0 "
+                   "twice). Store x̂_k and P_k in row k, right after the update with z[k].",
+    "fixes-skipped": "Your filter uses the GPS only at every other fix (the {which}): every "
+                     "row where z is not NaN updates.",
+    "measurement-late": "Your update at step k uses z[k − 1], the row before (nothing at k = "
+                        "1): the residual takes the row of the step being updated, z[k].",
     "update.zeroed-gain": "the full gain M Hᵀ (H M Hᵀ + V)⁻¹ with the columns of the missing "
                           "rows set to zero (report 004's BD(:,1,n) = 0)",
     "update.zeroed-gain.hint": "The kept columns of the full gain were computed as if the "
@@ -101,21 +134,54 @@ MESSAGES: dict[str, str] = {
 }
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Ingredients:
-    """What a student chooses writing the ship's update or filter; every switch off is the
-    optimal one.  zeroed: the full gain with the missing columns zeroed; report_covariance:
-    P = (I − K H) M; monorate_gain: the monorate filter's gain at the GPS fixes; no_input: the
-    prediction without B u; missing_as_zero: NaN rows used as measurements of 0."""
+    """What a student chooses writing the ship's update or filter; every switch off (and every
+    matrix None: the ship's own) is the optimal one.
+
+    zeroed : the full gain with the missing columns zeroed; report_covariance : P = (I − K H) M;
+    monorate_gain : the monorate filter's gain at the GPS fixes; no_input : the prediction without
+    B u; missing_as_zero : NaN rows used as measurements of 0.
+    Phi, W, Q, V, M0, x0 : the filter's own model (None: the ship's, :meth:`correct` fills them
+    in; Q, when given, instead of Γ W Γᵀ); V_gain, form : the gain's V and the covariance update
+    (:class:`~gpsaccel.ship.zeroed_gain.ZeroedGainUpdate`); z_shift : "first", the update at
+    step k takes z[k − 1]; updates : "even" or "odd", the GPS only at every other fix (the 2nd,
+    4th, ... left out, or the 1st, 3rd, ...); u_shift : "early" u[k + 1] or "late" u[k − 1]
+    drives the step from t_k; output_shift : the rows returned one late.
+    """
 
     zeroed: bool = False
     report_covariance: bool = False
     monorate_gain: bool = False
     no_input: bool = False
     missing_as_zero: bool = False
+    Phi: np.ndarray | None = None
+    W: np.ndarray | None = None
+    Q: np.ndarray | None = None
+    V: np.ndarray | None = None
+    M0: np.ndarray | None = None
+    x0: np.ndarray | None = None
+    V_gain: np.ndarray | None = None
+    form: str | None = None
+    z_shift: str | None = None
+    updates: str | None = None
+    u_shift: str | None = None
+    output_shift: bool = False
+
+    @classmethod
+    def correct(cls, model: ShipModel) -> Ingredients:
+        """The optimal filter's, with ``model``'s matrices filled in (so that a change of one
+        element has a matrix to change)."""
+        return cls(Phi=model.Phi, W=model.W, V=model.V, M0=model.M0, x0=model.x0)
 
 
-#: (code, the switches it sets, the filters it applies to): the catalogue's entries in order.
+#: The ingredients that change only the gains a filter applies, never how its mean moves: with
+#: only these, the true covariance of its error is the Joseph recursion of its gains (the cost
+#: said exactly); with any other, the cost is said from its estimates.
+GAIN_ONLY = frozenset({"zeroed", "report_covariance", "monorate_gain", "W", "Q", "V", "M0",
+                       "V_gain", "form", "updates"})
+
+#: (code, the switches it sets, the filters it applies to): the report's entries in order.
 #: ``report-covariance`` of the filter sets only its own switch: :func:`variants` pairs it with
 #: ``zeroed-gain`` (with the optimal gain (I − KH) M is the Joseph form, no mistake).
 _ENTRIES: tuple[tuple[str, tuple[tuple, ...], str], ...] = (
@@ -129,12 +195,44 @@ _ENTRIES: tuple[tuple[str, tuple[tuple, ...], str], ...] = (
 )
 
 
+def _numbers(model: ShipModel) -> LinearModel:
+    """The ship's matrices by the names :mod:`gpsaccel.kalman.entries` reads (an epoch every
+    step)."""
+    return LinearModel(model.Phi, model.Gamma, model.W, model.H, model.V, model.M0, model.x0,
+                       1, model.n_samples, model.dt, tuple(s for s, _ in STATES))
+
+
+def _text(key: str, **fields: object) -> str:
+    return {**LINEAR_MESSAGES, **MESSAGES}[key].format(**fields)
+
+
+def shared_catalogue(model: ShipModel | None = None) -> tuple[Mistake, ...]:
+    """The checker's entries beyond the report's: the ideas every system shares
+    (:mod:`gpsaccel.kalman.entries`) on the ship's numbers, and the ship's own."""
+    m = _numbers(ShipModel() if model is None else model)
+    out = entries.phi_sign(m, _text)
+    out += entries.std_as_variance(m, _text, element=entries.subscript)
+    out += entries.prior_scale(m, _text) + entries.joseph_sign(m, _text)
+    out += entries.residual_covariance(m, _text) + entries.process_noise(m, _text)
+    out += entries.x0_wrong(m, _text, from_z=False) + entries.measurement_late(
+        m, _text, wrap=False, first="z[k − 1] for z[k] (nothing at k = 1)")
+    out += entries.fixes_skipped(m, _text, {"even": "the 1st, 3rd, ... fix",
+                                            "odd": "the 2nd, 4th, ... fix"}, "the GPS at {which}")
+    out += [Mistake("missing-as-zero", "NaN rows used as 0", MESSAGES["missing-as-zero"],
+                    (("missing_as_zero", True),)),
+            Mistake("epoch-shift", "outputs one row late", MESSAGES["epoch-shift"],
+                    (("output_shift", True),))]
+    out += [Mistake("input-shift", f"u[k {sign} 1] for u[k]", MESSAGES[f"input-shift.{key}"],
+                    (("u_shift", key),)) for key, sign in (("early", "+"), ("late", "−"))]
+    return tuple(replace(e, kinds=("filter",)) for e in out)
+
+
 def catalogue(kind: str = "filter") -> tuple[Mistake, ...]:
     """The ship's catalogue: entries of the core's one type (:class:`gpsaccel.kalman.mistakes
     .Mistake`), each a change of :class:`Ingredients`, for ``kind`` "filter" (the checker's
-    ``multirate_filter``, message templates with ``{cost}``) or "update" (the homework's one
-    update, :func:`update`: what it is and the hint; ``missing-as-zero`` is the homework's own,
-    the checker's filter gets NaN rows, whose zero-filled use it names as a mismatch)."""
+    ``multirate_filter``: the report's entries, message templates with ``{cost}``, then
+    :func:`shared_catalogue`) or "update" (the homework's one update, :func:`update`: what it is
+    and the hint)."""
     out = []
     for code, changes, k in _ENTRIES:
         if k != kind:
@@ -143,10 +241,24 @@ def catalogue(kind: str = "filter") -> tuple[Mistake, ...]:
         out.append(Mistake(code, code if k == "filter" else MESSAGES[key], MESSAGES[key],
                            changes, hint=MESSAGES.get(f"{key}.hint", ""), kinds=(k,),
                            homework=k == "update"))
-    return tuple(out)
+    return tuple(out) + (_shared() if kind == "filter" else ())
 
 
-CODES = tuple(m.code for m in catalogue("filter"))
+@lru_cache(maxsize=1)
+def _shared() -> tuple[Mistake, ...]:
+    return shared_catalogue(_default_model())
+
+
+@lru_cache(maxsize=1)
+def _default_model() -> ShipModel:
+    return ShipModel()
+
+
+#: The report's four codes (the homework's question 3 and :func:`variants`' combinations).
+REPORT_CODES = ("zeroed-gain", "report-covariance", "monorate-gain", "no-input")
+
+#: Every code of the checker's catalogue, in order.
+CODES = tuple(dict.fromkeys(m.code for m in catalogue("filter")))
 
 #: The homework's question 1 (one update, :func:`update`): the mistakes it names, in the order
 #: tried.
@@ -185,26 +297,38 @@ class Variant:
 
     @property
     def ingredients(self) -> Ingredients:
-        return apply(Ingredients(), self.mistakes)
+        """The ingredients on the ship's default model (:meth:`on` another)."""
+        return self.on(_default_model())
+
+    def on(self, model: ShipModel) -> Ingredients:
+        return apply(Ingredients.correct(model), self.mistakes)
+
+    @property
+    def gain_only(self) -> bool:
+        """Whether it changes only the gains (:data:`GAIN_ONLY`): its P_true is then the true
+        covariance of its error."""
+        return all(m.fields <= GAIN_ONLY for m in self.mistakes)
 
     def __str__(self) -> str:
-        return " + ".join(self.codes) or "optimal"
+        return " + ".join(str(m) if m.variant != m.code else m.code
+                          for m in self.mistakes) or "optimal"
 
 
 def variants() -> tuple[Variant, ...]:
-    """The optimal filter first, then every valid combination of the catalogue's mistakes.
+    """The optimal filter first, then every valid combination of the report's four entries, then
+    each other entry of the catalogue alone.
 
     ``report-covariance`` needs ``zeroed-gain`` (with the optimal gain (I − KH) M equals the Joseph
     form, so it is not a mistake there).
     """
-    entries = catalogue("filter")
+    report = catalogue("filter")[:len(REPORT_CODES)]
     out = [Variant(())]
-    for on in itertools.product((False, True), repeat=len(entries)):
-        zeroed, report = on[0], on[1]
-        if report and not zeroed or not any(on):
+    for on in itertools.product((False, True), repeat=len(report)):
+        zeroed, cov = on[0], on[1]
+        if cov and not zeroed or not any(on):
             continue
-        out.append(Variant(tuple(m for m, o in zip(entries, on, strict=True) if o)))
-    return tuple(out)
+        out.append(Variant(tuple(m for m, o in zip(report, on, strict=True) if o)))
+    return tuple(out) + tuple(Variant((m,)) for m in _shared())
 
 
 @dataclass
@@ -213,7 +337,8 @@ class Output:
 
     x_hat : (R, N, n) a posteriori means (row 0 the prior x0).  P : (N, n, n) the covariance the
     filter carries and returns.  P_true : (N, n, n) the true covariance of its error (Joseph form
-    of the gains it applied).  K : (N, n, 9) the gains (zero at k = 0).
+    of the gains it applied; the error's covariance only when the mistakes change nothing but
+    the gains, :attr:`Variant.gain_only`).  K : (N, n, 9) the gains (zero at k = 0).
     """
 
     x_hat: np.ndarray
@@ -227,49 +352,79 @@ def availability(z: np.ndarray) -> np.ndarray:
     return np.isfinite(np.asarray(z, dtype=float))
 
 
+def _used_z(z: np.ndarray, g: Ingredients) -> np.ndarray:
+    """The z (R, N, 9) the filter's update sees: NaN as 0, one row late, or every other GPS
+    fix left out.  (Not the hook's to say: it is handed the rows of z that arrived.)"""
+    if g.missing_as_zero:
+        z = np.nan_to_num(z, nan=0.0)
+        z[:, 0] = np.nan  # row 0 is x0 and M0: nothing updates there
+    if g.z_shift:
+        z = np.concatenate([np.full_like(z[:, :1], np.nan), z[:, :-1]], axis=1)
+    if g.updates:
+        z = z.copy()
+        for r in range(z.shape[0]):  # the fixes counted as they arrive, run by run
+            fixes = np.flatnonzero(np.isfinite(z[r, :, GPS_ROWS[0]]))
+            drop = fixes[1::2] if g.updates == "even" else fixes[0::2]
+            z[r][np.ix_(drop, GPS_ROWS)] = np.nan
+    return z
+
+
+def _used_u(u: np.ndarray, g: Ingredients) -> np.ndarray:
+    """The input that drives each step: u, one step early (the last row repeated) or late."""
+    if g.u_shift == "early":
+        return np.concatenate([u[1:], u[-1:]])
+    if g.u_shift == "late":
+        return np.concatenate([np.zeros_like(u[:1]), u[:-1]])
+    return u
+
+
 def run(model: ShipModel, z: np.ndarray, u: np.ndarray | None = None,
         variant: Variant = Variant(()), mono_K: np.ndarray | None = None) -> Output:
     """Run ``variant`` on z (R, N, 9) (every run with the same NaN pattern) and input u (N−1, 3).
 
     ``u`` defaults to the model's driving input; ``mono_K`` (N, n, 9), the monorate filter's gains,
-    is computed when the variant needs it and it is not given.
+    is computed when the variant needs it and it is not given.  The loop is
+    :func:`~gpsaccel.kalman.update.step_schedule` over an epoch at every step k ≥ 1 (what
+    arrived there, possibly nothing), its update :class:`~gpsaccel.ship.zeroed_gain
+    .ZeroedGainUpdate` (module docstring).
     """
-    z = np.asarray(z, dtype=float)
-    if z.ndim == 2:
-        z = z[None]
+    g = variant.on(model)
+    z = _used_z(np.asarray(z, dtype=float).reshape((-1,) + np.shape(z)[-2:]), g)
     R, N, p = z.shape
     avail = availability(z[0])
     if (availability(z) != avail).any():
         raise ValueError("z: every run must have the same NaN pattern (the same schedule)")
-    u = driving_input(model) if u is None else np.asarray(u, dtype=float)
-    Phi, Q, H, V, B = model.Phi, model.Q, model.H, model.V, model.B
+    u = _used_u(driving_input(model) if u is None else np.asarray(u, dtype=float), g)
+    Phi, V = g.Phi, g.V
+    Q = g.Q if g.Q is not None else model.Q if g.W is model.W else model.Gamma @ g.W @ model.Gamma.T
+    H, B = model.H, model.B
     n = Phi.shape[0]
-    g = variant.ingredients
     if g.monorate_gain and mono_K is None:
         mono_K = monorate_gains(model)
-    x = np.broadcast_to(model.x0, (R, n)).copy()
-    C = model.M0.copy()
-    Ct = C.copy()
-    x_hat = np.empty((R, N, n))
-    P = np.empty((N, n, n))
-    P_true = np.empty((N, n, n))
+    schedule = Schedule(N - 1, np.arange(1, N), avail[1:])
+    hook = ZeroedGainUpdate(model.Phi, model.Q, model.M0, schedule.steps,
+                            "report" if g.report_covariance else "joseph",
+                            mono_K[schedule.steps] if g.monorate_gain else None,
+                            zeroed=g.zeroed, V_gain=g.V_gain, form=g.form, V_true=model.V)
+    state = {"x": np.broadcast_to(g.x0, (R, n)).copy(), "C": np.array(g.M0, dtype=float)}
+    x_hat, P = np.empty((R, N, n)), np.empty((N, n, n))
     K_all = np.zeros((N, n, p))
-    x_hat[:, 0], P[0], P_true[0] = x, C, Ct
-    for k in range(N - 1):
-        j = k + 1
-        x = x @ Phi.T + (0.0 if g.no_input else B @ u[k])
-        C = Phi @ C @ Phi.T + Q
-        Ct = Phi @ Ct @ Phi.T + Q
-        rows = np.flatnonzero(avail[j])
-        K = np.zeros((n, p))
-        if rows.size:
-            given = mono_K[j] if mono_K is not None and g.monorate_gain and \
-                rows.size == p else None
-            x, C, K = partial_update(x, C, z[:, j], H, V, rows, given, g.zeroed,
-                                     g.report_covariance)
-            Ct = joseph_update(Ct, K, H, V)                 # the true covariance of any gain
-        K_all[j] = K
-        x_hat[:, j], P[j], P_true[j] = x, C, Ct
+    x_hat[:, 0], P[0] = state["x"], state["C"]
+
+    def predict(k: int) -> None:                  # the input is the prediction's, not the hook's
+        state["x"] = state["x"] @ Phi.T + (0.0 if g.no_input else B @ u[k])
+        state["C"] = Phi @ state["C"] @ Phi.T + Q
+
+    def update(i: int) -> None:
+        j = int(schedule.steps[i])
+        state["x"], state["C"], K_all[j] = hook.update(
+            state["x"], state["C"], i, z[:, j], np.flatnonzero(schedule.mask[i]), H, V)
+        x_hat[:, j], P[j] = state["x"], state["C"]
+
+    step_schedule(schedule, predict, update)
+    P_true = np.concatenate([model.M0[None], hook.P_actual])
+    if g.output_shift:                            # the rows returned, after the loop
+        x_hat[:, 1:], P[1:], P_true[1:] = x_hat[:, :-1].copy(), P[:-1].copy(), P_true[:-1].copy()
     return Output(x_hat, P, P_true, K_all)
 
 

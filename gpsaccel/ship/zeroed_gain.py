@@ -58,7 +58,8 @@ class ZeroedGainResult(MultirateResult):
     P_actual : (n_epochs, n, n) the true a posteriori error covariance of the gains applied
         (Joseph form; equal to P when ``covariance="joseph"``).
     M_actual : the matching true a priori covariance.
-    K_full : (n_epochs, n, p) the full gain before its columns were zeroed.
+    K_full : (n_epochs, n, p) the full gain before its columns were zeroed (of a hook with
+        ``zeroed``, as every run of :func:`run_zeroed_gain`).
     covariance : ``"joseph"`` or ``"report"``.
     """
 
@@ -80,13 +81,26 @@ class ZeroedGainUpdate:
         C      ← Joseph(C, K)  or  (I − K H) C                  (``covariance``)
 
     and the true covariance of this filter's error is carried alongside,
-    M_actual = Φ_n P_actual Φ_nᵀ + Q_n between epochs, P_actual = Joseph(M_actual, K).
+    M_actual = Φ_n P_actual Φ_nᵀ + Q_n between epochs, P_actual = Joseph(M_actual, K), with the
+    system's own Φ, Q, M0 (and ``V_true``, the V of each call unless given).
+
+    The same hook is every other gain a filter of the ship may apply (the catalogue of
+    :mod:`gpsaccel.ship.mistakes` runs through it): ``zeroed=False`` the optimal gain of the rows
+    that arrived, ``V_gain`` the V of the gain's S (the filter's P is updated with V), ``form``
+    the filter's covariance update (:func:`gpsaccel.kalman.update.covariance_update`, over
+    ``covariance``'s); whatever the filter computes, P_actual is the covariance of its error as
+    long as its mean is x̄ = Φ x̂ + B u with the system's Φ.  :meth:`update` is the update on
+    arrays (x̄ one run (n,) or many (R, n) sharing C), :meth:`__call__` the driver's hook.
     """
 
     def __init__(self, Phi: np.ndarray, Q: np.ndarray, M0: np.ndarray, steps: np.ndarray,
-                 covariance: str, full_epoch_gains: np.ndarray | None) -> None:
+                 covariance: str, full_epoch_gains: np.ndarray | None, *, zeroed: bool = True,
+                 V_gain: np.ndarray | None = None, form: str | None = None,
+                 V_true: np.ndarray | None = None) -> None:
         self.Phi, self.Q, self.steps = Phi, Q, steps
         self.covariance, self.full_epoch_gains = covariance, full_epoch_gains
+        self.zeroed, self.V_gain, self.V_true = zeroed, V_gain, V_true
+        self.form = form or ("short" if covariance == "report" else "joseph")
         n_epochs, n = len(steps), M0.shape[0]
         self.C_actual = M0.copy()
         self._transitions: dict[int, tuple[np.ndarray, np.ndarray]] = {}
@@ -104,21 +118,27 @@ class ZeroedGainUpdate:
 
     def __call__(self, kf, i: int, z: np.ndarray, rows: np.ndarray, H: np.ndarray,
                  V: np.ndarray) -> np.ndarray:
+        x, kf.P, K = self.update(kf.x[:, 0], kf.P, i, z, rows, H, V)
+        kf.x = x.reshape(-1, 1)
+        return K
+
+    def update(self, x: np.ndarray, C: np.ndarray, i: int, z: np.ndarray, rows: np.ndarray,
+               H: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(x̂, C, K) of epoch i from the a priori (x̄, C); the true covariance moves along."""
         self._propagate_actual(i)
         self.M_actual[i] = self.C_actual
         p = H.shape[0]
-        x, C = kf.x[:, 0], kf.P
-        K_full, _ = gain(C, H, V)
-        self.K_full.append(K_full)
+        if self.zeroed:                    # the gain before its columns are zeroed
+            self.K_full.append(gain(C, H, V if self.V_gain is None else self.V_gain)[0])
         given = None
         if self.full_epoch_gains is not None and rows.size == p:
             given = self.full_epoch_gains[i].copy()
-        x, kf.P, K = partial_update(x, C, z, H, V, rows, given, zeroed=True,
-                                    short_form=self.covariance == "report")
-        kf.x = x.reshape(-1, 1)
-        self.C_actual = joseph_update(self.C_actual, K, H, V)
+        x, C, K = partial_update(x, C, z, H, V, rows, given, zeroed=self.zeroed,
+                                 V_gain=self.V_gain, form=self.form)
+        self.C_actual = joseph_update(self.C_actual, K, H, V if self.V_true is None
+                                      else self.V_true)
         self.P_actual[i] = self.C_actual
-        return K
+        return x, C, K
 
 
 def run_zeroed_gain(model: LinearGaussianModel, z: np.ndarray, schedule: Schedule | None = None,

@@ -93,6 +93,13 @@ class ShipProblem(Problem):
 
     def evaluate(self, report: Report, cases: ShipCases, function: Function,
                  results: list[dict[str, np.ndarray]], returned: dict) -> None:
+        # a filter that runs away (1e108, 1e308) is judged as any other: its distances overflow
+        # to inf (far), never a warning or an error of the checker
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore", under="ignore"):
+            self._evaluate(report, cases, function, results, returned)
+
+    def _evaluate(self, report: Report, cases: ShipCases, function: Function,
+                  results: list[dict[str, np.ndarray]], returned: dict) -> None:
         from gpsaccel.ship import mistakes as sm
         from gpsaccel.ship.model import STATES
 
@@ -121,10 +128,10 @@ class ShipProblem(Problem):
             def run(v, steps: int | None) -> tuple[np.ndarray, np.ndarray]:
                 return self.run_variant(cases, v, steps)[:2]
 
-            found = nearest_within(variants[1:], run, x, P, P_ref, tol, tol)
+            found = nearest_within(variants[1:], run, x, P, P_ref, tol, tol, x_ref=x_ref)
             if found and found[1] <= 1.0:
                 v = found[0]
-                self._variant_findings(report, v, self.run_variant(cases, v)[2], P_ref)
+                self._variant_findings(report, v, self.run_variant(cases, v)[2], P_ref, dx)
             else:
                 where, full = first_departure(dx, dP, tol, tol, t, [s for s, _ in STATES],
                                                labels, x, x_ref, sd)
@@ -140,19 +147,33 @@ class ShipProblem(Problem):
                                "dx": float(dx.max()), "dP": float(dP.max()), "hint": hint})
         self._consistency(report, cases, x, P)
 
-    def _variant_findings(self, report: Report, v, P_true: np.ndarray, P_ref: np.ndarray) -> None:
+    def _variant_findings(self, report: Report, v, P_true: np.ndarray, P_ref: np.ndarray,
+                          dx: np.ndarray) -> None:
+        """The matched variant's entries as findings, each with what it costs the student's own
+        filter: the exact σ excess of its error's covariance when it changes only the gains,
+        else how far its estimates are from the optimal filter's (a wrong mean is no variance)."""
         from gpsaccel.ship import mistakes as sm
         from gpsaccel.ship.model import STATES
 
         report.details["ship"]["matched"] = list(v.codes)
-        ex = sm.sigma_excess(P_true, P_ref)[:, 1:]  # (R+1, N−1, 9)
-        worst = np.unravel_index(int(np.argmax(ex)), ex.shape)
-        cost = (f"its true error σ exceeds the optimal by up to {100 * ex.max():.3g} % "
-                f"({STATES[worst[2]][0]} at t = {self.model.t[worst[1] + 1]:g} s), "
-                f"{100 * ex.mean():.2g} % on average")
-        for code in v.codes:  # the cost is the student's own filter's (its true error)
-            report.add(code, sm.MESSAGES[code].format(cost=cost),
-                       text=STUDENT[code] + " Cost: {cost}.", observed={"cost": cost})
+        if v.gain_only:
+            ex = sm.sigma_excess(P_true, P_ref)[:, 1:]  # (R+1, N−1, 9)
+            worst = np.unravel_index(int(np.argmax(ex)), ex.shape)
+            cost = (f"its true error σ exceeds the optimal by up to {100 * ex.max():.3g} % "
+                    f"({STATES[worst[2]][0]} at t = {self.model.t[worst[1] + 1]:g} s), "
+                    f"{100 * ex.mean():.2g} % on average")
+        else:
+            worst = np.unravel_index(int(np.argmax(dx)), dx.shape)
+            cost = (f"its x̂ is up to {dx.max():.3g} σ from the optimal estimate "
+                    f"({STATES[worst[2]][0]} at t = {self.model.t[worst[1]]:g} s), "
+                    f"{dx.mean():.2g} σ on average over the voyages")
+        for m in v.mistakes:  # the cost is the student's own filter's (its true error)
+            message = (m.message.format(cost=cost) if "{cost}" in m.message
+                       else f"{m.message} Cost: {cost}.")
+            matches = (" Your output matches a filter that makes this mistake ({variant})."
+                       if m.variant != m.code else "")
+            report.add(m.code, message, text=STUDENT[m.code] + matches + " Cost: {cost}.",
+                       observed={"cost": cost, "variant": m.variant})
 
     def _consistency(self, report: Report, cases: ShipCases, x: np.ndarray,
                      P: np.ndarray) -> None:
@@ -221,8 +242,12 @@ def _run_ship_variant(cases: ShipCases, variant, z: np.ndarray
 
     mono = _mono(cases.model) if variant.ingredients.monorate_gain else None
     R = z.shape[0] - 1
-    a = sm.run(cases.model, z[:R], cases.u, variant, mono)
-    b = sm.run(cases.model, z[R:], cases.u, variant, mono)
+    try:
+        a = sm.run(cases.model, z[:R], cases.u, variant, mono)
+        b = sm.run(cases.model, z[R:], cases.u, variant, mono)
+    except np.linalg.LinAlgError:  # a mistaken filter whose S is singular: it matches nothing
+        nan = np.full((R + 1,) + z.shape[1:2] + (9, 9), np.nan)
+        return np.full(z.shape, np.nan), nan, nan
     x = np.concatenate([a.x_hat, b.x_hat])
     P = np.concatenate([np.broadcast_to(a.P, (R,) + a.P.shape), b.P[None]])
     Pt = np.concatenate([np.broadcast_to(a.P_true, (R,) + a.P.shape), b.P_true[None]])
