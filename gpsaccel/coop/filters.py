@@ -63,7 +63,7 @@ from gpsaccel.coop.model import (
 )
 from gpsaccel.coop.result import FilterResult
 from gpsaccel.coop.unscented import UKF_ALPHA, UKF_BETA, UKF_KAPPA, Unscented
-from gpsaccel.kalman.update import gain, joseph_update
+from gpsaccel.kalman.update import covariance_update, gain, joseph_update
 
 METHODS = ("lkf", "ekf", "ukf")
 
@@ -127,6 +127,18 @@ class Ingredients:
         (one Euler step x + ΔT·f(x, u) per sample; for the LKF, an Euler nominal).
     relinearize : an "LKF" that linearizes about its own estimate, not the nominal: an EKF.
     output : "posterior" returns x̂, P; "prior" returns x̄, M (the estimate before the update).
+
+    and the slips every system shares (:mod:`gpsaccel.kalman.entries`, under the same names):
+
+    V_gain : the R of the gain's S (its covariance update keeps R): zeros, or √R.
+    form : None, or a covariance update of :data:`gpsaccel.kalman.update.COVARIANCE_FORMS`
+        ("minus", "plus": Joseph's form with a sign wrong), over ``joseph``'s.
+    M0 : the P0 the filter starts from (None: the model's).
+    heading_sign : A's heading column (∂ξ/∂θ, ∂η/∂θ) with its signs flipped, for "ugv", "uav"
+        or "both" vehicles; C_swapped : C's bearing and range rows with the UGV and UAV position
+        blocks swapped (Δ taken the other way round).
+    mean_propagated : False keeps the mean where it was (the EKF's x̄ = x̂; the LKF's δx̄ = δx̂);
+        nominal_frozen : an LKF about x* = x0 at every step (a nominal never propagated).
     """
 
     wrap_residual: str = "yes"
@@ -141,9 +153,19 @@ class Ingredients:
     propagation: str = "exact"
     relinearize: bool = False
     output: str = "posterior"
+    V_gain: np.ndarray | None = None
+    form: str | None = None
+    M0: np.ndarray | None = None
+    heading_sign: str | None = None
+    C_swapped: bool = False
+    mean_propagated: bool = True
+    nominal_frozen: bool = False
 
 
 RIGHT = Ingredients()
+
+#: The entries of A each vehicle's heading column holds (∂ξ/∂θ, ∂η/∂θ): the UGV's, the UAV's.
+HEADING_COLUMNS = {"ugv": ((0, 1), 2), "uav": ((3, 4), 5)}
 
 
 # --------------------------------------------------------------------------- helpers
@@ -201,14 +223,28 @@ class _Linearised:
         self.model, self.g, self.lkf = model, g, kind == "lkf"
         if nominal is None and (self.lkf or "nominal" in (g.F_point, g.H_point)):
             nominal = euler_nominal(model) if g.propagation == "euler" else model.nominal()
+        if g.nominal_frozen:  # a nominal never propagated: x* = x0 at every step
+            nominal = np.broadcast_to(model.x0, (model.n_steps + 1, N_STATES)).copy()
         self.xn: np.ndarray = np.empty((0, N_STATES)) if nominal is None else nominal
         self.I = np.eye(N_STATES)
         if self.lkf:  # linearised once, about x*: F_k, H_k, h(x*_k) for every step
             xn = np.asarray(nominal)
-            self.Fs, self.Hs = self.F_of(model.A(xn)), model.C(xn)
+            self.Fs, self.Hs = self.F_of(model.A(xn)), self.C_of(model.C(xn))
             self.yn, self.yn_raw = h(xn), h_unwrapped(xn)
 
+    def C_of(self, C: np.ndarray) -> np.ndarray:
+        """C as the filter writes it (``C_swapped``: the two position blocks of rows 0-2)."""
+        if self.g.C_swapped:
+            C = C.copy()
+            C[..., :3, [0, 1, 3, 4]] = C[..., :3, [3, 4, 0, 1]]
+        return C
+
     def F_of(self, A: np.ndarray) -> np.ndarray:
+        if self.g.heading_sign:  # a sign slip in the heading column(s) of A
+            A = A.copy()
+            for who in ("ugv", "uav") if self.g.heading_sign == "both" else (self.g.heading_sign,):
+                rows, col = HEADING_COLUMNS[who]
+                A[..., rows, col] = -A[..., rows, col]
         if self.g.F_form == "I+dtA":
             return self.I + self.model.dt * A
         return A if self.g.F_form == "A" else self.model.dt * A
@@ -229,12 +265,14 @@ class _Linearised:
         """(s̄, M) at step k + 1 from (s, P) at step k."""
         if self.lkf:
             F = self.Fs[k]
-            return s @ F.T, F @ P @ _tr(F) + Q
+            return (s @ F.T if self.g.mean_propagated else s.copy()), F @ P @ _tr(F) + Q
         g, model = self.g, self.model
         self.x_prev = s
         if g.F_point == "posterior":
             F = self.F_of(model.A(s))
-        if g.propagation == "euler":
+        if not g.mean_propagated:
+            x = self.wrap(s.copy())
+        elif g.propagation == "euler":
             x = self.wrap(s + model.dt * f(s, model.u0, model.L))
         else:
             x = self.wrap(propagate(s, model.u0, model.dt, model.L))
@@ -253,7 +291,8 @@ class _Linearised:
             return H, self.yn[j] + d, self.yn_raw[j] + d
         point = self.g.H_point
         xH = s if point == "prior" else self.x_prev[runs] if point == "posterior" else self.xn[j]
-        return self.model.C(xH), h(s), (h_unwrapped(s) if self.g.wrap_residual == "none" else None)
+        return (self.C_of(self.model.C(xH)), h(s),
+                (h_unwrapped(s) if self.g.wrap_residual == "none" else None))
 
     def update(self, j: int, s: np.ndarray, M: np.ndarray, y: np.ndarray, m: np.ndarray,
                R: np.ndarray, runs=slice(None)):
@@ -267,12 +306,16 @@ class _Linearised:
             r = y - (yhat if g.wrap_residual == "difference" else yraw)
         if not m.all():
             H, r, R = H[..., m, :], r[:, m], R[np.ix_(m, m)]
-        K, S = gain(M, H, R, inverse=True)              # K = M Hᵀ S⁻¹, as filterpy
+        Rg = R if g.V_gain is None else np.asarray(g.V_gain)[np.ix_(m, m)]
+        K, S = gain(M, H, Rg, inverse=True)             # K = M Hᵀ S⁻¹, as filterpy
         if self.lkf:
             s = _add_gain(s, K, r)
         else:
             s = self.wrap(_add_gain(s, K, r))
-        P = joseph_update(M, K, H, R) if g.joseph else (self.I - K @ H) @ M
+        if g.form is not None:
+            P = covariance_update(M, K, H, R, g.form)
+        else:
+            P = joseph_update(M, K, H, R) if g.joseph else (self.I - K @ H) @ M
         return s, P, r, S
 
 
@@ -333,6 +376,7 @@ def run_batch(method: str, model: CoopModel, y: np.ndarray, Q: np.ndarray | None
     g = ingredients
     Q = Q * g.q_scale if g.q_scale != 1.0 else Q
     R = np.sqrt(R) if g.r_sqrt else R
+    P0 = P0 if g.M0 is None else np.asarray(g.M0, dtype=float)
     if method == "ukf":
         flt: _Linearised | Unscented = Unscented(model, alpha, beta, kappa)
     else:

@@ -29,10 +29,14 @@ matches a student's output against it is in :mod:`gpsaccel.check`, the homework 
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 
 from gpsaccel.coop.filters import FilterResult, Ingredients, euler_nominal, run_batch
 from gpsaccel.coop.model import ANGLE_STATES, CoopModel, wrap_angle
+from gpsaccel.kalman import entries
+from gpsaccel.kalman.linear_messages import MESSAGES as LINEAR_MESSAGES
 from gpsaccel.kalman.mistakes import Mistake, apply
 
 KINDS = ("ekf", "lkf")
@@ -66,7 +70,7 @@ MESSAGES: dict[str, str] = {
                         "already the covariance per DT step: M = F P Fᵀ + Q.",
     "std-as-variance": "Your update uses the standard deviations √R where R (variances) belongs: "
                        "S = H M Hᵀ + R with R as given.",
-    "epoch-shift.measurement": "Your update at t_(k+1) uses y_k, the previous row: the loop "
+    "measurement-late": "Your update at t_(k+1) uses y_k, the previous row: the loop "
                                "updates before it predicts (or indexes y one row early). Predict "
                                "from t_k to t_(k+1), then update with y_(k+1) (row 0 of y is "
                                "NaN: nothing to update at t = 0).",
@@ -96,6 +100,35 @@ MESSAGES: dict[str, str] = {
                                    "H_k = C(x*_k), and filters the perturbation δx = x − x*.",
     "returns-a-priori": "Your filter returns x̄ and M, the estimate before the update, instead "
                         "of x̂ and P.",
+    "residual-covariance.none": "Your gain leaves R out of the residual covariance: K = M Hᵀ "
+                                "(H M Hᵀ)⁻¹, where S = H M Hᵀ + R (the measurement's own noise is "
+                                "part of the residual).",
+    "residual-covariance.sqrt": "Your gain's residual covariance adds the standard deviations √R "
+                                "where the variances belong (S = H M Hᵀ + R), while your P is "
+                                "updated with R.",
+    "joseph-sign.minus": "Your covariance update is Joseph's form with a minus: (I − K H) M "
+                         "(I − K H)ᵀ − K R Kᵀ. The measurement's noise adds uncertainty: "
+                         "+ K R Kᵀ.",
+    "joseph-sign.plus": "Your covariance update writes I + K H where Joseph's form has I − K H: "
+                        "P = (I − K H) M (I − K H)ᵀ + K R Kᵀ.",
+    "prior-scale": "Your P0 is {factor:g} × the P0 of the problem: every variance of the prior "
+                   "is off by a power of ten.",
+    "jacobian-sign.ugv": "Your A = ∂f/∂x has the UGV's heading column with the wrong signs: "
+                      "∂ξg/∂θg = −v sin θg and ∂ηg/∂θg = +v cos θg.",
+    "jacobian-sign.uav": "Your A = ∂f/∂x has the UAV's heading column with the wrong signs: "
+                      "∂ξa/∂θa = −v sin θa and ∂ηa/∂θa = +v cos θa.",
+    "jacobian-sign.both": "Your A = ∂f/∂x has both heading columns with the wrong signs: "
+                       "∂ξ/∂θ = −v sin θ and ∂η/∂θ = +v cos θ for each vehicle.",
+    "jacobian-blocks": "Your C = ∂h/∂x has the UGV's and the UAV's position columns swapped in the "
+                  "bearing and range rows (Δξ = ξa − ξg taken the other way round): ∂γag/∂ξg = "
+                  "Δη/ρ², ∂ρ/∂ξg = −Δξ/ρ, and the UAV's columns the opposite.",
+    "mean-not-propagated.ekf": "Your EKF's mean is not propagated: x̄_(k+1) = x̂_k while the "
+                               "covariance is; the prediction is x̄_(k+1) = φ_ΔT(x̂_k, u).",
+    "mean-not-propagated.lkf": "Your LKF's perturbation is not propagated: δx̄_(k+1) = δx̂_k "
+                               "while the covariance is; δx̄_(k+1) = F_k δx̂_k.",
+    "mean-not-propagated.nominal": "Your LKF's nominal trajectory is never propagated (x* = x0 at "
+                                   "every step): the LKF linearizes about the noiseless "
+                                   "trajectory x*_(k+1) = φ_ΔT(x*_k, u) from x0.",
     "returns-a-priori.hint": "Store x̂ and P after the update at each step.",
     # ------------------------------------- the homework's findings (assignments/coop.py)
     "homework.not-defined": "{where} is not defined yet (or still `...`).",
@@ -130,7 +163,7 @@ _ENTRIES: tuple[tuple[str, str, tuple[tuple, ...], dict], ...] = (
     ("process-noise.omitted", "Q omitted", (("q_scale", 0.0),), {}),
     ("process-noise.dt", "Q scaled by ΔT", (("q_scale", "dt"),), {}),
     ("std-as-variance", "R replaced by √R", (("r_sqrt", True),), {}),
-    ("epoch-shift.measurement", "update with y_k before the prediction",
+    ("measurement-late", "update with y_k before the prediction",
      (("shift", "measurement"),), {}),
     ("epoch-shift.output", "outputs one row late", (("shift", "output"),), {}),
     ("p-not-symmetric", "P = (I − KH) M", (("joseph", False),), {"informational": True}),
@@ -146,19 +179,45 @@ _ENTRIES: tuple[tuple[str, str, tuple[tuple, ...], dict], ...] = (
      {"kinds": ("lkf",)}),
     ("returns-a-priori", "x̄ and M returned", (("output", "prior"),),
      {"kinds": ("ekf",), "checker": False, "homework": True}),
+    ("jacobian-sign.both", "both heading columns of A, signs flipped", (("heading_sign", "both"),),
+     {}),
+    ("jacobian-sign.ugv", "the UGV's heading column of A, signs flipped", (("heading_sign", "ugv"),),
+     {}),
+    ("jacobian-sign.uav", "the UAV's heading column of A, signs flipped", (("heading_sign", "uav"),),
+     {}),
+    ("jacobian-blocks", "C's UGV and UAV position columns swapped", (("C_swapped", True),), {}),
+    ("mean-not-propagated.ekf", "x̄ = x̂", (("mean_propagated", False),), {"kinds": ("ekf",)}),
+    ("mean-not-propagated.lkf", "δx̄ = δx̂", (("mean_propagated", False),), {"kinds": ("lkf",)}),
+    ("mean-not-propagated.nominal", "x* = x0 at every step", (("nominal_frozen", True),),
+     {"kinds": ("lkf",)}),
 )
 
 
 def catalogue(model: CoopModel | None = None, kind: str = "ekf") -> tuple[Mistake, ...]:
     """Every mistake that applies to ``kind`` ("ekf" or "lkf"), with ``model``'s numbers (its
-    ΔT in the messages and in ``process-noise``'s ΔT·Q)."""
-    dt = (CoopModel() if model is None else model).dt
+    ΔT in the messages and in ``process-noise``'s ΔT·Q): the coop filter's own entries, then the
+    ideas every system shares (:mod:`gpsaccel.kalman.entries`: V left out of S or √R there,
+    Joseph's sign, a prior off by a power of ten) in the coop's words."""
+    model = CoopModel() if model is None else model
+    dt = model.dt
     out = []
     for key, title, changes, options in _ENTRIES:
         changes = tuple((f, dt if v == "dt" else v) for f, v in changes)
         out.append(Mistake(key.split(".")[0], title, MESSAGES[key].format(dt=dt), changes,
                            hint=MESSAGES.get(f"{key}.hint", ""), **options))
-    return tuple(m for m in out if m.applies(kind))
+    return tuple(m for m in out + _shared(model) if m.applies(kind))
+
+
+def _shared(model: CoopModel) -> list[Mistake]:
+    """The shared entries on the coop's numbers: R as the filter's V, P0 as its M0."""
+
+    def text(key: str, **fields: object) -> str:
+        return {**LINEAR_MESSAGES, **MESSAGES}[key].format(**fields)
+
+    numbers = SimpleNamespace(V=model.Rtrue, M0=model.P0)
+    return (entries.residual_covariance(numbers, text, name="R")
+            + entries.joseph_sign(numbers, text, name="R")
+            + entries.prior_scale(numbers, text, name="P0"))
 
 
 def codes(kind: str = "ekf") -> tuple[str, ...]:

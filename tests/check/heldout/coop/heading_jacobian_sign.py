@@ -1,4 +1,4 @@
-"""expect: jacobian-A — the heading column of A with its signs flipped (∂ξ/∂θ = +v sin θ,
+"""expect: jacobian-sign — the heading column of A with its signs flipped (∂ξ/∂θ = +v sin θ,
 ∂η/∂θ = −v cos θ)."""
 import numpy as np
 

@@ -1,4 +1,4 @@
-"""expect: jacobian-C — the bearing and range rows of C with the UGV and UAV position blocks
+"""expect: jacobian-blocks — the bearing and range rows of C with the UGV and UAV position blocks
 swapped (Δ taken the other way round)."""
 import numpy as np
 
