@@ -96,7 +96,6 @@ from gpsaccel.sandbox.channel import (
                                       FRAME_FIELDS,
                                       MAX_HEADER,
                                       MAX_TEXT,
-                                      MAX_VALUE,
                                       FrameReader,
                                       Refused,
 )
@@ -127,7 +126,7 @@ from gpsaccel.sandbox.submission import (
 
 __all__ = [
     "BACKENDS", "BOX_PREFIX", "FRAME_COUNTS", "FRAME_FIELDS", "MAX_BYTES", "MAX_DEPTH",
-    "MAX_ENTRIES", "MAX_FILES", "MAX_HEADER", "MAX_TEXT", "MAX_VALUE", "PACKAGE_DIR",
+    "MAX_ENTRIES", "MAX_FILES", "MAX_HEADER", "MAX_TEXT", "PACKAGE_DIR",
     "BoxResult", "Call", "ChildResult", "FrameReader", "Limits", "Lost", "NoFence", "Output",
     "Refused", "Submission", "SubmissionError", "basic_is_safe", "bwrap_path", "defines",
     "in_child", "load_submission", "refuse_unsafe_basic", "resolve_backend", "run",

@@ -21,10 +21,6 @@ MAX_TEXT = 8000
 #: the other frames (imported, uses-checker, problem, done: each at most MAX_HEADER).
 HEADER_ALLOWANCE = 1024
 CHANNEL_ALLOWANCE = 4 * MAX_HEADER
-#: Largest finite magnitude a float result may hold: a filter's estimates and covariances are
-#: far below it, and the checker squares and sums them (1e100² · 10⁶ terms is still finite).
-MAX_VALUE = 1e100
-
 
 class Refused(Exception):
     """The runner's channel carried something other than the declared frames."""
@@ -96,11 +92,11 @@ class FrameReader:
     :attr:`budget` bytes (the declared outputs' bytes plus :data:`HEADER_ALLOWANCE` per call and
     :data:`CHANNEL_ALLOWANCE` for the rest), a header at most :data:`MAX_HEADER` bytes, each kind
     of frame at most :data:`FRAME_COUNTS` times; every header field must pass its test in
-    :data:`FRAME_FIELDS` (type, size, range, nesting); a float beyond :data:`MAX_VALUE` in
-    magnitude (finite, but its square or a sum of them overflows the checker's arithmetic) or an
-    integer beyond 2^53 in a result is refused.  NaN and ±inf pass: they mean "not computed"
-    and the checker reports them.  The parent holds at most one header plus one declared result
-    of undecoded bytes at a time.
+    :data:`FRAME_FIELDS` (type, size, range, nesting).  What a declared result holds is the
+    student's value, whatever it is (NaN, ±inf, 1e308: a filter that runs away returns such
+    numbers, and the checker judges them as its result); a breach is a frame that is not what
+    was declared (its kind, size, shape or dtype, its header), never a number.  The parent holds
+    at most one header plus one declared result of undecoded bytes at a time.
     """
 
     def __init__(self, calls: Sequence[Call]) -> None:
@@ -204,13 +200,5 @@ class FrameReader:
             a = np.frombuffer(payload, dtype=o.dtype, count=o.nbytes // np.dtype(o.dtype).itemsize,
                               offset=at).reshape(o.shape).copy()
             at += o.nbytes
-            if a.dtype.kind == "f":
-                big = np.isfinite(a) & (np.abs(a) > MAX_VALUE)
-            else:
-                big = (a > 1 << 53) | (a < -(1 << 53)) if a.dtype.kind in "iu" else None
-            if big is not None and big.any():
-                raise Refused(f"{_shown(o.name, 40)} holding a value of magnitude "
-                              f"{float(np.abs(a[big]).max()):.3g} (at most "
-                              f"{MAX_VALUE if a.dtype.kind == 'f' else 2.0**53:g})")
             out[o.name] = a
         return out

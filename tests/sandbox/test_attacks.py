@@ -181,12 +181,19 @@ def test_the_report_says_which_limits_applied(tmp_path, backend):
 @pytest.mark.parametrize("name, words", [
     ("frame_flood.py", "more than 1 'imported' frame"),
     ("frame_forger.py", "nested too deep"),
-    ("huge_values.py", "magnitude 1.7e+308"),
 ])
 def test_a_student_made_channel_error_is_result_refused(name, words, backend, hostile):
     report = _check(hostile, name, backend)
     assert report.codes == ["result-refused"], report
     assert words in _message(report, "result-refused")
+
+
+def test_huge_values_are_the_student_s_result_not_a_breach(backend, hostile):
+    """1.7e308 in every x̂ and P is a value (a filter that runs away returns such numbers): it is
+    judged as the student's result, never refused as tampering (issue 40)."""
+    report = _check(hostile, "huge_values.py", backend)
+    assert report.codes == ["p-mismatch"], report
+    assert "ratio to the right value overflows" in _message(report, "p-mismatch")
 
 
 # ------------------------------------------------------------------------ leave nothing

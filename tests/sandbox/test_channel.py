@@ -103,23 +103,20 @@ def test_malformed_or_wrongly_typed_headers_are_refused(header, words):
         sb.FrameReader(CALLS).feed(struct.pack(">I", len(header)) + header)
 
 
-@pytest.mark.parametrize("a, k, refused", [
-    (np.array([1.7e308, 0.0]), np.arange(3), True),
-    (np.array([-2e100, 0.0]), np.arange(3), True),
-    (np.array([1e99, np.nan]), np.arange(3), False),   # NaN: "not computed", reported later
-    (np.array([np.inf, -np.inf]), np.arange(3), False),
-    (np.zeros(2), np.array([0, 1, 1 << 60]), True),
-    (np.zeros(2), np.array([0, 1, 1 << 53]), False),
+@pytest.mark.parametrize("a, k", [
+    (np.array([1.7e308, 0.0]), np.arange(3)),
+    (np.array([-2e100, 0.0]), np.arange(3)),
+    (np.array([1e99, np.nan]), np.arange(3)),   # NaN: "not computed", reported later
+    (np.array([np.inf, -np.inf]), np.arange(3)),
+    (np.zeros(2), np.array([0, 1, 1 << 60])),
 ])
-def test_values_that_overflow_the_checkers_arithmetic_are_refused(a, k, refused):
+def test_any_value_of_the_declared_dtype_is_the_student_s_result(a, k):
+    """A number is never a breach (issue 40): the checker judges 1e308 as the filter's result."""
     blob = _frame({"t": "result", "call": 0}, a.tobytes() + k.astype(np.int64).tobytes())
     reader = sb.FrameReader(CALLS)
-    if refused:
-        with pytest.raises(sb.Refused, match="magnitude"):
-            reader.feed(blob)
-    else:
-        reader.feed(blob)
-        np.testing.assert_array_equal(reader.results[0]["a"], a)
+    reader.feed(blob)
+    np.testing.assert_array_equal(reader.results[0]["a"], a)
+    np.testing.assert_array_equal(reader.results[0]["k"], k)
 
 
 # ------------------------------------------------------------------ the declared frames

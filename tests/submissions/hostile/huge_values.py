@@ -1,5 +1,5 @@
-"""Hostile (issue 20): returns finite values near the largest float (1.7e308): the checker's
-arithmetic on them overflows."""
+"""Hostile (issue 20): returns finite values near the largest float (1.7e308), on which the
+checker's arithmetic overflows; a value all the same, judged as the student's result (issue 40)."""
 import numpy as np
 
 
