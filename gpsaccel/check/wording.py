@@ -141,10 +141,10 @@ STUDENT: dict[str, str] = {
                      "model's.",
     "gamma-order": "Your Γ's rows are in another order than the state's: each row of Γ says how "
                    "the noise enters that state.",
-    "residual-covariance": "Your gain's residual covariance S is not H M Hᵀ + V: the "
-                           "measurement's noise variances belong in it.",
-    "joseph-sign": "Your covariance update has a sign wrong: Joseph's form is (I − K H) M "
-                   "(I − K H)ᵀ + K V Kᵀ.",
+    "residual-covariance": "Your gain's residual covariance S leaves out the measurement's "
+                           "noise, or puts its standard deviations where its variances belong.",
+    "joseph-sign": "Your covariance update (the Joseph form) has a sign wrong: compare each sign "
+                   "with the lesson's; the measurement's noise adds uncertainty.",
     "prior-scale": "Your prior covariance M0 is off by a power of ten.",
     "fixes-skipped": "Your filter skips the update at some measurement times (every other "
                      "one): every time a measurement arrives, the filter updates.",

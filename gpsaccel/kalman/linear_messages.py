@@ -199,13 +199,12 @@ MESSAGES: dict[str, str] = {
                         "from t = {t:g} s on: the propagation between measurements is wrong "
                         "(Φ, Q = Γ W Γᵀ, or the number of steps).",
     "p-mismatch.matrices": "Check your Φ, Γ, W, H, V and M0 against the problem's.",
-    "p-not-positive-definite.advice": "The Joseph form P = (I − K H) M (I − K H)ᵀ + K V Kᵀ, "
-                                      "with these signs, keeps it one (and P = (P + Pᵀ)/2 "
-                                      "against rounding).",
+    "p-not-positive-definite.advice": "The Joseph form, with its signs as the lesson writes "
+                                      "them, keeps it one (and P = (P + Pᵀ)/2 against "
+                                      "rounding).",
     "p-not-positive-definite.joseph-sign": "That is what the sign slip in your covariance "
-                                           "update (above) does: the Joseph form with the right "
-                                           "signs, (I − K H) M (I − K H)ᵀ + K V Kᵀ, keeps P a "
-                                           "covariance.",
+                                           "update (above) does: with its signs right, the "
+                                           "Joseph form keeps P a covariance.",
     "hint.near": " The nearest known mistake is {names}: your P is within {d:.3g} σσ of it "
                  "({ratio:.2g}× the tolerance), so look there first.",
     "hint.none": " No catalogued mistake matches.",
