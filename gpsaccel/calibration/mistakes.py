@@ -48,7 +48,6 @@ from gpsaccel.kalman import entries
 from gpsaccel.kalman.epochs import EpochFilter, batch_gains  # noqa: F401 - re-exported
 from gpsaccel.kalman.linear_catalogue import (
     LINEAR_MESSAGES,
-    output_mistakes,
     predict_before_first_update,
     shared_mistakes,
     state_orders,
@@ -206,7 +205,7 @@ def covariance_mistakes(model: CalibrationModel | None = None) -> tuple[Mistake,
     lm, text = linear_model(model), _text(model)
     out = (_model_mistakes(model, f) + _propagation_mistakes(model, f)
            + tuple(entries.std_as_variance(lm, text, element=entries.subscript)))
-    out += tuple(transposed_mistakes(lm, text)) + tuple(output_mistakes(lm, text)[3:])
+    out += tuple(transposed_mistakes(lm, text))  # (the last epoch's: what is returned says it)
     return out + tuple(shared_mistakes(lm, text, skip=("process-noise-interval",))[0])
 
 

@@ -35,13 +35,17 @@ TOLERANCE = 1e-6
 #: Epochs of every candidate computed first, to bound its distance from below (:class:`Candidates`).
 HEAD = 8
 
-#: What a match allows beyond the tolerance, relative to how far a candidate's P runs beyond the
-#: optimal filter's: ROUNDING·(√|P_c,ii P_c,jj| − σ_i σ_j) where that is positive.  A mistaken
-#: filter that runs away (Joseph's form with a minus: negative variances at the first fix, P at
-#: 1e10 times the optimal after a few) computes the same numbers in another order only to about
-#: 1e-6 of their size (measured on report 000's), far beyond the tolerance in units of the
-#: optimal σ; a candidate in the optimal filter's range gets no allowance.
+#: What a match allows beyond the tolerance, ROUNDING·√|P_c,ii P_c,jj|, from the first row where
+#: a candidate's P runs away (a variance ≤ 0, or one beyond RUNAWAY times the optimal filter's):
+#: a mistaken filter that runs away (Joseph's form with a minus: negative variances at the first
+#: fix, P at 1e10 times the optimal after a few) computes the same numbers in another order only
+#: to about 1e-6 of their size (measured on report 000's), far beyond the tolerance in units of
+#: the optimal σ.  A candidate that stays a covariance in the optimal filter's range (σ for σ²
+#: gives 25 times a variance) gets no allowance, so a filter 2e-7 from one still reads as near
+#: it, not as it.  The row decides from the rows up to it, so a candidate's first rows bound its
+#: whole distance from below (:class:`Candidates`) as before.
 ROUNDING = 1e-5
+RUNAWAY = 1e3
 
 #: The same for x̂, relative to |x̂_c| (rounding only: a mean that runs away, 1e100, is matched
 #: to 1e-9 of itself).
@@ -50,11 +54,15 @@ ROUNDING_X = 1e-9
 
 def match_distance(P: np.ndarray, P_c: np.ndarray, sd: np.ndarray) -> np.ndarray:
     """|P − P_c|_ij / (σ_i σ_j) elementwise (σ = ``sd``, the optimal filter's), less the
-    :data:`ROUNDING` allowance of the candidate's run beyond the optimal (never below 0)."""
-    s = np.sqrt(np.abs(np.diagonal(P_c, axis1=-2, axis2=-1)))
+    :data:`ROUNDING` allowance from where the candidate has run away (never below 0).  P_c
+    (..., rows, n, n), rows the second-to-last axis of its leading ones."""
+    var = np.diagonal(P_c, axis1=-2, axis2=-1)                     # (..., rows, n)
+    s = np.sqrt(np.abs(var))
     scale = sd[..., :, None] * sd[..., None, :]
     with np.errstate(invalid="ignore", over="ignore"):
-        slack = ROUNDING * np.maximum(s[..., :, None] * s[..., None, :] - scale, 0.0)
+        away = (var <= 0).any(axis=-1) | (var > RUNAWAY * sd**2).any(axis=-1)
+        away = np.logical_or.accumulate(away, axis=-1)            # from that row on
+        slack = np.where(away[..., None, None], ROUNDING * s[..., :, None] * s[..., None, :], 0.0)
         return np.maximum(covariance_distance(P, P_c, sd) - slack / scale, 0.0)
 
 

@@ -75,36 +75,42 @@ def phi_sign_variants(Phi: np.ndarray) -> list[tuple[str, np.ndarray]]:
     equal diagonal blocks (the ship's three axes), one entry flipped in every block (a block
     written in a loop); and every coupling at once where no column variant covers it."""
     Phi = np.asarray(Phi, dtype=float)
-    n = Phi.shape[0]
-    name = lambda a, b: f"Φ{a + 1}{b + 1}".translate(_SUB)  # noqa: E731
-    out = []
-
-    def flipped(entries: list[tuple[int, int]]) -> tuple[str, np.ndarray]:
-        f = Phi.copy()
-        for a, b in entries:
-            f[a, b] = -Phi[a, b]
-        return " and ".join(name(a, b) for a, b in entries), f
-
-    for a, b in itertools.product(range(n), repeat=2):
-        if a != b and Phi[a, b] != 0.0:
-            out.append(flipped([(a, b)]))
-    for b in range(n):
-        rows = [a for a in range(n) if a != b and Phi[a, b] != 0.0]
-        if len(rows) > 1:
-            out.append(flipped([(a, b) for a in rows]))
-    s = _blocks(Phi)
-    if s > 1:
-        for a, b in itertools.product(range(s), repeat=2):
-            same = [(a + j, b + j) for j in range(0, n, s)]
-            if a != b and all(Phi[e] != 0.0 for e in same):
-                out.append(flipped(same))
-    off = [(a, b) for a, b in itertools.product(range(n), repeat=2) if a != b and Phi[a, b] != 0]
-    if len(off) > 1 and all(np.count_nonzero(Phi[:, b]) <= 2 for _, b in off):
+    groups = _single_entries(Phi) + _column_entries(Phi) + _block_entries(Phi)
+    off = _single_entries(Phi)
+    if len(off) > 1 and all(np.count_nonzero(Phi[:, e[0][1]]) <= 2 for e in off):
         # every coupling flipped (e.g. −Δt in x and in y), unless a column variant covers it
-        variant = flipped(off)
-        if not any(v == variant[0] for v, _ in out):
-            out.append(variant)
-    return out
+        every = [e[0] for e in off]
+        if every not in groups:
+            groups.append(every)
+    return [_flipped(Phi, entries) for entries in groups]
+
+
+def _flipped(Phi: np.ndarray, entries: list[tuple[int, int]]) -> tuple[str, np.ndarray]:
+    f = Phi.copy()
+    for a, b in entries:
+        f[a, b] = -Phi[a, b]
+    return " and ".join(f"Φ{a + 1}{b + 1}".translate(_SUB) for a, b in entries), f
+
+
+def _single_entries(Phi: np.ndarray) -> list[list[tuple[int, int]]]:
+    n = Phi.shape[0]
+    return [[(a, b)] for a, b in itertools.product(range(n), repeat=2)
+            if a != b and Phi[a, b] != 0.0]
+
+
+def _column_entries(Phi: np.ndarray) -> list[list[tuple[int, int]]]:
+    n = Phi.shape[0]
+    cols = [[(a, b) for a in range(n) if a != b and Phi[a, b] != 0.0] for b in range(n)]
+    return [c for c in cols if len(c) > 1]
+
+
+def _block_entries(Phi: np.ndarray) -> list[list[tuple[int, int]]]:
+    n, s = Phi.shape[0], _blocks(Phi)
+    if s < 2:
+        return []
+    same = ([(a + j, b + j) for j in range(0, n, s)]
+            for a, b in itertools.product(range(s), repeat=2) if a != b)
+    return [e for e in same if all(Phi[i] != 0.0 for i in e)]
 
 
 def couplings(Phi: np.ndarray, flipped: np.ndarray, states) -> str:

@@ -365,7 +365,7 @@ def _used_z(z: np.ndarray, g: Ingredients) -> np.ndarray:
         for r in range(z.shape[0]):  # the fixes counted as they arrive, run by run
             fixes = np.flatnonzero(np.isfinite(z[r, :, GPS_ROWS[0]]))
             drop = fixes[1::2] if g.updates == "even" else fixes[0::2]
-            z[r][np.ix_(drop, GPS_ROWS)] = np.nan
+            z[r][np.ix_(drop, np.array(GPS_ROWS))] = np.nan
     return z
 
 
@@ -395,8 +395,10 @@ def run(model: ShipModel, z: np.ndarray, u: np.ndarray | None = None,
     if (availability(z) != avail).any():
         raise ValueError("z: every run must have the same NaN pattern (the same schedule)")
     u = _used_u(driving_input(model) if u is None else np.asarray(u, dtype=float), g)
-    Phi, V = g.Phi, g.V
-    Q = g.Q if g.Q is not None else model.Q if g.W is model.W else model.Gamma @ g.W @ model.Gamma.T
+    Phi = model.Phi if g.Phi is None else g.Phi            # (correct() fills them in)
+    V = model.V if g.V is None else g.V
+    W = model.W if g.W is None else g.W
+    Q = g.Q if g.Q is not None else model.Q if W is model.W else model.Gamma @ W @ model.Gamma.T
     H, B = model.H, model.B
     n = Phi.shape[0]
     if g.monorate_gain and mono_K is None:
@@ -404,9 +406,11 @@ def run(model: ShipModel, z: np.ndarray, u: np.ndarray | None = None,
     schedule = Schedule(N - 1, np.arange(1, N), avail[1:])
     hook = ZeroedGainUpdate(model.Phi, model.Q, model.M0, schedule.steps,
                             "report" if g.report_covariance else "joseph",
-                            mono_K[schedule.steps] if g.monorate_gain else None,
+                            mono_K[schedule.steps] if mono_K is not None and g.monorate_gain
+                            else None,
                             zeroed=g.zeroed, V_gain=g.V_gain, form=g.form, V_true=model.V)
-    state = {"x": np.broadcast_to(g.x0, (R, n)).copy(), "C": np.array(g.M0, dtype=float)}
+    state = {"x": np.broadcast_to(model.x0 if g.x0 is None else g.x0, (R, n)).copy(),
+             "C": np.array(model.M0 if g.M0 is None else g.M0, dtype=float)}
     x_hat, P = np.empty((R, N, n)), np.empty((N, n, n))
     K_all = np.zeros((N, n, p))
     x_hat[:, 0], P[0] = state["x"], state["C"]

@@ -73,6 +73,8 @@ MUTANTS = [
     ("mutant_first_update_skipped.py", ["first-update-skipped"]),
     ("mutant_predict_before_update.py", ["predict-before-first-update"]),
     ("mutant_w_value.py", ["w-value"]),
+    ("mutant_phi_transposed.py", ["phi-transposed"]),
+    ("mutant_q_without_gamma.py", ["q-without-gamma"]),
     ("mutant_two_mistakes.py", ["phi-sign", "x0-total-state"]),
     ("report003.py", ["process-noise-interval", "std-as-variance"]),
     ("mutant_residual_index.py", ["measurement-late"]),
@@ -85,7 +87,7 @@ def test_every_catalogue_code_has_a_mutant_here():
     # issue 31's gaps: student-style mutants in tests/check/test_catalogue_gaps.py
     covered |= {"covariance-update-skipped", "update-every-step", "phi-sign", "state-order"}
     # issue 40's: students' filters of the held-out set (tests/check/heldout/calibration)
-    covered |= named("calibration") | {"last-update-missing"}  # test_sharper_diagnosis's
+    covered |= named("calibration")
     assert set(check.codes()) <= covered, set(check.codes()) - covered
 
 
