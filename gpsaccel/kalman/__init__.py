@@ -20,6 +20,9 @@
   entry (code, title, message, hint) whose changes are applied to that system's ingredients;
 * :mod:`~gpsaccel.kalman.linear_model`: ``LinearModel``, any linear problem an instructor
   describes by its matrices;
+* :mod:`~gpsaccel.kalman.entries`: the known mistakes every system shares (σ for σ², Joseph's
+  sign, V left out of S, z one epoch late, ...), one constructor per idea, applied through each
+  system's ingredients;
 * :mod:`~gpsaccel.kalman.linear_catalogue`: the known mistakes of any linear model, and
   :mod:`~gpsaccel.kalman.linear_messages` their texts (one table);
 * :mod:`~gpsaccel.kalman.gain_sequence`: one gain sequence applied to a whole ensemble;

@@ -158,7 +158,8 @@ def std_as_variance(m: Any, text: Text, names: tuple[str, ...] = ("V", "W", "M0"
             for value, label in ((np.sqrt(right), "sigma"), (right**2, "squared")):
                 if np.isclose(value, right, rtol=1e-6):
                     continue  # σ = σ² (a variance of 1): this slip cannot be seen
-                elem = element(name, i) if mat.shape[0] > 1 else name
+                # the reports write a 1 × 1 W without indices; code writes W[0,0]
+                elem = name if mat.shape[0] == 1 and element is subscript else element(name, i)
                 whole[label].append((name, (i, i), float(value)))
                 out.append(Mistake("std-as-variance", f"{elem} = {value:.4g}",
                                    text("std-as-variance", elem=elem, value=float(value),
@@ -168,7 +169,9 @@ def std_as_variance(m: Any, text: Text, names: tuple[str, ...] = ("V", "W", "M0"
         for label, changes in whole.items():
             if len(changes) > 1:
                 what = "σ for σ²" if label == "sigma" else "σ² squared"
-                out.append(Mistake("std-as-variance", f"every element of {name}: {what}",
+                values = ", ".join(f"{c[2]:.4g}" for c in changes)
+                out.append(Mistake("std-as-variance", f"every element of {name}: {what} "
+                                   f"({values})",
                                    text("std-as-variance.whole", name=name,
                                         label=text(f"std-as-variance.{label}")),
                                    tuple(changes), combined=2))

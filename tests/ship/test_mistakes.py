@@ -69,7 +69,7 @@ def test_each_shared_entry_runs_through_the_hook_with_the_true_covariance_of_its
     Joseph recursion of its gains for its true covariance: its estimates' errors over many voyages
     match it (NEES about n); one that changes the mean is flagged, its cost said otherwise."""
     entry = {m.variant: m for m in mistakes.shared_catalogue()}
-    gain = mistakes.Variant((entry["every element of W: σ for σ²"],))
+    gain = mistakes.Variant((entry["every element of W: σ for σ² (0.5, 0.5, 0.05)"],))
     mean = mistakes.Variant((entry["x̄₀ = 0"],))
     assert gain.gain_only and not mean.gain_only
     ens = simulate_ensemble(M, 200, np.random.default_rng(3))
