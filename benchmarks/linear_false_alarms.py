@@ -28,8 +28,8 @@ from gpsaccel.check.problems.tracker import TRACKER
 from gpsaccel.check.report import Report
 
 HERE = Path(__file__).resolve().parents[1] / "tests"
-sys.path.insert(0, str(HERE / "check"))
-from test_linear import GENERIC  # noqa: E402 - the tests' table of mistakes and their codes
+sys.path.insert(0, str(HERE.parent))  # the tests as a package: their modules import each other
+from tests.check.test_linear import GENERIC  # noqa: E402 - the tests' table of mistakes, codes
 
 STUDENT = HERE / "submissions" / "tracker" / "student.py"
 
