@@ -57,6 +57,64 @@ from gpsaccel.kalman.linear_catalogue import (
 from gpsaccel.kalman.linear_model import LinearIngredients, LinearModel
 from gpsaccel.kalman.mistakes import Mistake, combinations, with_changes  # noqa: F401
 
+
+@dataclass(frozen=True, eq=False)
+class Ingredients:
+    """Report 000's filter in its own terms (the report's Δt of Φ and Γ, the signs of Φ₁₃ and
+    Φ₂₃, a scalar W), for the lessons and a student's experiments (lesson 06's exercise builds the
+    report's filters from it); :meth:`epoch_filter` assembles it into the core's
+    :class:`~gpsaccel.kalman.linear_model.LinearIngredients`.  The catalogue's entries change
+    those generic ingredients directly (:func:`ingredients`), so that the ideas every system
+    shares are written once (:mod:`gpsaccel.kalman.entries`).
+
+    phi_dt, sign13 : Φ = Φ(phi_dt) with Φ₁₃ = sign13·phi_dt²/2.
+    gamma_dt, W : one-step process noise Q = Γ(gamma_dt) W Γ(gamma_dt)ᵀ.
+    steps : one-step predictions between GPS updates (40; 1 when stepping over the GPS interval).
+    H, V, M0, x0 : measurement matrix, GPS noise, prior covariance and mean.
+    sign23 : Φ₂₃ = sign23·phi_dt.
+    mean_propagated : False is the mean-not-propagated mistake (x̄_k = x̂_{k−1}).
+    output, skip_first : see :class:`EpochFilter`; predict_first, update_P, update_every_step :
+    see :class:`~gpsaccel.kalman.epochs.LinearIngredients`.
+    """
+
+    phi_dt: float
+    sign13: float
+    gamma_dt: float
+    W: float
+    steps: int
+    H: np.ndarray
+    V: np.ndarray
+    M0: np.ndarray
+    x0: np.ndarray
+    n_gps: int
+    mean_propagated: bool = True
+    output: str = "posterior"
+    skip_first: bool | str = False
+    predict_first: bool = False
+    sign23: float = -1.0
+    update_P: bool = True
+    update_every_step: bool = False
+
+    @classmethod
+    def correct(cls, model: CalibrationModel) -> Ingredients:
+        return cls(model.dt, -1.0, model.dt, float(model.W[0, 0]), model.gps_every, model.H,
+                   model.V, model.M0, model.x0, model.n_gps)
+
+    def epoch_filter(self) -> EpochFilter:
+        """The generic ingredients (:class:`gpsaccel.kalman.epochs.LinearIngredients`) of
+        Φ(phi_dt) with its Φ₁₃ sign, Γ(gamma_dt) and W: the one epoch recursion of the core."""
+        return LinearIngredients(phi(self.phi_dt, self.sign13, self.sign23),
+                                 gamma(self.gamma_dt), np.array([[self.W]]), self.steps, self.H,
+                                 self.V, self.M0, self.x0, self.n_gps, self.mean_propagated,
+                                 self.output, self.skip_first, predict_first=self.predict_first,
+                                 update_P=self.update_P,
+                                 update_every_step=self.update_every_step).epoch_filter()
+
+    def with_changes(self, changes: tuple[tuple, ...]) -> Ingredients:
+        """Apply ``(field, value)`` or ``(field, (row, col), value)`` changes (see :class:`Mistake`)."""
+        return with_changes(self, changes)
+
+
 _SUB = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
 
 

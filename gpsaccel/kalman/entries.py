@@ -146,13 +146,17 @@ def phi_sign(m: Any, text: Text, skip: tuple[str, ...] = ()) -> list[Mistake]:
 
 # ------------------------------------------------------------------------------ variances
 def std_as_variance(m: Any, text: Text, names: tuple[str, ...] = ("V", "W", "M0"),
-                    element: Callable[[str, int], str] = bracket) -> list[Mistake]:
+                    element: Callable[[str, int], str] = bracket, whole: int = 4
+                    ) -> list[Mistake]:
     """``std-as-variance``: σ for σ², or σ² squared again, in one diagonal element of each of
-    ``names``, and in every element of one matrix at once (a matrix written with the σ's)."""
+    ``names``, and in every element of one matrix at once (a matrix written with the σ's) where
+    it has at least ``whole`` elements that show the slip: a linear diagnosis combines up to three
+    entries, so a smaller matrix's whole slip is already a combination of its elements' (and a
+    lesson counts those); the ship's matches its entries one at a time (``whole=2``)."""
     out: list[Mistake] = []
     for name in names:
         mat = np.asarray(getattr(m, name), dtype=float)
-        whole: dict[str, list[tuple]] = {"sigma": [], "squared": []}
+        per_label: dict[str, list[tuple]] = {"sigma": [], "squared": []}
         for i in range(mat.shape[0]):
             right = float(mat[i, i])
             for value, label in ((np.sqrt(right), "sigma"), (right**2, "squared")):
@@ -160,14 +164,14 @@ def std_as_variance(m: Any, text: Text, names: tuple[str, ...] = ("V", "W", "M0"
                     continue  # σ = σ² (a variance of 1): this slip cannot be seen
                 # the reports write a 1 × 1 W without indices; code writes W[0,0]
                 elem = name if mat.shape[0] == 1 and element is subscript else element(name, i)
-                whole[label].append((name, (i, i), float(value)))
+                per_label[label].append((name, (i, i), float(value)))
                 out.append(Mistake("std-as-variance", f"{elem} = {value:.4g}",
                                    text("std-as-variance", elem=elem, value=float(value),
                                         right=right, label=text(f"std-as-variance.{label}"),
                                         sigma=float(np.sqrt(right))),
                                    ((name, (i, i), float(value)),)))
-        for label, changes in whole.items():
-            if len(changes) > 1:
+        for label, changes in per_label.items():
+            if len(changes) >= max(whole, 2):
                 what = "σ for σ²" if label == "sigma" else "σ² squared"
                 values = ", ".join(f"{c[2]:.4g}" for c in changes)
                 out.append(Mistake("std-as-variance", f"every element of {name}: {what} "
