@@ -126,7 +126,10 @@ def _each(section: Section, *codes: str) -> dict[str, Section]:
 #: code (or a lesson self-check's key, "NN.k") -> the section that teaches it.
 TAUGHT: dict[str, Section] = {
     # ------------------------------------------------- the model: Φ, Γ, Q, H, V, W, M0
-    **_each(CALIBRATION, "phi-transposed", "q-without-gamma", "state-order", "not-symmetric"),
+    **_each(CALIBRATION, "phi-transposed", "q-without-gamma", "state-order", "not-symmetric",
+            "gamma-order", "joseph-sign"),
+    "residual-covariance": FIRST_FIX,
+    "prior-scale": NUMBERS,
     **_each(NUMBERS, "v-element", "m0-element", "w-value", "units"),
     "h-element": MEASURES,
     "phi-sign": Section(L02, "The derivation", "5"),
@@ -135,12 +138,14 @@ TAUGHT: dict[str, Section] = {
     **_each(INTERVAL, "phi-interval", "gamma-interval", "q-element", "dt"),
     "std-as-variance": SIGMA_VARIANCE,
     "m0-order": M0_SWAPPED,
-    "x0-total-state": TOTAL_STATE,
+    **_each(TOTAL_STATE, "x0-total-state", "x0-wrong"),
     # ------------------------------------------------- the loop: what is updated, when
     **_each(FIRST_FIX, "first-update-skipped", "predict-before-first-update"),
     **_each(LOOP, "update-skipped", "covariance-update-skipped", "mean-update-skipped",
-            "last-update-missing", "returns-a-priori", "epoch-shift", "mean-not-propagated"),
-    **_each(ALGORITHM, "update-every-step", "missing-propagation"),
+            "last-update-missing", "returns-a-priori", "epoch-shift", "mean-not-propagated",
+            "measurement-late"),
+    **_each(ALGORITHM, "update-every-step", "missing-propagation", "fixes-skipped"),
+    "information-vector": FORMS,
     **_each(FORMS, "p-not-symmetric", "p-not-positive-definite", "p-scaled"),
     # ------------------------------------------------- the comparison and the consistency
     **_each(WHOLE_FILTER, "p-mismatch", "gain-or-residual", "filter-mismatch",
@@ -151,12 +156,13 @@ TAUGHT: dict[str, Section] = {
             "nees-diagonal", "nees-per-state", "nees-value", "nees-bounds",
             "nees-bounds-one-run"),
     # ------------------------------------------------- the ship (report 004)
-    "no-input": VOYAGE,
+    **_each(VOYAGE, "no-input", "input-shift"),
     **_each(OPTIMAL_UPDATE, "missing-as-zero", "update-mismatch"),
     **_each(ZEROED, "zeroed-gain", "report-covariance", "sigma-value"),
     **_each(SHIP_MONTE_CARLO, "monorate-gain", "claimed-not-actual"),
     # ------------------------------------------------- cooperative localization (report 002)
-    **_each(JACOBIANS, "jacobian-A", "jacobian-B", "jacobian-C", "jacobians-right"),
+    **_each(JACOBIANS, "jacobian-A", "jacobian-B", "jacobian-C", "jacobians-right",
+            "jacobian-sign", "jacobian-blocks"),
     "omega-dt-gamma": COOP_TRUTH,
     **_each(DT_MODEL, "zero-order-hold", "dt-model-right", "uses-own-jacobian"),
     **_each(EKF, "no-angle-wrap", "no-state-wrap", "dt-linearization", "process-noise",
