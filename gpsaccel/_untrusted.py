@@ -2,7 +2,8 @@ r"""Names, folders and text a student controls, made safe once for the grader an
 
 Everything here is a student's: a folder or notebook name (any bytes but ``/`` and NUL; not
 necessarily UTF-8; NFC or NFD; punctuation; any length), the depth and width of a folder, the
-text of an exception.  Three small tools, each used wherever such input enters:
+text of an exception.  This module is the only place that makes such input harmless; each tool
+is used wherever the input enters or leaves:
 
 * :func:`student_id` maps a name's raw bytes to a printable id that is a safe file name (a slug
   of the name, plus a short hash of the raw bytes whenever the slug is not the name itself), so
@@ -13,9 +14,19 @@ text of an exception.  Three small tools, each used wherever such input enters:
   :data:`MAX_DEPTH` levels and :data:`MAX_ENTRIES` entries (the checker's limits: one walk for
   the checker's box and the grader's search for notebooks); beyond them :class:`WalkLimit`,
   before the rest is read.  No recursion: 1500 nested folders cost 16 listings.
-* :func:`clean` removes control, format (bidirectional overrides, zero-width) and separator
-  characters from text that goes into feedback or a table, so a name cannot reorder or hide the
-  text around it.
+* :func:`printable` and :func:`shown` make a name (or a code, a path) printable: every
+  control, format or separator character (ESC and so every escape sequence, bidirectional
+  overrides, zero-width characters, U+2028/U+2029, NBSP and the other spaces but the ASCII one,
+  unassigned code points, a byte that was not UTF-8) is *written out* (``\\x1b``, ``\\u202e``)
+  rather than dropped, so no name can reorder or hide the text around it, and two names that
+  differ only by such a character never look alike (``Bob`` and ``Bob\\u200b`` are two names, not
+  one student's cell in a gradebook).
+* :func:`clean` removes the same characters from running text (feedback, a student's exception
+  message), keeping its newlines when asked.
+* :func:`cell` keeps a spreadsheet from evaluating a CSV text cell (``=``, ``+``, ``-``, ``@``,
+  tab, CR lead a formula): every CSV the package writes guards its text cells with it.
+* :func:`secret_seed` draws the seed of a class's data, the other side of the same line: what
+  no student can predict, so answers computed at home for a public seed pass nothing.
 
 Names stay ``str`` as :func:`os.fsdecode` gives them (bytes that are not UTF-8 as surrogate
 escapes, exactly what :func:`os.scandir` returns), and are encoded back with
@@ -26,6 +37,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import secrets
 import unicodedata
 from collections import deque
 from collections.abc import Callable, Iterator
@@ -41,34 +53,57 @@ SLUG_CHARS = 80
 #: Hex digits of the hash of the raw name added to an id whose slug is not the name.
 HASH_DIGITS = 8
 
-_DROPPED = ("Cc", "Cf", "Cs", "Zl", "Zp")
-
-
 def clean(text: str, newlines: bool = False) -> str:
-    """``text`` without control, format (bidi, zero-width) or line/paragraph-separator
-    characters (tabs become spaces; newlines kept only when asked); a lone surrogate (a byte
-    that was not UTF-8) becomes U+FFFD."""
+    """``text`` without the characters :func:`printable` writes out (control, format such as bidi
+    and zero-width, private-use, unassigned; line and paragraph separators), for running text:
+    a tab or another space becomes a space, a lone surrogate (a byte that was not UTF-8) U+FFFD,
+    newlines are kept only when asked."""
     out = []
     for c in text:
-        cat = unicodedata.category(c)
-        if c == "\n" and newlines:
+        if c.isprintable() or (c == "\n" and newlines):
             out.append(c)
-        elif c == "\t":
+        elif c == "\t" or unicodedata.category(c) == "Zs":
             out.append(" ")
-        elif cat == "Cs":
+        elif unicodedata.category(c) == "Cs":
             out.append("\ufffd")
-        elif cat not in _DROPPED:
+    return "".join(out)
+
+
+def printable(text: str, keep_newlines: bool = False) -> str:
+    """``text`` as it may reach a terminal or a file a person reads: every character that is not
+    printable (:meth:`str.isprintable`: the control, format, surrogate, private-use and
+    unassigned ones, and every separator but the ASCII space) written ``\\xNN``, ``\\uNNNN`` or
+    ``\\UNNNNNNNN``; newlines kept only when asked."""
+    out = []
+    for c in text:
+        if c.isprintable() or (keep_newlines and c == "\n"):
             out.append(c)
+        else:
+            n = ord(c)
+            out.append(f"\\x{n:02x}" if n < 0x100 else f"\\u{n:04x}" if n < 0x10000
+                       else f"\\U{n:08x}")
     return "".join(out)
 
 
 def shown(name: str | bytes, limit: int = 200) -> str:
-    """A name as a person reads it: UTF-8 decoded (other bytes as ``\\xNN``), NFC, cleaned, at
-    most ``limit`` characters."""
+    """A name as a person reads it: UTF-8 decoded (other bytes as ``\\xNN``), NFC,
+    :func:`printable`, at most ``limit`` characters (the last one ``…`` when cut)."""
     raw = os.fsencode(name)
-    text = unicodedata.normalize("NFC", raw.decode("utf-8", "backslashreplace"))
-    text = clean(text)
+    text = printable(unicodedata.normalize("NFC", raw.decode("utf-8", "backslashreplace")))
     return text if len(text) <= limit else text[:limit - 1] + "…"
+
+
+def cell(value: str) -> str:
+    """A CSV text cell a spreadsheet will not evaluate: a leading ``=``, ``+``, ``-``, ``@``,
+    tab or CR (which start a formula) behind a ``'``."""
+    return "'" + value if value[:1] in ("=", "+", "-", "@", "\t", "\r") else value
+
+
+def secret_seed() -> int:
+    """A seed no student can predict (63 bits from :mod:`secrets`): the default of a class's
+    check and grade, so answers precomputed at home for a public seed pass nothing.  The runs
+    record it (``settings.seed``, ``grading.json``), so any verdict can be reproduced."""
+    return secrets.randbits(63)
 
 
 def _slug(text: str) -> str:

@@ -166,3 +166,42 @@ def test_an_interrupted_run_leaves_not_graded_rows_and_raises(tmp_path, monkeypa
                     "carol": "not-graded"}
     info = json.loads((tmp_path / "out" / "grading.json").read_text(encoding="utf-8"))
     assert info["interrupted"] and info["graded"] == 1
+
+
+# ------------------------------------------- one printable name, one CSV guard, one secret seed
+#: A character of each kind some former helper caught (controls C0/C1, ESC, DEL, NEL, NBSP and
+#: other spaces, zero-width, bidi marks, overrides and isolates, line and paragraph separators,
+#: BOM, private use, a tag, unassigned, a byte that was not UTF-8).
+CAUGHT = ("\x00\x1b\x7f\x85\u00a0\u1680\u2000\u200b\u200e\u2028\u2029\u202e\u2066\u3000"
+          "\ufeff\ue000\U000e0001\u0378" + os.fsdecode(b"\xff"))
+
+
+def test_one_printable_rule_writes_out_all_that_any_former_helper_caught():
+    # check/batch.py escaped categories C*, Zl, Zp; sandbox/submission.py and classwide.py
+    # whatever str.isprintable refuses (every separator but the space, too): the union stays
+    for cp in [*range(0x3100), *range(0xfe00, 0x10000), 0xe0001, 0x10ffff]:
+        c = chr(cp)
+        caught = (unicodedata.category(c)[0] == "C" or unicodedata.category(c) in ("Zl", "Zp")
+                  or not c.isprintable())
+        out = u.printable(f"a{c}b")
+        assert out.isprintable()
+        assert (out != f"a{c}b") == caught, hex(cp)
+    for c in CAUGHT:
+        assert u.printable(c).startswith("\\") and u.shown(f"x{c}y").isprintable(), repr(c)
+        assert c not in u.clean(f"x{c}y") or c == "\n"  # running text: dropped or a space
+    assert u.printable("a\nb", keep_newlines=True) == "a\nb" and u.printable("\t") == "\\x09"
+    assert u.printable("\U000e0001") == "\\U000e0001"
+
+
+def test_shown_is_nfc_escaped_and_bounded():
+    nfd = unicodedata.normalize("NFD", "Jos\u00e9")
+    assert u.shown(nfd) == "Jos\u00e9" and u.shown(b"caf\xe9") == "caf\\xe9"
+    assert u.shown(os.fsdecode(b"caf\xe9 \x1b[31mred.py")) == "caf\\xe9 \\x1b[31mred.py"
+    long = u.shown("\u202e" * 100, limit=50)
+    assert len(long) == 50 and long.endswith("…") and long.isprintable()
+
+
+@pytest.mark.parametrize("value", ["=1+1", "+1", "-1", "@SUM(A1)", "\t=1", "\r=1"])
+def test_a_csv_cell_that_would_be_a_formula_is_text(value):
+    assert u.cell(value) == "'" + value
+    assert u.cell("Doe, Jane") == "Doe, Jane" and u.cell("") == ""

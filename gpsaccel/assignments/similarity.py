@@ -235,6 +235,7 @@ def write_report(pairs: Sequence[Pair], out: Path, title: str) -> None:
     import csv
 
     from gpsaccel._atomic import write_text
+    from gpsaccel._untrusted import cell as _cell
 
     buf = io.StringIO()
     w = csv.writer(buf)
@@ -244,10 +245,6 @@ def write_report(pairs: Sequence[Pair], out: Path, title: str) -> None:
                     f"{p.similarity_b:.2f}"])
     write_text(out / "similarity.csv", buf.getvalue())
     write_text(out / "similarity.html", _html(pairs, title))
-
-
-def _cell(value: str) -> str:
-    return "'" + value if value[:1] in ("=", "+", "-", "@", "\t", "\r") else value
 
 
 def _html(pairs: Sequence[Pair], title: str) -> str:

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from gpsaccel import _untrusted
+from gpsaccel._untrusted import shown as _shown  # the one printable name
 
 #: Largest submission copied into a box: files and bytes (a folder of data files may be large).
 MAX_FILES = 200
@@ -106,13 +107,6 @@ def load_submission(path: str | os.PathLike, function: str) -> Submission:
                               f"{_shown(', '.join(entries))}. Keep it in one file and import "
                               f"it from there.")
     return Submission(root, entries[0], tuple(files))
-
-
-def _shown(text: str, limit: int = 200) -> str:
-    """A name as it may appear in a message: printable, one line, at most ``limit`` chars."""
-    out = "".join(c if c.isprintable() else f"\\x{ord(c):02x}" if ord(c) < 256
-                  else f"\\u{ord(c):04x}" for c in text[:limit])
-    return out + ("…" if len(text) > limit else "")
 
 
 def _check_file(full: Path, st: os.stat_result, rel: str) -> None:
