@@ -2,7 +2,7 @@
 
 The class: 100 files copied from the by-hand fixtures of tests/submissions that step at 200 Hz
 (covariance, Joseph and information forms, and mistakes of the catalogue), checked by
-:func:`gpsaccel.check.batch.check_many` with local processes (one per CPU), as the CLI does.
+:func:`gpsaccel.classrun.check_many` with local processes (one per CPU), as the CLI does.
 Prints the wall time of the whole class at the checker's default n_runs, and, side by side in
 the same run, a 10-file slice at the default and at the former default of 200 runs (the ratio is
 what fewer runs buys).
@@ -19,8 +19,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from gpsaccel.check.batch import check_many
 from gpsaccel.check.problems.calibration import DEFAULT_RUNS
+from gpsaccel.classrun import check_many
 
 HERE = Path(__file__).resolve().parents[1] / "tests" / "submissions"
 BY_HAND_200HZ = ["correct_covariance.py", "correct_joseph.py", "correct_information.py",

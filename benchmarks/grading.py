@@ -47,8 +47,9 @@ import nbformat  # noqa: E402
 import numpy as np  # noqa: E402
 
 from gpsaccel import sandbox as sb  # noqa: E402
-from gpsaccel.assignments import generate, grade, grading, scoring  # noqa: E402
+from gpsaccel.assignments import generate, grading, scoring  # noqa: E402
 from gpsaccel.assignments import notebook as nbm  # noqa: E402
+from gpsaccel.classrun import grade  # noqa: E402
 from tests.assignments.conftest import write_variant  # noqa: E402
 from tests.assignments.test_grading import MEAN, PHI  # noqa: E402
 
@@ -185,7 +186,7 @@ def profile(repeats: int) -> None:
         run = scoring._prepare(nbm.read(nb_path), variant)
         reads = [r for q in qs for r in q.reads(scoring.Draw(
             scoring.question_seed(1, "calibration", q.name, "s"), variant))]
-        calls = grading._calls(len(run.cells), reads)
+        calls = scoring._calls(len(run.cells), reads)
         source = nbm.module_source(run, reads)
         # the module's one call of its audit hook, a line of its own (notebook.py's prelude)
         lines = source.split("\n")

@@ -7,7 +7,7 @@ A module that defines a problem registers it when imported::
     registry.add_problem("coop", CoopProblem, system="coop", title="Report 002: ...")
 
 and everything that lists problems reads the registry instead of a literal tuple: the CLI's
-``--problem`` choices (``gpsaccel check``), :func:`gpsaccel.check.batch.check_many`,
+``--problem`` choices (``gpsaccel check``), :func:`gpsaccel.classrun.check_many`,
 :func:`gpsaccel.check.submission`, the tests (and the homework generator).  The registry imports
 nothing of the package itself (it sits with the infrastructure): the modules that fill it are
 named in :data:`PROVIDERS` and imported, by name, the first time a list is asked for.

@@ -13,10 +13,10 @@ import pytest
 
 from gpsaccel import registry
 from gpsaccel.assignments.generate import ASSIGNMENTS_ENV, master_notebook, packaged_masters
-from gpsaccel.assignments.gradebook import write_exports
 from gpsaccel.assignments.grading import Grade
 from gpsaccel.assignments.roster import Student, read_roster
 from gpsaccel.assignments.similarity import answer_code, compare, report
+from gpsaccel.classrun.classwide import write_gradebooks
 from gpsaccel.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -115,7 +115,7 @@ def test_gradebook_exports_map_ids_through_the_roster(tmp_path):
                       sis_id="1001", login_id="jdoe", canvas_id="555", section="A"),
               Student("bob", name="Bob Ray", email="b@u.edu"),
               Student("absent", name="Al Sent", email="al@u.edu", sis_id="1003")]
-    missing = write_exports(grades, possible, roster, "Homework 1", tmp_path)
+    missing = write_gradebooks(grades, possible, roster, "Homework 1", tmp_path)
     assert missing == ["=stranger"]  # graded, not on the roster: named, not written
     canvas = _rows(tmp_path / "canvas.csv")
     assert canvas[0] == ["Student", "ID", "SIS User ID", "SIS Login ID", "Section", "Homework 1"]

@@ -4,13 +4,15 @@ Floors, bottom up: infrastructure (``_validation``, ``_blas``, ``_atomic``, ``_i
 ``executors``) ->
 ``sandbox`` (and ``boxside``, the code a box imports, which imports nothing of gpsaccel) ->
 ``kalman`` -> the systems (``calibration``, ``ship``, ``coop``, side by side) ->
-``check`` (-> ``assignments``, the homework, -> ``homework``, the public API of an instructor's
-own, which only ``cli`` imports) -> ``plots`` ->
-``figures`` -> ``lessons``, ``cli``.  The sandbox (``gpsaccel/sandbox/``) is a layer of its own
-below ``check``: it imports nothing of gpsaccel but the infrastructure, and nothing outside it uses
-a private name of it (a module or an attribute whose name starts with ``_``: ``sb._prctl``,
-``gpsaccel.sandbox._runner``).  Read from the source with ``ast`` (every ``import`` and
-``from ... import``, at module level or inside a function), so a lazy import counts too.
+``check`` (-> ``assignments``, the homework: one file's check and one notebook's grade are the
+items -> ``classrun``, a class's run of them: the walk, the pool, the files written; ->
+``homework``, the public API of an instructor's own) -> ``plots`` -> ``figures`` -> ``lessons``,
+``cli`` (the only unit that imports ``classrun`` or ``homework``).  The sandbox
+(``gpsaccel/sandbox/``) is a layer of its own below ``check``: it imports nothing of gpsaccel but
+the infrastructure, and nothing outside it uses a private name of it (a module or an attribute
+whose name starts with ``_``: ``sb._prctl``, ``gpsaccel.sandbox._runner``).  Read from the source
+with ``ast`` (every ``import`` and ``from ... import``, at module level or inside a function), so
+a lazy import counts too.
 """
 
 from __future__ import annotations
@@ -44,8 +46,9 @@ ALLOWED = {
     # the instructor's public API of a homework of their own (and its shipped example), on
     # check/ and assignments/; only the command (``--example``) imports it
     "homework": INFRA | {"kalman", "sandbox", "check", "assignments"} | SYSTEMS,
+    "classrun": INFRA | {"sandbox", "check", "assignments"},
     "cli": INFRA | {"kalman", "plots", "figures", "lessons", "sandbox", "check", "assignments",
-                    "homework"} | SYSTEMS,
+                    "homework", "classrun"} | SYSTEMS,
     "top": INFRA | {"kalman"} | SYSTEMS,
 }
 
@@ -81,6 +84,15 @@ def test_imports_point_down(path):
     assert unit in ALLOWED, f"{unit}: a new top-level unit needs its floor in ALLOWED"
     bad = _imported_units(path) - ALLOWED[unit] - {unit}
     assert not bad, f"gpsaccel/{path.relative_to(ROOT)} ({unit}) imports {sorted(bad)}"
+
+
+def test_the_class_run_is_one_floor_below_the_command_above_its_items():
+    """``classrun`` runs a class of check items and grade items (it imports ``check`` and
+    ``assignments``, which never import it); only the command imports it."""
+    assert {"check", "assignments"} <= ALLOWED["classrun"]
+    assert not ALLOWED["classrun"] & {"cli", "plots", "figures", "lessons", "exercises", "top"}
+    assert [u for u, allowed in ALLOWED.items() if "classrun" in allowed] == ["cli"]
+    assert all(_unit(p) == "classrun" for p in (ROOT / "classrun").rglob("*.py"))
 
 
 def test_the_rule_catches_a_system_importing_another(tmp_path):

@@ -28,7 +28,7 @@ HEAVY = ("scipy", "filterpy", "mpmath", "matplotlib", "nbformat", "jsonschema", 
          "otter", "IPython", "dask", "distributed", "pandas", "sympy")
 
 PACKAGES = ("gpsaccel", "gpsaccel.assignments", "gpsaccel.calibration", "gpsaccel.check",
-            "gpsaccel.coop", "gpsaccel.kalman", "gpsaccel.ship")
+            "gpsaccel.classrun", "gpsaccel.coop", "gpsaccel.kalman", "gpsaccel.ship")
 
 
 def loaded_after(code: str) -> list[str]:
@@ -164,7 +164,7 @@ def test_a_notebook_box_loads_only_what_the_students_cells_import(tmp_path):
     instead of otter (IPython, nbformat, jsonschema: 1.5–4.5 CPU s per notebook)."""
     from gpsaccel import sandbox as sb
     from gpsaccel.assignments import notebook as nbm
-    from gpsaccel.assignments.grading import _calls
+    from gpsaccel.assignments.scoring import _calls
 
     probe = ("import sys\n"
              f"print('LOADED', sorted({{m.split('.')[0] for m in sys.modules}} & set({HEAVY!r})))")

@@ -13,8 +13,9 @@ Three homeworks on the course reports, each a master notebook in otter's assign 
 
 :func:`generate` (``gpsaccel assignment NAME --out DIR``) runs ``otter assign`` (the student
 notebook and otter's autograder zip for students' ``grader.check`` and Gradescope);
-:func:`grade` (``gpsaccel grade DIR --assignment NAME``) grades a class: every notebook only in
-the sandbox, every score computed outside it (:mod:`~gpsaccel.assignments.grading`).
+:func:`grade_notebook` grades one notebook: only in the sandbox, every score computed outside it
+(:mod:`~gpsaccel.assignments.grading`).  A class (``gpsaccel grade DIR --assignment NAME``) is
+graded by the class run one floor up, ``gpsaccel.classrun.grade``, one notebook at a time.
 """
 
 from typing import TYPE_CHECKING
@@ -23,13 +24,12 @@ from gpsaccel import _lazy
 
 if TYPE_CHECKING:  # for mypy and editors; at run time each name loads on first use (_lazy)
     from gpsaccel.assignments.generate import Generated, generate, master_notebook, questions
-    from gpsaccel.assignments.grading import Grade, grade, grade_notebook
+    from gpsaccel.assignments.grading import Grade, grade_notebook
 
-__all__ = ["Generated", "Grade", "generate", "grade", "grade_notebook",
-           "master_notebook", "questions"]
+__all__ = ["Generated", "Grade", "generate", "grade_notebook", "master_notebook", "questions"]
 
 # the homework modules (``gpsaccel.assignments.calibration``, read by the registry) import this
 # package first: it must not import otter's generator or the grader for that.
 __getattr__, __dir__ = _lazy.attach(
     __name__, attributes={"generate": ("Generated", "generate", "master_notebook", "questions"),
-                          "grading": ("Grade", "grade", "grade_notebook")})
+                          "grading": ("Grade", "grade_notebook")})

@@ -32,7 +32,6 @@ import base64
 import hashlib
 import json
 import os
-import secrets
 import zipfile
 from pathlib import Path
 
@@ -186,8 +185,9 @@ def run(root: str | os.PathLike, sandbox: str = "auto") -> dict:
     """Grade the submission under ``root`` (``/autograder`` in the container) and write
     ``root/results/results.json``; returns what it wrote."""
     from gpsaccel._atomic import write_text
+    from gpsaccel._untrusted import secret_seed
     from gpsaccel.assignments.generate import use_folder
-    from gpsaccel.assignments.grading import grade_notebook, questions_of
+    from gpsaccel.assignments.grading import grade_notebook, possible_of
 
     root = Path(root)
     source = root / "source"
@@ -196,7 +196,7 @@ def run(root: str | os.PathLike, sandbox: str = "auto") -> dict:
     if config.get("own_folder"):
         name = use_folder(source / "homework" / name)
     secret = (source / "secret").read_bytes() if (source / "secret").is_file() else None
-    possible = {q.name: float(q.points) for q in questions_of(name)}
+    possible = possible_of(name)
     try:
         meta = json.loads((root / "submission_metadata.json").read_text(encoding="utf-8"))
     except (OSError, ValueError):
@@ -210,7 +210,7 @@ def run(root: str | os.PathLike, sandbox: str = "auto") -> dict:
                "stdout_visibility": "hidden",
                "tests": [{"name": q, "score": 0.0, "max_score": p} for q, p in possible.items()]}
     else:
-        g = grade_notebook(path, name, student, secrets.randbits(63), secret=secret,
+        g = grade_notebook(path, name, student, secret_seed(), secret=secret,
                            sandbox=sandbox, file=path.name)
         out = results(g, possible)
     (root / "results").mkdir(parents=True, exist_ok=True)

@@ -1,7 +1,7 @@
 """The class roster: who the students are, and how each LMS names them.
 
 One file serves the hand-out (one notebook per student) and the gradebook exports
-(:mod:`gpsaccel.assignments.gradebook`).  Two forms:
+(:mod:`gpsaccel.classrun.classwide`).  Two forms:
 
 * plain text, one student id a line (the id is how the LMS names the student's folder or
   notebook in its export): enough to hand out and for ``grades.csv``;

@@ -5,8 +5,8 @@ r"""Grading one homework notebook: its cells run in the sandbox, every score com
 the cells in order and then the *reads* every question declares, and only once the box is empty
 draws the reference answers and scores each question; a question graded from a file the notebook
 writes is checked by :func:`gpsaccel.check.submission` in a box of its own.  The feedback a
-student gets (:func:`_feedback_text`) is the student's projection of each finding.  The class run
-around it is :mod:`gpsaccel.assignments.grading`.
+student gets (:func:`_feedback_text`) is the student's projection of each finding.  A class's run
+grades each notebook through :mod:`gpsaccel.assignments.grading`.
 """
 
 from __future__ import annotations

@@ -165,9 +165,8 @@ class Problem:
         student's box is gone (and no answer of an earlier check is kept meanwhile).
         """
         t0 = time.perf_counter()
-        n_runs = self.default_runs if n_runs is None else _v.integer("n_runs", n_runs, minimum=2)
-        seed = _v.integer("seed", seed, minimum=0)
-        timeout = _v.positive_float("timeout", timeout)
+        n_runs, seed, timeout = arguments(n_runs, seed, timeout)
+        n_runs = self.default_runs if n_runs is None else n_runs
         if limits is not None and not isinstance(limits, sb.Limits):
             raise ValueError(f"limits must be a gpsaccel.sandbox.Limits, got {limits!r}")
         limits = sb.Limits(**{**vars(limits or sb.Limits()), "time": timeout})
@@ -235,6 +234,14 @@ class Problem:
             return sb.Submission(path.resolve().parent, path.name, (path.name,))
         assert error is not None
         raise error
+
+
+def arguments(n_runs: int | None, seed: int, timeout: float) -> tuple[int | None, int, float]:
+    """A check's ``n_runs`` (None: the problem's default), ``seed`` and ``timeout``, checked
+    (a ValueError naming each): by :meth:`Problem.check`, and by a class's check once, before
+    any submission runs."""
+    n_runs = None if n_runs is None else _v.integer("n_runs", n_runs, minimum=2)
+    return n_runs, _v.integer("seed", seed, minimum=0), _v.positive_float("timeout", timeout)
 
 
 def _columns_accepted(calls: list[Call]) -> list[Call]:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from gpsaccel import _validation as _v
@@ -12,94 +11,72 @@ from gpsaccel.cli._flags import dask_spec
 
 def _cmd_check(args: argparse.Namespace) -> int:
     """Check students' submissions for one problem, each in a sandbox; table on stdout, --json
-    for the details."""
+    for the details.  Every file is written before anything is printed, and a reader that goes
+    away (``| head``) stops nothing (:func:`gpsaccel.classrun.writing.terminal`)."""
     import time
 
-    from gpsaccel import sandbox
     from gpsaccel._interrupt import exit_status as stopped_status
-    from gpsaccel._untrusted import json_safe
-    from gpsaccel.check.batch import (
-        Interrupted,
-        appender,
-        check_many,
-        find_submissions,
-        log_path,
-        secret_seed,
-        table,
-        write_json,
-    )
     from gpsaccel.check.own import is_file_spec, load_problem
+    from gpsaccel.classrun.checking import plan_check
+    from gpsaccel.classrun.running import Interrupted
+    from gpsaccel.classrun.writing import appender, log_path, table, terminal, write_json
 
     if is_file_spec(args.problem) and args.dask is not None:
         raise ValueError("--dask: a problem from a file of your own is known to this process "
                          "only, not to Dask's workers; leave out --dask (or register it in a "
                          "module the workers import)")
     args.problem = load_problem(args.problem)  # the instructor's file run, its problem registered
-    # the notes and the count only: check_many expands the same raw paths itself, once
-    files, notes = find_submissions(args.paths)
-    for note in notes:
-        print(note, file=sys.stderr)
-    if not files:
-        raise ValueError("paths: no .py file or submission folder was found")
-    spec = dask_spec(args.dask)
-    if spec is None:
-        spec = "processes"  # a process per check, even with --workers 1
-    limits, backend, seed, settings = _check_settings(args, sandbox, secret_seed)
-    print(f"sandbox: {backend}" + (" (bubblewrap not available: apt-get install bubblewrap)"
-                                   if backend != "bwrap" and args.sandbox == "auto" else ""),
-          file=sys.stderr)
-    log = appender(log_path(args.json)) if args.json is not None else None
-    from tqdm.auto import tqdm
+    spec = dask_spec(args.dask) or "processes"  # a process per check, even with --workers 1
+    plan = plan_check(args.paths, problem=args.problem, n_runs=args.runs, seed=args.seed,
+                      timeout=args.timeout, sandbox=args.sandbox, limits=_limits(args),
+                      allow_gpsaccel=args.allow_gpsaccel,
+                      allow_unsafe_basic=args.allow_unsafe_basic)
+    with terminal() as term:
+        for note in plan.notes:
+            term.err(note)
+        if not plan.entries:
+            raise ValueError("paths: no .py file or submission folder was found")
+        term.err(f"sandbox: {plan.backend}" + (
+            " (bubblewrap not available: apt-get install bubblewrap)"
+            if plan.backend != "bwrap" and args.sandbox == "auto" else ""))
+        log = appender(log_path(args.json)) if args.json is not None else None
+        from tqdm.auto import tqdm
 
-    bar = tqdm(total=len(files), desc="check", unit="submission", leave=False,
-               disable=None)  # on stderr, when it is a terminal
+        bar = tqdm(total=len(plan.entries), desc="check", unit="submission", leave=False,
+                   disable=None)  # on stderr, when it is a terminal
 
-    def on_result(result: dict) -> None:
-        bar.update()
-        if log is not None:
-            log(json_safe(result))
+        def on_result(result: dict) -> None:
+            bar.update()
+            if log is not None:
+                log(result)
 
-    t0 = time.perf_counter()
+        t0 = time.perf_counter()
+        try:
+            with bar:
+                results = plan.run(spec, args.workers, on_result)
+        except Interrupted as exc:
+            done = [r for r in exc.results if r is not None]
+            if args.json is not None:  # first: the terminal may be gone
+                write_json(done, args.json, interrupted=True, **plan.settings)
+            if done:
+                term.out(table(done))
+            if args.json is not None:
+                term.out(f"wrote {args.json} ({len(done)} of {len(plan.entries)} checked)")
+            term.err("gpsaccel check: interrupted")
+            return stopped_status(exc)  # 130 for Ctrl-C, 128 + SIGTERM's or SIGHUP's number
+        return _check_report(args, term, results, plan, time.perf_counter() - t0)
+
+
+def _limits(args: argparse.Namespace):  # noqa: ANN202 - a gpsaccel.sandbox.Limits
+    """The limits of ``gpsaccel check``'s flags; a bad one is named by its flag."""
+    from gpsaccel import sandbox
+
     try:
-        with bar:
-            results = check_many(args.paths, n_runs=args.runs, seed=seed, timeout=args.timeout,
-                                 executor=spec, max_workers=args.workers, sandbox=backend,
-                                 limits=limits, allow_gpsaccel=args.allow_gpsaccel,
-                                 on_result=on_result, problem=args.problem,
-                                 allow_unsafe_basic=args.allow_unsafe_basic)
-    except Interrupted as exc:
-        done = json_safe([r for r in exc.results if r is not None])
-        if args.json is not None:  # first: the terminal may be gone
-            write_json(done, args.json, interrupted=True, **settings)
-        if done:
-            print(table(done))
-        if args.json is not None:
-            print(f"wrote {args.json} ({len(done)} of {len(files)} checked)")
-        print("gpsaccel check: interrupted", file=sys.stderr)
-        return stopped_status(exc)  # 130 for Ctrl-C, 128 + SIGTERM's or SIGHUP's number
-    return _check_report(args, results, settings, time.perf_counter() - t0)
-
-
-def _check_settings(args: argparse.Namespace, sandbox, secret_seed) -> tuple:  # noqa: ANN001
-    """The limits, backend and seed of ``gpsaccel check``, and the settings its JSON records;
-    a bad limit is named by its flag."""
-    try:
-        limits = sandbox.Limits(memory=int(args.memory * 2**20), time=args.timeout,
-                                file_size=int(args.max_file_size * 2**20),
-                                processes=args.max_processes,
-                                output=int(args.max_output * 2**20))
+        return sandbox.Limits(memory=int(args.memory * 2**20), time=args.timeout,
+                              file_size=int(args.max_file_size * 2**20),
+                              processes=args.max_processes, output=int(args.max_output * 2**20))
     except ValueError as exc:
         raise ValueError(str(exc).replace("limits.", "--")) from None
-    backend = sandbox.resolve_backend(args.sandbox)
-    sandbox.refuse_unsafe_basic(backend, args.allow_unsafe_basic)
-    # a class is graded on secret data unless a seed is given; the seed is in the JSON
-    seed = secret_seed() if args.seed is None else args.seed
-    settings = {"problem": args.problem, "runs": args.runs, "seed": seed,
-                "seed_drawn": args.seed is None,
-                "timeout": args.timeout,
-                "sandbox": backend, "allow_gpsaccel": args.allow_gpsaccel,
-                "limits": {k: v for k, v in vars(limits).items()}}
-    return limits, backend, seed, settings
 
 
 #: What the student's first look (one file, no ``-v``) says ``-v`` adds ({path}: as given).
@@ -107,56 +84,31 @@ MORE = ("gpsaccel check -v {path} prints the whole report: the comparison with t
         "filter, the mistake the catalogue matched, the consistency tables.")
 
 
-def _check_report(args: argparse.Namespace, results: list, settings: dict, seconds: float) -> int:
+def _check_report(args: argparse.Namespace, term, results: list, plan,  # noqa: ANN001
+                  seconds: float) -> int:
     """The JSON first (printing can fail), then what the reader needs and the one-line summary:
     one file is a student's first look (each finding's line and the lesson that teaches its
     fix, :func:`gpsaccel.check.report.brief`); a class is the instructor's table and which
     lesson teaches each mistake it made.  The exit status is :func:`exit_status`'s."""
-    from gpsaccel._untrusted import json_safe
-    from gpsaccel.check.batch import printable, table, write_json
-    from gpsaccel.check.report import brief
+    from gpsaccel.classrun.writing import brief, check_mistakes, reports, table, write_json
 
-    seed, backend = settings["seed"], settings["sandbox"]
-    results = json_safe(results)  # a name that is not UTF-8 written \xNN, never a crash
     if args.json is not None:  # first: printing can fail (a closed terminal), the file must not
-        path = write_json(results, args.json, **settings)
+        path = write_json(results, args.json, **plan.settings)
     if args.verbose:
-        for r in results:
-            print(printable(r["text"], keep_newlines=True), end="\n\n")
+        term.out(reports(results), end="")
     if len(results) == 1 and not args.verbose:
-        import textwrap
-
-        print(printable(brief(results[0]), keep_newlines=True))
-        print(textwrap.fill(printable(MORE.format(path=" ".join(map(str, args.paths)))),
-                            width=100, break_on_hyphens=False, break_long_words=False))
+        term.out(brief(results[0], MORE.format(path=" ".join(map(str, args.paths)))))
     else:
-        print(table(results))
-        _class_lines(results)
+        term.out(table(results))
+        for line in check_mistakes(results):
+            term.out(line)
     runs = results[0]["details"].get("n_runs", args.runs) if results else args.runs
-    print(f"{len(results)} submission{'' if len(results) == 1 else 's'}, problem {args.problem}, "
-          f"{runs} runs each (seed {seed}{', drawn' if args.seed is None else ''}), sandbox "
-          f"{backend}, {seconds:.1f} s")
+    term.out(f"{len(results)} submission{'' if len(results) == 1 else 's'}, problem "
+             f"{args.problem}, {runs} runs each (seed {plan.seed}"
+             f"{', drawn' if plan.seed_drawn else ''}), sandbox {plan.backend}, {seconds:.1f} s")
     if args.json is not None:
-        print(f"wrote {path}")
+        term.out(f"wrote {path}")
     return exit_status(results)
-
-
-def _class_lines(results: list[dict]) -> None:
-    """Under the class's table: how many submissions made each mistake, and which lesson section
-    teaches its fix (:func:`gpsaccel._taught.class_lines`); a check without a verdict (the
-    machine's, :func:`gpsaccel.check.report.no_verdict`) made none."""
-    from collections import Counter
-
-    from gpsaccel._taught import class_lines
-    from gpsaccel.check.batch import printable
-    from gpsaccel.check.report import no_verdict
-
-    counts = Counter(str(c) for r in results if not no_verdict(False, list(r["codes"]))
-                     for c in dict.fromkeys(r["codes"]))
-    if counts:
-        print("mistakes, and where the course teaches each:")
-        for line in class_lines(counts, noun="submission"):
-            print("  " + printable(line))
 
 
 #: ``gpsaccel check``'s exit status: every submission passed; one failed (its code);

@@ -97,12 +97,15 @@ def _write_example(args: argparse.Namespace) -> int:
 
 
 def _cmd_grade(args: argparse.Namespace) -> int:
-    """Grade a class in the sandbox; grades.csv, feedback/, summary.csv/png in --out; with
-    --roster the LMS gradebook files; the similarity report."""
-    from gpsaccel.assignments import grade
+    """Grade a class in the sandbox: grades.csv, feedback/, summary.csv/png in --out; with
+    --roster the LMS gradebook files; the similarity report.  :func:`gpsaccel.classrun.grade`
+    writes every file; only then is anything printed, and a reader that goes away (``| head``)
+    stops nothing (:func:`gpsaccel.classrun.writing.terminal`)."""
     from gpsaccel.assignments.generate import resolve
-    from gpsaccel.assignments.grading import default_out, read_secret
+    from gpsaccel.assignments.grading import read_secret
     from gpsaccel.assignments.roster import read_roster
+    from gpsaccel.classrun.grading import default_out, grade_class
+    from gpsaccel.classrun.writing import grade_mistakes, grades_table, terminal
 
     name = resolve(args.assignment)
     if args.dask is not None and name != args.assignment:
@@ -111,38 +114,20 @@ def _cmd_grade(args: argparse.Namespace) -> int:
     roster = read_roster(args.roster) if args.roster is not None else None
     secret = read_secret(args.secret_file)
     out = args.out if args.out is not None else default_out(args.submissions)
-    grades = grade(args.submissions, name, out=out, jobs=args.jobs, timeout=args.timeout,
-                   seed=args.seed, secret=secret, student=args.student, dask=args.dask,
-                   sandbox=args.sandbox, progress=True)
-    if not grades:
-        raise ValueError(f"submissions: no student's folder or notebook in {args.submissions}")
-    width = max(len(g.student) for g in grades)
-    for g in grades:
-        print(f"{g.student:<{width}}  {g.total:>5g} / {g.max_total:g}  {g.status:<13} "
-              f"{g.seconds:5.1f} s")
-    _mistake_lines(grades)
-    print(f"wrote {out / 'grades.csv'}, {out / 'grades.json'}, {out / 'feedback'}/, "
-          f"{out / 'summary.csv'}, {out / 'summary.png'} (seed in {out / 'grading.json'})")
-    from gpsaccel.assignments.classwide import after_grading
-
-    for line in after_grading(Path(args.submissions), out, name, roster, secret,
-                              similarity=not args.no_similarity):
-        print(line)
+    with terminal() as term:
+        graded = grade_class(args.submissions, name, out=out, jobs=args.jobs,
+                             timeout=args.timeout, seed=args.seed, secret=secret,
+                             student=args.student, dask=args.dask, sandbox=args.sandbox,
+                             progress=True, roster=roster, similarity=not args.no_similarity)
+        term.out(grades_table(graded.grades))
+        for line in grade_mistakes(graded.grades):
+            term.out(line)
+        term.out(f"wrote {out / 'grades.csv'}, {out / 'grades.json'}, {out / 'feedback'}/, "
+                 f"{out / 'summary.csv'}, {out / 'summary.png'} (seed in "
+                 f"{out / 'grading.json'})")
+        for line in graded.classwide:
+            term.out(line)
     return 0
-
-
-def _mistake_lines(grades: list) -> None:
-    """Per question, how many students made each mistake and which lesson section teaches its
-    fix (:func:`gpsaccel._taught.class_lines`; the same counts as summary.csv)."""
-    from collections import Counter
-
-    from gpsaccel._taught import class_lines
-    from gpsaccel._untrusted import clean
-
-    for q in grades[0].possible:
-        counts = Counter(c for g in grades for c in dict.fromkeys(g.codes.get(q, [])))
-        for line in class_lines(counts):
-            print(clean(f"{q}: {line}"))
 
 
 def add_assignment(sub: argparse._SubParsersAction) -> None:

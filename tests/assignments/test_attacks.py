@@ -18,7 +18,8 @@ from pathlib import Path
 import nbformat
 import pytest
 
-from gpsaccel.assignments.grading import SECRET_ENV, grade
+from gpsaccel.assignments.grading import SECRET_ENV
+from gpsaccel.classrun import grade
 
 from .conftest import kill_pids, read_grades
 

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from gpsaccel import CoopModel
-from gpsaccel.assignments import coop, grade
+from gpsaccel.assignments import coop
 from gpsaccel.assignments.generate import student_package_dir
+from gpsaccel.classrun import grade
 from gpsaccel.coop import model as cm
 from gpsaccel.coop.filters import run_ekf
 

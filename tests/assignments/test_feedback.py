@@ -15,9 +15,10 @@ import pytest
 
 from gpsaccel.assignments import grading
 from gpsaccel.assignments.calibration import nees_reference
-from gpsaccel.assignments.grading import grade, is_otter_cell
+from gpsaccel.assignments.grading import is_otter_cell
 from gpsaccel.assignments.questions import Draw, question_seed
 from gpsaccel.check.report import see
+from gpsaccel.classrun import grade
 
 from .conftest import CHI2_SPECIAL, write_variant
 

@@ -14,7 +14,7 @@ import pytest
 from gpsaccel import _untrusted, registry
 from gpsaccel.assignments import grading
 from gpsaccel.assignments import notebook as nbm
-from gpsaccel.assignments.grading import find_submissions, grade
+from gpsaccel.classrun import default_out, grade, notebooks, walk
 from gpsaccel.assignments.questions import question_seed, variant_number
 from gpsaccel.cli import main
 
@@ -52,7 +52,7 @@ def graded(tmp_path_factory):
     root = tmp_path_factory.mktemp("lms")
     sub = root / "Homework 1 submissions"
     _class(sub)
-    out = grading.default_out(sub)
+    out = default_out(sub)
     (out / "feedback").mkdir(parents=True)
     (out / "feedback" / "dropped the course.txt").write_text("stale", encoding="utf-8")
     grades = grade(sub, "calibration", jobs=2, timeout=120, seed=2027, secret=SECRET)
@@ -162,7 +162,7 @@ def test_lms_layout_any_case_spaces_nothing_silent(tmp_path):
     (tmp_path / "F").mkdir()
     (tmp_path / "readme.md").write_text("", encoding="utf-8")
     os.symlink(tmp_path / "E.ipynb", tmp_path / "G.ipynb")
-    entries, notes = find_submissions(tmp_path, "ship")
+    entries, notes = walk(tmp_path, notebooks("ship"))
     got = {e.student: (e.path.name if e.path else e.problem[0]) for e in entries}
     assert got == {"A B": "x.IpYnB", "C": "ambiguous", "D": "ship.ipynb", "E": "E.ipynb",
                    "F": "no-notebook"}

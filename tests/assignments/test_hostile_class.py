@@ -24,7 +24,7 @@ import pytest
 
 from gpsaccel import _untrusted
 from gpsaccel.assignments import notebook as nbm
-from gpsaccel.assignments.grading import grade
+from gpsaccel.classrun import grade
 
 from .conftest import CHI2_SPECIAL, kill_pids, write_variant
 

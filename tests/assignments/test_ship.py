@@ -6,8 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gpsaccel.assignments import grade, ship
+from gpsaccel.assignments import ship
 from gpsaccel.assignments.grading import student_variant
+from gpsaccel.classrun import grade
 from gpsaccel.kalman.update import joseph_update
 from gpsaccel.ship.model import ShipModel
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from gpsaccel import registry
-from gpsaccel.assignments import grade
+from gpsaccel.classrun import grade
 from gpsaccel.assignments.grading import assignment_module, student_variant
 from gpsaccel.assignments.linear import matrices, matrices_answer
 from gpsaccel.assignments.tracker import variant_model

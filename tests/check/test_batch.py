@@ -1,4 +1,4 @@
-"""A batch nothing can take down (gpsaccel.check.batch, ``gpsaccel check DIR``): hostile files in a
+"""A class check nothing can take down (gpsaccel.classrun, ``gpsaccel check DIR``): hostile files in a
 class of correct ones, a parent killer, a daemon after the JSON, Ctrl-C; under every backend.
 
 The command runs as a child process (``python -m gpsaccel.cli``), as an instructor runs it, so a
@@ -18,7 +18,7 @@ import time
 import pytest
 
 from gpsaccel import sandbox as sb
-from gpsaccel.check.batch import check_many, find_submissions, log_path, write_json
+from gpsaccel.classrun import PYTHON, check_many, log_path, walk, write_json
 from gpsaccel.sandbox import _boxuser
 
 
@@ -41,7 +41,7 @@ def _cli(args, hostile, **kw):
                             env=hostile.env(), **kw)
 
 
-def test_find_submissions_takes_top_level_entries(tmp_path):
+def test_the_walk_takes_top_level_entries_and_notes_the_rest(tmp_path):
     (tmp_path / "a.py").write_text("def kalman_filter(z):\n    pass\n")
     (tmp_path / "b.py").write_text("def kf(z):\n    pass\n")  # misnamed: stays, to be reported
     (tmp_path / "__init__.py").write_text("")
@@ -50,9 +50,10 @@ def test_find_submissions_takes_top_level_entries(tmp_path):
     (tmp_path / "carol").mkdir()
     (tmp_path / "carol" / "main.py").write_text("from helpers import f as kalman_filter\n")
     (tmp_path / "carol" / "helpers.py").write_text("def f(z):\n    pass\n")
-    files, notes = find_submissions([tmp_path])
-    assert [f.name for f in files] == ["a.py", "b.py", "carol"]  # helpers.py is carol's
+    entries, notes = walk([tmp_path], PYTHON)
+    assert [e.path.name for e in entries] == ["a.py", "b.py", "carol"]  # helpers.py is carol's
     assert any("__init__" in n for n in notes) and any("notes.txt" in n for n in notes)
+    assert any(n.endswith(".hidden: skipped (hidden)") for n in notes)  # nothing silent
 
 
 @pytest.mark.parametrize("workers", [1, 2])

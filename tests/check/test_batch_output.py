@@ -14,7 +14,8 @@ import pytest
 
 from gpsaccel import check
 from gpsaccel import sandbox as sb
-from gpsaccel.check.batch import appender, check_many, printable, table
+from gpsaccel._untrusted import printable
+from gpsaccel.classrun import appender, check_many, table
 from gpsaccel.sandbox import _boxuser, confinement
 
 HOSTILE_NAMES = ["yes\x1b[2K\ryes.py", "line\u2028sep.py", "bidi\u202eyp.txt.py",

@@ -15,7 +15,7 @@ import pytest
 from gpsaccel import registry
 from gpsaccel._feedback import Miss, classify, describe_miss, render
 from gpsaccel.assignments._answers import assert_report
-from gpsaccel.assignments.grading import Grade, _feedback_text
+from gpsaccel.assignments.scoring import Grade, _feedback_text
 from gpsaccel.check import batch, findings
 from gpsaccel.check.linear import FINDINGS, LinearProblem
 from gpsaccel.check.report import Finding, Report, StudentFinding, brief

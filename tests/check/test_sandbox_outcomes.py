@@ -1,5 +1,6 @@
 """The sandbox's outcomes are worded in one table: the checker's findings, the homework grader's
-stop clause and the batch's lost checks all read gpsaccel.sandbox.outcomes.OUTCOMES."""
+stop clause and a class run's lost items (a check, a notebook) all read
+gpsaccel.sandbox.outcomes.OUTCOMES."""
 
 from __future__ import annotations
 
@@ -8,6 +9,10 @@ from pathlib import Path
 from gpsaccel import sandbox as sb
 from gpsaccel.assignments import scoring
 from gpsaccel.check import batch, findings
+from gpsaccel.classrun import running
+from gpsaccel.classrun.checking import CheckPlan, _Check
+from gpsaccel.classrun.entries import Entry
+from gpsaccel.classrun.grading import _Grade
 from gpsaccel.sandbox.outcomes import OUTCOMES
 
 #: Every failure a box reports (gpsaccel.sandbox's docstring and the runner's problems).
@@ -30,10 +35,19 @@ def test_the_grader_stops_with_the_tables_clause():
         assert scoring._STOPS[code] == OUTCOMES[code].stop
 
 
-def test_a_lost_check_is_worded_by_the_table():
-    for reason in ("error", "not-a-report", "too-long", "died"):
-        out = batch._lost(Path("alice.py"), sb.Lost(reason, "signal SIGKILL"), 30.0)
-        want = OUTCOMES[f"lost.{reason}"].finding.format(detail="signal SIGKILL",
-                                                        limit=30.0 + batch.CHECK_SLACK,
-                                                        slack=batch.CHECK_SLACK)
-        assert want in str(out), (reason, out)
+def test_a_lost_check_and_a_lost_notebook_are_worded_by_the_table():
+    check = _Check(CheckPlan((), (), "calibration", None, 1, False, 30.0, "basic"))
+    notebook = _Grade(Path("class"), {"name": "calibration", "timeout": 30.0})
+    entry = Entry("alice", Path("class/alice.ipynb"), id="alice")
+    assert (check.deadline, notebook.deadline) == (30.0 + batch.CHECK_SLACK,
+                                                   2 * 30.0 + 60 + scoring.SLACK)
+    for task in (check, notebook):
+        for reason in ("error", "not-a-report", "too-long", "died"):
+            why = running.lost_text(sb.Lost(reason, "signal SIGKILL"), task.timeout,
+                                    task.deadline)
+            out = task.lost(entry, why)
+            want = OUTCOMES[f"lost.{reason}"].finding.format(
+                detail="signal SIGKILL", limit=task.deadline, slack=task.deadline - 30.0)
+            assert why == want and want in str(out), (reason, out)
+            assert out["status" if task is notebook else "codes"] in ("grader-error",
+                                                                      ["checker-error"])

@@ -12,7 +12,7 @@ import pytest
 
 from gpsaccel import check
 from gpsaccel import sandbox as sb
-from gpsaccel.check.batch import check_many, find_submissions
+from gpsaccel.classrun import PYTHON, check_many, walk
 
 
 @pytest.fixture
@@ -33,8 +33,8 @@ def test_top_level_links_of_a_class_folder_are_refused(klass):
     (folder / "mallory.py").symlink_to(folder / "alice.py")  # a copy of alice's
     (folder / "trudy").symlink_to(solutions)  # the instructor's folder
     (folder / "dangling.py").symlink_to(folder / "nowhere.py")
-    files, _ = find_submissions([folder])
-    assert sorted(f.name for f in files) == ["alice.py", "dangling.py", "mallory.py", "trudy"]
+    entries, _ = walk([folder], PYTHON)
+    assert sorted(e.path.name for e in entries) == ["alice.py", "dangling.py", "mallory.py", "trudy"]
     results = check_many([folder], n_runs=2, executor=None, seed=1)
     by_name = {r["subject"]: r for r in results}
     assert by_name["alice.py"]["passed"]

@@ -450,7 +450,7 @@ def test_compare_refuses_an_unreproducible_seed():
 
 
 def test_check_many_refuses_bad_numbers_before_running_anyone(tmp_path):
-    from gpsaccel.check.batch import check_many
+    from gpsaccel.classrun import check_many
 
     for kwargs, name in (({"n_runs": 0}, "n_runs"), ({"seed": -1}, "seed"),
                          ({"timeout": 0}, "timeout")):

@@ -162,7 +162,7 @@ def test_the_grader_records_a_busy_machine_as_its_own_error_not_a_grade(tmp_path
     """The notebook's box came back machine-busy: no grade (graded again), the student told so."""
     import nbformat
 
-    from gpsaccel.assignments.gradebook import UNFINISHED
+    from gpsaccel.classrun.classwide import UNFINISHED
 
     nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("x = 1")])
     nbformat.write(nb, str(tmp_path / "alice.ipynb"))

@@ -1,0 +1,145 @@
+"""What grading a class writes about the whole class once every notebook is graded: the LMS
+gradebook files (with a roster) and the similarity report.  Both read the grades the run holds
+(every student's row, a regrade of one included) and change none of them.  :func:`write` is
+called by :func:`gpsaccel.classrun.grading.grade_class`, so ``grade()`` from Python writes what
+``gpsaccel grade`` writes.
+
+The gradebooks are the same totals in the columns each gradebook's import reads, every row
+mapped through the class roster (:mod:`gpsaccel.assignments.roster`) from the submission's id to
+the LMS's identifiers:
+
+* ``canvas.csv``: Canvas's gradebook CSV (Grades > Import): ``Student, ID, SIS User ID, SIS Login
+  ID, Section, <homework>``, then a ``Points Possible`` row, as Canvas exports it.  Canvas matches
+  a row by ``ID`` (its user id; the roster's ``canvas_id``), else ``SIS User ID`` / ``SIS Login
+  ID`` (``sis_id``, ``login_id``).  A new column name makes a new assignment; name it as an
+  existing one (with Canvas's "(id)" suffix) to fill that one.
+* ``moodle.csv``: for Moodle's grade import (Grades > Import > CSV file): ``First name, Last name,
+  ID number, Email address, <homework>``; map "Email address" (or "ID number") to the user and the
+  homework column to a grade item.
+* ``gradescope-roster.csv``: Gradescope's roster upload (``First Name, Last Name, Email, SID,
+  Section``), and ``gradescope-scores.csv``: ``First Name, Last Name, SID, Email, Total Score,
+  Max Points, Status`` and one column per question (``q1 (3.0 pts)``, as its score export names
+  them), for an offline assignment's score upload (matched by email or SID).
+
+A student on the roster without a submission gets an empty cell (the LMS keeps what it has);
+a notebook whose run did not finish (``grader-error``, ``not-graded``) also stays empty (rerun
+it).  A graded student absent from the roster is not written: the lines returned name them.
+
+The similarity report (:mod:`gpsaccel.assignments.similarity`) is asked for through one
+function, :func:`similar`, and flags, never grades.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+from gpsaccel import registry
+from gpsaccel._atomic import write_text
+from gpsaccel._untrusted import cell, shown
+from gpsaccel.assignments.roster import Student
+from gpsaccel.assignments.scoring import Grade
+from gpsaccel.classrun.writing import csv_text
+
+#: Statuses whose total is not a grade (the run must be repeated): left empty in every export.
+UNFINISHED = ("grader-error", "not-graded")
+
+#: The gradebook files :func:`write_gradebooks` writes.
+FILES = ("canvas.csv", "moodle.csv", "gradescope-roster.csv", "gradescope-scores.csv")
+
+
+def write(submissions: Path, out: Path, name: str, grades: Sequence[Grade],
+          possible: dict[str, float], roster: Sequence[Student] | None,
+          similarity: bool = True) -> list[str]:
+    """Write the gradebook files (with a roster) and the similarity report into ``out``; the
+    lines to show the instructor."""
+    lines = []
+    if roster is not None:
+        missing = write_gradebooks(grades, possible, roster,
+                                   registry.assignment(name).title or name, out)
+        lines.append("gradebooks: " + ", ".join(str(out / f) for f in FILES))
+        if missing:
+            lines.append(f"not on the roster (in grades.csv only): {', '.join(missing)}")
+    if similarity:
+        lines += similar(submissions, out, name, grades)
+    return lines
+
+
+# --------------------------------------------------------------------------------- gradebooks
+def _num(x: float) -> str:
+    return f"{x:g}"
+
+
+def _total(grades: dict, s: Student) -> str:
+    g = grades.get(s.id)
+    return "" if g is None or g.status in UNFINISHED else _num(g.total)
+
+
+def canvas_rows(grades: dict, possible: dict[str, float], roster: Sequence[Student],
+                title: str) -> list[list[str]]:
+    rows = [["Student", "ID", "SIS User ID", "SIS Login ID", "Section", title],
+            ["    Points Possible", "", "", "", "", _num(sum(possible.values()))]]
+    for s in roster:
+        rows.append([cell(s.full_name), cell(s.canvas_id), cell(s.sis_id), cell(s.login_id),
+                     cell(s.section), _total(grades, s)])
+    return rows
+
+
+def moodle_rows(grades: dict, roster: Sequence[Student], title: str) -> list[list[str]]:
+    rows = [["First name", "Last name", "ID number", "Email address", title]]
+    for s in roster:
+        first, last = s.split_name
+        rows.append([cell(first), cell(last), cell(s.sis_id), cell(s.email), _total(grades, s)])
+    return rows
+
+
+def gradescope_rows(grades: dict, possible: dict[str, float], roster: Sequence[Student]
+                    ) -> tuple[list[list[str]], list[list[str]]]:
+    people = [["First Name", "Last Name", "Email", "SID", "Section"]]
+    scores = [["First Name", "Last Name", "SID", "Email", "Total Score", "Max Points", "Status",
+               *(f"{q} ({p:.1f} pts)" for q, p in possible.items())]]
+    for s in roster:
+        first, last = s.split_name
+        people.append([cell(first), cell(last), cell(s.email), cell(s.sis_id or s.id),
+                       cell(s.section)])
+        g = grades.get(s.id)
+        done = g is not None and g.status not in UNFINISHED
+        scores.append([cell(first), cell(last), cell(s.sis_id or s.id), cell(s.email),
+                       _total(grades, s), _num(sum(possible.values())),
+                       g.status if g is not None else "missing",
+                       *((_num(g.scores.get(q, 0.0)) if done and g is not None else "")
+                         for q in possible)])
+    return people, scores
+
+
+def write_gradebooks(grades: Sequence[Grade], possible: dict[str, float],
+                     roster: Sequence[Student], title: str, out: str | Path) -> list[str]:
+    """Write :data:`FILES` into ``out`` (module docstring); returns the students graded but not
+    on the roster (written nowhere but ``grades.csv``)."""
+    out = Path(out)
+    by_id = {g.student: g for g in grades}
+    ids = {s.id for s in roster}
+    write_text(out / "canvas.csv", csv_text(canvas_rows(by_id, possible, roster, title)))
+    write_text(out / "moodle.csv", csv_text(moodle_rows(by_id, roster, title)))
+    people, scores = gradescope_rows(by_id, possible, roster)
+    write_text(out / "gradescope-roster.csv", csv_text(people))
+    write_text(out / "gradescope-scores.csv", csv_text(scores))
+    return sorted(g.student for g in grades if g.student not in ids)
+
+
+# --------------------------------------------------------------------------------- similarity
+def similar(submissions: Path, out: Path, name: str, grades: Sequence[Grade]) -> list[str]:
+    """The similarity report of the graded notebooks (``similarity.csv``, ``.html``): the one
+    place the class run asks for it; the lines to show."""
+    from gpsaccel.assignments.grading import questions_of, student_variant
+    from gpsaccel.assignments.similarity import report_in_child, write_report
+
+    pairs, why = report_in_child(submissions, grades, questions_of(name),
+                                 student_variant(name, "", None))
+    if pairs is None:
+        return [f"similarity report not written: {why}"]
+    write_report(pairs, out, name)
+    return [f"similarity: {len(pairs)} pair(s) flagged for a look "
+            f"({out / 'similarity.html'}; grades unchanged)"] + [
+        f"  {p.question}: {shown(p.a, 60)} & {shown(p.b, 60)} "
+        f"({p.similarity_a:.0%} / {p.similarity_b:.0%} of their code)" for p in pairs]

@@ -1,0 +1,296 @@
+r"""One walk of a class into entries: who each submission is, a printable unique id, its path, or
+why there is none.
+
+A class is a folder (``gpsaccel grade``), or files and folders named on the command line
+(``gpsaccel check``).  Each top-level entry of a folder is one student's submission, of a
+:class:`Kind`: a ``.py`` file or a folder (:data:`PYTHON`, one student's, checked as a whole), or a
+notebook or a folder holding one (:func:`notebooks`).  What is not a submission is noted, never
+skipped silently.
+
+Who an entry is comes from its name, through a :data:`Naming` (default :func:`plain`: a file's
+stem, a folder's name).  That is the one place an LMS export is read as it was downloaded: a
+naming parses ``nguyenan_84500_678900_calibration.ipynb`` (Canvas: user id, ``_LATE_``,
+``-1``) or ``An Nguyen_84500_assignsubmission_file_`` (Moodle), looks the ids up in the roster and
+answers a :class:`Name`: the roster's student, late or not, which attempt, or why it names no one
+(a status, never a guess).  Of one student's entries the highest attempt is kept and the others
+are noted as superseded; two of one attempt are a collision.
+
+Every name is the student's to choose (any bytes, any length, any punctuation): it is kept as
+found (:func:`os.fsdecode`) and given once a unique printable id
+(:func:`gpsaccel._untrusted.student_id`) that names the student's files.  Entries whose ids or
+shown names differ only in case are told apart by a hash of their raw names; where the kind's
+ids name a student's files and key their variant (grading), both are refused
+(``id-collision``), since neither can be told to be the one the roster means.  Folders are walked
+without recursion and without following links (:func:`gpsaccel._untrusted.walk`), so no name or
+folder stops the class.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from gpsaccel import _untrusted
+
+
+@dataclass(frozen=True)
+class Name:
+    """Who an entry is, as its name says (what a :data:`Naming` answers).
+
+    student : the student as the export names them, the key of their variant, data and roster
+        row (the found name itself for a plain folder; the roster's id once an export is mapped);
+    late : handed in after the deadline (an export's ``_LATE_``);
+    attempt : which resubmission (Canvas' ``-1``, ``-2``); a student's highest attempt is graded;
+    problem : ``(status, message)`` when the name maps to no student, or to several: the entry is
+        reported with that status and never run (nothing is graded on a guessed variant).
+    """
+
+    student: str
+    late: bool = False
+    attempt: int = 0
+    problem: tuple[str, str] | None = None
+
+
+#: ``naming(found, is_file) -> Name``: who the top-level entry named ``found`` is.
+Naming = Callable[[str, bool], Name]
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One submission of a class.
+
+    student : who (:attr:`Name.student`): the name as found (:func:`os.fsdecode` of its bytes),
+        or the roster's id when a naming mapped it; it keys the variant and the data;
+    path : what the item runs on (a ``.py`` file or folder to check, a notebook to grade), as
+        found under the path given; None: why not in ``problem`` (``(status, message)``);
+    id : unique, printable and file-safe (:func:`gpsaccel._untrusted.student_id`): it names
+        the student's files (feedback);
+    found : the top-level name as found; late, attempt : as the naming read them.
+    """
+
+    student: str
+    path: Path | None
+    problem: tuple[str, str] | None = None
+    id: str = ""
+    found: str = ""
+    late: bool = False
+    attempt: int = 0
+
+    @property
+    def shown(self) -> str:
+        return _untrusted.shown(self.student)
+
+
+@dataclass(frozen=True)
+class Kind:
+    """What a submission is (module docstring).
+
+    what : what the notes say one is; suffix : a submission file's extension (any case);
+    ignored : ``name -> why`` a top-level name is not a submission ("" when it may be one);
+    links : a symbolic link is an entry (the item refuses it, in the student's own report) rather
+        than a note; inside : the homework whose notebook a folder holds ("" : the folder itself
+        is the submission); refuse_collisions : entries whose ids differ only in case are refused
+        (their ids name files and key variants).
+    """
+
+    what: str
+    suffix: str
+    ignored: Callable[[str], str] = field(repr=False)
+    links: bool = False
+    inside: str = ""
+    refuse_collisions: bool = False
+
+
+def _hidden(name: str) -> str:
+    return "hidden" if name.startswith(".") or name == "__MACOSX" else ""
+
+
+def _python_ignored(name: str) -> str:
+    if name == "__pycache__":
+        return "Python's cache"
+    return _hidden(name) or ("a package's __init__.py" if name == "__init__.py" else "")
+
+
+#: ``gpsaccel check``: a ``.py`` file or a folder (one student's: the file that defines the
+#: contract's functions and its helpers and data; :func:`gpsaccel.sandbox.load_submission`).  A
+#: link stays (its check refuses it: ``link-refused``; ``mallory.py -> alice.py`` is not a
+#: second passing submission); a helper inside a student's folder is part of it.
+PYTHON = Kind("a .py file or a folder", ".py", _python_ignored, links=True)
+
+
+def notebooks(name: str) -> Kind:
+    """``gpsaccel grade`` of homework ``name``: a notebook, or a folder holding one (anywhere
+    within the checker's depth and entry limits; ``NAME.ipynb`` among several)."""
+    return Kind("a notebook or a student's folder", ".ipynb", _hidden, inside=name,
+                refuse_collisions=True)
+
+
+def plain(kind: Kind) -> Naming:
+    """The naming of a class laid out by hand, one file or folder per student: a file's name
+    without its extension, a folder's name."""
+    def naming(found: str, is_file: bool) -> Name:
+        if is_file and found.lower().endswith(kind.suffix):
+            return Name(found[:-len(kind.suffix)])
+        return Name(found)
+    return naming
+
+
+# ------------------------------------------------------------------------------ the walk
+def walk(paths: str | os.PathLike | Sequence[str | os.PathLike], kind: Kind,
+         naming: Naming | None = None) -> tuple[list[Entry], list[str]]:
+    """Every entry of a class (module docstring) and notes on what is not one.
+
+    ``paths``: one folder, whose top-level entries are the students (the notes name them as
+    found in it); or a list of files and folders (the command line's: a file is one entry, a
+    missing one too, for its item to report; a folder holds one per top-level entry; the notes
+    name them by their paths).  Entries come in the order given, each folder's by name without
+    case.  ``naming`` (default :func:`plain`) says who each one is."""
+    naming = naming or plain(kind)
+    one_folder = isinstance(paths, (str, os.PathLike))
+    roots = [Path(paths)] if isinstance(paths, (str, os.PathLike)) else [Path(p) for p in paths]
+    found: list[Entry] = []
+    notes: list[str] = []
+    for root in roots:
+        if not one_folder and not root.is_dir():
+            found.append(_named(naming, Entry("", root, found=root.name), is_file=True))
+            continue
+        n = len(found)
+        found += _folder(root, kind, naming, notes, "" if one_folder else str(root))
+        if len(found) == n and not one_folder:
+            notes.append(f"{_untrusted.shown(str(root))}: no submission in it ({kind.what} "
+                         f"each)")
+    unique = list({(e.path, e.problem, e.found): e for e in found}.values())
+    return _with_ids(_latest(unique, notes), kind, notes), notes
+
+
+def _folder(root: Path, kind: Kind, naming: Naming, notes: list[str], where: str
+            ) -> list[Entry]:
+    """The entries at the top of ``root``; ``where`` prefixes the names in notes."""
+    out: list[Entry] = []
+    with os.scandir(root) as it:
+        listing = sorted(it, key=lambda e: (os.fsencode(e.name).lower(), os.fsencode(e.name)))
+    for e in listing:
+        shown = _untrusted.shown(os.path.join(where, e.name) if where else e.name)
+        why = kind.ignored(e.name) or _not_a_submission(e, kind)
+        if why:
+            notes.append(f"{shown}: skipped ({why})")
+            continue
+        is_file = not e.is_dir(follow_symlinks=False)
+        entry = Entry("", Path(e.path), found=e.name)
+        if not is_file and kind.inside:
+            path, problem = _notebook_in(e, kind.inside)
+            entry = replace(entry, path=path, problem=problem)
+        out.append(_named(naming, entry, is_file))
+    return out
+
+
+def _not_a_submission(e: os.DirEntry, kind: Kind) -> str:
+    if e.is_symlink():
+        return "" if kind.links else "a symbolic link"
+    if e.is_dir(follow_symlinks=False):
+        return ""
+    if not e.is_file(follow_symlinks=False):
+        return "not a file or folder"
+    return "" if e.name.lower().endswith(kind.suffix) else f"not {kind.what}"
+
+
+def _named(naming: Naming, entry: Entry, is_file: bool) -> Entry:
+    name = naming(entry.found, is_file)
+    problem = name.problem or entry.problem
+    return replace(entry, student=name.student, late=name.late, attempt=name.attempt,
+                   problem=problem, path=None if problem else entry.path)
+
+
+def _notebook_in(e: os.DirEntry, name: str) -> tuple[Path | None, tuple[str, str] | None]:
+    """The notebook of a student's folder, walked within the checker's limits, or why not."""
+    who = _untrusted.shown(e.name)
+    try:
+        found = sorted(Path(e.path) / rel for rel, f in
+                       _untrusted.walk(e.path, skip=_hidden)  # type: ignore[arg-type]
+                       if f.name.lower().endswith(".ipynb") and f.is_file(follow_symlinks=False))
+    except _untrusted.WalkLimit as exc:
+        what = (f"more than {exc.limit} levels deep" if exc.kind == "depth" else
+                f"more than {exc.limit} files and folders")
+        return None, ("file-limit", f"The folder {who}/ is {what}: hand in the homework's "
+                      f"notebook in a folder of a few files. Nothing was graded.")
+    except OSError as exc:
+        return None, ("unreadable", f"The folder {who}/ cannot be read ({exc.strerror}).")
+    if len(found) > 1:
+        named = [p for p in found if p.stem.lower() == name.lower()]
+        found = named if len(named) == 1 else found
+    if not found:
+        return None, ("no-notebook", f"No .ipynb file in {who}/: hand in the homework's "
+                      f"notebook.")
+    if len(found) > 1:
+        names = ", ".join(_untrusted.shown(os.path.relpath(p, e.path)) for p in found[:10])
+        return None, ("ambiguous", f"Several notebooks in {who}/ ({names}) and none named "
+                      f"{name}.ipynb: hand in one.")
+    return found[0], None
+
+
+# ------------------------------------------------------------------- who is who, and their ids
+def _key(student: str) -> str:
+    return _untrusted.student_id(student).casefold()
+
+
+def _latest(entries: list[Entry], notes: list[str]) -> list[Entry]:
+    """Of one student's entries (by id, without case) the highest attempt; the earlier ones are
+    noted as superseded.  A naming that reads no attempts changes nothing here."""
+    best: dict[str, int] = {}
+    for e in entries:
+        if e.problem is None:
+            best[_key(e.student)] = max(best.get(_key(e.student), e.attempt), e.attempt)
+    kept = []
+    for e in entries:
+        if e.problem is None and e.attempt < best[_key(e.student)]:
+            notes.append(f"{_untrusted.shown(e.found)}: superseded by a later attempt of "
+                         f"{e.shown}")
+        else:
+            kept.append(e)
+    return kept
+
+
+def _with_ids(entries: list[Entry], kind: Kind, notes: list[str]) -> list[Entry]:
+    """Each entry with its id (module docstring): the found names tell apart what collides."""
+    ids = [_untrusted.student_id(x.student or x.found) for x in entries]
+    clash = _clashes(ids, [x.shown for x in entries])
+    out = []
+    for i, x in enumerate(entries):
+        if i not in clash:
+            out.append(replace(x, id=ids[i]))
+            continue
+        sid = _untrusted.hashed_id(x.found)
+        if not kind.refuse_collisions:
+            out.append(replace(x, id=sid))
+            continue
+        others = ", ".join(repr(_untrusted.shown(entries[j].found)) for j in sorted(clash[i]))
+        notes.append(f"{_untrusted.shown(x.found)}: id-collision with {others}")
+        message = (f"Your submission {_untrusted.shown(x.found)!r} cannot be told apart from "
+                   f"{others} (the same name or id once case and punctuation are set aside); "
+                   f"your instructor must rename one. Nothing was graded.")
+        out.append(replace(x, path=None, problem=("id-collision", message), id=sid))
+    return _numbered(out)
+
+
+def _clashes(ids: list[str], shown: list[str]) -> dict[int, set[int]]:
+    clash: dict[int, set[int]] = {}
+    for g in _untrusted.collisions(ids) + _untrusted.collisions(shown):
+        for i in g:
+            clash.setdefault(i, set()).update(j for j in g if j != i)
+    return clash
+
+
+def _numbered(entries: Iterable[Entry]) -> list[Entry]:
+    """A forged name equal to another's hashed id (or one raw name given twice): numbered."""
+    taken: set[str] = set()
+    out = []
+    for x in entries:
+        sid, n = x.id, 1
+        while sid.casefold() in taken:
+            n += 1
+            sid = f"{x.id}-{n}"
+        taken.add(sid.casefold())
+        out.append(replace(x, id=sid))
+    return out

@@ -1,0 +1,147 @@
+"""One run of a task over a class's entries, for ``gpsaccel check`` and ``gpsaccel grade`` alike.
+
+What a class run decides once, before any student's code runs: the seed of the data (drawn
+with :func:`gpsaccel._untrusted.secret_seed` unless given, so no student can precompute an
+answer; recorded by the caller so a verdict can be reproduced), the jobs, the sandbox's backend
+(and the refusal of the basic one where it cannot isolate a student:
+:func:`gpsaccel.sandbox.refuse_unsafe_basic`), and the imports every item needs (the task's
+:meth:`Task.warm`, before the pool forks, so each item inherits them).
+
+:func:`run` then sends each entry through the sandbox's one pool
+(:func:`gpsaccel.sandbox.run_items`): a process forked per item (the default, ``"processes"``),
+this process one after the other (``None``), or a Dask cluster or any executor, each item within
+the task's deadline.  An entry without a submission (its :attr:`~gpsaccel.classrun.entries.Entry
+.problem`) is never run: the task says its result here.  An item that gives no result is worded
+from the sandbox's own table (``lost.<reason>`` of :data:`gpsaccel.sandbox.outcomes.OUTCOMES`)
+and becomes that entry's result through :meth:`Task.lost`: one student's loss, never the class's.
+Ctrl-C, SIGTERM or SIGHUP kills every item and what their boxes left (the pool's), and raises
+:class:`Interrupted` (a :class:`gpsaccel._interrupt.Stopped`, so a KeyboardInterrupt naming the
+signal) holding what finished.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from typing import Any
+
+from gpsaccel import _untrusted
+from gpsaccel import _validation as _v
+from gpsaccel import sandbox as sb
+from gpsaccel._interrupt import Stopped
+from gpsaccel.classrun.entries import Entry
+from gpsaccel.sandbox.outcomes import OUTCOMES
+
+
+class Interrupted(Stopped):
+    """A class run was stopped (Ctrl-C, SIGTERM, SIGHUP: :mod:`gpsaccel._interrupt`); the
+    signal and what the pool kept as ``stopped`` said them, and ``results`` holds, per entry,
+    its result or None where it did not finish."""
+
+    def __init__(self, results: list, stopped: BaseException | None = None) -> None:
+        if isinstance(stopped, Stopped):
+            super().__init__(stopped.signum, stopped.kept)
+        else:
+            super().__init__()
+        self.results = results
+
+
+def seed_of(seed: int | None) -> tuple[int, bool]:
+    """(the run's seed, whether it was drawn): ``seed`` checked, or a secret one."""
+    if seed is None:
+        return _untrusted.secret_seed(), True
+    return _v.integer("seed", seed, minimum=0), False
+
+
+def jobs_of(jobs: int | None, default: int, name: str = "jobs") -> int:
+    """Items at once: ``jobs`` checked (an integer >= 1), or ``default``."""
+    return default if jobs is None else _v.integer(name, jobs, minimum=1)
+
+
+def cpus() -> int:
+    return os.cpu_count() or 1
+
+
+def backend_of(sandbox: str, allow_unsafe_basic: bool = False) -> str:
+    """The sandbox's backend, resolved once for the class (a clear error before anything runs),
+    and the basic one refused where it cannot isolate a student."""
+    backend = sb.resolve_backend(sandbox)
+    sb.refuse_unsafe_basic(backend, allow_unsafe_basic)
+    return backend
+
+
+class Task:
+    """What a class run does with each entry: the hooks a kind of run overrides.
+
+    ``timeout`` is the student's own time limit, ``deadline`` what one item may take in all
+    (boxes, references, feedback) before it is lost.  :meth:`item` runs in the item's process
+    (a module-level class, so Dask can send it); the others run here."""
+
+    timeout: float = 60.0
+    deadline: float = 180.0
+
+    def warm(self) -> None:
+        """Import what every item imports on first use, before the pool forks (only modules:
+        no answer exists before a box is empty)."""
+
+    def item(self, entry: Entry) -> dict:
+        """The entry's result, computed in the item's process (its box runs from there)."""
+        raise NotImplementedError
+
+    def refused(self, entry: Entry) -> dict:
+        """The result of an entry that has no submission to run (``entry.problem``)."""
+        raise NotImplementedError
+
+    def lost(self, entry: Entry, why: str) -> dict:
+        """The result of an item that gave none; ``why`` is the sandbox's wording."""
+        raise NotImplementedError
+
+
+def lost_text(lost: sb.Lost, timeout: float, deadline: float) -> str:
+    """Why an item has no result, in the words of :data:`gpsaccel.sandbox.outcomes.OUTCOMES`
+    (``lost.<reason>``; fields ``detail``, ``limit`` the deadline, ``slack`` its part beyond the
+    time limit)."""
+    known = OUTCOMES.get(f"lost.{lost.reason}")
+    return (known.finding if known else "{detail}").format(
+        detail=lost.detail, limit=deadline, slack=deadline - timeout)
+
+
+#: The executors of this machine: a forked process per item, or this process.
+LOCAL = ("processes", "local", None, "inprocess")
+
+
+def run(task: Task, entries: Sequence[Entry], jobs: int, executor: object = "processes",
+        on_result: Callable[[int, dict], None] | None = None) -> list[dict | None]:
+    """Every entry's result, in order (module docstring); ``on_result(i, result)`` as each ends.
+
+    ``executor``: ``"processes"`` (a process forked per item), None (here, one after the other)
+    or anything :func:`gpsaccel.executors.resolve_executor` accepts (``"dask-local"``,
+    ``"tcp://..."``, an Executor).  Raises :class:`Interrupted` on Ctrl-C, SIGTERM or SIGHUP."""
+    results: list[dict | None] = [None] * len(entries)
+
+    def done(i: int, out: Any) -> None:
+        results[i] = out
+        if on_result is not None:
+            on_result(i, out)
+
+    runnable = [i for i, e in enumerate(entries) if e.problem is None and e.path is not None]
+    try:
+        for i in sorted(set(range(len(entries))) - set(runnable)):
+            done(i, task.refused(entries[i]))
+        if executor in LOCAL:
+            task.warm()  # before the pool forks: every item inherits the imports
+
+        def finished(k: int, out: Any) -> None:
+            i = runnable[k]
+            if not isinstance(out, dict):
+                lost = out if isinstance(out, sb.Lost) else sb.Lost("not-a-report")
+                out = task.lost(entries[i], lost_text(lost, task.timeout, task.deadline))
+            done(i, out)
+
+        spec = None if executor in ("processes", "local") else \
+            "inprocess" if executor is None else executor
+        sb.run_items(task.item, [entries[i] for i in runnable], jobs, task.deadline, finished,
+                     spec)
+    except KeyboardInterrupt as exc:
+        raise Interrupted(results, exc) from exc
+    return results

@@ -1,0 +1,101 @@
+"""One run of a task over a class (gpsaccel.classrun.running): the seed drawn once, the imports
+warmed once before the pool forks, entries without a submission never run, an item that dies or
+raises lost for its own entry only and worded by the sandbox's table, Ctrl-C."""
+
+from __future__ import annotations
+
+import os
+import signal
+import time
+from pathlib import Path
+
+import pytest
+
+from gpsaccel.classrun import Entry, Interrupted, Task, run
+from gpsaccel.classrun.running import backend_of, jobs_of, lost_text, seed_of
+from gpsaccel.sandbox import Lost
+from gpsaccel.sandbox.outcomes import OUTCOMES
+
+WARMED: list[int] = []
+
+
+class _Toy(Task):
+    """Items by name: ``ok`` returns what it inherited, ``dies`` ends its process, ``raises``
+    raises, ``stops`` sends Ctrl-C to the run and waits."""
+
+    timeout, deadline = 5.0, 30.0
+
+    def warm(self) -> None:
+        WARMED.append(os.getpid())
+
+    def item(self, entry: Entry) -> dict:
+        if entry.student == "dies":
+            os._exit(3)
+        if entry.student == "raises":
+            raise ValueError("boom")
+        if entry.student == "stops":
+            os.kill(os.getppid(), signal.SIGINT)
+            time.sleep(60)  # killed by the run on its way out
+        return {"student": entry.student, "pid": os.getpid(), "warmed": list(WARMED)}
+
+    def refused(self, entry: Entry) -> dict:
+        return {"student": entry.student, "refused": entry.problem[0]}
+
+    def lost(self, entry: Entry, why: str) -> dict:
+        return {"student": entry.student, "lost": why}
+
+
+def _entries(*names: str) -> list[Entry]:
+    return [Entry(n, None, ("no-notebook", "none")) if n == "nothing" else
+            Entry(n, Path(f"{n}.py"), id=n) for n in names]
+
+
+def test_a_lost_item_is_its_own_entrys_only_and_worded_by_the_sandbox():
+    WARMED.clear()
+    seen: list[int] = []
+    results = run(_Toy(), _entries("ok", "dies", "raises", "nothing", "ok2"), 2,
+                  on_result=lambda i, r: seen.append(i))
+    assert sorted(seen) == [0, 1, 2, 3, 4] and seen[0] == 3  # the refused one at once, here
+    ok, dies, raises, nothing, ok2 = results
+    assert ok["warmed"] == ok2["warmed"] == [os.getpid()]  # warmed once, here, then forked
+    assert ok["pid"] != os.getpid() != ok2["pid"] != ok["pid"]  # a process per item
+    assert dies == {"student": "dies", "lost": OUTCOMES["lost.died"].finding.format(
+        detail="exit status 3")}
+    assert raises == {"student": "raises", "lost": "the checker failed: ValueError: boom"}
+    assert nothing == {"student": "nothing", "refused": "no-notebook"}
+
+
+def test_in_this_process_one_after_the_other():
+    WARMED.clear()
+    results = run(_Toy(), _entries("ok", "raises", "nothing"), 1, executor=None)
+    assert results[0] == {"student": "ok", "pid": os.getpid(), "warmed": [os.getpid()]}
+    assert results[1]["lost"] == "the checker failed: ValueError: boom"
+    assert results[2]["refused"] == "no-notebook"
+
+
+def test_the_lost_wording_states_the_deadline_and_its_slack():
+    text = lost_text(Lost("too-long", "30 s"), timeout=60.0, deadline=180.0)
+    assert text == OUTCOMES["lost.too-long"].finding.format(limit=180.0, slack=120.0)
+    assert "180 s" in text and "120 s" in text
+    assert lost_text(Lost("unheard-of", "why"), 1.0, 2.0) == "why"
+
+
+def test_ctrl_c_stops_the_run_and_keeps_what_finished():
+    with pytest.raises(Interrupted) as exc:
+        run(_Toy(), _entries("ok", "stops", "ok2"), 1)
+    assert isinstance(exc.value, KeyboardInterrupt)  # the command exits 130
+    assert exc.value.results[0]["student"] == "ok" and exc.value.results[1:] == [None, None]
+
+
+def test_the_settings_are_checked_once_before_anything_runs():
+    seeds = {seed_of(None) for _ in range(3)}
+    assert all(drawn and 0 <= s < 2**63 for s, drawn in seeds) and len(seeds) == 3
+    assert seed_of(7) == (7, False)
+    for bad in (-1, 1.5, "7"):
+        with pytest.raises(ValueError, match="seed"):
+            seed_of(bad)
+    assert jobs_of(None, 3) == 3 and jobs_of(2, 3) == 2
+    with pytest.raises(ValueError, match="max_workers"):
+        jobs_of(0, 3, "max_workers")
+    with pytest.raises(ValueError, match="sandbox must be one of"):
+        backend_of("docker")
