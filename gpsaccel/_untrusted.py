@@ -144,6 +144,12 @@ def collisions(ids: list[str]) -> list[list[int]]:
     return [g for g in groups.values() if len(g) > 1]
 
 
+def hidden(name: str) -> bool:
+    """A name no student hands in as their work: a dot file or folder, or macOS's ``__MACOSX``
+    (an unpacked archive's)."""
+    return name.startswith(".") or name == "__MACOSX"
+
+
 class WalkLimit(Exception):
     """A folder is deeper than :data:`MAX_DEPTH` (``kind="depth"``, ``where`` the folder that is
     too deep) or holds more than :data:`MAX_ENTRIES` entries (``kind="entries"``)."""

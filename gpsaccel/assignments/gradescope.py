@@ -161,16 +161,6 @@ def _student_id(meta: dict, ids: dict[str, str]) -> tuple[str, str]:
                 "your instructor will grade this submission by hand")
 
 
-def _notebook(submission: Path, name: str) -> Path | None:
-    """The submitted notebook: ``NAME.ipynb`` (any case), else the only ``.ipynb`` there."""
-    found = [p for p in sorted(submission.rglob("*")) if p.suffix.lower() == ".ipynb"
-             and p.is_file() and not p.is_symlink()]
-    named = [p for p in found if p.name.lower() == f"{name}.ipynb"]
-    if len(named) == 1:
-        return named[0]
-    return found[0] if len(found) == 1 else None
-
-
 def results(grade, possible: dict[str, float]) -> dict:
     """Gradescope's results.json for a :class:`~gpsaccel.assignments.grading.Grade`: one test per
     question (its score and points), the student's feedback as the output."""
@@ -187,7 +177,7 @@ def run(root: str | os.PathLike, sandbox: str = "auto") -> dict:
     from gpsaccel._atomic import write_text
     from gpsaccel._untrusted import secret_seed
     from gpsaccel.assignments.generate import use_folder
-    from gpsaccel.assignments.grading import grade_notebook, possible_of
+    from gpsaccel.assignments.grading import grade_notebook, notebook_in, possible_of
 
     root = Path(root)
     source = root / "source"
@@ -202,9 +192,9 @@ def run(root: str | os.PathLike, sandbox: str = "auto") -> dict:
     except (OSError, ValueError):
         meta = {}
     student, why = _student_id(meta, config.get("ids") or {})
-    path = _notebook(root / "submission", name) if student else None
-    if student and path is None:
-        why = f"no notebook {name}.ipynb was submitted"
+    path, problem = notebook_in(root / "submission", name) if student else (None, None)
+    if problem is not None:  # the class's rule: none, several, too deep (never an unbounded walk)
+        why = problem[1]
     if path is None:
         out = {"score": 0.0, "output": why, "visibility": "visible",
                "stdout_visibility": "hidden",

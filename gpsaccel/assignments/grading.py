@@ -30,6 +30,7 @@ import os
 from dataclasses import asdict
 from pathlib import Path
 
+from gpsaccel import _untrusted
 from gpsaccel.assignments import notebook as nbm
 from gpsaccel.assignments.scoring import BOX_MEMORY as BOX_MEMORY
 from gpsaccel.assignments.scoring import BOX_PROCESSES as BOX_PROCESSES
@@ -85,6 +86,35 @@ def warm(name: str) -> None:
     homework_warm = getattr(assignment_module(name), "warm", None)
     if callable(homework_warm):
         homework_warm()
+
+
+def notebook_in(folder: Path, name: str) -> tuple[Path | None, tuple[str, str] | None]:
+    """The notebook a student's ``folder`` holds, or ``(status, message)`` why there is none:
+    any ``.ipynb`` (any case) found breadth first within the checker's depth and entry limits,
+    without following a link (:func:`gpsaccel._untrusted.walk`); ``NAME.ipynb`` among several.
+    A class's walk and Gradescope's container look for it so."""
+    who = _untrusted.shown(folder.name)
+    try:
+        found = sorted(folder / rel for rel, f in _untrusted.walk(folder, skip=_untrusted.hidden)
+                       if f.name.lower().endswith(".ipynb") and f.is_file(follow_symlinks=False))
+    except _untrusted.WalkLimit as exc:
+        what = (f"more than {exc.limit} levels deep" if exc.kind == "depth" else
+                f"more than {exc.limit} files and folders")
+        return None, ("file-limit", f"The folder {who}/ is {what}: hand in the homework's "
+                      f"notebook in a folder of a few files. Nothing was graded.")
+    except OSError as exc:
+        return None, ("unreadable", f"The folder {who}/ cannot be read ({exc.strerror}).")
+    if len(found) > 1:
+        named = [p for p in found if p.stem.lower() == name.lower()]
+        found = named if len(named) == 1 else found
+    if not found:
+        return None, ("no-notebook", f"No .ipynb file in {who}/: hand in the homework's "
+                      f"notebook.")
+    if len(found) > 1:
+        names = ", ".join(_untrusted.shown(os.path.relpath(p, folder)) for p in found[:10])
+        return None, ("ambiguous", f"Several notebooks in {who}/ ({names}) and none named "
+                      f"{name}.ipynb: hand in one.")
+    return found[0], None
 
 
 def grade_item(path: Path, student: str, file: str, sid: str, settings: dict) -> dict:

@@ -30,6 +30,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field, replace
+from functools import partial
 from pathlib import Path
 
 from gpsaccel import _untrusted
@@ -90,21 +91,23 @@ class Kind:
     what : what the notes say one is; suffix : a submission file's extension (any case);
     ignored : ``name -> why`` a top-level name is not a submission ("" when it may be one);
     links : a symbolic link is an entry (the item refuses it, in the student's own report) rather
-        than a note; inside : the homework whose notebook a folder holds ("" : the folder itself
-        is the submission); refuse_collisions : entries whose ids differ only in case are refused
-        (their ids name files and key variants).
+        than a note; inside : ``folder -> (path, problem)``, the submission a student's folder
+        holds or why there is none (None: the folder itself is the submission);
+        refuse_collisions : entries whose ids differ only in case are refused (their ids name
+        files and key variants).
     """
 
     what: str
     suffix: str
     ignored: Callable[[str], str] = field(repr=False)
     links: bool = False
-    inside: str = ""
+    inside: Callable[[Path], tuple[Path | None, tuple[str, str] | None]] | None = \
+        field(default=None, repr=False)
     refuse_collisions: bool = False
 
 
 def _hidden(name: str) -> str:
-    return "hidden" if name.startswith(".") or name == "__MACOSX" else ""
+    return "hidden" if _untrusted.hidden(name) else ""
 
 
 def _python_ignored(name: str) -> str:
@@ -121,10 +124,13 @@ PYTHON = Kind("a .py file or a folder", ".py", _python_ignored, links=True)
 
 
 def notebooks(name: str) -> Kind:
-    """``gpsaccel grade`` of homework ``name``: a notebook, or a folder holding one (anywhere
-    within the checker's depth and entry limits; ``NAME.ipynb`` among several)."""
-    return Kind("a notebook or a student's folder", ".ipynb", _hidden, inside=name,
-                refuse_collisions=True)
+    """``gpsaccel grade`` of homework ``name``: a notebook, or a folder holding one
+    (:func:`gpsaccel.assignments.grading.notebook_in`: within the checker's depth and entry
+    limits, ``NAME.ipynb`` among several)."""
+    from gpsaccel.assignments.grading import notebook_in  # the grader's, when grading
+
+    return Kind("a notebook or a student's folder", ".ipynb", _hidden,
+                inside=partial(notebook_in, name=name), refuse_collisions=True)
 
 
 def plain(kind: Kind) -> Naming:
@@ -179,8 +185,8 @@ def _folder(root: Path, kind: Kind, naming: Naming, notes: list[str], where: str
             continue
         is_file = not e.is_dir(follow_symlinks=False)
         entry = Entry("", Path(e.path), found=e.name)
-        if not is_file and kind.inside:
-            path, problem = _notebook_in(e, kind.inside)
+        if not is_file and kind.inside is not None:
+            path, problem = kind.inside(Path(e.path))
             entry = replace(entry, path=path, problem=problem)
         out.append(_named(naming, entry, is_file))
     return out
@@ -201,33 +207,6 @@ def _named(naming: Naming, entry: Entry, is_file: bool) -> Entry:
     problem = name.problem or entry.problem
     return replace(entry, student=name.student, late=name.late, attempt=name.attempt,
                    problem=problem, path=None if problem else entry.path)
-
-
-def _notebook_in(e: os.DirEntry, name: str) -> tuple[Path | None, tuple[str, str] | None]:
-    """The notebook of a student's folder, walked within the checker's limits, or why not."""
-    who = _untrusted.shown(e.name)
-    try:
-        found = sorted(Path(e.path) / rel for rel, f in
-                       _untrusted.walk(e.path, skip=_hidden)  # type: ignore[arg-type]
-                       if f.name.lower().endswith(".ipynb") and f.is_file(follow_symlinks=False))
-    except _untrusted.WalkLimit as exc:
-        what = (f"more than {exc.limit} levels deep" if exc.kind == "depth" else
-                f"more than {exc.limit} files and folders")
-        return None, ("file-limit", f"The folder {who}/ is {what}: hand in the homework's "
-                      f"notebook in a folder of a few files. Nothing was graded.")
-    except OSError as exc:
-        return None, ("unreadable", f"The folder {who}/ cannot be read ({exc.strerror}).")
-    if len(found) > 1:
-        named = [p for p in found if p.stem.lower() == name.lower()]
-        found = named if len(named) == 1 else found
-    if not found:
-        return None, ("no-notebook", f"No .ipynb file in {who}/: hand in the homework's "
-                      f"notebook.")
-    if len(found) > 1:
-        names = ", ".join(_untrusted.shown(os.path.relpath(p, e.path)) for p in found[:10])
-        return None, ("ambiguous", f"Several notebooks in {who}/ ({names}) and none named "
-                      f"{name}.ipynb: hand in one.")
-    return found[0], None
 
 
 # ------------------------------------------------------------------- who is who, and their ids

@@ -7,6 +7,7 @@ from __future__ import annotations
 import os
 import re
 import unicodedata
+from pathlib import Path
 
 import pytest
 
@@ -154,3 +155,26 @@ def test_two_entries_of_one_student_and_attempt_are_both_refused(tmp_path):
         (tmp_path / name).write_text("{}")
     entries, _ = walk(tmp_path, notebooks("calibration"), canvas_like({"84500": "an"}))
     assert [e.problem[0] for e in entries] == ["id-collision", "id-collision"]
+
+
+def test_a_students_folder_too_deep_is_its_status_and_gradescope_looks_the_same_way(
+        tmp_path, nested_folders):
+    """The notebook of a student's folder is found one way, with the checker's limits, by a
+    class's walk and by Gradescope's container (whose search was an unbounded rglob)."""
+    from gpsaccel.assignments import gradescope
+    from gpsaccel.assignments.grading import notebook_in
+
+    (tmp_path / "deep").mkdir()
+    nested_folders.make(tmp_path / "deep", 1500)
+    try:
+        entries, _ = walk(tmp_path, notebooks("hw"))
+        path, problem = notebook_in(tmp_path / "deep", "hw")
+    finally:
+        nested_folders.remove(tmp_path / "deep")
+    assert [(e.found, e.problem[0]) for e in entries] == [("deep", "file-limit")]
+    assert path is None and problem == entries[0].problem
+    assert "notebook_in(root" in Path(gradescope.__file__).read_text()  # its submission too
+    (tmp_path / "two").mkdir()
+    for name in ("a.ipynb", "HW.ipynb"):
+        (tmp_path / "two" / name).write_text("{}")
+    assert notebook_in(tmp_path / "two", "hw") == (tmp_path / "two" / "HW.ipynb", None)
