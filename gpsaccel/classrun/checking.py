@@ -40,7 +40,7 @@ from gpsaccel._untrusted import json_safe
 from gpsaccel.check import batch
 from gpsaccel.check.problem import arguments
 from gpsaccel.classrun import running
-from gpsaccel.classrun.entries import PYTHON, Entry, walk
+from gpsaccel.classrun.entries import PYTHON, Entry, Naming, walk
 
 
 class _Check(running.Task):
@@ -108,17 +108,19 @@ class CheckPlan:
 def plan_check(paths: Sequence[str | os.PathLike], problem: str = "calibration",
                n_runs: int | None = None, seed: int | None = None, timeout: float = 60,
                sandbox: str = "auto", limits: sb.Limits | None = None,
-               allow_gpsaccel: bool = False, allow_unsafe_basic: bool = False) -> CheckPlan:
+               allow_gpsaccel: bool = False, allow_unsafe_basic: bool = False,
+               naming: Naming | None = None) -> CheckPlan:
     """The check of every submission of ``paths`` (module docstring), settled before any of them
     runs: a bad number, problem or backend is a ValueError naming it.  ``seed`` None draws a
     secret one (:func:`gpsaccel._untrusted.secret_seed`): a class is checked on data no student
-    could know in advance; pass the recorded seed to reproduce a run."""
+    could know in advance; pass the recorded seed to reproduce a run.  ``naming``: who each
+    entry is (:data:`~gpsaccel.classrun.entries.Naming`; default its name)."""
     seed, drawn = running.seed_of(seed)
     n_runs, seed, timeout = arguments(n_runs, seed, timeout)
     problem = _v.choice("problem", problem, registry.problems())
     if limits is not None and not isinstance(limits, sb.Limits):
         raise ValueError(f"limits must be a gpsaccel.sandbox.Limits, got {limits!r}")
-    entries, notes = walk(paths, PYTHON)
+    entries, notes = walk(paths, PYTHON, naming)
     backend = running.backend_of(sandbox, allow_unsafe_basic)
     return CheckPlan(tuple(entries), tuple(notes), problem, n_runs, seed, drawn, timeout,
                      backend, limits, allow_gpsaccel)

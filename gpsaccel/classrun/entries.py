@@ -45,7 +45,8 @@ class Name:
     late : handed in after the deadline (an export's ``_LATE_``);
     attempt : which resubmission (Canvas' ``-1``, ``-2``); a student's highest attempt is graded;
     problem : ``(status, message)`` when the name maps to no student, or to several: the entry is
-        reported with that status and never run (nothing is graded on a guessed variant).
+        reported with that status (under its name as found) and never run (nothing is graded on a
+        guessed variant).
     """
 
     student: str
@@ -205,8 +206,8 @@ def _not_a_submission(e: os.DirEntry, kind: Kind) -> str:
 def _named(naming: Naming, entry: Entry, is_file: bool) -> Entry:
     name = naming(entry.found, is_file)
     problem = name.problem or entry.problem
-    return replace(entry, student=name.student, late=name.late, attempt=name.attempt,
-                   problem=problem, path=None if problem else entry.path)
+    return replace(entry, student=name.student or entry.found, late=name.late,
+                   attempt=name.attempt, problem=problem, path=None if problem else entry.path)
 
 
 # ------------------------------------------------------------------- who is who, and their ids

@@ -51,7 +51,7 @@ from gpsaccel.assignments import grading as item
 from gpsaccel.assignments.roster import Student, read_roster
 from gpsaccel.assignments.scoring import TIMEOUT, Grade
 from gpsaccel.classrun import classwide, running, writing
-from gpsaccel.classrun.entries import Entry, notebooks, walk
+from gpsaccel.classrun.entries import Entry, Naming, notebooks, walk
 
 
 class _Grade(running.Task):
@@ -204,7 +204,7 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
                 secret: bytes | None = None, student: str | None = None, dask: str | None = None,
                 sandbox: str = "auto", progress: bool = False,
                 roster: Sequence[Student] | str | os.PathLike | None = None,
-                similarity: bool = True) -> Graded:
+                similarity: bool = True, naming: Naming | None = None) -> Graded:
     """Grade every student of ``submissions`` for homework ``name`` and write every file
     (module docstring); :func:`grade` is this with the grades alone.
 
@@ -214,13 +214,15 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
     instructor's secret for per-student variants (None: every student gets the public notebook's
     numbers); dask : a Dask address or "dask-local"; progress : a tqdm bar on stderr when it is
     a terminal; roster : the class roster (students, or its file: :func:`~gpsaccel.assignments
-    .roster.read_roster`), for the LMS gradebooks; similarity : write the similarity report.
+    .roster.read_roster`), for the LMS gradebooks; similarity : write the similarity report;
+    naming : who each entry of the export is (:data:`~gpsaccel.classrun.entries.Naming`;
+    default: the folder's or the notebook's name).
     """
     folder = Path(submissions)
     out, jobs = _checked(folder, out, timeout, jobs)
     students = read_roster(roster) if isinstance(roster, (str, os.PathLike)) else roster
     possible = item.possible_of(name)
-    entries, notes = walk(folder, notebooks(name))
+    entries, notes = walk(folder, notebooks(name), naming)
     if not entries:
         raise ValueError(f"submissions: no student's folder or notebook in {folder}")
     out.mkdir(parents=True, exist_ok=True)
@@ -255,11 +257,11 @@ def grade(submissions: str | os.PathLike, name: str, out: str | os.PathLike | No
           secret: bytes | None = None, student: str | None = None, dask: str | None = None,
           sandbox: str = "auto", progress: bool = False,
           roster: Sequence[Student] | str | os.PathLike | None = None,
-          similarity: bool = True) -> list[Grade]:
+          similarity: bool = True, naming: Naming | None = None) -> list[Grade]:
     """Grade a class (:func:`grade_class`: the same files as ``gpsaccel grade`` writes); this
     run's grades, one per student graded, in the class's order."""
     return grade_class(submissions, name, out, jobs, timeout, seed, secret, student, dask,
-                       sandbox, progress, roster, similarity).grades
+                       sandbox, progress, roster, similarity, naming).grades
 
 
 def _checked(folder: Path, out: str | os.PathLike | None, timeout: float, jobs: int | None

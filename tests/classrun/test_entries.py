@@ -144,7 +144,7 @@ def test_a_naming_maps_an_export_to_the_roster_with_late_and_resubmissions(tmp_p
            for e in entries]
     assert got == [("jane.doe", True, 0, "doejane_LATE_84501_678902_calibration.ipynb"),
                    ("an.nguyen", False, 1, "nguyenan_84500_678950_calibration-1.ipynb"),
-                   ("", False, 0, "not-on-roster")]
+                   ("stranger_99999_678903_calibration.ipynb", False, 0, "not-on-roster")]
     assert notes == ["nguyenan_84500_678900_calibration.ipynb: superseded by a later attempt "
                      "of an.nguyen"]
     assert entries[1].id == "an.nguyen"  # the roster's id names the files and keys the variant
