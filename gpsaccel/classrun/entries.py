@@ -155,8 +155,10 @@ def walk(paths: str | os.PathLike | Sequence[str | os.PathLike], kind: Kind,
     name them by their paths).  Entries come in the order given, each folder's by name without
     case.  ``naming`` (default :func:`plain`) says who each one is."""
     naming = naming or plain(kind)
-    one_folder = isinstance(paths, (str, os.PathLike))
-    roots = [Path(paths)] if isinstance(paths, (str, os.PathLike)) else [Path(p) for p in paths]
+    if isinstance(paths, (str, os.PathLike)):
+        roots, one_folder = [Path(paths)], True
+    else:
+        roots, one_folder = [Path(p) for p in paths], False
     found: list[Entry] = []
     notes: list[str] = []
     for root in roots:
@@ -234,7 +236,7 @@ def _latest(entries: list[Entry], notes: list[str]) -> list[Entry]:
 
 def _with_ids(entries: list[Entry], kind: Kind, notes: list[str]) -> list[Entry]:
     """Each entry with its id (module docstring): the found names tell apart what collides."""
-    ids = [_untrusted.student_id(x.student or x.found) for x in entries]
+    ids = [_untrusted.student_id(x.student) for x in entries]
     clash = _clashes(ids, [x.shown for x in entries])
     out = []
     for i, x in enumerate(entries):
