@@ -221,3 +221,29 @@ def test_each_job_of_untrusted_is_written_once_in_the_package():
         text = path.read_text(encoding="utf-8")
         for mark, job in marks.items():
             assert mark not in text, f"{path.relative_to(root)}: {job} again ({mark})"
+
+
+def test_every_writer_of_a_name_uses_the_one_rule(tmp_path):
+    """Where a name leaves: the sandbox's messages, grades.csv, the similarity CSV (and the
+    gradebooks: tests/test_kit.py; the check's table: tests/check/test_batch_output.py)."""
+    import csv
+
+    from gpsaccel import sandbox as sb
+    from gpsaccel.assignments.scoring import Grade
+    from gpsaccel.assignments.similarity import Pair, write_report
+    from gpsaccel.classrun.writing import write_grades
+
+    evil = "e\x1b[2Jvil\u202e.py"
+    (tmp_path / "alice.py").write_text("def kalman_filter(z):\n    return z\n")
+    os.symlink(tmp_path / "alice.py", tmp_path / evil)
+    with pytest.raises(sb.SubmissionError) as exc:
+        sb.load_submission(tmp_path / evil, "kalman_filter")
+    assert "e\\x1b[2Jvil\\u202e.py" in str(exc.value) and str(exc.value).isprintable()
+    write_grades([Grade("=cmd|' /C calc'!A0", "=x.ipynb", {"q1": 1.0}, {"q1": 1.0}, "graded",
+                        id="-id")], {"q1": 1.0}, tmp_path / "grades.csv")
+    with open(tmp_path / "grades.csv", newline="", encoding="utf-8") as f:
+        row = list(csv.reader(f))[2]
+    assert row[:3] == ["'=cmd|' /C calc'!A0", "'-id", "'=x.ipynb"] and row[3] == "1"
+    write_report([Pair("q1", "@a", "+b", 1.0, 1.0)], tmp_path, "HW")
+    with open(tmp_path / "similarity.csv", newline="", encoding="utf-8") as f:
+        assert list(csv.reader(f))[1][:3] == ["q1", "'@a", "'+b"]
