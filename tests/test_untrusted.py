@@ -224,8 +224,8 @@ def test_each_job_of_untrusted_is_written_once_in_the_package():
 
 
 def test_every_writer_of_a_name_uses_the_one_rule(tmp_path):
-    """Where a name leaves: the sandbox's messages, grades.csv, the similarity CSV (and the
-    gradebooks: tests/test_kit.py; the check's table: tests/check/test_batch_output.py)."""
+    """Where a name leaves: the sandbox's messages, grades.csv, the gradebooks, the similarity
+    CSV (the check's table: tests/check/test_batch_output.py)."""
     import csv
 
     from gpsaccel import sandbox as sb
@@ -244,6 +244,13 @@ def test_every_writer_of_a_name_uses_the_one_rule(tmp_path):
     with open(tmp_path / "grades.csv", newline="", encoding="utf-8") as f:
         row = list(csv.reader(f))[2]
     assert row[:3] == ["'=cmd|' /C calc'!A0", "'-id", "'=x.ipynb"] and row[3] == "1"
+    from gpsaccel.assignments.roster import Student
+    from gpsaccel.classrun.classwide import write_gradebooks
+
+    write_gradebooks([], {"q1": 1.0}, [Student("x", name="=HYPERLINK(1)", sis_id="-7",
+                                               email="@e", canvas_id="+1")], "HW", tmp_path)
+    with open(tmp_path / "canvas.csv", newline="", encoding="utf-8") as f:
+        assert list(csv.reader(f))[2][:3] == ["'=HYPERLINK(1)", "'+1", "'-7"]
     write_report([Pair("q1", "@a", "+b", 1.0, 1.0)], tmp_path, "HW")
     with open(tmp_path / "similarity.csv", newline="", encoding="utf-8") as f:
         assert list(csv.reader(f))[1][:3] == ["q1", "'@a", "'+b"]
