@@ -7,10 +7,12 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from types import SimpleNamespace
 
 from gpsaccel._taught import taught
 from gpsaccel.check import batch
 from gpsaccel.check.report import Report, brief, see
+from gpsaccel.classrun.writing import Terminal
 from gpsaccel.cli import main
 from gpsaccel.cli.checking import _check_report
 
@@ -63,18 +65,23 @@ def _args(tmp_path, n: int, verbose: bool = False) -> argparse.Namespace:
                               paths=[Path(f"s{i}.py") for i in range(n)])
 
 
-SETTINGS = {"seed": 1, "sandbox": "bwrap"}
+#: What _check_report reads of the class run's plan (gpsaccel.classrun.checking.CheckPlan).
+PLAN = SimpleNamespace(seed=1, seed_drawn=False, backend="bwrap", settings={})
+
+
+def _report_out(args, results) -> int:
+    return _check_report(args, Terminal(), results, PLAN, 1.0)
 
 
 def test_one_file_gets_the_first_look_and_is_told_of_v(tmp_path, capsys):
     result = batch.student_result(_report("s0.py"))
-    assert _check_report(_args(tmp_path, 1), [result], SETTINGS, 1.0) == 1
+    assert _report_out(_args(tmp_path, 1), [result]) == 1
     out = capsys.readouterr().out
     assert out.startswith(brief(result) + "\n")
     assert "gpsaccel check -v s0.py prints the whole report" in out
     assert "submission  passed" not in out and "ZeroDivisionError" not in out
     assert "1 submission, problem calibration" in out
-    assert _check_report(_args(tmp_path, 1, verbose=True), [result], SETTINGS, 1.0) == 1
+    assert _report_out(_args(tmp_path, 1, verbose=True), [result]) == 1
     out = capsys.readouterr().out
     assert "ZeroDivisionError" in out and "max |ΔP|/(σσ) = 23.1" in out
 
@@ -86,7 +93,7 @@ def test_a_class_gets_the_table_and_which_lesson_teaches_each_mistake(tmp_path, 
     busy = Report("s4.py")
     busy.add("machine-busy", text="Too busy.")
     results += [batch.student_result(ok), batch.student_result(busy)]
-    assert _check_report(_args(tmp_path, 5), results, SETTINGS, 1.0) == 1
+    assert _report_out(_args(tmp_path, 5), results) == 1
     out = capsys.readouterr().out
     assert "submission  passed" in out and "1 of 5 passed" in out
     assert "machine-busy`" not in out  # the machine's, no one's mistake
@@ -112,16 +119,15 @@ def test_the_command_on_a_wrong_filter(capsys):
     assert "0.0016" not in out and "max |ΔP|" not in out
 
 
-def test_the_graders_class_summary_names_where_each_mistake_is_taught(capsys):
+def test_the_graders_class_summary_names_where_each_mistake_is_taught():
     from gpsaccel.assignments.scoring import Grade
-    from gpsaccel.cli.homework import _mistake_lines
+    from gpsaccel.classrun.writing import grade_mistakes
 
     possible = {"q1": 3.0, "q3": 3.0}
     grades = [Grade(s, "", {}, possible, "graded", codes={"q1": codes, "q3": ["nees-sum"]})
               for s, codes in (("a", ["phi-sign", "phi-sign"]), ("b", ["phi-sign"]),
                                ("c\x1b[2J", []))]
-    _mistake_lines(grades)
-    assert capsys.readouterr().out.splitlines() == [
+    assert grade_mistakes(grades) == [
         "q1: 2 students: `phi-sign` → lesson 02, 'The derivation' (exercise 5)",
         "q3: 3 students: `nees-sum` → lesson 08, 'The consistency test: NEES and its bounds' "
         "(exercise 2)"]
