@@ -4,6 +4,7 @@ and a student's file that shadows numpy running only after the runner's guards."
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from gpsaccel import sandbox as sb
 from gpsaccel.check.problems import calibration as wf
@@ -48,3 +49,38 @@ def test_a_students_numpy_py_does_not_run_before_the_checkers_guards(tmp_path, b
     box = sb.run(sb.load_submission(folder, "kalman_filter"), wf.calls(np.zeros((2, 151, 2))),
                  LIMITS, backend)
     assert box.failure is None and not box.uses_checker and "SHADOW" not in box.output
+
+
+#: Ways a box stops in its third call (each process marked with the hostile tests' comm; every
+#: flood bounded by itself too): the results of the two calls before it must come back.
+STOPS = {
+    "timeout": "time.sleep(300)",
+    "process-limit": ("for _ in range(40):\n"
+                      "            if os.fork() == 0:\n"
+                      "                time.sleep(30)\n"
+                      "                os._exit(0)\n"
+                      "        time.sleep(30)"),
+    "memory-limit": ("hog = []\n"
+                     "        while len(hog) < 64:\n"
+                     "            hog.append(bytearray(32 << 20))"),
+    "crashed": "os.kill(os.getpid(), signal.SIGKILL)",
+}
+
+
+@pytest.mark.parametrize("stop", list(STOPS))
+def test_results_before_a_stop_come_back(tmp_path, backend, hostile, watch, stop):
+    """What a notebook's grade keeps (issue 42): the frames the box sent before a limit, its
+    deadline or a kill stopped it are its results, under every backend."""
+    (tmp_path / "student.py").write_text(
+        "import ctypes, os, signal, time\n"
+        f"ctypes.CDLL(None).prctl(15, {hostile.MARKER.encode()!r}, 0, 0, 0)  # PR_SET_NAME\n\n"
+        "def f(i):\n"
+        "    if i == 2:\n"
+        f"        {STOPS[stop]}\n"
+        "    return i + 1.0\n")
+    sub = sb.load_submission(tmp_path / "student.py", "f")
+    calls = [sb.Call("f", (np.array(float(i)),), (sb.Output("y", ()),)) for i in range(4)]
+    box = sb.run(sub, calls, sb.Limits(memory=512 << 20, processes=8, time=3), backend)
+    assert box.failure == stop, (box.failure, box.detail, box.output[-2000:])
+    assert [float(r["y"]) for r in box.results] == [1.0, 2.0]
+    assert hostile.wait_gone(watch.seen) == set()
