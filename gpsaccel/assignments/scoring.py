@@ -23,6 +23,7 @@ import numpy as np
 
 from gpsaccel import _untrusted
 from gpsaccel.assignments import notebook as nbm
+from gpsaccel.assignments import snapshots
 from gpsaccel.assignments.questions import (
     Answer,
     Draw,
@@ -192,15 +193,25 @@ def _prepare(nb: nbm.Notebook, variant: dict) -> nbm.Notebook:
     return nbm.Notebook(cells, nb.notes)
 
 
-def _calls(n_cells: int, reads: list[nbm.Read]):
+def _calls(p: snapshots.Plan | int, reads: list[nbm.Read]):
+    """The box's calls in the plan's order: ``_gpsaccel_cell(i)`` per cell and, in each group,
+    ``_gpsaccel_probe(k, *args)`` per read (a read made in several groups is the same call).
+    A number of cells instead of a plan: every cell, then every read once."""
     from gpsaccel.sandbox import Call, Output
+
+    if isinstance(p, int):
+        p = snapshots.plan(p, {"": (0, len(reads))} if reads else {}, {})
 
     head = (Output("status", (_CELL_STATUS,), "int64"),
             Output("message", (nbm.MESSAGE_BYTES,), "uint8"))
-    calls = [Call("_gpsaccel_cell", (np.array(i),), head) for i in range(n_cells)]
-    for k, r in enumerate(reads):
+    calls = []
+    for group, i in p.calls:
+        if group == -1:
+            calls.append(Call("_gpsaccel_cell", (np.array(i),), head))
+            continue
+        r = reads[i]
         outs = tuple(Output(f"out{j}", tuple(s)) for j, s in enumerate(r.shapes))
-        calls.append(Call("_gpsaccel_probe", (np.array(k), *(np.asarray(a, dtype=float)
+        calls.append(Call("_gpsaccel_probe", (np.array(i), *(np.asarray(a, dtype=float)
                                                              for a in r.args)), head + outs))
     return calls
 
@@ -209,9 +220,19 @@ def _calls(n_cells: int, reads: list[nbm.Read]):
 _STOPS = {code: o.stop for code, o in OUTCOMES.items() if o.stop}
 
 
-def _stop_message(failure: str, where: str, limits) -> str:
+def _stop_message(failure: str, where: str, limits, graded: Sequence[str], state: str) -> str:
+    """Where the notebook stopped and why, and which answers count (:mod:`.snapshots`)."""
     why = _STOPS.get(failure, failure).format(limit=limits.time, memory=limits.memory >> 30)
-    return f"The notebook stopped {where}: {why}. Nothing after that was graded."
+    kept = (f" Answers complete before that count: {', '.join(graded)}, graded as your notebook "
+            f"stood {state}." if graded else " No answer was complete before that.")
+    return f"The notebook stopped {where}: {why}.{kept}"
+
+
+def _after(cells: Sequence, i: int) -> str:
+    """The state after cell index ``i`` of the cells run, in the student's numbering."""
+    if i == len(cells) - 1:
+        return "after its last cell"
+    return f"after cell {cells[i].number}" if cells[i].number else "before its first cell"
 
 
 def _cell_notes(cells: Sequence, results: Sequence) -> list[str]:
@@ -232,31 +253,80 @@ def _cell_notes(cells: Sequence, results: Sequence) -> list[str]:
     return notes
 
 
-def _where_stopped(k: int, cells: Sequence, reads: Sequence[nbm.Read],
-                   spans: dict[str, tuple[int, int]]) -> str:
-    """Where a box that returned ``k`` results stopped: a cell, a read of a question, or after."""
-    if k < len(cells):
-        number = cells[k].number
+def _where_stopped(p: snapshots.Plan, stopped: int | None, cells: Sequence,
+                   reads: Sequence[nbm.Read]) -> str:
+    """Where the box stopped: in a cell, in a read of a question, or after its last call."""
+    if stopped is None:
+        return "after its last answer"
+    group, i = p.calls[stopped]
+    if group == -1:
+        number = cells[i].number
         return f"in cell {number}" if number else "before the first cell"
-    if k - len(cells) < len(reads):
-        failed = reads[k - len(cells)]
-        asked = next(q for q, (a, b) in spans.items() if a <= k - len(cells) < b)
-        return f"while {'reading' if failed.value else 'calling'} {failed.name} ({asked})"
-    return "after its last answer"
+    q = next(q for q, (a, b) in p.spans.items() if a <= i < b)
+    text = f"while {'reading' if reads[i].value else 'calling'} {reads[i].name} ({q})"
+    after = p.groups[group].after
+    return text if after == len(cells) - 1 else f"{text}, {_after(cells, after)}"
 
 
-def _question_report(q: Question, nb: nbm.Notebook, draw: Draw, answers: list[Answer],
-                     timeout: float) -> Report:
-    """One question's report: graded from a file, not run (the notebook stopped before it),
-    or graded from its answers."""
+def _not_graded(q: Question, code: str, text: str) -> Report:
+    rep = Report(q.name)
+    rep.add(code, text=text)
+    return rep
+
+
+def _question_report(q: Question, nb: nbm.Notebook, draw: Draw, answers: list[Answer] | None,
+                     timeout: float, stop: str | None) -> Report:
+    """One question's report: graded from a file, from its answers, or not graded: its cells
+    had not run (``answers`` None: ``not-run``), or its read did not come back (``stop``, the
+    box's failure, where the box stopped in it; else ``not-read``)."""
     if q.file is not None:
         return _grade_file(q, nb, draw, timeout)
+    if answers is None:
+        return _not_graded(q, "not-run", "Not graded: the notebook stopped before this "
+                           "question's cells had run (see above).")
+    if stop is not None:
+        return _not_graded(q, stop, "Not graded: the notebook stopped while reading this "
+                           "answer (see above).")
     if any(x.status == "not-run" for x in answers):
-        rep = Report(q.name)
-        rep.add("not-run", text="Not graded: the notebook stopped before this question "
-                "(see above).")
-        return rep
+        return _not_graded(q, "not-read", "Not graded: the notebook stopped while reading "
+                           "another answer, before this one (see above).")
     return _safe_grade(q, draw, answers)
+
+
+def _plan(run: nbm.Notebook, nb: nbm.Notebook, qs: Sequence[Question],
+          draws: dict[str, Draw]) -> tuple[list[nbm.Read], snapshots.Plan]:
+    """Every question's reads, in order, and when the box makes them (:mod:`.snapshots`)."""
+    reads: list[nbm.Read] = []
+    spans: dict[str, tuple[int, int]] = {}
+    for q in qs:
+        r = list(q.reads(draws[q.name]))
+        if r:
+            spans[q.name] = (len(reads), len(reads) + len(r))
+            reads += r
+    reading = {q: sorted({r.name for r in reads[a:b]}) for q, (a, b) in spans.items()}
+    return reads, snapshots.plan(len(run.cells), spans,
+                                 snapshots.answer_cells(run.cells, nb.cells, reading))
+
+
+def _returned(p: snapshots.Plan, box, cells: Sequence, reads: list[nbm.Read], limits
+              ) -> tuple[dict[str, list[Answer]], dict[str, str], list[str], list[str]]:
+    """What the box returned, read as the one group that grades (:func:`.snapshots.kept`): the
+    answers of each question in it, the failure of the question whose read stopped, the note
+    on where the notebook stopped and what counts, the notes on its cells."""
+    results = box.results + [None] * (len(p.calls) - len(box.results))
+    kept = snapshots.kept(p, len(box.results))
+    answers = {q: [answer_from(results[c], len(reads[k].shapes))
+                   for c, k in zip(at, range(*p.spans[q]), strict=True)]
+               for q, at in kept.questions.items()}
+    stops = {q: box.failure for q, at in kept.questions.items() if kept.stopped in at}
+    notes = []
+    if box.failure is not None:
+        graded = [q for q, a in answers.items() if q not in stops
+                  and all(x.status != "not-run" for x in a)]
+        state = "" if kept.group is None else _after(cells, p.groups[kept.group].after)
+        notes.append(_stop_message(box.failure, _where_stopped(p, kept.stopped, cells, reads),
+                                   limits, graded, state))
+    return answers, stops, notes, _cell_notes(cells, [results[i] for i in p.cell_calls])
 
 
 def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
@@ -277,40 +347,27 @@ def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
     variant = student_variant(name, student, secret)
     draws = {q.name: Draw(question_seed(seed, name, q.name, student), variant) for q in qs}
     run = _prepare(nb, variant)
-    reads: list[nbm.Read] = []
-    spans: dict[str, tuple[int, int]] = {}
-    for q in qs:
-        r = list(q.reads(draws[q.name]))
-        spans[q.name] = (len(reads), len(reads) + len(r))
-        reads += r
+    reads, p = _plan(run, nb, qs, draws)
     limits = sb.Limits(memory=BOX_MEMORY, time=float(timeout), processes=BOX_PROCESSES)
-    notes: list[str] = []
     with _scratch("nb") as tmp:
         folder = Path(tmp) / "submission"
         folder.mkdir()
         (folder / "notebook.py").write_text(nbm.module_source(run, reads), encoding="utf-8")
         sub = sb.load_submission(folder / "notebook.py", "_gpsaccel_cell")
-        calls = _calls(len(run.cells), reads)
+        calls = _calls(p, reads)
         box = sb.run(sub, calls, limits, backend=sandbox, allow_gpsaccel=True, hide=nbm.BOX_HIDES)
     # ---- the box is empty from here on: nothing of the student's runs while answers exist
-    results = box.results + [None] * (len(calls) - len(box.results))
-    notes += _cell_notes(run.cells, results[:len(run.cells)])
-    answers = [answer_from(res, len(r.shapes)) for r, res in
-               zip(reads, results[len(run.cells):], strict=True)]
-    status = "graded"
-    if box.failure is not None:
-        status = box.failure
-        where = _where_stopped(len(box.results), run.cells, reads, spans)
-        notes.append(_stop_message(box.failure, where, limits))
-    reports = {q.name: _question_report(q, nb, draws[q.name], answers[slice(*spans[q.name])],
-                                        timeout) for q in qs}
+    answers, stops, notes, cell_notes = _returned(p, box, run.cells, reads, limits)
+    status = box.failure or "graded"
+    reports = {q.name: _question_report(q, nb, draws[q.name], answers.get(q.name), timeout,
+                                        stops.get(q.name)) for q in qs}
     scores = {q.name: q.score(reports[q.name]) for q in qs}
     codes = {k: r.codes for k, r in reports.items()}
     if ours(status) or any(ours(c) for cs in codes.values() for c in cs):
         status = "grader-error"  # the machine's or the checker's, not a grade: graded again
     g = Grade(_untrusted.shown(student), file, scores, possible, status, "", codes,
               time.perf_counter() - t0, sid or _untrusted.student_id(student))
-    g.feedback = _feedback_text(g, notes, reports, variant)
+    g.feedback = _feedback_text(g, cell_notes + notes, reports, variant)
     return g
 
 
