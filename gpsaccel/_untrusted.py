@@ -22,7 +22,8 @@ is used wherever the input enters or leaves:
   differ only by such a character never look alike (``Bob`` and ``Bob\\u200b`` are two names, not
   one student's cell in a gradebook).
 * :func:`clean` removes the same characters from running text (feedback, a student's exception
-  message), keeping its newlines when asked.
+  message), keeping its newlines when asked; :func:`bounded` keeps such a text under a size,
+  what matters most first, and says what it left out.
 * :func:`cell` keeps a spreadsheet from evaluating a CSV text cell (``=``, ``+``, ``-``, ``@``,
   tab, CR lead a formula): every CSV the package writes guards its text cells with it.
 * :func:`secret_seed` draws the seed of a class's data, the other side of the same line: what
@@ -40,7 +41,7 @@ import os
 import secrets
 import unicodedata
 from collections import deque
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import Any
 
 #: Entries (files and folders, hidden ones too) a student's folder may hold, and its depth.
@@ -206,3 +207,47 @@ def json_safe(obj: Any) -> Any:
     if isinstance(obj, (list, tuple)):
         return [json_safe(v) for v in obj]
     return obj
+
+
+def bounded(lines: Sequence[tuple[int, str]], limit: int, left_out: Mapping[int, str],
+            line_chars: int) -> str:
+    """``lines`` (priority, text) as one text of at most ``limit`` bytes of UTF-8, in their
+    order: each line cut to ``line_chars`` characters; every line of priority 0, then those of
+    priority 1, 2, ... while they fit (:func:`_fit`); each run of lines left out replaced by one
+    line, ``left_out[priority]`` formatted with ``n`` (how many) and ``kb`` (the limit in KiB).
+    For text made of what a student controls (a grade's feedback: their messages, one per cell
+    of a notebook of any length)."""
+    cut = [(k, "\n".join(x if len(x) <= line_chars else x[:line_chars - 1] + "…"
+                          for x in t.split("\n"))) for k, t in lines]
+    keep = _fit(cut, limit, max(map(len, left_out.values()), default=0) + 40)
+    out: list[str] = []
+    dropped = 0
+    for i, (k, t) in enumerate(cut):
+        if keep[i]:
+            out.append(t)
+            continue
+        dropped += 1
+        if i + 1 == len(cut) or keep[i + 1] or cut[i + 1][0] != k:
+            out.append(left_out[k].format(n=dropped, kb=limit >> 10))
+            dropped = 0
+    text = "\n".join(out)
+    if len(text.encode("utf-8")) > limit:  # the lines always kept alone are over the limit
+        text = text.encode("utf-8")[:limit - 16].decode("utf-8", "ignore") + "\n... (cut)"
+    return text
+
+
+def _fit(cut: Sequence[tuple[int, str]], limit: int, per_run: int) -> list[bool]:
+    """Which lines :func:`bounded` keeps: every line of priority 0, then by priority, in order,
+    until the first that does not fit in ``limit`` bytes less ``per_run`` for each run of lines
+    that may be left out (nothing of a lower priority once a line is left out)."""
+    cost = [len(t.encode("utf-8")) + 1 for _, t in cut]
+    runs = sum(1 for i, (k, _) in enumerate(cut) if k and (i == 0 or cut[i - 1][0] != k))
+    budget = limit - per_run * runs - sum(c for (k, _), c in zip(cut, cost, strict=True) if not k)
+    keep = [not k for k, _ in cut]
+    for level in sorted({k for k, _ in cut} - {0}):
+        for i, (k, _) in enumerate(cut):
+            if k == level and cost[i] > budget:
+                return keep  # in order: nothing after the first line that does not fit
+            if k == level:
+                keep[i], budget = True, budget - cost[i]
+    return keep

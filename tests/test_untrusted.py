@@ -254,3 +254,23 @@ def test_every_writer_of_a_name_uses_the_one_rule(tmp_path):
     write_report([Pair("q1", "@a", "+b", 1.0, 1.0)], tmp_path, "HW")
     with open(tmp_path / "similarity.csv", newline="", encoding="utf-8") as f:
         assert list(csv.reader(f))[1][:3] == ["q1", "'@a", "'+b"]
+
+
+LEFT = {1: "- {n} finding(s) left out ({kb} KB)", 2: "{n} note(s) left out ({kb} KB)"}
+
+
+def test_bounded_keeps_what_matters_first_and_counts_what_it_left_out():
+    lines = [(0, "score"), (1, "a" * 30), (1, "b" * 30), (0, "q2"), (1, "c" * 30), (2, "n1"),
+             (2, "n2")]
+    assert u.bounded(lines, 1 << 10, LEFT, 100) == "\n".join(t for _, t in lines)
+    # 1 KiB less a line's worth per run that may be left out: the findings in order while
+    # they fit, then no note (one finding left out)
+    text = u.bounded([(0, "score"), *[(1, f"{i:03d}" + "x" * 96) for i in range(9)],
+                               (0, "q2"), (2, "note")], 1 << 10, LEFT, 100)
+    assert text.splitlines() == ["score", *[f"{i:03d}" + "x" * 96 for i in range(8)],
+                                 "- 1 finding(s) left out (1 KB)", "q2", "1 note(s) left out (1 KB)"]
+    assert len(text.encode()) <= 1 << 10
+    # a line longer than its limit is cut; lines that are always kept are cut at the limit
+    assert u.bounded([(0, "é" * 50)], 1 << 10, LEFT, 10) == "é" * 9 + "…"
+    text = u.bounded([(0, "é" * 600), (0, "y")], 1 << 10, LEFT, 1000)
+    assert len(text.encode()) <= 1 << 10 and text.endswith("\n... (cut)")

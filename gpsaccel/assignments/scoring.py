@@ -178,6 +178,20 @@ def is_otter_cell(source: str) -> bool:
     return bool(tree.body) and all(_otter_call(node) for node in tree.body)
 
 
+def checked_question(source: str) -> str | None:
+    """The question of an otter ``grader.check("qN")`` cell (None for any other cell): where
+    the student's notebook says that answer is complete (:mod:`.snapshots`)."""
+    if not is_otter_cell(source):  # short and made only of otter's calls: parsed here
+        return None
+    for node in ast.parse(source).body:
+        call = node.value if isinstance(node, ast.Expr) else None
+        if isinstance(call, ast.Call) and isinstance(call.func, ast.Attribute) \
+                and call.func.attr == "check" and call.args \
+                and isinstance(call.args[0], ast.Constant) and isinstance(call.args[0].value, str):
+            return call.args[0].value
+    return None
+
+
 def _prepare(nb: nbm.Notebook, variant: dict) -> nbm.Notebook:
     """The cells to run: the variant cell replaced by the student's, data-only cells and otter's
     own cells (:func:`is_otter_cell`) left out."""
@@ -304,8 +318,10 @@ def _plan(run: nbm.Notebook, nb: nbm.Notebook, qs: Sequence[Question],
             spans[q.name] = (len(reads), len(reads) + len(r))
             reads += r
     reading = {q: sorted({r.name for r in reads[a:b]}) for q, (a, b) in spans.items()}
+    checks = {c.number: asked for c in nb.cells
+              if (asked := checked_question(c.source)) is not None}
     return reads, snapshots.plan(len(run.cells), spans,
-                                 snapshots.answer_cells(run.cells, nb.cells, reading))
+                                 snapshots.answer_cells(run.cells, checks, reading))
 
 
 def _returned(p: snapshots.Plan, box, cells: Sequence, reads: list[nbm.Read], limits
@@ -367,7 +383,7 @@ def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
         status = "grader-error"  # the machine's or the checker's, not a grade: graded again
     g = Grade(_untrusted.shown(student), file, scores, possible, status, "", codes,
               time.perf_counter() - t0, sid or _untrusted.student_id(student))
-    g.feedback = _feedback_text(g, cell_notes + notes, reports, variant)
+    g.feedback = _feedback_text(g, notes, reports, variant, cell_notes)
     return g
 
 
@@ -417,22 +433,41 @@ def _grade_file(q: Question, nb: nbm.Notebook, draw: Draw, timeout: float) -> Re
 
 
 # --------------------------------------------------------------------------------- feedback
+#: The most a student's feedback holds (bytes of UTF-8), in its file and in Gradescope's output:
+#: the score, the notes on the run and every question's findings come first; the notes on the
+#: student's own cells (which raised, which lines were not run) fill what is left, and what is
+#: left out is counted in the text.  An honest notebook's feedback is under 2 KB.
+MAX_FEEDBACK = 16 << 10
+
+#: The longest line of feedback (characters): a finding or a note quoting the student's text.
+MAX_LINE = 1000
+
+
+#: What replaces a run of findings (1) or of notes on cells (2) left out of the feedback.
+_LEFT_OUT = {1: "    - ... {n} more finding(s) of this question left out: the feedback holds at "
+                "most {kb} KB",
+             2: "... {n} more note(s) on your cells left out: the feedback holds at most {kb} KB"}
+
+
 def _feedback_text(g: Grade, notes: list[str], reports: dict[str, Report],
-                   variant: dict) -> str:
-    """The student's feedback: the notes about their notebook (its own cells' errors, where it
-    stopped) and, per question, the student's projection of each finding
-    (:meth:`gpsaccel.check.report.Finding.for_student`: no expected value reaches this text),
-    each error and warning with the lesson section that teaches its fix under it."""
-    lines = [f"{g.student}: {g.total:g} / {g.max_total:g} points ({g.status})"]
+                   variant: dict, cells: Sequence[str] = ()) -> str:
+    """The student's feedback: the notes about their notebook (where it stopped), per question
+    the student's projection of each finding (:meth:`gpsaccel.check.report.Finding.for_student`:
+    no expected value reaches this text), each error and warning with the lesson section that
+    teaches its fix under it, then the notes on its cells (``cells``); at most
+    :data:`MAX_FEEDBACK` bytes, the notes on cells cut first (:func:`gpsaccel._untrusted
+    .bounded`: a finding and its section are kept or left out together)."""
+    lines: list[tuple[int, str]] = [
+        (0, f"{g.student}: {g.total:g} / {g.max_total:g} points ({g.status})")]
     if variant:
-        lines.append("Your variant: " + ", ".join(f"{k} = {v}" for k, v in variant.items()))
-    lines.append("")
+        lines.append((0, "Your variant: " + ", ".join(f"{k} = {v}" for k, v in variant.items())))
+    lines.append((0, ""))
     for n in dict.fromkeys(notes):
-        lines.append(n)
+        lines.append((0, n))
     if notes:
-        lines.append("")
+        lines.append((0, ""))
     for q, points in g.possible.items():
-        lines.append(f"{q}: {g.scores.get(q, 0):g} / {points:g}")
+        lines.append((0, f"{q}: {g.scores.get(q, 0):g} / {points:g}"))
         rep = reports.get(q)
         seen = set()
         for f in rep.for_student().findings if rep else []:
@@ -442,8 +477,7 @@ def _feedback_text(g: Grade, notes: list[str], reports: dict[str, Report],
             if text in seen:
                 continue  # each failure once
             seen.add(text)
-            lines.append("    - " + text)
-            if f.see():
-                lines.append("      " + f.see())
-        lines.append("")
-    return "\n".join(lines)
+            lines.append((1, "    - " + text + ("\n      " + f.see() if f.see() else "")))
+        lines.append((0, ""))
+    lines += [(2, n) for n in dict.fromkeys(cells)]
+    return _untrusted.bounded(lines, MAX_FEEDBACK, _LEFT_OUT, MAX_LINE)

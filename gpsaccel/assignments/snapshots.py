@@ -11,7 +11,8 @@ reads also run earlier, as *snapshots* (:func:`plan`):
   named by a string; a global read by a function or class defined under such a name, bound; any
   name, for a cell that rebinds names the parser cannot see: ``exec``, ``globals()``,
   ``setattr``, a star import), or, if later, the last cell before its otter
-  ``grader.check("qN")`` cell (:func:`answer_cells`).  A cell that only uses an answer (a slow
+  ``grader.check("qN")`` cell (:func:`answer_cells`; :func:`gpsaccel.assignments.scoring
+  .checked_question`).  A cell that only uses an answer (a slow
   exploratory loop calling the student's filter) is not its answer cell;
 * after each answer cell, and after the last cell, one *group* of reads runs: every question
   whose answer cell has run (a question with none is read in every group), in the questions'
@@ -197,28 +198,13 @@ def last_binding_cells(texts: Sequence[str], questions: Mapping[str, Sequence[st
     return out
 
 
-def _checked_question(source: str) -> str | None:
-    """The question of an otter ``grader.check("qN")`` cell (None for any other cell)."""
-    from gpsaccel.assignments.scoring import is_otter_cell
-
-    if not is_otter_cell(source):  # short and made only of otter's calls: parsed here
-        return None
-    for node in ast.parse(source).body:
-        call = node.value if isinstance(node, ast.Expr) else None
-        if isinstance(call, ast.Call) and isinstance(call.func, ast.Attribute) \
-                and call.func.attr == "check" and call.args \
-                and isinstance(call.args[0], ast.Constant) and isinstance(call.args[0].value, str):
-            return call.args[0].value
-    return None
-
-
-def answer_cells(run: Sequence, numbered: Sequence, questions: Mapping[str, Sequence[str]]
-                 ) -> dict[str, int | None]:
+def answer_cells(run: Sequence, checks: Mapping[int, str],
+                 questions: Mapping[str, Sequence[str]]) -> dict[str, int | None]:
     """Each question's answer cell (module docstring): an index into ``run`` (the cells the box
-    runs, :class:`gpsaccel.assignments.notebook.Cell`), or None.  ``numbered``: every code cell
-    of the notebook (otter's check cells among them).  The cells' text is parsed in a child
-    under the notebook parser's limits; if that fails, no question has an answer cell (each is
-    then read in every group)."""
+    runs, :class:`gpsaccel.assignments.notebook.Cell`), or None.  ``checks``: the number of each
+    otter ``grader.check`` cell of the notebook -> the question it checks.  The cells' text is
+    parsed in a child under the notebook parser's limits; if that fails, no answer cell is found
+    from it."""
     from gpsaccel import sandbox as sb
     from gpsaccel.assignments import notebook as nbm
 
@@ -229,10 +215,9 @@ def answer_cells(run: Sequence, numbered: Sequence, questions: Mapping[str, Sequ
     if out.ok and isinstance(out.value, dict):
         found.update({q: i for q, i in out.value.items() if q in found and isinstance(i, int)
                       and 0 <= i < len(run)})
-    for cell in numbered:
-        q = _checked_question(cell.source)
-        before = [i for i, c in enumerate(run) if c.number < cell.number]
-        if q is not None and q in found and before:
+    for number, q in checks.items():
+        before = [i for i, c in enumerate(run) if c.number < number]
+        if q in found and before:
             found[q] = max(before[-1], -1 if (at := found[q]) is None else at)
     return found
 

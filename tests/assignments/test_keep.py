@@ -11,12 +11,14 @@ command line; after the run a scan of ``/proc`` must find none (and kills by PID
 
 from __future__ import annotations
 
+import json
 import uuid
 from pathlib import Path
 
 import nbformat
 import pytest
 
+from gpsaccel.assignments import gradescope, scoring
 from gpsaccel.assignments.grading import grade
 
 from .conftest import CHI2_SPECIAL, kill_pids, read_grades, write_variant
@@ -138,3 +140,52 @@ def test_a_stall_never_grades_better_than_run_all(kept, name):
     assert run_all.status == "graded" and stalled.status == "timeout", stalled.feedback
     assert stalled.scores == run_all.scores, (stalled.feedback, run_all.feedback)
     assert run_all.total < 6.0  # the spoiled answer costs points under Run All
+
+
+# ------------------------------------------------------------------ the feedback's bound
+#: issue 42's notebook: 3000 cells, each raising with 300 characters of text (1.4 MB)
+RAISING = "raise ValueError('{}')"
+
+
+def test_feedback_of_3000_raising_cells_stays_under_its_bound(tmp_path):
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [nbformat.v4.new_code_cell(RAISING.format(f"{i:05d}" + "x" * 295))
+                for i in range(3000)]
+    path = tmp_path / "calibration.ipynb"
+    nbformat.write(nb, str(path))
+    assert path.stat().st_size > 1_300_000
+    g = scoring.grade_notebook(path, "calibration", "flood", seed=3, timeout=120)
+    text = g.feedback
+    assert len(text.encode("utf-8")) <= scoring.MAX_FEEDBACK < 20_000
+    lines = text.splitlines()
+    # the score, then every question, then as many notes on cells as fit and their count
+    assert lines[0] == "flood: 0 / 10 points (graded)"
+    assert [ln for ln in lines if ln[:2] == "q1"] == ["q1: 0 / 3"]
+    assert text.index("q3: 0 / 3") < text.index("Cell 1 raised ValueError: 00000xxx")
+    shown = sum(1 for ln in lines if ln.startswith("Cell "))
+    assert 10 < shown < 3000
+    assert lines[-1] == (f"... {3000 - shown} more note(s) on your cells left out: the feedback "
+                         f"holds at most {scoring.MAX_FEEDBACK >> 10} KB")
+    out = gradescope.results(g, g.possible)
+    assert out["output"] == text and len(json.dumps(out)) < scoring.MAX_FEEDBACK + 2000
+
+
+def test_findings_come_before_notes_and_each_run_left_out_is_counted():
+    from gpsaccel.check.report import Report
+
+    g = scoring.Grade("s", "", {"q1": 0.0, "q2": 1.0}, {"q1": 1.0, "q2": 1.0}, "graded")
+    rep = Report("q1")
+    for i in range(400):
+        rep.add("exception", text=f"finding {i:03d}: " + "y" * 80)
+    text = scoring._feedback_text(g, ["The notebook stopped."], {"q1": rep}, {"a": 1},
+                                  [f"Cell {i} raised E" for i in range(50)])
+    assert len(text.encode("utf-8")) <= scoring.MAX_FEEDBACK
+    lines = text.splitlines()
+    assert lines[:4] == ["s: 1 / 2 points (graded)", "Your variant: a = 1", "",
+                         "The notebook stopped."]
+    shown = sum(1 for ln in lines if ln.startswith("    - exception: finding"))
+    assert f"    - ... {400 - shown} more finding(s) of this question left out: the feedback " \
+           f"holds at most 16 KB" in lines
+    # q2's line is kept though q1's findings filled the feedback; no note on a cell fits
+    assert "q2: 1 / 1" in lines and lines[-1].startswith("... 50 more note(s) on your cells")
+    assert scoring._feedback_text(g, [], {}, {}, ["Cell 3 raised E"]).endswith("Cell 3 raised E")

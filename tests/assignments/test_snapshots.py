@@ -48,22 +48,26 @@ def test_the_globals_a_function_reads_are_part_of_its_answer():
 
 
 def test_an_otter_check_cell_moves_the_answer_cell_after_what_precedes_it():
+    from gpsaccel.assignments.scoring import checked_question
+
     run = [nbm.Cell(0, "VARIANT = {}"), nbm.Cell(3, "def make():\n    global Phi\n    Phi = 1"),
            nbm.Cell(5, "make()"), nbm.Cell(9, "x = 1")]
     numbered = [*run[1:3], nbm.Cell(6, 'grader.check("q1")'), nbm.Cell(7, 'grader.check("q9")'),
                 nbm.Cell(8, "grader.check(q)"), run[3]]
+    checks = {c.number: q for c in numbered if (q := checked_question(c.source)) is not None}
+    assert checks == {6: "q1", 7: "q9"}
     # the def cell binds Phi (global); the call after it does so only when run: the check cell
     # after it says the answer is complete there
-    assert sn.answer_cells(run, numbered, {"q1": Q1, "q3": Q3}) == {"q1": 2, "q3": None}
-    assert sn.answer_cells(run, run, {"q1": Q1}) == {"q1": 1}
+    assert sn.answer_cells(run, checks, {"q1": Q1, "q3": Q3}) == {"q1": 2, "q3": None}
+    assert sn.answer_cells(run, {}, {"q1": Q1}) == {"q1": 1}
 
 
 def test_answer_cells_of_text_the_parser_cannot_take_are_none(monkeypatch):
     run = [nbm.Cell(1, "Phi = 1"), nbm.Cell(2, "x = " + "(" * 200_000 + ")" * 200_000)]
-    assert sn.answer_cells(run, run, {"q1": Q1}) == {"q1": 0}  # the deep cell binds nothing
+    assert sn.answer_cells(run, {}, {"q1": Q1}) == {"q1": 0}  # the deep cell binds nothing
     monkeypatch.setattr(nbm, "LOAD_CPU", 0.01)
     big = [nbm.Cell(i, f"Phi{i} = {i}\n" * 2000) for i in range(1, 200)]
-    assert sn.answer_cells(big, big, {"q1": ["Phi1"]}) == {"q1": None}  # over the CPU limit
+    assert sn.answer_cells(big, {}, {"q1": ["Phi1"]}) == {"q1": None}  # over the CPU limit
 
 
 SPANS = {"q1": (0, 2), "q3": (2, 3)}
