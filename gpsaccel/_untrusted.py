@@ -211,10 +211,11 @@ def json_safe(obj: Any) -> Any:
 
 def bounded(lines: Sequence[tuple[int, str]], limit: int, left_out: Mapping[int, str],
             line_chars: int) -> str:
-    """``lines`` (priority, text) as one text of at most ``limit`` bytes of UTF-8, in their
-    order: each line cut to ``line_chars`` characters; every line of priority 0, then those of
-    priority 1, 2, ... while they fit (:func:`_fit`); each run of lines left out replaced by one
-    line, ``left_out[priority]`` formatted with ``n`` (how many) and ``kb`` (the limit in KiB).
+    """``lines`` (priority, text) as one text of at most ``limit`` bytes of UTF-8
+    (:func:`_size`), in their order: each line cut to ``line_chars`` characters; every line of
+    priority 0, then those of priority 1, 2, ... while they fit (:func:`_fit`); each run of lines
+    left out replaced by one line, ``left_out[priority]`` formatted with ``n`` (how many) and
+    ``kb`` (the limit in KiB).
     For text made of what a student controls (a grade's feedback: their messages, one per cell
     of a notebook of any length)."""
     cut = [(k, "\n".join(x if len(x) <= line_chars else x[:line_chars - 1] + "…"
@@ -231,16 +232,25 @@ def bounded(lines: Sequence[tuple[int, str]], limit: int, left_out: Mapping[int,
             out.append(left_out[k].format(n=dropped, kb=limit >> 10))
             dropped = 0
     text = "\n".join(out)
-    if len(text.encode("utf-8")) > limit:  # the lines always kept alone are over the limit
-        text = text.encode("utf-8")[:limit - 16].decode("utf-8", "ignore") + "\n... (cut)"
+    if _size(text) > limit:  # the lines always kept are over the limit by themselves
+        data = text.encode("utf-8", "surrogatepass")[:limit - 16]
+        while data and data[-1] & 0xC0 == 0x80:  # not in the middle of a character
+            data = data[:-1]
+        text = data[:-1 if data and data[-1] >= 0xC0 else None].decode(
+            "utf-8", "surrogatepass") + "\n... (cut)"
     return text
+
+
+def _size(text: str) -> int:
+    """Bytes of ``text`` in UTF-8, a lone surrogate (a name's undecodable byte) as 3."""
+    return len(text.encode("utf-8", "surrogatepass"))
 
 
 def _fit(cut: Sequence[tuple[int, str]], limit: int, per_run: int) -> list[bool]:
     """Which lines :func:`bounded` keeps: every line of priority 0, then by priority, in order,
     until the first that does not fit in ``limit`` bytes less ``per_run`` for each run of lines
     that may be left out (nothing of a lower priority once a line is left out)."""
-    cost = [len(t.encode("utf-8")) + 1 for _, t in cut]
+    cost = [_size(t) + 1 for _, t in cut]
     runs = sum(1 for i, (k, _) in enumerate(cut) if k and (i == 0 or cut[i - 1][0] != k))
     budget = limit - per_run * runs - sum(c for (k, _), c in zip(cut, cost, strict=True) if not k)
     keep = [not k for k, _ in cut]

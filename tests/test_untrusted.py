@@ -274,3 +274,8 @@ def test_bounded_keeps_what_matters_first_and_counts_what_it_left_out():
     assert u.bounded([(0, "é" * 50)], 1 << 10, LEFT, 10) == "é" * 9 + "…"
     text = u.bounded([(0, "é" * 600), (0, "y")], 1 << 10, LEFT, 1000)
     assert len(text.encode()) <= 1 << 10 and text.endswith("\n... (cut)")
+    # a name's undecodable bytes (lone surrogates, cleaned when written) count, never raise
+    bad = os.fsdecode(b"\xff\xfe.ipynb")
+    assert u.bounded([(0, bad), (2, "n")], 1 << 10, LEFT, 100) == bad + "\nn"
+    text = u.bounded([(0, bad * 400)], 1 << 10, LEFT, 10_000)
+    assert text.endswith("\n... (cut)") and len(text.encode("utf-8", "surrogatepass")) <= 1 << 10

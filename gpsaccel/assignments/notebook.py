@@ -184,7 +184,8 @@ def module_source(nb: Notebook, reads: list[Read]) -> str:
     """The text of ``notebook.py`` for the sandbox: data and calls of
     :mod:`gpsaccel.boxside.notebook` only (the modules the box may not import, the cells as
     string literals, each read as its name, kind and shapes); the sandbox's runner then calls
-    ``_gpsaccel_cell(i)`` per cell and ``_gpsaccel_probe(k, *args)`` per read."""
+    ``_gpsaccel_cell(i)`` per cell and ``_gpsaccel_probe(k, *args)`` for read ``k``, where the
+    grader placed it among the cells (:mod:`gpsaccel.assignments.snapshots`)."""
     cells = [(c.number, c.python if c.python is not None else _python(c.source))
              for c in nb.cells]
     for r in reads:

@@ -2,11 +2,13 @@ r"""Grading one homework notebook: its cells run in the sandbox, every score com
 
 :func:`grade_notebook` turns the student's code cells into one module
 (:mod:`gpsaccel.assignments.notebook`), runs it in a box (:func:`gpsaccel.sandbox.run`) that calls
-the cells in order and then the *reads* every question declares, and only once the box is empty
-draws the reference answers and scores each question; a question graded from a file the notebook
-writes is checked by :func:`gpsaccel.check.submission` in a box of its own.  The feedback a
-student gets (:func:`_feedback_text`) is the student's projection of each finding.  A class's run
-grades each notebook through :mod:`gpsaccel.assignments.grading`.
+the cells in order and the *reads* every question declares, after the last cell and after each
+question's answer cell (:mod:`gpsaccel.assignments.snapshots`: a notebook that stops is graded
+from the last group of reads it reached), and only once the box is empty draws the reference
+answers and scores each question; a question graded from a file the notebook writes is checked
+by :func:`gpsaccel.check.submission` in a box of its own.  The feedback a student gets
+(:func:`_feedback_text`, at most :data:`MAX_FEEDBACK` bytes) is the student's projection of each
+finding.  A class's run grades each notebook through :mod:`gpsaccel.assignments.grading`.
 """
 
 from __future__ import annotations

@@ -34,6 +34,12 @@ read again after the overwriting cell (it binds the name: a group follows it) an
 as Run All grades it; one question's earlier state is never combined with another's later one.
 The student places answer cells only by writing their notebook; the grader places the groups
 and chooses the one that grades.
+
+What it costs.  Each question is read once more per group from its answer cell's on (the box's
+time, counted in its limit: ``benchmarks/snapshots.py``), and an early read calls the student's
+functions before the later cells run, in the notebook's process: a function that changes the
+notebook's state when called (a global, numpy's global random generator) can change what a later
+cell computes.
 """
 
 from __future__ import annotations

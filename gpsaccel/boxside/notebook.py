@@ -11,9 +11,11 @@ sandbox's runner imports, data and calls of this module only::
 
 Nothing runs at import.  The runner calls ``_gpsaccel_cell(i)`` once per cell, in order, so each
 cell's outcome comes back as its own frame (a cell that raises is recorded and the next one runs,
-as ``otter run`` does); then ``_gpsaccel_probe(k, *args)`` once per read: it calls the student's
-function (or reads the variable) and returns ``(status, message, *outputs)`` as arrays of the
-shapes the grader declared.  Neither ever raises (``BaseException`` included), so one broken answer
+as ``otter run`` does); after the last cell, and after each cell that completes an answer, it
+calls ``_gpsaccel_probe(k, *args)`` for the reads the grader placed there
+(:mod:`gpsaccel.assignments.snapshots`; the same read may be made several times): it calls the
+student's function (or reads the variable) and returns ``(status, message, *outputs)`` as arrays
+of the shapes the grader declared.  Neither ever raises (``BaseException`` included), so one broken answer
 does not stop the runner's later calls.  The cells run in the notebook module's own namespace (its
 ``globals()``), as they did in the student's kernel.
 """
