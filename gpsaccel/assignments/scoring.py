@@ -236,8 +236,10 @@ def _calls(p: snapshots.Plan | int, reads: list[nbm.Read]):
 _STOPS = {code: o.stop for code, o in OUTCOMES.items() if o.stop}
 
 
-def _stop_message(failure: str, where: str, limits, graded: Sequence[str], state: str) -> str:
-    """Where the notebook stopped and why, and which answers count (:mod:`.snapshots`)."""
+def _stop_message(failure: str, where: str, limits, graded: Sequence[str] = (),
+                  state: str = "") -> str:
+    """Where the notebook stopped and why, and which answers count: ``graded``, as the notebook
+    stood ``state`` (:mod:`.snapshots`)."""
     why = _STOPS.get(failure, failure).format(limit=limits.time, memory=limits.memory >> 30)
     kept = (f" Answers complete before that count: {', '.join(graded)}, graded as your notebook "
             f"stood {state}." if graded else " No answer was complete before that.")
