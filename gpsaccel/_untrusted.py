@@ -212,10 +212,11 @@ def json_safe(obj: Any) -> Any:
 def bounded(lines: Sequence[tuple[int, str]], limit: int, left_out: Mapping[int, str],
             line_chars: int) -> str:
     """``lines`` (priority, text) as one text of at most ``limit`` bytes of UTF-8
-    (:func:`_size`), in their order: each line cut to ``line_chars`` characters; every line of
-    priority 0, then those of priority 1, 2, ... while they fit (:func:`_fit`); each run of lines
-    left out replaced by one line, ``left_out[priority]`` formatted with ``n`` (how many) and
-    ``kb`` (the limit in KiB).
+    (:func:`_size`), in their order: each line cut to ``line_chars`` characters (a text of
+    several lines is kept or left out whole, each of its lines cut); every line of priority 0,
+    then those of priority 1, 2, ... while they fit (:func:`_fit`); each run of lines left out
+    replaced by one line, ``left_out[priority]`` formatted with ``n`` (how many) and ``kb`` (the
+    limit in KiB).
     For text made of what a student controls (a grade's feedback: their messages, one per cell
     of a notebook of any length)."""
     cut = [(k, "\n".join(x if len(x) <= line_chars else x[:line_chars - 1] + "…"

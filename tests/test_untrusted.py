@@ -270,6 +270,11 @@ def test_bounded_keeps_what_matters_first_and_counts_what_it_left_out():
     assert text.splitlines() == ["score", *[f"{i:03d}" + "x" * 96 for i in range(8)],
                                  "- 1 finding(s) left out (1 KB)", "q2", "1 note(s) left out (1 KB)"]
     assert len(text.encode()) <= 1 << 10
+    # a text of two lines (a finding and the lesson section under it) is kept or left out whole
+    text = u.bounded([(0, "s"), (1, "a" * 500 + "\n" + "b" * 500), (1, "c\nd")], 1 << 10, LEFT, 100)
+    assert text.splitlines() == ["s", "a" * 99 + "…", "b" * 99 + "…", "c", "d"]
+    text = u.bounded([(0, "s"), (1, "a" * 500 + "\n" + "b" * 500), (1, "c\nd")], 256, LEFT, 1000)
+    assert text.splitlines() == ["s", "- 2 finding(s) left out (0 KB)"]
     # a line longer than its limit is cut; lines that are always kept are cut at the limit
     assert u.bounded([(0, "é" * 50)], 1 << 10, LEFT, 10) == "é" * 9 + "…"
     text = u.bounded([(0, "é" * 600), (0, "y")], 1 << 10, LEFT, 1000)
