@@ -1,16 +1,19 @@
 """The cost of reading a notebook's answers early (issue 42 item 1,
-:mod:`gpsaccel.assignments.snapshots`): one filled notebook of each homework graded side by side
-with the reads after the last cell only (as before) and with a group of reads after each answer
-cell too (now), alternated, the median of ``--repeats`` R.
+:mod:`gpsaccel.assignments.snapshots`): one filled notebook of each homework graded three ways,
+alternated, the median of ``--repeats`` R:
+
+* "before": the reads after the last cell only, one call of the box each (as the grader made
+  them before issue 42: every question's answer cell unknown, ``scoring.BATCH`` = 1);
+* "early": the reads after each answer cell too, one call each;
+* "now": the reads after each answer cell too, the reads of one function in a group stacked in
+  one call (``scoring.BATCH``).
 
 "box CPU" is the notebook's box (every cell, every read): the children's CPU around
 ``sandbox.run``; "grade CPU" is the whole :func:`~gpsaccel.assignments.scoring.grade_notebook`
 (this process and its children: the parse, the answer cells' parse, the box, the file question's
-box, the reference answers).  "before" is the same code with every question's answer cell
-unknown, which leaves one group: the reads after the last cell, as the grader made them before.
-The filled notebooks are the masters' solutions as a student hands them in
-(tests/assignments/conftest.py ``solved``), each with one exploratory last cell that binds
-nothing a question reads (``x = 1``), so that the early groups are not the final one.
+box, the reference answers).  The filled notebooks are the masters' solutions as a student hands
+them in (tests/assignments/conftest.py ``solved``), each with one exploratory last cell that
+binds nothing a question reads (``x = 1``), so that the early groups are not the final one.
 
 Usage: python benchmarks/snapshots.py [--repeats R]
 """
@@ -61,12 +64,17 @@ class _Measured:
                 self.calls = len(calls)
 
 
-def _once(path: Path, name: str, early: bool) -> tuple[float, float, int]:
-    """(grade CPU, box CPU, calls) of one grading; ``early`` False: the reads after the last
-    cell only."""
+#: The ways of grading compared: (early reads, reads per call).
+WAYS = {"before": (False, 1), "early": (True, 1), "now": (True, scoring.BATCH)}
+
+
+def _once(path: Path, name: str, way: str) -> tuple[float, float, int]:
+    """(grade CPU, box CPU, the box's calls) of one grading, one of :data:`WAYS`."""
+    early, batch = WAYS[way]
     measured = _Measured()
-    real_answer_cells = snapshots.answer_cells
+    real_answer_cells, real_batch = snapshots.answer_cells, scoring.BATCH
     sb.run = measured  # type: ignore[assignment]  # restored below
+    scoring.BATCH = batch
     if not early:
         snapshots.answer_cells = lambda run, checks, questions: dict.fromkeys(questions)
     try:
@@ -75,7 +83,7 @@ def _once(path: Path, name: str, early: bool) -> tuple[float, float, int]:
         return _all_cpu() - c0, measured.box, measured.calls
     finally:
         sb.run = measured.real
-        snapshots.answer_cells = real_answer_cells
+        snapshots.answer_cells, scoring.BATCH = real_answer_cells, real_batch
 
 
 def main(argv: list[str]) -> int:
@@ -85,25 +93,23 @@ def main(argv: list[str]) -> int:
         for name in registry.assignments():
             path = write_variant(name, Path(tmp) / name / f"{name}.ipynb", last_cell="x = 1")
             grading.warm(name)
-            _once(path, name, True)  # the first grading's imports, in neither column
-            samples: dict[bool, list[tuple[float, float, int]]] = {False: [], True: []}
+            _once(path, name, "now")  # the first grading's imports, in no column
+            samples: dict[str, list[tuple[float, float, int]]] = {w: [] for w in WAYS}
             for _ in range(repeats):
-                for early in (False, True):
-                    samples[early].append(_once(path, name, early))
+                for way in WAYS:
+                    samples[way].append(_once(path, name, way))
             row = [name]
             for k in range(2):
-                before = statistics.median(s[k] for s in samples[False])
-                now = statistics.median(s[k] for s in samples[True])
-                row += [f"{before:.2f}", f"{now:.2f}", f"{now - before:+.2f}"]
-            row += [f"{samples[False][0][2]} / {samples[True][0][2]}"]
+                row += [f"{statistics.median(s[k] for s in samples[w]):.2f}" for w in WAYS]
+            row += [" / ".join(str(samples[w][0][2]) for w in WAYS)]
             rows.append(row)
     load = os.getloadavg()
     print(f"load {load[0]:.1f} / {load[1]:.1f} / {load[2]:.1f} (1/5/15 min) on {os.cpu_count()} "
           f"CPUs; medians of {repeats}, alternated; CPU = user + system, children included; "
           f"{time.strftime('%Y-%m-%d')}")
     print()
-    print("| homework | grade CPU s before | now | now - before | box CPU s before | now "
-          "| now - before | box calls before / now |")
+    print("| homework | grade CPU s before | early | now | box CPU s before | early | now "
+          "| box calls before / early / now |")
     print("|---|---|---|---|---|---|---|---|")
     for row in rows:
         print("| " + " | ".join(row) + " |")

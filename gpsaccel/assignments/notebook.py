@@ -184,8 +184,9 @@ def module_source(nb: Notebook, reads: list[Read]) -> str:
     """The text of ``notebook.py`` for the sandbox: data and calls of
     :mod:`gpsaccel.boxside.notebook` only (the modules the box may not import, the cells as
     string literals, each read as its name, kind and shapes); the sandbox's runner then calls
-    ``_gpsaccel_cell(i)`` per cell and ``_gpsaccel_probe(k, *args)`` for read ``k``, where the
-    grader placed it among the cells (:mod:`gpsaccel.assignments.snapshots`)."""
+    ``_gpsaccel_cell(i)`` per cell and ``_gpsaccel_probe(k, *args)`` for read ``k`` (or
+    ``_gpsaccel_reads`` for several), where the grader placed them among the cells
+    (:mod:`gpsaccel.assignments.snapshots`)."""
     cells = [(c.number, c.python if c.python is not None else _python(c.source))
              for c in nb.cells]
     for r in reads:
@@ -198,6 +199,6 @@ def module_source(nb: Notebook, reads: list[Read]) -> str:
         "# A student's notebook, rewritten by gpsaccel.assignments.notebook for the sandbox.",
         "from gpsaccel.boxside import notebook as _gpsaccel_box",
         f"_gpsaccel_box.guard({hidden!r})",
-        f"_gpsaccel_cell, _gpsaccel_probe = _gpsaccel_box.start(globals(), {cells!r}, "
-        f"{probes!r})",
+        f"_gpsaccel_cell, _gpsaccel_probe, _gpsaccel_reads = _gpsaccel_box.start(globals(), "
+        f"{cells!r}, {probes!r})",
         ""])

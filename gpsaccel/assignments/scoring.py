@@ -209,27 +209,79 @@ def _prepare(nb: nbm.Notebook, variant: dict) -> nbm.Notebook:
     return nbm.Notebook(cells, nb.notes)
 
 
-def _calls(p: snapshots.Plan | int, reads: list[nbm.Read]):
-    """The box's calls in the plan's order: ``_gpsaccel_cell(i)`` per cell and, in each group,
-    ``_gpsaccel_probe(k, *args)`` per read (a read made in several groups is the same call).
-    A number of cells instead of a plan: every cell, then every read once."""
+def _calls(n_cells: int, reads: list[nbm.Read]):
+    """Every cell, then every read once, one call each (``_gpsaccel_cell(i)``,
+    ``_gpsaccel_probe(k, *args)``): the plain order of a box, for tests and benchmarks; a
+    notebook is graded with :func:`_box_calls`."""
     from gpsaccel.sandbox import Call, Output
 
-    if isinstance(p, int):
-        p = snapshots.plan(p, {"": (0, len(reads))} if reads else {}, {})
-
-    head = (Output("status", (_CELL_STATUS,), "int64"),
-            Output("message", (nbm.MESSAGE_BYTES,), "uint8"))
-    calls = []
-    for group, i in p.calls:
-        if group == -1:
-            calls.append(Call("_gpsaccel_cell", (np.array(i),), head))
-            continue
-        r = reads[i]
+    head = _head()
+    calls = [Call("_gpsaccel_cell", (np.array(i),), head) for i in range(n_cells)]
+    for k, r in enumerate(reads):
         outs = tuple(Output(f"out{j}", tuple(s)) for j, s in enumerate(r.shapes))
-        calls.append(Call("_gpsaccel_probe", (np.array(i), *(np.asarray(a, dtype=float)
+        calls.append(Call("_gpsaccel_probe", (np.array(k), *(np.asarray(a, dtype=float)
                                                              for a in r.args)), head + outs))
     return calls
+
+
+def _head() -> tuple:
+    """The status and message every call of a notebook's box returns first."""
+    from gpsaccel.sandbox import Output
+
+    return (Output("status", (_CELL_STATUS,), "int64"),
+            Output("message", (nbm.MESSAGE_BYTES,), "uint8"))
+
+#: The most reads one call makes at once (:func:`_box_calls`).
+BATCH = 256
+
+
+def _box_calls(p: snapshots.Plan, reads: list[nbm.Read]) -> tuple[list, list[range]]:
+    """The box's calls for plan ``p``: ``_gpsaccel_cell(i)`` per cell and, for each run of the
+    plan's reads of one name and shapes in a group (at most :data:`BATCH`),
+    ``_gpsaccel_reads(ks, nargs, *args)``: one frame for them all, each output stacked (a frame
+    costs more than a small function's read: 1100 reads of Jacobians were 0.4 CPU s in frames).
+    Returns the calls and, for each, the range of the plan's calls it makes."""
+    from gpsaccel.sandbox import Call, Output
+
+    head = _head()
+    calls, covers = [], []
+    i = 0
+    while i < len(p.calls):
+        group, k = p.calls[i]
+        if group == -1:
+            calls.append(Call("_gpsaccel_cell", (np.array(k),), head))
+            covers.append(range(i, i + 1))
+            i += 1
+            continue
+        r = reads[k]
+        j = i + 1
+        while j < len(p.calls) and j - i < BATCH and p.calls[j][0] == group and \
+                (reads[p.calls[j][1]].name, reads[p.calls[j][1]].value,
+                 reads[p.calls[j][1]].shapes) == (r.name, r.value, r.shapes):
+            j += 1
+        ks = [p.calls[m][1] for m in range(i, j)]
+        n = len(ks)
+        outs = tuple(Output(o.name, (n, *o.shape), o.dtype) for o in head) + tuple(
+            Output(f"out{m}", (n, *s)) for m, s in enumerate(r.shapes))
+        args = [np.asarray(a, dtype=float) for k2 in ks for a in reads[k2].args]
+        calls.append(Call("_gpsaccel_reads", (np.array(ks), np.array([len(reads[k2].args)
+                                                                     for k2 in ks]), *args),
+                          outs))
+        covers.append(range(i, j))
+        i = j
+    return calls, covers
+
+
+def _per_call(p: snapshots.Plan, results: list, covers: list[range]) -> list:
+    """The results of the box's calls (:func:`_box_calls`) as one per call of the plan: a
+    cell's as it came, each read of a stacked call its row."""
+    out: list = []
+    for res, cover in zip(results, covers, strict=False):
+        if p.calls[cover[0]][0] == -1:
+            out.append(res)
+        else:
+            out += [{name: a[j] for name, a in res.items()} for j in range(len(cover))]
+    return out
 
 
 #: failure -> what the notebook's stop says (the sandbox's one table of outcomes)
@@ -328,13 +380,17 @@ def _plan(run: nbm.Notebook, nb: nbm.Notebook, qs: Sequence[Question],
                                  snapshots.answer_cells(run.cells, checks, reading))
 
 
-def _returned(p: snapshots.Plan, box, cells: Sequence, reads: list[nbm.Read], limits
+def _returned(p: snapshots.Plan, box, covers: list[range], cells: Sequence,
+              reads: list[nbm.Read], limits
               ) -> tuple[dict[str, list[Answer]], dict[str, str], list[str], list[str]]:
-    """What the box returned, read as the one group that grades (:func:`.snapshots.kept`): the
-    answers of each question in it, the failure of the question whose read stopped, the note
-    on where the notebook stopped and what counts, the notes on its cells."""
-    results = box.results + [None] * (len(p.calls) - len(box.results))
-    kept = snapshots.kept(p, len(box.results))
+    """What the box returned (its calls made ``covers`` of the plan's, :func:`_box_calls`),
+    read as the one group that grades (:func:`.snapshots.kept`): the answers of each question
+    in it, the failure of the question whose read stopped, the note on where the notebook
+    stopped and what counts, the notes on its cells."""
+    results = _per_call(p, box.results, covers)
+    received = len(results)
+    results += [None] * (len(p.calls) - received)
+    kept = snapshots.kept(p, received)
     answers = {q: [answer_from(results[c], len(reads[k].shapes))
                    for c, k in zip(at, range(*p.spans[q]), strict=True)]
                for q, at in kept.questions.items()}
@@ -374,10 +430,10 @@ def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
         folder.mkdir()
         (folder / "notebook.py").write_text(nbm.module_source(run, reads), encoding="utf-8")
         sub = sb.load_submission(folder / "notebook.py", "_gpsaccel_cell")
-        calls = _calls(p, reads)
+        calls, covers = _box_calls(p, reads)
         box = sb.run(sub, calls, limits, backend=sandbox, allow_gpsaccel=True, hide=nbm.BOX_HIDES)
     # ---- the box is empty from here on: nothing of the student's runs while answers exist
-    answers, stops, notes, cell_notes = _returned(p, box, run.cells, reads, limits)
+    answers, stops, notes, cell_notes = _returned(p, box, covers, run.cells, reads, limits)
     status = box.failure or "graded"
     reports = {q.name: _question_report(q, nb, draws[q.name], answers.get(q.name), timeout,
                                         stops.get(q.name)) for q in qs}

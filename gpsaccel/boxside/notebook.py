@@ -6,17 +6,19 @@ sandbox's runner imports, data and calls of this module only::
 
     from gpsaccel.boxside import notebook as _gpsaccel_box
     _gpsaccel_box.guard(('gpsaccel.check', 'gpsaccel.assignments', ...))
-    _gpsaccel_cell, _gpsaccel_probe = _gpsaccel_box.start(
+    _gpsaccel_cell, _gpsaccel_probe, _gpsaccel_reads = _gpsaccel_box.start(
         globals(), [(3, "x = 1\\n"), ...], [("kalman_filter", False, [(151, 3)]), ...])
 
 Nothing runs at import.  The runner calls ``_gpsaccel_cell(i)`` once per cell, in order, so each
 cell's outcome comes back as its own frame (a cell that raises is recorded and the next one runs,
 as ``otter run`` does); after the last cell, and after each cell that completes an answer, it
-calls ``_gpsaccel_probe(k, *args)`` for the reads the grader placed there
-(:mod:`gpsaccel.assignments.snapshots`; the same read may be made several times): it calls the
-student's function (or reads the variable) and returns ``(status, message, *outputs)`` as arrays
-of the shapes the grader declared.  Neither ever raises (``BaseException`` included), so one broken answer
-does not stop the runner's later calls.  The cells run in the notebook module's own namespace (its
+makes the reads the grader placed there (:mod:`gpsaccel.assignments.snapshots`; the same read
+may be made several times): ``_gpsaccel_probe(k, *args)`` calls the student's function (or reads
+the variable) and returns ``(status, message, *outputs)`` as arrays of the shapes the grader
+declared; ``_gpsaccel_reads(ks, nargs, *args)`` makes several reads of one function at once and
+returns them stacked, one frame for all (a frame costs more than a read of a small function).
+None of them ever raises (``BaseException`` included), so one broken answer does not stop the
+runner's later calls.  The cells run in the notebook module's own namespace (its
 ``globals()``), as they did in the student's kernel.
 """
 
@@ -191,6 +193,24 @@ class GradedNotebook:
         except BaseException as exc:  # noqa: BLE001 - the student's function may raise anything
             return fail("exception", error(exc))
 
+    def batch(self, ks: object, nargs: object, *args: np.ndarray) -> Outputs:
+        """Reads ``ks`` at once (reads of one name and the same shapes, ``nargs[j]`` of
+        ``args`` for the j-th): their statuses, messages and outputs, each stacked along a first
+        axis, so that they come back as one frame."""
+        try:
+            out, at = [], 0
+            for k, n in zip(np.ravel(ks), np.ravel(nargs), strict=True):  # type: ignore[call-overload]
+                out.append(self.probe(k, *args[at:at + int(n)]))
+                at += int(n)
+            return tuple(np.stack(parts) for parts in zip(*out, strict=True))
+        except BaseException as exc:  # noqa: BLE001 - never raises (a MemoryError stacking them)
+            name, _, shapes = self.reads[int(np.ravel(ks)[0])]  # type: ignore[call-overload]
+            n = np.size(ks)  # type: ignore[arg-type]
+            status = np.zeros((n, STATUS_LENGTH), dtype=np.int64)
+            status[:, 0] = STATUSES.index("exception")
+            return (status, np.tile(text(error(exc)), (n, 1)),
+                    *[np.full((n, *s), np.nan) for s in shapes])
+
     def _read(self, name: str, value_only: bool, shapes: Sequence[Sequence[int]],
               args: tuple[np.ndarray, ...], fail: Callable[..., Outputs]) -> Outputs:
         target = self.namespace.get(name, None)
@@ -221,10 +241,10 @@ class GradedNotebook:
 
 
 def start(namespace: dict[str, Any], cells: Sequence[tuple[int, str]], reads: Sequence[Read]
-          ) -> tuple[Callable[[object], Outputs], Callable[..., Outputs]]:
+          ) -> tuple[Callable[[object], Outputs], Callable[..., Outputs], Callable[..., Outputs]]:
     """Make the notebook's namespace a kernel's (``get_ipython``, ``import otter``); the cell
-    runner and the read the runner calls."""
+    runner, the read and the reads at once (:meth:`GradedNotebook.batch`) the runner calls."""
     nb = GradedNotebook(namespace, cells, reads)
     install_otter()
     namespace["get_ipython"] = lambda: nb.shell
-    return nb.cell, nb.probe
+    return nb.cell, nb.probe, nb.batch

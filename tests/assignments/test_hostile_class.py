@@ -31,7 +31,7 @@ from .conftest import CHI2_SPECIAL, kill_pids, write_variant
 ZOE = os.fsdecode(b"Zo\xeby")  # Latin-1, not UTF-8: the run used to crash here and on every rerun
 BAD_FILE = os.fsdecode(b"\xff\xfe.ipynb")
 
-# the student replaces the function that reports a read: every read says "shape (10⁶, 10⁶)"
+# the student replaces the functions that report reads: every read says "shape (10⁶, 10⁶)"
 FORGE = """
 import numpy as _n
 _reads = _gpsaccel_probe.__self__.reads
@@ -39,6 +39,9 @@ def _gpsaccel_probe(k, *args):
     st = _n.zeros(9, dtype=_n.int64)
     st[0], st[2], st[3], st[4] = 7, 2, 10**6, 10**6
     return (st, _n.zeros(320, dtype=_n.uint8), *[_n.full(s, _n.nan) for s in _reads[int(k)][2]])
+def _gpsaccel_reads(ks, nargs, *args):
+    one = [_gpsaccel_probe(k) for k in _n.ravel(ks)]
+    return tuple(_n.stack(parts) for parts in zip(*one))
 """
 
 

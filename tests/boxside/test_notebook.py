@@ -38,7 +38,7 @@ def notebook(monkeypatch):
              (7, "ellipsis = ...\nget_ipython().run_line_magic('matplotlib', 'inline')\n"),
              (9, "x = 1\n\n1 / 0\n"),
              (10, "raise SystemExit(3)\n")]
-    cell, probe = box.start(ns, cells, READS)
+    cell, probe, _ = box.start(ns, cells, READS)
     return ns, cell, probe
 
 
@@ -70,6 +70,30 @@ def test_every_status_of_a_read(notebook):
     for name, out in got.items():  # a failed read gives NaN arrays of the declared shapes
         shapes = next(r[2] for r in READS if r[0] == name)
         assert [o.shape for o in out[2:]] == [tuple(s) for s in shapes]
+
+
+def test_reads_at_once_are_the_reads_one_by_one_stacked(monkeypatch):
+    monkeypatch.setitem(sys.modules, "otter", None)
+    reads = [("f", False, [(3,), ()])] * 3 + [("g", False, [(2,)])]
+    cell, probe, batch = box.start({}, [(1, "import numpy as np\n"
+                                            "def f(a, b):\n    return a * b, float(b)\n"
+                                            "def g():\n    raise ValueError('no')\n")], reads)
+    cell(0)
+    args = [(np.arange(3.0), np.array(2.0)), (np.ones(3), np.array(-1.0)), (np.zeros(2),)]
+    status, message, x, y = batch(np.arange(3), np.array([2, 2, 1]), *[a for r in args for a in r])
+    one = [probe(np.array(k), *a) for k, a in enumerate(args)]
+    assert status.shape == (3, box.STATUS_LENGTH) and message.shape == (3, box.MESSAGE_BYTES)
+    for j, (s, m, xj, yj) in enumerate(one):
+        assert (status[j] == s).all() and (message[j] == m).all()
+        np.testing.assert_array_equal(x[j], xj)
+        np.testing.assert_array_equal(y[j], yj)
+    assert [_code(s) for s in status] == ["ok", "ok", "exception"]  # f(zeros(2)): one argument
+    status, message, out = batch(np.array([3, 3]), np.array([0, 0]))  # g raises, twice
+    assert [_code(s) for s in status] == ["exception"] * 2 and out.shape == (2, 2)
+    assert "ValueError: no" in _text(message[1])
+    # reads that cannot be stacked (different shapes): each says so, the batch never raises
+    status, message, x, y = batch(np.array([0, 3]), np.array([2, 0]), np.ones(3), np.ones(()))
+    assert [_code(s) for s in status] == ["exception"] * 2 and x.shape == (2, 3)
 
 
 def test_a_read_of_the_wrong_shape_reports_the_shape(notebook):
