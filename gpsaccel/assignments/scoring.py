@@ -515,8 +515,9 @@ def _feedback_text(g: Grade, notes: list[str], reports: dict[str, Report],
     the student's projection of each finding (:meth:`gpsaccel.check.report.Finding.for_student`:
     no expected value reaches this text), each error and warning with the lesson section that
     teaches its fix under it, then the notes on its cells (``cells``); at most
-    :data:`MAX_FEEDBACK` bytes, the notes on cells cut first (:func:`gpsaccel._untrusted
-    .bounded`: a finding and its section are kept or left out together)."""
+    :data:`MAX_FEEDBACK` bytes, the notes on cells cut first
+    (:func:`gpsaccel._untrusted.bounded`: a finding and its section are kept or left out
+    together)."""
     lines: list[tuple[int, str]] = [
         (0, f"{g.student}: {g.total:g} / {g.max_total:g} points ({g.status})")]
     if variant:

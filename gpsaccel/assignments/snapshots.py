@@ -11,9 +11,9 @@ reads also run earlier, as *snapshots* (:func:`plan`):
   named by a string; a global read by a function or class defined under such a name, bound; any
   name, for a cell that rebinds names the parser cannot see: ``exec``, ``globals()``,
   ``setattr``, a star import), or, if later, the last cell before its otter
-  ``grader.check("qN")`` cell (:func:`answer_cells`; :func:`gpsaccel.assignments.scoring
-  .checked_question`).  A cell that only uses an answer (a slow
-  exploratory loop calling the student's filter) is not its answer cell;
+  ``grader.check("qN")`` cell (:func:`answer_cells`, given what
+  :func:`~gpsaccel.assignments.scoring.checked_question` finds).  A cell that only uses an
+  answer (a slow exploratory loop calling the student's filter) is not its answer cell;
 * after each answer cell, and after the last cell, one *group* of reads runs: every question
   whose answer cell has run (a question with none is read in every group), in the questions'
   order; the group after the last cell is the final read of every question.
@@ -31,15 +31,19 @@ a stopped notebook is graded exactly as Run All grades the same notebook cut aft
 notebook the student could have handed in.  A stall never earns more than deleting the cells
 after the group would.  A right answer overwritten by a later cell and then frozen by a stall is
 read again after the overwriting cell (it binds the name: a group follows it) and graded wrong,
-as Run All grades it; one question's earlier state is never combined with another's later one.
-The student places answer cells only by writing their notebook; the grader places the groups
-and chooses the one that grades.
+as Run All grades it; one question's earlier state is never combined with another's later one,
+so a change the parser cannot see (``np.copyto(Phi, ...)`` in a later answer cell) is read with
+that cell's group too.  What no read sees is such a change made after the last group the box
+reached (in the cell that stalls, or in a cell between): the notebook is graded as it stood at
+that group (Run All of it cut there).  The student places answer cells only by writing their
+notebook; the grader places the groups and chooses the one that grades.
 
-What it costs.  Each question is read once more per group from its answer cell's on (the box's
-time, counted in its limit: ``benchmarks/snapshots.py``), and an early read calls the student's
-functions before the later cells run, in the notebook's process: a function that changes the
-notebook's state when called (a global, numpy's global random generator) can change what a later
-cell computes.
+What it costs.  Each question is read once more per group from its answer cell on (the box's
+time, counted in its limit: ``benchmarks/snapshots.py``; the reads of one function in a group
+are one call of the box, :func:`gpsaccel.assignments.scoring._box_calls`), and an early read
+calls the student's functions before the later cells run, in the notebook's process: a function
+that changes the notebook's state when called (a global, numpy's global random generator) can
+change what a later cell computes.
 """
 
 from __future__ import annotations
