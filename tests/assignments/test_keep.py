@@ -19,7 +19,7 @@ import nbformat
 import pytest
 
 from gpsaccel.assignments import gradescope, scoring
-from gpsaccel.assignments.grading import grade
+from gpsaccel.classrun import grade
 
 from .conftest import CHI2_SPECIAL, kill_pids, read_grades, write_variant
 from .test_attacks import BACKENDS, _procs_with
