@@ -19,7 +19,7 @@ import nbformat
 import pytest
 
 from gpsaccel.assignments import gradescope, scoring
-from gpsaccel.classrun import grade
+from gpsaccel.classrun import grade, writing
 
 from .conftest import CHI2_SPECIAL, kill_pids, read_grades, write_variant
 from .test_attacks import BACKENDS, _procs_with
@@ -168,6 +168,9 @@ def test_feedback_of_3000_raising_cells_stays_under_its_bound(tmp_path):
                          f"holds at most {scoring.MAX_FEEDBACK >> 10} KB")
     out = gradescope.results(g, g.possible)
     assert out["output"] == text and len(json.dumps(out)) < scoring.MAX_FEEDBACK + 2000
+    # the file a class run writes holds the same text, cleaned, under the same bound
+    written = writing.write_feedback(tmp_path, "flood", text).read_bytes()
+    assert written == text.encode("utf-8") and len(written) <= scoring.MAX_FEEDBACK
 
 
 def test_findings_come_before_notes_and_each_run_left_out_is_counted():
