@@ -19,6 +19,8 @@ Below the command line and above the items it runs (:mod:`gpsaccel.check` checks
   lost items in the sandbox's words, Ctrl-C);
 * :mod:`~gpsaccel.classrun.writing`: every file and table the runs write, through
   :mod:`gpsaccel._untrusted`, and a terminal a closed pipe cannot stop;
+* :mod:`~gpsaccel.classrun.statuses`: every status a grade can have, who caused it and its
+  gradebook cell (a status the student did not cause is never a score);
 * :mod:`~gpsaccel.classrun.checking` (:func:`check_many`), :mod:`~gpsaccel.classrun.grading`
   (:func:`grade`) and :mod:`~gpsaccel.classrun.classwide` (the gradebooks and the similarity
   report, written by :func:`grade` itself).

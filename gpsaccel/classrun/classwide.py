@@ -22,8 +22,10 @@ the LMS's identifiers:
   them), for an offline assignment's score upload (matched by email or SID).
 
 A student on the roster without a submission gets an empty cell (the LMS keeps what it has);
-a notebook whose run did not finish (``grader-error``, ``not-graded``) also stays empty (rerun
-it).  A graded student absent from the roster is not written: the lines returned name them.
+so does a grade whose status the student did not cause (:mod:`gpsaccel.classrun.statuses`:
+``id-collision``, ``grader-error``, ``not-graded``, ...): a grade that was not computed is never
+a score.  A status the student caused holds the total its table says.  A graded student absent
+from the roster is not written: the lines returned name them.
 
 The similarity report (:mod:`gpsaccel.assignments.similarity`) is asked for through one
 function, :func:`similar`, and flags, never grades.
@@ -39,10 +41,8 @@ from gpsaccel._atomic import write_text
 from gpsaccel._untrusted import cell, shown
 from gpsaccel.assignments.roster import Student
 from gpsaccel.assignments.scoring import Grade
+from gpsaccel.classrun import statuses
 from gpsaccel.classrun.writing import csv_text
-
-#: Statuses whose total is not a grade (the run must be repeated): left empty in every export.
-UNFINISHED = ("grader-error", "not-graded")
 
 #: The gradebook files :func:`write_gradebooks` writes.
 FILES = ("canvas.csv", "moodle.csv", "gradescope-roster.csv", "gradescope-scores.csv")
@@ -53,7 +53,7 @@ def write(submissions: Path, out: Path, name: str, grades: Sequence[Grade],
           similarity: bool = True) -> list[str]:
     """Write the gradebook files (with a roster) and the similarity report into ``out``; the
     lines to show the instructor."""
-    lines = []
+    lines = statuses.unscored_lines(grades) + statuses.scored_zero_lines(grades)
     if roster is not None:
         missing = write_gradebooks(grades, possible, roster,
                                    registry.assignment(name).title or name, out)
@@ -72,7 +72,23 @@ def _num(x: float) -> str:
 
 def _total(grades: dict, s: Student) -> str:
     g = grades.get(s.id)
-    return "" if g is None or g.status in UNFINISHED else _num(g.total)
+    return "" if g is None else statuses.cell(g.status, g.total)
+
+
+def _by_student(grades: Sequence[Grade]) -> dict[str, Grade]:
+    """Each roster key's grade.  Two grades under one name (two folders that show alike, one of
+    them named exactly by the roster and graded, the other an ``id-collision``): the one that is
+    not a collision; when that does not single one out, none (the cell stays empty)."""
+    found: dict[str, list[Grade]] = {}
+    for g in grades:
+        found.setdefault(g.student, []).append(g)
+    out = {}
+    for key, gs in found.items():
+        if len(gs) > 1:
+            gs = [g for g in gs if g.status != "id-collision"]
+        if len(gs) == 1:
+            out[key] = gs[0]
+    return out
 
 
 def canvas_rows(grades: dict, possible: dict[str, float], roster: Sequence[Student],
@@ -103,7 +119,7 @@ def gradescope_rows(grades: dict, possible: dict[str, float], roster: Sequence[S
         people.append([cell(first), cell(last), cell(s.email), cell(s.sis_id or s.id),
                        cell(s.section)])
         g = grades.get(s.id)
-        done = g is not None and g.status not in UNFINISHED
+        done = g is not None and statuses.scored(g.status)
         scores.append([cell(first), cell(last), cell(s.sis_id or s.id), cell(s.email),
                        _total(grades, s), _num(sum(possible.values())),
                        g.status if g is not None else "missing",
@@ -117,7 +133,7 @@ def write_gradebooks(grades: Sequence[Grade], possible: dict[str, float],
     """Write :data:`FILES` into ``out`` (module docstring); returns the students graded but not
     on the roster (written nowhere but ``grades.csv``)."""
     out = Path(out)
-    by_id = {g.student: g for g in grades}
+    by_id = _by_student(grades)
     ids = {s.id for s in roster}
     write_text(out / "canvas.csv", csv_text(canvas_rows(by_id, possible, roster, title)))
     write_text(out / "moodle.csv", csv_text(moodle_rows(by_id, roster, title)))

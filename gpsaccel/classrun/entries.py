@@ -20,7 +20,9 @@ found (:func:`os.fsdecode`) and given once a unique printable id
 (:func:`gpsaccel._untrusted.student_id`) that names the student's files.  Entries whose ids or
 shown names differ only in case are told apart by a hash of their raw names; where the kind's
 ids name a student's files and key their variant (grading), both are refused
-(``id-collision``), since neither can be told to be the one the roster means.  Folders are walked
+(``id-collision``), since neither can be told to be the one the roster means, unless the roster
+names one of them exactly (its student is a roster id as it is, the others' are not): that one
+is the roster's student and kept, the others refused.  Folders are walked
 without recursion and without following links (:func:`gpsaccel._untrusted.walk`), so no name or
 folder stops the class.
 """
@@ -28,7 +30,7 @@ folder stops the class.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Collection, Iterable, Sequence
 from dataclasses import dataclass, field, replace
 from functools import partial
 from pathlib import Path
@@ -146,14 +148,18 @@ def plain(kind: Kind) -> Naming:
 
 # ------------------------------------------------------------------------------ the walk
 def walk(paths: str | os.PathLike | Sequence[str | os.PathLike], kind: Kind,
-         naming: Naming | None = None) -> tuple[list[Entry], list[str]]:
+         naming: Naming | None = None, known: Collection[str] = ()
+         ) -> tuple[list[Entry], list[str]]:
     """Every entry of a class (module docstring) and notes on what is not one.
 
     ``paths``: one folder, whose top-level entries are the students (the notes name them as
     found in it); or a list of files and folders (the command line's: a file is one entry, a
     missing one too, for its item to report; a folder holds one per top-level entry; the notes
     name them by their paths).  Entries come in the order given, each folder's by name without
-    case.  ``naming`` (default :func:`plain`) says who each one is."""
+    case.  ``naming`` (default :func:`plain`) says who each one is.  ``known``: the roster's
+    ids; of entries that collide, the one whose student is one of them exactly (the folder's
+    name as found, byte for byte, or the naming's id), when no other of them is, is that
+    student and kept; the others stay refused."""
     naming = naming or plain(kind)
     if isinstance(paths, (str, os.PathLike)):
         roots, one_folder = [Path(paths)], True
@@ -171,7 +177,7 @@ def walk(paths: str | os.PathLike | Sequence[str | os.PathLike], kind: Kind,
             notes.append(f"{_untrusted.shown(str(root))}: no submission in it ({kind.what} "
                          f"each)")
     unique = list({(e.path, e.problem, e.found): e for e in found}.values())
-    return _with_ids(_latest(unique, notes), kind, notes), notes
+    return _with_ids(_latest(unique, notes), kind, notes, frozenset(known)), notes
 
 
 def _folder(root: Path, kind: Kind, naming: Naming, notes: list[str], where: str
@@ -234,13 +240,17 @@ def _latest(entries: list[Entry], notes: list[str]) -> list[Entry]:
     return kept
 
 
-def _with_ids(entries: list[Entry], kind: Kind, notes: list[str]) -> list[Entry]:
-    """Each entry with its id (module docstring): the found names tell apart what collides."""
+def _with_ids(entries: list[Entry], kind: Kind, notes: list[str],
+              known: frozenset[str] = frozenset()) -> list[Entry]:
+    """Each entry with its id (module docstring): the found names tell apart what collides; of
+    a collision, the one entry the roster names exactly (``known``) keeps its id."""
     ids = [_untrusted.student_id(x.student) for x in entries]
     clash = _clashes(ids, [x.shown for x in entries])
+    named = {i for i in clash if entries[i].student in known
+             and not any(entries[j].student in known for j in clash[i])}
     out = []
     for i, x in enumerate(entries):
-        if i not in clash:
+        if i not in clash or i in named:
             out.append(replace(x, id=ids[i]))
             continue
         sid = _untrusted.hashed_id(x.found)

@@ -222,7 +222,8 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
     out, jobs = _checked(folder, out, timeout, jobs)
     students = read_roster(roster) if isinstance(roster, (str, os.PathLike)) else roster
     possible = item.possible_of(name)
-    entries, notes = walk(folder, notebooks(name), naming)
+    entries, notes = walk(folder, notebooks(name), naming,
+                          known={s.id for s in students} if students else ())
     if not entries:
         raise ValueError(f"submissions: no student's folder or notebook in {folder}")
     out.mkdir(parents=True, exist_ok=True)

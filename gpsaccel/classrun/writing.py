@@ -31,6 +31,7 @@ from typing import Any, TextIO
 from gpsaccel import _untrusted
 from gpsaccel._atomic import write_text
 from gpsaccel.check.report import no_verdict
+from gpsaccel.classrun import statuses
 
 #: Longest submission name shown in the check's table (the JSON keeps it whole).
 NAME_WIDTH = 80
@@ -96,17 +97,20 @@ def write_feedback(folder: Path, sid: str, text: str) -> Path:
 
 def write_grades(grades: Sequence, possible: dict[str, float], path: Path) -> None:
     """``grades.csv``: a header, a row of the points possible, one row per student
-    (:class:`~gpsaccel.assignments.scoring.Grade` s)."""
+    (:class:`~gpsaccel.assignments.scoring.Grade` s); the points of a grade whose status is not
+    a score (:func:`gpsaccel.classrun.statuses.scored`) left empty, its status said."""
     qs = list(possible)
     whole = f"{sum(possible.values()):g}"
     rows: list[list[object]] = [
         [*HEADER, *qs, "total", "possible", "status", "seconds"],
         ["Points Possible", "", "", *(f"{possible[q]:g}" for q in qs), whole, whole, "", ""]]
     for g in grades:
+        points = statuses.scored(g.status)
         rows.append([_untrusted.cell(g.student), _untrusted.cell(g.id),
                      _untrusted.cell(_untrusted.shown(g.file, 1000)),
-                     *(f"{g.scores.get(q, 0):g}" for q in qs),
-                     f"{g.total:g}", f"{g.max_total:g}", g.status, f"{g.seconds:.1f}"])
+                     *(f"{g.scores.get(q, 0):g}" if points else "" for q in qs),
+                     f"{g.total:g}" if points else "", f"{g.max_total:g}", g.status,
+                     f"{g.seconds:.1f}"])
     write_text(path, csv_text(rows))
 
 
@@ -233,11 +237,11 @@ def grade_mistakes(grades: Sequence) -> list[str]:
 
 
 def grades_table(grades: Sequence) -> str:
-    """The instructor's table of a class's grades: student, total / possible, status, seconds
-    (each name as the grade shows it: printable)."""
+    """The instructor's table of a class's grades: student, total / possible ("-" where the
+    status is not a score), status, seconds (each name as the grade shows it: printable)."""
     width = max([len(g.student) for g in grades] + [0])
-    return "\n".join(f"{g.student:<{width}}  {g.total:>5g} / {g.max_total:g}  {g.status:<13} "
-                     f"{g.seconds:5.1f} s" for g in grades)
+    return "\n".join(f"{g.student:<{width}}  {statuses.cell(g.status, g.total) or '-':>5} / "
+                     f"{g.max_total:g}  {g.status:<13} {g.seconds:5.1f} s" for g in grades)
 
 
 # --------------------------------------------------------------------------------- terminal

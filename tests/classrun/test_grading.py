@@ -9,7 +9,7 @@ from dataclasses import asdict
 
 from gpsaccel.assignments import grading as item
 from gpsaccel.assignments.roster import Student
-from gpsaccel.classrun import grade, running
+from gpsaccel.classrun import grade, grade_class, running
 
 from .test_entries import canvas_like
 
@@ -56,3 +56,60 @@ def test_an_export_mapped_by_a_naming_is_graded_and_written_under_the_rosters_id
     assert canvas["An Nguyen"] == canvas["Jane Doe"] == full  # the roster's rows, filled
     feedback = sorted(p.name for p in (tmp_path / "out" / "feedback").iterdir())
     assert feedback[:2] == ["an.nguyen.txt", "jane.doe.txt"]
+
+
+def _canvas(out) -> dict[str, str]:
+    with open(out / "canvas.csv", newline="", encoding="utf-8") as f:
+        return {r[0]: r[-1] for r in csv.reader(f)}
+
+
+def _case_collision(tmp_path, monkeypatch, roster: list[Student]):
+    """Folders "Jane Doe" and "JANE DOE", each with a notebook, graded with ``roster``."""
+    sub = tmp_path / "export"
+    for name in ("Jane Doe", "JANE DOE"):
+        (sub / name).mkdir(parents=True)
+        (sub / name / "calibration.ipynb").write_text("{}")
+    seen: list = []
+    monkeypatch.setattr(running, "run", _fake_run(seen))
+    graded = grade_class(sub, "calibration", out=tmp_path / "out", seed=1, roster=roster,
+                         similarity=False)
+    return graded, seen
+
+
+def test_a_case_collision_is_never_a_score(tmp_path, monkeypatch):
+    """Both folders on the roster: neither can be told to be the one a roster row means, both
+    are id-collision, and their cells are empty in every gradebook (canvas.csv wrote 0 for the
+    victim), named on the terminal."""
+    graded, seen = _case_collision(tmp_path, monkeypatch, [
+        Student("Jane Doe", name="Jane Doe", canvas_id="1"),
+        Student("JANE DOE", name="Jane Other", canvas_id="2")])
+    assert [(g.student, g.status) for g in graded.grades] == [
+        ("JANE DOE", "id-collision"), ("Jane Doe", "id-collision")]
+    canvas = _canvas(graded.out)
+    assert canvas["Jane Doe"] == canvas["Jane Other"] == ""
+    rows = {r["student"]: r for r in csv.DictReader(
+        (graded.out / "grades.csv").open(newline="", encoding="utf-8"))}
+    assert rows["Jane Doe"]["total"] == rows["JANE DOE"]["total"] == ""
+    named = [ln for ln in graded.classwide if ln.startswith("  id-collision")]
+    assert len(named) == 1 and named[0].endswith("JANE DOE, Jane Doe")
+
+
+def test_the_roster_naming_one_folder_exactly_grades_that_student(tmp_path, monkeypatch):
+    """The roster's id is "Jane Doe", byte for byte the victim's folder and not the other's: the
+    victim is graded into her row; "JANE DOE" stays id-collision (and is on no roster row)."""
+    graded, seen = _case_collision(tmp_path, monkeypatch, [
+        Student("Jane Doe", name="Jane Doe", canvas_id="1")])
+    assert [(g.student, g.status) for g in graded.grades] == [
+        ("JANE DOE", "id-collision"), ("Jane Doe", "graded")]
+    assert ("Jane Doe", False, 0) in seen  # graded as herself: her variant, her data
+    full = str(len(item.possible_of("calibration")))  # the fake run's 1 point a question
+    assert _canvas(graded.out)["Jane Doe"] == full
+    assert (graded.out / "feedback" / "Jane Doe.txt").is_file()
+    assert any(ln.startswith("  id-collision") and ln.endswith("): JANE DOE")
+               for ln in graded.classwide)
+
+
+def test_a_roster_that_names_neither_folder_exactly_leaves_both_refused(tmp_path, monkeypatch):
+    graded, _ = _case_collision(tmp_path, monkeypatch, [Student("jane doe", name="Jane Doe")])
+    assert [g.status for g in graded.grades] == ["id-collision", "id-collision"]
+    assert _canvas(graded.out)["Jane Doe"] == ""
