@@ -107,6 +107,37 @@ def test_nested_json_is_unreadable_not_a_grader_error(tmp_path):
         nbm.load(path)
 
 
+#: Files that are not notebooks, as a student's hard link to a file they may not read (the
+#: instructor's secret, a key) would show them: each starts differently, and the parser's
+#: message for each gave its position ("Extra data: line 1 column 5 (char 4)") or its bytes.
+NOT_NOTEBOOKS = {
+    "json": {"digits": b"1234 feedbeef", "hex": b"9f86d081884c7d65\n", "cut": b'{"cells": [',
+             "key": b"-----BEGIN PRIVATE KEY-----\nMIIE", "word": b"true 1", "empty": b""},
+    "text": {"binary": b"\xff\xfe\x00secret", "latin-1": b'{"cells": "\xe9t\xe9"}'},
+    "cells": {"number": b"1234", "list": b"[1, 2]", "no-cells": b'{"cell": []}'},
+}
+
+
+@pytest.mark.parametrize("kind", sorted(NOT_NOTEBOOKS))
+def test_an_unreadable_notebook_is_said_in_words_never_its_bytes_or_offsets(tmp_path, kind):
+    """Issue 39: what is wrong, in one wording per kind, whatever the file holds: every file of
+    a kind gets the same text, with no digit, offset or byte of the file in it."""
+    said = set()
+    for name, data in NOT_NOTEBOOKS[kind].items():
+        path = tmp_path / "hw.ipynb"
+        path.write_bytes(data)
+        with pytest.raises(nbm.NotebookError) as err:
+            nbm.read(path)
+        text = str(err.value)
+        assert not any(c.isdigit() for c in text.replace("UTF-8", "")), (name, text)
+        assert not {"line", "column", "char", "position", "byte", "0x"} & set(text.split()), text
+        for piece in data.split():
+            assert len(piece) < 4 or piece.decode("latin-1") not in text, (name, text)
+        said.add(text)
+    assert len(said) == 1, said
+    assert said.pop().startswith("hw.ipynb is not a notebook: it is ")
+
+
 def test_a_cell_of_magics_stops_at_the_cpu_limit(tmp_path, monkeypatch):
     # 300 lines of %time take about 3 CPU s to transform (400: 5.7 s); the limit is 1 s here
     monkeypatch.setattr(nbm, "LOAD_CPU", 1)

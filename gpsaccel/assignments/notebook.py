@@ -61,7 +61,13 @@ LOAD_WALL = 120
 
 
 class NotebookError(ValueError):
-    """The file is not a notebook that can be graded; the message is for the student."""
+    """The file is not a notebook that can be graded; the message is for the student: what is
+    wrong, in words, never a parser's position or bytes of the file (a notebook hard-linked to
+    a file the student may not read would otherwise tell them about its first bytes)."""
+
+
+#: What a student whose file is not a notebook does.
+_SAVE_AGAIN = "Open your notebook in Jupyter, save it, and hand in the .ipynb file it saved."
 
 
 @dataclass(frozen=True)
@@ -104,14 +110,19 @@ def read(path: str | Path) -> Notebook:
                             f"the outputs (Kernel > Restart & Clear Output) and save it again.")
     try:
         data = json.loads(path.read_bytes())
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise NotebookError(f"{path.name} is not a notebook (not JSON: {exc}).") from None
+    except UnicodeDecodeError:  # its message quotes the file's bytes and their offset
+        raise NotebookError(f"{path.name} is not a notebook: it is not text (a notebook is "
+                            f"UTF-8 text). {_SAVE_AGAIN}") from None
+    except ValueError:  # the parser's message gives line, column and offset into the file
+        raise NotebookError(f"{path.name} is not a notebook: it is not valid JSON (a notebook "
+                            f"is a JSON document). {_SAVE_AGAIN}") from None
     except RecursionError:
         raise NotebookError(f"{path.name} is not a notebook (its JSON is nested too deep to "
                             f"read).") from None
     cells = data.get("cells") if isinstance(data, dict) else None
     if not isinstance(cells, list):
-        raise NotebookError(f"{path.name} is not a notebook (no list of cells).")
+        raise NotebookError(f"{path.name} is not a notebook: it is JSON without a list of "
+                            f"cells. {_SAVE_AGAIN}")
     out = []
     for i, cell in enumerate(cells, start=1):
         if not isinstance(cell, dict) or cell.get("cell_type") != "code":
