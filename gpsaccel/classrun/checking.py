@@ -48,6 +48,8 @@ class _Check(running.Task):
     (:func:`gpsaccel._untrusted.json_safe`: a name that was not UTF-8 written ``\\xNN``), as the
     results file, the log and the table take it."""
 
+    doer, doing = "checker", "checking this file"
+
     def __init__(self, plan: CheckPlan) -> None:
         self.problem, self.timeout = plan.problem, plan.timeout
         self.deadline = plan.timeout + batch.CHECK_SLACK

@@ -57,6 +57,8 @@ from gpsaccel.classrun.entries import Entry, Naming, notebooks, walk
 class _Grade(running.Task):
     """One notebook's grade as a class's item (:mod:`gpsaccel.assignments.grading`)."""
 
+    doer, doing = "grader", "grading this notebook"
+
     def __init__(self, folder: Path, settings: dict) -> None:
         self.folder, self.settings, self.name = folder, settings, settings["name"]
         self.timeout = settings["timeout"]

@@ -79,6 +79,10 @@ class Task:
 
     timeout: float = 60.0
     deadline: float = 180.0
+    #: Who runs an item and what it does, as a lost item's wording says them (the
+    #: ``lost.<reason>`` templates' ``doer`` and ``doing``): a check and a grade say their own.
+    doer: str = "run"
+    doing: str = "running this item"
 
     def warm(self) -> None:
         """Import what every item imports on first use, before the pool forks (only modules:
@@ -97,13 +101,14 @@ class Task:
         raise NotImplementedError
 
 
-def lost_text(lost: sb.Lost, timeout: float, deadline: float) -> str:
+def lost_text(lost: sb.Lost, task: Task) -> str:
     """Why an item has no result, in the words of :data:`gpsaccel.sandbox.outcomes.OUTCOMES`
-    (``lost.<reason>``; fields ``detail``, ``limit`` the deadline, ``slack`` its part beyond the
-    time limit)."""
+    (``lost.<reason>``; fields ``detail``, ``limit`` the task's deadline, ``slack`` its part
+    beyond the time limit, ``doer`` and ``doing`` the task's)."""
     known = OUTCOMES.get(f"lost.{lost.reason}")
     return (known.finding if known else "{detail}").format(
-        detail=lost.detail, limit=deadline, slack=deadline - timeout)
+        detail=lost.detail, limit=task.deadline, slack=task.deadline - task.timeout,
+        doer=task.doer, doing=task.doing)
 
 
 #: The executors of this machine: a forked process per item, or this process.
@@ -135,7 +140,7 @@ def run(task: Task, entries: Sequence[Entry], jobs: int, executor: object = "pro
             i = runnable[k]
             if not isinstance(out, dict):
                 lost = out if isinstance(out, sb.Lost) else sb.Lost("not-a-report")
-                out = task.lost(entries[i], lost_text(lost, task.timeout, task.deadline))
+                out = task.lost(entries[i], lost_text(lost, task))
             done(i, out)
 
         spec = None if executor in ("processes", "local") else \

@@ -6,8 +6,9 @@ one :class:`Outcome` here: the checker's template of its finding (:func:`gpsacce
 .box_findings`, fields in that module's docstring) and, where the homework's grader stops a
 notebook on it, the clause it says (:mod:`gpsaccel.assignments.scoring`, fields ``limit`` (s)
 and ``memory`` (GB)).  ``lost.<reason>`` are the pool's items without a result
-(:class:`gpsaccel.sandbox.Lost`), as the batch checker says them (fields ``detail``, ``limit``,
-``slack``).  These are student-facing texts built from the student's own run and the check's
+(:class:`gpsaccel.sandbox.Lost`), worded by the run they were lost from (fields ``detail``,
+``limit``, ``slack``, and ``doer`` and ``doing``: "checker" and "checking this file" for a
+check, "grader" and "grading this notebook" for a grade).  These are student-facing texts built from the student's own run and the check's
 limits only, never from an answer.
 
 An outcome is ``ours`` when it says nothing about the student's code: the checker or the machine
@@ -96,14 +97,14 @@ OUTCOMES: dict[str, Outcome] = {
         "{function} must return {wanted} ({rows}); on {label} it returned "
         "{returned}{between_calls}.{hints}"),
     "lost.error": Outcome(
-        "the checker failed: {detail}", ours=True),
+        "the {doer} failed: {detail}", ours=True),
     "lost.not-a-report": Outcome(
-        "the check's process returned no report", ours=True),
+        "the {doer}'s process returned no report", ours=True),
     "lost.too-long": Outcome(
-        "the check took more than {limit:g} s (time limit plus {slack:g} s) and was stopped",
+        "{doing} took more than {limit:g} s (time limit plus {slack:g} s) and was stopped",
         ours=True),
     "lost.died": Outcome(
-        "the process checking this file died ({detail}) before it reported; a submission that kills "
+        "the process {doing} died ({detail}) before it reported; a submission that kills "
         "its parent process ends like this", ours=True),
 }
 

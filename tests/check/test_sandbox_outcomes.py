@@ -43,11 +43,14 @@ def test_a_lost_check_and_a_lost_notebook_are_worded_by_the_table():
                                                    2 * 30.0 + 60 + scoring.SLACK)
     for task in (check, notebook):
         for reason in ("error", "not-a-report", "too-long", "died"):
-            why = running.lost_text(sb.Lost(reason, "signal SIGKILL"), task.timeout,
-                                    task.deadline)
+            why = running.lost_text(sb.Lost(reason, "signal SIGKILL"), task)
             out = task.lost(entry, why)
             want = OUTCOMES[f"lost.{reason}"].finding.format(
-                detail="signal SIGKILL", limit=task.deadline, slack=task.deadline - 30.0)
+                detail="signal SIGKILL", limit=task.deadline, slack=task.deadline - 30.0,
+                doer=task.doer, doing=task.doing)
             assert why == want and want in str(out), (reason, out)
+            # each in its own words: a lost notebook never says "check", a lost file "grade"
+            other = ("grad", "notebook") if task is check else ("check", " file")
+            assert not any(w in why.lower() for w in other), why
             assert out["status" if task is notebook else "codes"] in ("grader-error",
                                                                       ["checker-error"])

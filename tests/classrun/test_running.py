@@ -60,8 +60,8 @@ def test_a_lost_item_is_its_own_entrys_only_and_worded_by_the_sandbox():
     assert ok["warmed"] == ok2["warmed"] == [os.getpid()]  # warmed once, here, then forked
     assert ok["pid"] != os.getpid() != ok2["pid"] != ok["pid"]  # a process per item
     assert dies == {"student": "dies", "lost": OUTCOMES["lost.died"].finding.format(
-        detail="exit status 3")}
-    assert raises == {"student": "raises", "lost": "the checker failed: ValueError: boom"}
+        detail="exit status 3", doing="running this item")}
+    assert raises == {"student": "raises", "lost": "the run failed: ValueError: boom"}
     assert nothing == {"student": "nothing", "refused": "no-notebook"}
 
 
@@ -69,15 +69,17 @@ def test_in_this_process_one_after_the_other():
     WARMED.clear()
     results = run(_Toy(), _entries("ok", "raises", "nothing"), 1, executor=None)
     assert results[0] == {"student": "ok", "pid": os.getpid(), "warmed": [os.getpid()]}
-    assert results[1]["lost"] == "the checker failed: ValueError: boom"
+    assert results[1]["lost"] == "the run failed: ValueError: boom"
     assert results[2]["refused"] == "no-notebook"
 
 
 def test_the_lost_wording_states_the_deadline_and_its_slack():
-    text = lost_text(Lost("too-long", "30 s"), timeout=60.0, deadline=180.0)
-    assert text == OUTCOMES["lost.too-long"].finding.format(limit=180.0, slack=120.0)
-    assert "180 s" in text and "120 s" in text
-    assert lost_text(Lost("unheard-of", "why"), 1.0, 2.0) == "why"
+    task = _Toy()
+    task.timeout, task.deadline = 60.0, 180.0
+    text = lost_text(Lost("too-long", "30 s"), task)
+    assert text == ("running this item took more than 180 s (time limit plus 120 s) and was "
+                    "stopped")
+    assert lost_text(Lost("unheard-of", "why"), task) == "why"
 
 
 def test_ctrl_c_stops_the_run_and_keeps_what_finished():
