@@ -23,7 +23,8 @@ Below the command line and above the items it runs (:mod:`gpsaccel.check` checks
   gradebook cell (a status the student did not cause is never a score);
 * :mod:`~gpsaccel.classrun.checking` (:func:`check_many`), :mod:`~gpsaccel.classrun.grading`
   (:func:`grade`) and :mod:`~gpsaccel.classrun.classwide` (the gradebooks and the similarity
-  report, written by :func:`grade` itself).
+  report, written by :func:`grade` itself, or again from the recorded grades by
+  :func:`rewrite_class` when a full disk kept a run from writing them).
 """
 
 from typing import TYPE_CHECKING
@@ -33,14 +34,14 @@ from gpsaccel import _lazy
 if TYPE_CHECKING:  # for mypy and editors; at run time each name loads on first use (_lazy)
     from gpsaccel.classrun.checking import CheckPlan, check_many, plan_check
     from gpsaccel.classrun.entries import PYTHON, Entry, Kind, Name, Naming, notebooks, plain, walk
-    from gpsaccel.classrun.grading import Graded, default_out, grade, grade_class
+    from gpsaccel.classrun.grading import Graded, default_out, grade, grade_class, rewrite_class
     from gpsaccel.classrun.running import Interrupted, Task, run
     from gpsaccel.classrun.writing import appender, log_path, table, write_json
 
 __all__ = [
     "PYTHON", "CheckPlan", "Entry", "Graded", "Interrupted", "Kind", "Name", "Naming", "Task",
     "appender", "check_many", "default_out", "grade", "grade_class", "log_path", "notebooks",
-    "plain", "plan_check", "run", "table", "walk", "write_json",
+    "plain", "plan_check", "rewrite_class", "run", "table", "walk", "write_json",
 ]
 
 # the command imports this package to reach its parts: nothing of the check or the grader loads
@@ -50,7 +51,7 @@ __getattr__, __dir__ = _lazy.attach(
     attributes={
         "checking": ("CheckPlan", "check_many", "plan_check"),
         "entries": ("PYTHON", "Entry", "Kind", "Name", "Naming", "notebooks", "plain", "walk"),
-        "grading": ("Graded", "default_out", "grade", "grade_class"),
+        "grading": ("Graded", "default_out", "grade", "grade_class", "rewrite_class"),
         "running": ("Interrupted", "Task", "run"),
         "writing": ("appender", "log_path", "table", "write_json"),
     })

@@ -33,8 +33,9 @@ function, :func:`similar`, and flags, never grades.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 from gpsaccel import registry
 from gpsaccel._atomic import write_text
@@ -42,26 +43,40 @@ from gpsaccel._untrusted import cell, shown
 from gpsaccel.assignments.roster import Student
 from gpsaccel.assignments.scoring import Grade
 from gpsaccel.classrun import statuses
-from gpsaccel.classrun.writing import csv_text
+from gpsaccel.classrun.writing import Outputs, csv_text
 
 #: The gradebook files :func:`write_gradebooks` writes.
 FILES = ("canvas.csv", "moodle.csv", "gradescope-roster.csv", "gradescope-scores.csv")
 
 
+#: The similarity report's files (:func:`similar`).
+REPORT = ("similarity.csv", "similarity.html")
+
+
+def files(roster: bool, similarity: bool) -> tuple[str, ...]:
+    """The files :func:`write` writes, with a roster or not, the similarity report or not."""
+    return (FILES if roster else ()) + (REPORT if similarity else ())
+
+
 def write(submissions: Path, out: Path, name: str, grades: Sequence[Grade],
           possible: dict[str, float], roster: Sequence[Student] | None,
-          similarity: bool = True) -> list[str]:
+          similarity: bool = True, outputs: Outputs | None = None) -> list[str]:
     """Write the gradebook files (with a roster) and the similarity report into ``out``; the
-    lines to show the instructor."""
+    lines to show the instructor.  ``outputs``: where a write the file system refuses is
+    recorded (the other files are still written); without it, the error is raised."""
+    def each(names: Sequence[str], writer: Callable[..., Any], *args: Any) -> Any:
+        return outputs.write(names, writer, *args) if outputs is not None else writer(*args)
+
     lines = statuses.unscored_lines(grades) + statuses.scored_zero_lines(grades)
     if roster is not None:
-        missing = write_gradebooks(grades, possible, roster,
-                                   registry.assignment(name).title or name, out)
-        lines.append("gradebooks: " + ", ".join(str(out / f) for f in FILES))
+        missing = each(FILES, write_gradebooks, grades, possible, roster,
+                       registry.assignment(name).title or name, out)
+        if missing is not None:
+            lines.append("gradebooks: " + ", ".join(str(out / f) for f in FILES))
         if missing:
             lines.append(f"not on the roster (in grades.csv only): {', '.join(missing)}")
     if similarity:
-        lines += similar(submissions, out, name, grades)
+        lines += each(REPORT, similar, submissions, out, name, grades) or []
     return lines
 
 

@@ -26,6 +26,10 @@ inside the checker's sandbox, every score computed outside, every file written b
   reproduces their data).  Then, once every notebook is graded, the class-wide files
   (:mod:`gpsaccel.classrun.classwide`): with a roster the LMS gradebooks, and the similarity
   report;
+* a file the file system refuses (a full disk) costs that file only
+  (:class:`~gpsaccel.classrun.writing.Outputs`): the grades and every other file are kept, and
+  ``grading.json``'s ``missing`` names what is not written; :func:`rewrite_class` writes the
+  class-wide files again from ``grades.json`` once there is room, without grading;
 * ``student=ID`` regrades one student with the recorded seed: the old row stays until the new
   one is written, and the regrade is appended to ``grading.json``'s ``regrades`` (the class
   record is kept);
@@ -97,6 +101,10 @@ def summary(grades: Sequence[Grade], possible: dict[str, float]) -> list[dict]:
     return out
 
 
+#: The summary's files (:func:`gpsaccel.classrun.writing.write_summary`).
+SUMMARY = ("summary.csv", "summary.png")
+
+
 class _Record:
     """What a run writes, each file whole (:mod:`gpsaccel._atomic`), after every notebook.
 
@@ -112,6 +120,10 @@ class _Record:
         self.kept_path = out / "grades.json"
         self.feedback = out / "feedback"
         self.previous = self._json(self.record, {})
+        # a regrade keeps what the folder still misses (another student's feedback)
+        kept = self.previous.get("missing") if student and isinstance(self.previous, dict) \
+            else None
+        self.outputs = writing.Outputs(out, kept if isinstance(kept, dict) else None)
         self.old = [Grade(**d) for d in self._json(self.kept_path, [])] if student else []
         for g in self.old:  # a row of an earlier version, without its id
             g.id = g.id or _untrusted.student_id(g.student)
@@ -156,31 +168,51 @@ class _Record:
         return sorted(kept + now, key=lambda g: (g.student.lower(), g.id))
 
     def flush(self) -> None:
+        """``grades.csv`` and ``grades.json`` now; one the file system refuses is missing
+        until a later flush writes it (:class:`~gpsaccel.classrun.writing.Outputs`)."""
         current = self.rows()
-        writing.write_grades(current, self.possible, self.out / "grades.csv")
-        writing.dump_json(self.kept_path, [{**asdict(x), "feedback": ""} for x in current])
+        self.outputs.write(["grades.csv"], writing.write_grades, current, self.possible,
+                           self.out / "grades.csv")
+        self.outputs.write(["grades.json"], writing.dump_json, self.kept_path,
+                           [{**asdict(x), "feedback": ""} for x in current])
 
     def done(self, i: int, data: dict) -> None:
         g = Grade(**data)
         self.bar.set_postfix_str(f"{g.student[:40]}: {g.status}")
         self.bar.update()
-        writing.write_feedback(self.feedback, self.entries[i].id, g.feedback)
+        sid = self.entries[i].id
+        self.outputs.write([f"feedback/{sid}.txt"], writing.write_feedback, self.feedback, sid,
+                           g.feedback)
         self.grades[i] = g
         self.flush()
 
-    def finish(self, interrupted: bool) -> list[Grade]:
+    def finish(self, interrupted: bool, pending: Sequence[str] = ()) -> list[Grade]:
+        """The last flush, the record, then the summary; ``pending``: the class-wide files
+        still to be written.  The record names the summary and them missing before they are
+        written (a disk that fills up on them may leave no room to update it), and
+        :meth:`save` after them names what is still missing."""
         self.bar.close()
         self.flush()
         final = self.rows()
-        if not interrupted:
-            writing.write_summary(summary(final, self.possible), final, self.out)
         entry = self.info["regrades"][-1] if self.student is not None and \
             self.info.get("regrades") else self.info
         entry["seconds"] = round(time.perf_counter() - self.t0, 1)
         entry["graded"] = sum(g is not None for g in self.grades)
         entry["interrupted"] = interrupted
-        writing.dump_json(self.record, self.info, indent=2)
+        if not interrupted:
+            self.outputs.pending([*SUMMARY, *pending])
+        self.save()
+        if not interrupted:
+            self.outputs.write(SUMMARY, writing.write_summary, summary(final, self.possible),
+                               final, self.out)
         return final
+
+    def save(self) -> None:
+        """``grading.json``, with the files the output folder misses (``missing``: file ->
+        why; empty when every file is written)."""
+        self.info["missing"] = dict(self.outputs.missing)
+        self.outputs.write(["grading.json"], writing.dump_json, self.record, self.info,
+                           indent=2)
 
 
 @dataclass
@@ -193,6 +225,8 @@ class Graded:
     rows: list[Grade]
     out: Path
     classwide: list[str] = field(default_factory=list)
+    #: The files not written (relative to ``out``) and why (the file system's words).
+    missing: dict[str, str] = field(default_factory=dict)
 
 
 def default_out(submissions: str | os.PathLike) -> Path:
@@ -250,9 +284,56 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
     except BaseException:  # Ctrl-C, a lost cluster: what is done stays, the rest not-graded
         record.finish(interrupted=True)
         raise
-    rows = record.finish(interrupted=False)
-    lines = classwide.write(folder, out, name, rows, possible, students, similarity)
-    return Graded([g for g in record.grades if g is not None], rows, out, lines)
+    rows = record.finish(False, classwide.files(students is not None, similarity))
+    lines = classwide.write(folder, out, name, rows, possible, students, similarity,
+                            record.outputs)
+    record.save()
+    return Graded([g for g in record.grades if g is not None], rows, out, lines,
+                  dict(record.outputs.missing))
+
+
+def rewrite_class(submissions: str | os.PathLike, name: str, out: str | os.PathLike | None = None,
+                  roster: Sequence[Student] | str | os.PathLike | None = None,
+                  similarity: bool = True) -> Graded:
+    """The class-wide step again from the grades a run recorded, without grading a notebook
+    (``gpsaccel grade --from-grades``): ``grades.csv`` and the summary from ``grades.json``,
+    then the gradebooks (with a roster) and the similarity report, each as :func:`grade_class`
+    writes them; ``grading.json``'s ``missing`` then names only what is still not written (a
+    student's feedback needs that student graded again: ``grades.json`` keeps no feedback).
+    For a run that could not write everything (a full disk), once there is room."""
+    folder = Path(submissions)
+    if not folder.is_dir():
+        raise ValueError(f"submissions must be the folder that was graded, got {folder}")
+    out = Path(out) if out is not None else default_out(folder)
+    info = _Record._json(out / "grading.json", None)
+    if not isinstance(info, dict):
+        raise ValueError(f"out: no grading.json in {out}: grade the class first (without "
+                         f"--from-grades)")
+    if info.get("assignment") != name:
+        raise ValueError(f"assignment: {out} holds the grades of {info.get('assignment')!r}, "
+                         f"not {name!r}")
+    kept = _Record._json(out / "grades.json", None)
+    if not isinstance(kept, list):
+        raise ValueError(f"out: no grades.json in {out} (the run could not write it): grade "
+                         f"the class again")
+    rows = [Grade(**d) for d in kept]
+    for g in rows:  # a row of an earlier version, without its id
+        g.id = g.id or _untrusted.student_id(g.student)
+    recorded = info.get("questions")
+    possible = recorded if isinstance(recorded, dict) else item.possible_of(name)
+    students = read_roster(roster) if isinstance(roster, (str, os.PathLike)) else roster
+    before = info.get("missing")
+    outputs = writing.Outputs(out, before if isinstance(before, dict) else None)
+    outputs.write(["grades.csv"], writing.write_grades, rows, possible, out / "grades.csv")
+    outputs.write(SUMMARY, writing.write_summary, summary(rows, possible), rows, out)
+    outputs.pending(classwide.files(students is not None, similarity))  # one it declines
+    lines = classwide.write(folder, out, name, rows, possible, students, similarity, outputs)
+    info.setdefault("rewrites", []).append({
+        "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        "roster": students is not None, "similarity": similarity})
+    info["missing"] = dict(outputs.missing)
+    outputs.write(["grading.json"], writing.dump_json, out / "grading.json", info, indent=2)
+    return Graded([], rows, out, lines, dict(outputs.missing))
 
 
 def grade(submissions: str | os.PathLike, name: str, out: str | os.PathLike | None = None,
@@ -262,9 +343,15 @@ def grade(submissions: str | os.PathLike, name: str, out: str | os.PathLike | No
           roster: Sequence[Student] | str | os.PathLike | None = None,
           similarity: bool = True, naming: Naming | None = None) -> list[Grade]:
     """Grade a class (:func:`grade_class`: the same files as ``gpsaccel grade`` writes); this
-    run's grades, one per student graded, in the class's order."""
-    return grade_class(submissions, name, out, jobs, timeout, seed, secret, student, dask,
-                       sandbox, progress, roster, similarity, naming).grades
+    run's grades, one per student graded, in the class's order.  OSError when a file could not
+    be written (every other one is; ``grading.json`` names them, :func:`rewrite_class` writes
+    the class-wide ones once there is room)."""
+    graded = grade_class(submissions, name, out, jobs, timeout, seed, secret, student, dask,
+                         sandbox, progress, roster, similarity, naming)
+    if graded.missing:
+        raise OSError(f"not written in {graded.out}: " + ", ".join(
+            f"{f} ({why})" for f, why in graded.missing.items()))
+    return graded.grades
 
 
 def _checked(folder: Path, out: str | os.PathLike | None, timeout: float, jobs: int | None

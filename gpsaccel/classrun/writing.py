@@ -163,6 +163,87 @@ def _figure(rows: list[dict], path: Path) -> None:
     plt.close(fig)
 
 
+# ----------------------------------------------------------------------------- what is missing
+def _stamp(path: Path) -> tuple[int, int, int] | None:
+    try:
+        st = path.stat()
+    except OSError:
+        return None
+    return st.st_dev, st.st_ino, st.st_mtime_ns
+
+
+#: Why a file is missing that was named before it was written and not written since (the
+#: writer declined, or the record could not be updated after it was written).
+PENDING = "not written, or written after the record was last updated"
+
+
+class Outputs:
+    """The files a run writes into ``out``, each either written or named missing with why.
+
+    A write the file system refuses (a full disk, a quota, a read-only folder: an
+    :class:`OSError`) costs the files it did not write, never the run, the grades kept in memory
+    or the outputs after it.  Every file is replaced whole (:mod:`gpsaccel._atomic`), so a file
+    is written by a call exactly when its inode changed: a writer that stops half-way (the
+    summary's CSV written, its figure not) names only what it did not write.  ``missing`` maps
+    each file (relative to ``out``) to the file system's words; a file written later (the next
+    flush, a rerun) leaves it."""
+
+    def __init__(self, out: Path, missing: dict[str, str] | None = None) -> None:
+        self.out = Path(out)
+        self.missing: dict[str, str] = dict(missing or {})
+
+    def write(self, files: Sequence[str], writer: Callable[..., Any], *args: Any,
+              **kwargs: Any) -> Any:
+        """``writer(*args, **kwargs)``, which writes ``files``; its value, or None when the
+        file system refused a write (the files it did not write are then ``missing``)."""
+        before = {f: _stamp(self.out / f) for f in files}
+        value, why = None, None
+        try:
+            value = writer(*args, **kwargs)
+        except OSError as exc:
+            why = exc.strerror or type(exc).__name__
+        for f in files:
+            if _stamp(self.out / f) != before[f]:
+                self.missing.pop(f, None)
+            elif why is not None:
+                self.missing[f] = why
+        return value
+
+    def pending(self, files: Sequence[str]) -> None:
+        """Name ``files`` missing until a write replaces them: recorded before they are
+        written, so a record that cannot be updated afterwards does not claim them, and a
+        writer that declines to write one (the similarity report, saying why) leaves it
+        named."""
+        for f in files:
+            self.missing.setdefault(f, PENDING)
+
+
+def missing_lines(missing: dict[str, str], again: str) -> list[str]:
+    """The terminal's lines on the files a run could not write (none when every one was):
+    which, why, and how to write them once there is room (``again``: the command that rewrites
+    the class-wide files from the recorded grades; a student's feedback needs that student
+    graded again)."""
+    if not missing:
+        return []
+    feedback = sorted(f for f in missing if f.startswith("feedback/"))
+    files = [f for f in missing if f not in feedback]
+    whys = sorted(set(missing.values()))
+    lines = [f"NOT WRITTEN ({'; '.join(whys)}): {len(missing)} file(s), listed in grading.json's "
+             f"'missing'"]
+    if files:
+        lines.append(f"  {', '.join(files)}: once there is room, {again}")
+    if "grading.json" in missing:
+        lines.append("  grading.json could not be updated: its 'missing' may name files "
+                     "written since")
+    if feedback:
+        names = [f[len("feedback/"):-len(".txt")] for f in feedback]
+        shown = ", ".join(names[:20]) + (f", and {len(names) - 20} more" if len(names) > 20
+                                         else "")
+        lines.append(f"  the feedback of {shown}: once there is room, grade each again with "
+                     f"--student ID")
+    return lines
+
+
 # ----------------------------------------------------------------------------------- tables
 def _shown_name(r: dict) -> str:
     return _untrusted.shown(str(r["details"].get("path", r["subject"])), NAME_WIDTH)

@@ -6,9 +6,14 @@ import argparse
 import shlex
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from gpsaccel import _validation as _v
 from gpsaccel.cli._flags import Registered, registered_assignments
+
+if TYPE_CHECKING:  # the command loads them when it runs
+    from gpsaccel.classrun.grading import Graded
+    from gpsaccel.classrun.writing import Terminal
 
 
 def _cmd_assignment(args: argparse.Namespace) -> int:
@@ -100,34 +105,74 @@ def _cmd_grade(args: argparse.Namespace) -> int:
     """Grade a class in the sandbox: grades.csv, feedback/, summary.csv/png in --out; with
     --roster the LMS gradebook files; the similarity report.  :func:`gpsaccel.classrun.grade`
     writes every file; only then is anything printed, and a reader that goes away (``| head``)
-    stops nothing (:func:`gpsaccel.classrun.writing.terminal`)."""
+    stops nothing (:func:`gpsaccel.classrun.writing.terminal`).  A file the file system refused
+    (a full disk) is named, with the ``--from-grades`` command that writes it once there is
+    room, and the command exits 2."""
     from gpsaccel.assignments.generate import resolve
     from gpsaccel.assignments.grading import read_secret
     from gpsaccel.assignments.roster import read_roster
-    from gpsaccel.classrun.grading import default_out, grade_class
+    from gpsaccel.assignments.scoring import TIMEOUT
+    from gpsaccel.classrun.grading import default_out, grade_class, rewrite_class
     from gpsaccel.classrun.writing import grade_mistakes, grades_table, terminal
 
     name = resolve(args.assignment)
     if args.dask is not None and name != args.assignment:
         raise ValueError("--dask: a homework from a folder of your own is known to this process "
                          "only, not to Dask's workers; leave out --dask")
+    if args.from_grades:
+        _only_class_wide(args)
     roster = read_roster(args.roster) if args.roster is not None else None
-    secret = read_secret(args.secret_file)
     out = args.out if args.out is not None else default_out(args.submissions)
     with terminal() as term:
-        graded = grade_class(args.submissions, name, out=out, jobs=args.jobs,
-                             timeout=args.timeout, seed=args.seed, secret=secret,
-                             student=args.student, dask=args.dask, sandbox=args.sandbox,
-                             progress=True, roster=roster, similarity=not args.no_similarity)
-        term.out(grades_table(graded.grades))
-        for line in grade_mistakes(graded.grades):
-            term.out(line)
-        term.out(f"wrote {out / 'grades.csv'}, {out / 'grades.json'}, {out / 'feedback'}/, "
-                 f"{out / 'summary.csv'}, {out / 'summary.png'} (seed in "
-                 f"{out / 'grading.json'})")
-        for line in graded.classwide:
-            term.out(line)
-    return 0
+        if args.from_grades:
+            graded = rewrite_class(args.submissions, name, out, roster,
+                                   similarity=not args.no_similarity)
+        else:
+            graded = grade_class(args.submissions, name, out=out, jobs=args.jobs,
+                                 timeout=args.timeout or TIMEOUT, seed=args.seed,
+                                 secret=read_secret(args.secret_file), student=args.student,
+                                 dask=args.dask, sandbox=args.sandbox, progress=True,
+                                 roster=roster, similarity=not args.no_similarity)
+            term.out(grades_table(graded.grades))
+            for line in grade_mistakes(graded.grades):
+                term.out(line)
+        _wrote(term, args, out, graded)
+    return 2 if graded.missing else 0
+
+
+def _wrote(term: Terminal, args: argparse.Namespace, out: Path, graded: Graded) -> None:
+    """The lines after a grade: the files written, the class-wide step's lines, and what is
+    missing with the ``--from-grades`` command that writes it once there is room."""
+    from gpsaccel.classrun.writing import missing_lines
+
+    skip = set(graded.missing) | ({"grades.json", "feedback/"} if args.from_grades else set())
+    shown = [f"{out / f}/" if f.endswith("/") else str(out / f) for f in (
+        "grades.csv", "grades.json", "feedback/", "summary.csv", "summary.png", "grading.json")
+        if f not in skip]
+    term.out(f"wrote {', '.join(shown)} (seed in {out / 'grading.json'})")
+    for line in graded.classwide:
+        term.out(line)
+    again = " ".join(shlex.quote(str(a)) for a in (
+        "gpsaccel", "grade", args.submissions, "--assignment", args.assignment, "--out", out,
+        *(("--roster", args.roster) if args.roster is not None else ()),
+        *(("--no-similarity",) if args.no_similarity else ()), "--from-grades"))
+    for line in missing_lines(graded.missing, again):
+        term.err(line)
+
+
+#: The flags of a grade that ``--from-grades`` (no notebook graded) cannot honour, and their
+#: defaults.
+_GRADING_ONLY = {"student": None, "seed": None, "jobs": None, "timeout": None,
+                 "secret_file": None, "dask": None, "sandbox": "auto"}
+
+
+def _only_class_wide(args: argparse.Namespace) -> None:
+    """Refuse a grading flag with ``--from-grades``, which grades nothing."""
+    given = [f"--{k.replace('_', '-')}" for k, default in _GRADING_ONLY.items()
+             if getattr(args, k) != default]
+    if given:
+        raise ValueError(f"--from-grades writes the class-wide files from the recorded grades "
+                         f"and grades no notebook: leave out {', '.join(given)}")
 
 
 def add_assignment(sub: argparse._SubParsersAction) -> None:
@@ -166,7 +211,7 @@ def add_grade(sub: argparse._SubParsersAction) -> None:
                    help="folder for grades.csv, feedback/, summary (default SUBMISSIONS-grades)")
     p.add_argument("--jobs", type=_v.flag_int(minimum=1), default=None,
                    help="notebooks graded at once (default: CPUs, at most 4)")
-    p.add_argument("--timeout", type=_v.flag_float(0.0, open_min=True), default=120.0,
+    p.add_argument("--timeout", type=_v.flag_float(0.0, open_min=True), default=None,
                    help="time limit of one notebook's box, s (default 120)")
     p.add_argument("--seed", type=_v.flag_seed, default=None,
                    help="seed of the fresh data (default: random; recorded in grading.json)")
@@ -178,4 +223,8 @@ def add_grade(sub: argparse._SubParsersAction) -> None:
                    help="grade on Dask: 'dask-local' or a scheduler address tcp://host:port")
     p.add_argument("--sandbox", choices=("auto", "bwrap", "basic"), default="auto",
                    help="isolation of each notebook (default auto: bwrap where it works)")
+    p.add_argument("--from-grades", action="store_true",
+                   help="grade nothing: write grades.csv, the summary, the gradebooks (with "
+                        "--roster) and the similarity report again from --out's grades.json "
+                        "(after a run that could not write them: a full disk)")
     p.set_defaults(func=_cmd_grade)

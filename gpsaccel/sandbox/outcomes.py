@@ -8,8 +8,8 @@ notebook on it, the clause it says (:mod:`gpsaccel.assignments.scoring`, fields 
 and ``memory`` (GB)).  ``lost.<reason>`` are the pool's items without a result
 (:class:`gpsaccel.sandbox.Lost`), worded by the run they were lost from (fields ``detail``,
 ``limit``, ``slack``, and ``doer`` and ``doing``: "checker" and "checking this file" for a
-check, "grader" and "grading this notebook" for a grade).  These are student-facing texts built from the student's own run and the check's
-limits only, never from an answer.
+check, "grader" and "grading this notebook" for a grade).  These are student-facing texts
+built from the student's own run and the run's limits only, never from an answer.
 
 An outcome is ``ours`` when it says nothing about the student's code: the checker or the machine
 failed (``lost.*``, and ``machine-busy``: the box reached its backstop on a machine too busy to
