@@ -312,18 +312,19 @@ def rewrite_class(submissions: str | os.PathLike, name: str, out: str | os.PathL
     if info.get("assignment") != name:
         raise ValueError(f"assignment: {out} holds the grades of {info.get('assignment')!r}, "
                          f"not {name!r}")
+    before = info.get("missing")
+    before = before if isinstance(before, dict) else {}
     kept = _Record._json(out / "grades.json", None)
-    if not isinstance(kept, list):
-        raise ValueError(f"out: no grades.json in {out} (the run could not write it): grade "
-                         f"the class again")
+    if not isinstance(kept, list) or "grades.json" in before:  # none, or an earlier run's
+        raise ValueError(f"out: {out} holds no grades.json of the last run (it could not be "
+                         f"written): grade the class again")
     rows = [Grade(**d) for d in kept]
     for g in rows:  # a row of an earlier version, without its id
         g.id = g.id or _untrusted.student_id(g.student)
     recorded = info.get("questions")
     possible = recorded if isinstance(recorded, dict) else item.possible_of(name)
     students = read_roster(roster) if isinstance(roster, (str, os.PathLike)) else roster
-    before = info.get("missing")
-    outputs = writing.Outputs(out, before if isinstance(before, dict) else None)
+    outputs = writing.Outputs(out, before)
     outputs.write(["grades.csv"], writing.write_grades, rows, possible, out / "grades.csv")
     outputs.write(SUMMARY, writing.write_summary, summary(rows, possible), rows, out)
     outputs.pending(classwide.files(students is not None, similarity))  # one it declines

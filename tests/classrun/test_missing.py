@@ -177,5 +177,19 @@ def test_from_grades_needs_a_run_of_this_homework(tmp_path, monkeypatch):
     with pytest.raises(ValueError, match="holds the grades of 'calibration', not 'tracker'"):
         rewrite_class(sub, "tracker", tmp_path / "out")
     (tmp_path / "out" / "grades.json").unlink()
-    with pytest.raises(ValueError, match="no grades.json"):
+    with pytest.raises(ValueError, match="no grades.json of the last run"):
+        rewrite_class(sub, "calibration", tmp_path / "out")
+
+
+def test_from_grades_refuses_a_grades_json_the_last_run_could_not_replace(
+        tmp_path, monkeypatch, full):
+    """grades.json left from an earlier run (this run's was refused) would put stale grades in
+    the gradebooks: the rerun refuses it."""
+    sub = _class(tmp_path, monkeypatch)
+    grade_class(sub, "calibration", out=tmp_path / "out", seed=1, similarity=False)
+    full.add("grades.json")
+    graded = grade_class(sub, "calibration", out=tmp_path / "out", seed=2, similarity=False)
+    assert graded.missing == {"grades.json": ENOSPC}
+    full.clear()
+    with pytest.raises(ValueError, match="no grades.json of the last run"):
         rewrite_class(sub, "calibration", tmp_path / "out")
