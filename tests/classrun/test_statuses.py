@@ -29,6 +29,16 @@ def _status(node: ast.AST) -> str | None:
     return node.value if ok else None  # type: ignore[union-attr]  # a Constant when ok
 
 
+def _given(node: ast.AST) -> set[str]:
+    """The literal statuses an expression can be: itself, or either side of ``x or "graded"``
+    and ``a if c else b``."""
+    if isinstance(node, ast.BoolOp):
+        return set().union(*map(_given, node.values))
+    if isinstance(node, ast.IfExp):
+        return _given(node.body) | _given(node.orelse)
+    return {_status(node) or ""}
+
+
 def _called(node: ast.Call) -> str:
     f = node.func
     return f.attr if isinstance(f, ast.Attribute) else f.id if isinstance(f, ast.Name) else ""
@@ -42,8 +52,8 @@ def statuses_in_code() -> set[str]:
     """Every status the grader's code gives a student: a problem ``("status", message)`` (the
     walk's and an export naming's ``problem=``, a notebook search's ``return None, (...)``),
     the status a grade is made with (``unusable``, ``not_run``, ``Grade``), a literal assigned
-    to ``status``, and the sandbox's failures the grader stops a notebook on (:data:`OUTCOMES`'
-    ``stop``)."""
+    to ``status`` (alone or in ``box.failure or "graded"``), and the sandbox's failures the
+    grader stops a notebook on (:data:`OUTCOMES`' ``stop``)."""
     found = {code for code, o in OUTCOMES.items() if o.stop}
     files = [*(ROOT / "classrun").glob("*.py"), *(ROOT / "assignments").glob("*.py")]
     for path in files:
@@ -61,7 +71,7 @@ def statuses_in_code() -> set[str]:
                 found |= {_status(a) or "" for a in args}
             elif isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "status"
                                                       for t in node.targets):
-                found.add(_status(node.value) or "")
+                found |= _given(node.value)
     return found - {""}
 
 
