@@ -25,7 +25,7 @@ from gpsaccel.lessons.release import masters
 
 #: Template names of a system's table that are no code: the wording of a catalogue entry's
 #: finding in a homework (the finding carries the entry's own code).
-TEMPLATES = {"ekf-mistake", "update-mistake"}
+TEMPLATES = {"update-mistake"}
 
 _SELF_CHECK = re.compile(r'self_check\("([^"]+)"')
 _SUBMISSION_ERROR = re.compile(r'SubmissionError\("([a-z-]+)"')

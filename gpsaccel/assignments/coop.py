@@ -29,6 +29,7 @@ import numpy as np
 
 from gpsaccel import registry
 from gpsaccel.assignments._answers import array, assert_report, call
+from gpsaccel.check.findings import mistake_finding
 from gpsaccel.check.report import Report
 from gpsaccel.coop.mistakes import MESSAGES as COOP_MESSAGES
 from gpsaccel.coop.model import (
@@ -259,8 +260,9 @@ def ekf(func: object, y: np.ndarray, x0: np.ndarray | None = None, P0: np.ndarra
     for m in ekf_mistakes():
         xm, Pm = _ref(y, x0, P0, Q, R, (m.code, m.variant))
         if _distances(x, P, xm, Pm)[2] < 0:
-            report.add(m.code, text=TEXT["ekf-mistake"], where=label,
-                       observed={"what": m.message, "hint": m.hint})
+            # the student reads the code's wording and what their EKF does (the entry's variant);
+            # the entry's message, which states the right step, is the instructor's
+            mistake_finding(report, m, where=label)
             return report
     t = model.t
     report.add("ekf-mismatch", text=TEXT["ekf-mismatch"], where=f"t = {t[first]:g} s (step {first})",

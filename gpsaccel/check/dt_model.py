@@ -101,35 +101,40 @@ DT_RIGHT = {"F": "F = I + ΔT·A", "G": "G = ΔT·B", "H": "H = C", "Omega": "Ω
 
 @dataclass(frozen=True)
 class _DTForm:
-    """One DT matrix: the Jacobian it is built from, its right form, the slips recognised
-    (a wrong form and what is said of it, after "Your "), the formulas element by element and
-    the hint of an element finding.  ``{dt}`` in the texts is ΔT."""
+    """One DT matrix: the Jacobian it is built from, its right form, the slips recognised (a
+    wrong form, what the student reads of it — what their matrix does, after "Your " — and what
+    the instructor reads, the right form too), the formulas element by element and the
+    instructor's hint of an element finding.  ``{dt}`` in the texts is ΔT."""
 
     jacobian: str
     shape: tuple[int, int]
     right: Callable[[np.ndarray, float], np.ndarray]
-    slips: tuple[tuple[Callable[[np.ndarray, float], np.ndarray], str], ...]
+    slips: tuple[tuple[Callable[[np.ndarray, float], np.ndarray], str, str], ...]
     formulas: Callable[[], dict[tuple[int, int], str]]
     hint: str
 
 
 DT_FORMS = {
     "F": _DTForm("A", (6, 6), lambda J, dt: np.eye(6) + dt * J, (
-        (lambda J, dt: J, "F = A, the continuous-time Jacobian; the DT transition is "
-                          "F = I + ΔT·A (ΔT = {dt:g} s)"),
-        (lambda J, dt: dt * J, "F = ΔT·A: the identity is missing; F = I + ΔT·A"),
-        (lambda J, dt: np.eye(6) + J, "F = I + A: ΔT = {dt:g} s is missing; F = I + ΔT·A")),
+        (lambda J, dt: J, "F = A, the continuous-time Jacobian of the derivative ẋ, not a step",
+         "F = A, the continuous-time Jacobian; the DT transition is F = I + ΔT·A (ΔT = {dt:g} "
+         "s)"),
+        (lambda J, dt: dt * J, "F = ΔT·A: it maps δx_k to the change of δx over the step, not "
+                               "to δx_(k+1)",
+         "F = ΔT·A: the identity is missing; F = I + ΔT·A"),
+        (lambda J, dt: np.eye(6) + J, "F = I + A: a step of 1 s, where the step is ΔT = {dt:g} s",
+         "F = I + A: ΔT = {dt:g} s is missing; F = I + ΔT·A")),
         lambda: {(i, i): "1" for i in range(6)} | {k: f"ΔT·({v})"
                                                    for k, v in FORMULAS["A"].items()},
         "F = I + ΔT·A with ΔT = {dt:g} s."),
     "G": _DTForm("B", (6, 4), lambda J, dt: dt * J, (
-        (lambda J, dt: J, "G = B, the continuous-time ∂f/∂u; the DT input matrix is G = ΔT·B "
-                          "(ΔT = {dt:g} s)"),),
+        (lambda J, dt: J, "G = B, the continuous-time ∂f/∂u of the derivative ẋ, not a step",
+         "G = B, the continuous-time ∂f/∂u; the DT input matrix is G = ΔT·B (ΔT = {dt:g} s)"),),
         lambda: {k: f"ΔT·{v}" for k, v in FORMULAS["B"].items()},
         "G = ΔT·B with ΔT = {dt:g} s."),
     "H": _DTForm("C", (5, 6), lambda J, dt: J, (
-        (lambda J, dt: dt * J, "H = ΔT·C; the measurement is taken at an instant, so H = C "
-                               "(no ΔT)"),),
+        (lambda J, dt: dt * J, "H = ΔT·C: a measurement is taken at an instant, not over a step",
+         "H = ΔT·C; the measurement is taken at an instant, so H = C (no ΔT)"),),
         lambda: dict(FORMULAS["C"]), "H = C = ∂h/∂x."),
 }
 
@@ -164,11 +169,11 @@ def _check_dt_matrix(report: Report, name: str, value: object, X: np.ndarray, U:
     want = form.right(J, dt)
     if close(got, want, rtol):
         return
-    for slip, why in form.slips:
+    for slip, said, detail in form.slips:
         if close(got, slip(J, dt), rtol):
-            # the student reads what their matrix is (before ";"), not the right form after it
-            report.add("dt-linearization", f"Your {why.format(dt=dt)}.", text="Your {what}.",
-                       where=name, part=name, observed={"what": why.split(";")[0].format(dt=dt)})
+            # the student reads what their matrix is, never the right form (the instructor does)
+            report.add("dt-linearization", f"Your {detail.format(dt=dt)}.", text="Your {what}.",
+                       where=name, part=name, observed={"what": said.format(dt=dt)})
             return
     matrix_finding(report, "dt-linearization", name, got, want, X, labels, rtol,
                     formulas=form.formulas(), unit_hint=form.hint.format(dt=dt))
@@ -194,11 +199,11 @@ def _check_noise(report: Report, Omega: object, Q: object, model: CoopModel, rto
         Om = _matrix(report, "Omega", Omega, 6)
         if Om is not None and not close(Om[None], np.eye(6)[None], rtol):
             if close(Om[None], dt * np.eye(6)[None], rtol):
-                report.add("omega-dt-gamma", text="Your Ω = ΔT·Γ = {dt:g}·I: the course's Qtrue "
-                           "is already the covariance of the noise added per DT step "
-                           "(x_{{k+1}} = F x_k + G u_k + w_k, w_k ~ N(0, Qtrue)). Ω = ΔT·Γ "
-                           "belongs to a continuous-time noise intensity; here it shrinks Q by "
-                           "ΔT² = {dt2:g}.", where="Ω", observed={"dt": dt, "dt2": dt**2},
+                report.add("omega-dt-gamma", "x_(k+1) = F x_k + G u_k + w_k, w_k ~ N(0, "
+                           "Qtrue): Ω = I", text="Your Ω = ΔT·Γ = {dt:g}·I: the course's Qtrue "
+                           "is already the covariance of the noise w_k added per DT step. Ω = "
+                           "ΔT·Γ belongs to a continuous-time noise intensity; here it shrinks "
+                           "Q by ΔT² = {dt2:g}.", where="Ω", observed={"dt": dt, "dt2": dt**2},
                            expected={"Ω": "I"})
             else:
                 report.add("omega-dt-gamma", text="Your Ω is wrong (the course's Qtrue is the "
@@ -211,10 +216,10 @@ def _check_noise(report: Report, Omega: object, Q: object, model: CoopModel, rto
             return
         for scale, what in ((dt, "ΔT·Qtrue"), (dt**2, "ΔT²·Qtrue = Ω Qtrue Ωᵀ with Ω = ΔT·I")):
             if close(Qs[None], scale * Qt[None], rtol):
-                report.add("omega-dt-gamma", text="Your Q = {what}: the course's Qtrue is "
-                           "already the covariance of the process noise per DT step of {dt:g} s, "
-                           "so the filter's Q is not scaled by ΔT.", where="Q",
-                           observed={"what": what, "dt": dt})
+                report.add("omega-dt-gamma", "The filter's Q is Qtrue, not scaled by ΔT.",
+                           text="Your Q = {what}: the course's Qtrue is already the covariance "
+                           "of the process noise per DT step of {dt:g} s; yours scales it once "
+                           "more.", where="Q", observed={"what": what, "dt": dt})
                 return
 
 

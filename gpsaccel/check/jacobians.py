@@ -19,9 +19,10 @@ when it agrees with the analytic value to ``rtol`` relative to the element's own
 ``rtol`` times the largest element of that matrix at that state (the analytic matrices are exact
 to rounding; a central finite difference with a good step is 1e-8 relative away, and passes).
 
-Every wrong element is named in 1-based course notation (A₁₃), with the expected expression, the
-student's and the right value at the first state where it differs, and, for the recognised
-mistakes, the likely cause.  Codes: ``jacobian-A``, ``jacobian-B``, ``jacobian-C``;
+Every wrong element is named in 1-based course notation (A₁₃), with the student's value at the
+first state where it differs and, for the recognised mistakes, the likely cause: the student reads
+what their element does and what it depends on; the instructor also reads the expected expression,
+its value and the derivative that is right (never the student: that is the answer).  Codes: ``jacobian-A``, ``jacobian-B``, ``jacobian-C``;
 ``not-callable``, ``exception``, ``returns-none``, ``shape``, ``not-finite`` for what cannot be
 checked.  The DT linearization built from these Jacobians is checked by
 :mod:`gpsaccel.check.dt_model`, with the same states and element-by-element findings.
@@ -189,37 +190,53 @@ def close(a: np.ndarray, b: np.ndarray, rtol: float) -> bool:
     return not _bad(a, b, rtol).any()
 
 
+#: A likely cause as the student reads it and as the instructor does: the student's says what
+#: their element does and what the element depends on, never a derivative's value (that is the
+#: answer); the instructor's may state it.
+Cause = tuple[str, str]
+
+_HEADING = "the bearing is measured relative to the vehicle's heading, γ = atan2(Δη, Δξ) − θ"
+_ATAN2 = ("differentiate atan2(Δη, Δξ) through Δξ = ξa − ξg and Δη = ηa − ηg (chain rule), for "
+          "the UGV's coordinates and the UAV's alike")
+
+
 def _element_cause(name: str, idx: tuple[int, int], a: np.ndarray, e: np.ndarray,
-                   labels_bad: list[str], rtol: float) -> str:
-    """The likely cause of element ``idx`` being wrong, from its values over all states."""
+                   labels_bad: list[str], rtol: float) -> Cause:
+    """The likely cause of element ``idx`` being wrong, from its values over all states:
+    (the student's words, the instructor's); ("", "") when none is recognised."""
     i, j = idx
     tol = rtol * (np.abs(e) + np.abs(e).max() + 1e-300)
     if np.all(np.abs(a + e) <= tol) and np.abs(e).max() > 0:
         if name == "C" and j in (2, 5):
-            return ("the sign is wrong: the bearing is measured relative to the heading, "
-                    "γ = atan2(Δη, Δξ) − θ, so ∂γ/∂θ = −1")
+            return (f"the sign is wrong: {_HEADING}; how does γ change when θ grows?",
+                    f"the sign is wrong: {_HEADING}, so ∂γ/∂θ = −1")
         if name == "C" and i in (0, 2):
-            return ("a sign error in ∂atan2: ∂atan2(Δη, Δξ)/∂Δξ = −Δη/ρ² and ∂/∂Δη = Δξ/ρ², and "
-                    "Δξ = ξa − ξg enters with − for the UGV's own position")
+            return (f"the sign is wrong: {_ATAN2}",
+                    "a sign error in ∂atan2: ∂atan2(Δη, Δξ)/∂Δξ = −Δη/ρ² and ∂/∂Δη = Δξ/ρ², "
+                    "and Δξ = ξa − ξg enters with − for the UGV's own position")
         if name == "C" and i == 1:
-            return "the sign is wrong: ρ grows with ξa − ξg, so ∂ρ/∂ξa = +Δξ/ρ and ∂ρ/∂ξg = −Δξ/ρ"
-        return "the sign is wrong (∂cos θ/∂θ = −sin θ, ∂sin θ/∂θ = cos θ)"
+            return ("the sign is wrong: ρ depends on the two positions through "
+                    "Δξ = ξa − ξg and Δη = ηa − ηg (chain rule)",
+                    "the sign is wrong: ρ grows with ξa − ξg, so ∂ρ/∂ξa = +Δξ/ρ and ∂ρ/∂ξg = "
+                    "−Δξ/ρ")
+        return ("the sign is wrong: check the sign of each derivative that makes it (a cos or "
+                "a sin differentiated, a difference taken the other way round)", "the sign is wrong (∂cos θ/∂θ = −sin θ, ∂sin θ/∂θ = cos θ)")
     if np.all(np.abs(a) <= tol):
         if name == "C" and j in (2, 5):
-            return ("the bearing is measured relative to the vehicle's heading, γ = atan2(Δη, Δξ) "
-                    "− θ, so it depends on θ: ∂γ/∂θ = −1")
-        return "it is missing (zero)"
-    if name == "C" and j in (2, 5) and np.all(np.abs(a - 1) <= tol):
-        return ("the bearing is measured relative to the heading, γ = atan2(Δη, Δξ) − θ, so "
-                "∂γ/∂θ = −1, not +1")
+            return (f"it is missing (zero at every state): {_HEADING}, so it depends on θ",
+                    f"it is missing (zero): {_HEADING}, so ∂γ/∂θ = −1")
+        return "it is missing (zero at every state)", "it is missing (zero)"
     if name == "B" and idx == (2, 1):
-        return ("∂(vg tan φg / L)/∂φg = vg / (L cos² φg) = vg sec² φg / L (the derivative of "
+        return ("it is the derivative of θ̇g = vg tan φg / L with respect to the steering angle "
+                "φg: it depends on vg, L and φg, through the derivative of tan φg",
+                "∂(vg tan φg / L)/∂φg = vg / (L cos² φg) = vg sec² φg / L (the derivative of "
                 "tan is sec²)")
     if all("±π" in s or "1 cm" in s for s in labels_bad):
-        return ("it is right elsewhere and wrong only where a bearing is at ±π or the vehicles "
+        said = ("it is right elsewhere and wrong only where a bearing is at ±π or the vehicles "
                 "nearly coincide: a numerical derivative through the wrapped h (or a step too "
                 "large for ρ = 1 cm) — differentiate the formula, not the wrapped measurement")
-    return ""
+        return said, said
+    return "", ""
 
 
 def matrix_finding(report: Report, code: str, name: str, actual: np.ndarray,
@@ -241,15 +258,16 @@ def matrix_finding(report: Report, code: str, name: str, actual: np.ndarray,
     for idx in elems[:MAX_LISTED]:
         states = np.flatnonzero(bad[:, idx[0], idx[1]])
         k = s if bad[s][idx] else int(states[0])
-        cause = _element_cause(name, idx, actual[:, idx[0], idx[1]],
-                               expected[:, idx[0], idx[1]], [labels[j] for j in states], rtol)
+        said, cause = _element_cause(name, idx, actual[:, idx[0], idx[1]],
+                                     expected[:, idx[0], idx[1]], [labels[j] for j in states],
+                                     rtol)
         where = "" if k == s else f" at {labels[k]}"
         formula, value = formulas.get(idx, "0"), f"{expected[k][idx]:.6g}"
         want = value if formula.replace("−", "-") == value else f"{formula} = {value}"
         groups.setdefault(cause, []).append(
             f"{_elem(display, *idx)} = {actual[k][idx]:.6g}, should be {want}{where} (wrong at "
             f"{states.size} of {len(X)} states)")
-        mine.setdefault(cause, []).append(  # the student's value and where: no reference
+        mine.setdefault(said, []).append(  # the student's value and where: no reference
             f"{_elem(display, *idx)} = {actual[k][idx]:.6g}{where} is wrong (at {states.size} "
             f"of {len(X)} states)")
         right[f"{_elem(display, *idx)}{where}"] = want
@@ -268,27 +286,33 @@ def matrix_finding(report: Report, code: str, name: str, actual: np.ndarray,
     return False
 
 
+#: A whole Jacobian built for a DT step (name, what it is -> the student's words, the
+#: instructor's): the student reads what their matrix holds, never the DT form it would be right
+#: for (question 2 of the coop homework asks for that form).
+_WHOLE = {
+    ("A", "I + ΔT·A"): ("Your A is the identity plus ΔT = {dt:g} s times a Jacobian: A is the "
+                        "continuous-time Jacobian ∂f/∂x of ẋ = f(x, u), with neither.",
+                        "A given as the DT transition F = I + ΔT·A."),
+    ("A", "ΔT·A"): ("Your A is multiplied by ΔT = {dt:g} s: A is the continuous-time Jacobian "
+                    "∂f/∂x of ẋ = f(x, u), with no step in it.", "A given as ΔT·A."),
+    ("B", "ΔT·B"): ("Your B is multiplied by ΔT = {dt:g} s: B is the continuous-time Jacobian "
+                    "∂f/∂u of ẋ = f(x, u), with no step in it.",
+                    "B given as the DT input matrix G = ΔT·B."),
+}
+
+
 def _whole_matrix_causes(report: Report, name: str, actual: np.ndarray, expected: np.ndarray,
                          model: CoopModel, rtol: float) -> bool:
-    """Recognise a whole-matrix mistake (transposed-free: DT instead of CT); True if found."""
+    """Recognise a whole-matrix mistake (a Jacobian built for a DT step: :data:`_WHOLE`); True
+    if found."""
     dt = model.dt
-    code = f"jacobian-{name}"
-    if name == "A":
-        eye = np.eye(6)
-        if close(actual, eye + dt * expected, rtol):
-            report.add(code, "(A₁₃ = −vg·sin θg)", text="Your A is F = I + ΔT·A (ΔT = {dt:g} "
-                       "s), the DT transition; A is the continuous-time Jacobian ∂f/∂x, without "
-                       "I and without ΔT. Check F with check.dt_model.", where="A",
-                       observed={"dt": dt})
+    for (matrix, form), (said, detail) in _WHOLE.items():
+        if matrix != name:
+            continue
+        built = dt * expected + (np.eye(6) if form.startswith("I") else 0.0)
+        if close(actual, built, rtol):
+            report.add(f"jacobian-{name}", detail, text=said, where=name, observed={"dt": dt})
             return True
-        if close(actual, dt * expected, rtol):
-            report.add(code, text="Your A is ΔT·A (ΔT = {dt:g} s); A is the continuous-time "
-                       "Jacobian ∂f/∂x, not multiplied by ΔT.", where="A", observed={"dt": dt})
-            return True
-    if name == "B" and close(actual, dt * expected, rtol):
-        report.add(code, text="Your B is G = ΔT·B (ΔT = {dt:g} s); B is the continuous-time "
-                   "∂f/∂u.", where="B", observed={"dt": dt})
-        return True
     return False
 
 

@@ -136,19 +136,19 @@ MESSAGES: dict[str, str] = {
                                 "{type}.",
     "homework.uses-own-jacobian": "{where} is {form} with your own jacobian_{base}: right here "
                                   "(question 1 grades jacobian_{base}).",
-    "homework.zero-order-hold": "Your G is the exact zero-order-hold ∫₀^ΔT e^{{Aτ}} dτ B = (ΔT·I + "
+    "homework.zero-order-hold": "Your G is the exact zero-order hold ∫₀^ΔT e^{{Aτ}} dτ B = (ΔT·I + "
                                 "ΔT²·A/2) B. It is a better discretization, but the question asks for "
-                                "the course's Euler form G = ΔT·B.",
+                                "the course's Euler form: one Euler step of the perturbation.",
     "homework.ok.dt": "F = I + ΔT·A, G = ΔT·B and H = C at every state checked.",
     "homework.return-value.ekf": "ekf must return a pair (x_hat, P); it returned a {type}.",
     "homework.matches-reference": "x̂ and P match the course EKF on {where} to {tol:g} σ (largest "
                                   "distances {dx:.2g} σ, {dP:.2g} σσ).",
-    "homework.ekf-mistake": "Your EKF matches the course EKF with one mistake: {what} {hint}",
     "homework.ekf-mismatch": "Your EKF differs from the course EKF from {where} on: x̂ by up to "
                              "{dx:.3g} σ, P by up to {dP:.3g} σσ, and matches none of the typical "
-                             "mistakes ({codes}). {row0}Check the prediction (x̄ = model.step(x̂), M = "
-                             "F P Fᵀ + Q with F = I + ΔT·A(x̂)) and the update (H = C(x̄), only the "
-                             "rows of y that are not NaN).",
+                             "mistakes ({codes}). {row0}Check each step against the question: "
+                             "the prediction (the exact step for x̄, the DT transition at the "
+                             "previous estimate for M) and the update (the measurement Jacobian "
+                             "at the prediction x̄, only the rows of y that are not NaN).",
     "homework.ekf-mismatch.row0": "Row 0 must be (x0, P0): nothing is measured at t = 0. ",
 }
 

@@ -173,19 +173,22 @@ import re  # noqa: E402
 import numpy as np  # noqa: E402
 
 #: A matrix's structure (an identity or zero block: I₂, 0₂ₓ₁; a block row [I₂ 0]; a covariance's
-#: diag(...)) or a χ² with its degrees of freedom (χ²(3·N), χ²₃, "... degrees of freedom").
+#: diag(...)), a χ² with its degrees of freedom (χ²(3·N), χ²₃, "... degrees of freedom"), or a
+#: derivative stated with its value (∂γ/∂θ = −1: an element of a Jacobian, the answer).
 STRUCTURE = re.compile(r"(?<![A-Za-z_])[I0][₀-₉]|\[\s*I\b|\bdiag\(|χ²\s*[(_{₀-₉]|chi2\(|"
-                       r"degrees of freedom")
+                       r"degrees of freedom|∂[^=;:]{1,30}/∂\S{1,12}\s*=(?!=)")
 
 
 def test_the_structure_rule_sees_what_it_must():
     for leak in ("H = [I₂ 0]: GPS measures δp and δv", "N·ε̄ ~ χ²(3·N)", "Q = σ²I₄",
                  "Γ = [0₂ₓ₁; I]", "V = diag(σ_p², σ_v²)", "χ² with n·N degrees of freedom",
-                 "[I, 0]"):
+                 "[I, 0]", "so ∂γ/∂θ = −1", "∂ρ/∂ξa = +Δξ/ρ",
+                 "∂(vg tan φg / L)/∂φg = vg / (L cos² φg)"):
         assert STRUCTURE.search(leak), leak
     for fine in ("Your H's row 1 measures δp; the GPS measures δp and δv, not the bias.",
                  "state [δp, δv, b]", "Φ₁₃ = 1.25e-05", "M0₁₁", "95 % χ² bounds", "x̄₀ = Φ x0",
-                 "Φ₁₀ and Φ₂₀", "V[0,0] = 3", "eᵀ P⁻¹ e"):
+                 "Φ₁₀ and Φ₂₀", "V₁₁ = 3", "eᵀ P⁻¹ e", "A = ∂f/∂x", "C = ∂h/∂x, with Δξ = ξa − ξg",
+                 "the continuous-time Jacobian ∂f/∂u of ẋ = f(x, u)"):
         assert not STRUCTURE.search(fine), fine
 
 
@@ -349,10 +352,137 @@ def _dt_model_reports() -> list[tuple[str, Report, tuple[str, ...]]]:
     return out
 
 
-@pytest.mark.parametrize("source", ["calibration", "linear", "nees", "dt_model"])
+def _coop_answers() -> tuple[str, ...]:
+    """The coop homework's right forms of question 2 (F = I + ΔT·A, G = ΔT·B, H = C): an answer
+    in the feedback of any of its questions."""
+    from gpsaccel.check.dt_model import DT_RIGHT
+
+    return tuple(DT_RIGHT[k] for k in "FGH")
+
+
+def _jacobian_slips() -> list[tuple[str, dict]]:
+    """Wrong Jacobian functions as students write them: each element that is not identically
+    zero negated, zeroed, off by one; a whole matrix for the DT step; C's vehicles swapped; a
+    finite difference through the wrapped h."""
+    from gpsaccel.check.jacobians import FORMULAS
+    from gpsaccel.coop.model import h, jacobian_A, jacobian_B, jacobian_C, wrap_measurement
+
+    dt = 0.1
+    right = {"A": lambda x, u: jacobian_A(x, u), "B": lambda x, u: jacobian_B(x, u, 0.5),
+             "C": lambda x: jacobian_C(x)}
+
+    def edited(name, idx, how):
+        def f(*args):
+            out = np.array(right[name](*args), dtype=float)
+            out[idx] = how(out[idx])
+            return out
+        return f
+
+    out = []
+    for name, formulas in FORMULAS.items():
+        for idx in formulas:
+            for label, how in (("negated", lambda v: -v), ("zero", lambda v: 0.0 * v),
+                               ("+ 1", lambda v: v + 1.0)):
+                out.append((f"{name}{idx} {label}", {name: edited(name, idx, how)}))
+
+    def fd_C(x):
+        C = np.empty((5, 6))
+        for j in range(6):
+            d = np.zeros(6)
+            d[j] = 1e-6
+            C[:, j] = wrap_measurement(h(x + d) - h(x - d)) / 2e-6
+        return C
+    out += [("A = I + ΔT·A", {"A": lambda x, u: np.eye(6) + dt * jacobian_A(x, u)}),
+            ("A = ΔT·A", {"A": lambda x, u: dt * jacobian_A(x, u)}),
+            ("B = ΔT·B", {"B": lambda x, u: dt * jacobian_B(x, u, 0.5)}),
+            ("C's vehicles swapped", {"C": lambda x: jacobian_C(x)[:, [3, 4, 5, 0, 1, 2]]}),
+            ("A heading columns negated", {"A": edited("A", (slice(None), [2, 5]),
+                                                       lambda v: -v)}),
+            ("C by a finite difference through the wrapped h", {"C": fd_C})]
+    return out
+
+
+def _coop_reports() -> list[tuple[str, Report, tuple[str, ...]]]:
+    """The coop Jacobian checks (``check.jacobians``, the homework's question 1) and the coop
+    homework's questions 2 and 3 on wrong answers."""
+    from gpsaccel.assignments import coop as hw_coop
+    from gpsaccel.check.jacobians import jacobians
+    from gpsaccel.coop.model import jacobian_A, jacobian_B, jacobian_C
+
+    answers = _coop_answers()
+    out = []
+    for label, given in _jacobian_slips():
+        out.append((f"check.jacobians {label}", jacobians(**given, n_random=10), answers))
+    q1 = hw_coop.jacobians(jacobian_A, lambda x, u: 0.1 * jacobian_B(x, u), None, n_random=5)
+    out.append(("homework q1: B = ΔT·B, C not defined", q1, answers))
+
+    def lin(F=None, G=None, H=None):
+        def f(x, u, dt_):
+            A, B, C = jacobian_A(x, u), jacobian_B(x, u), jacobian_C(x)
+            return ((np.eye(6) + dt_ * A) if F is None else F(A, B, C, dt_),
+                    dt_ * B if G is None else G(A, B, C, dt_), C if H is None else H(A, B, C, dt_))
+        return f
+    for label, fn in (
+            ("F = A", lin(F=lambda A, B, C, t: A)), ("F = ΔT·A", lin(F=lambda A, B, C, t: t * A)),
+            ("F = I + A", lin(F=lambda A, B, C, t: np.eye(6) + A)),
+            ("F without its heading column", lin(F=lambda A, B, C, t: np.eye(6) + 0 * A)),
+            ("F's A₁₃ negated", lin(F=lambda A, B, C, t: np.eye(6) + t * A * np.where(
+                np.arange(36).reshape(6, 6) == 2, -1, 1))),
+            ("G = B", lin(G=lambda A, B, C, t: B)),
+            ("G the exact zero-order hold", lin(G=lambda A, B, C, t: (
+                t * np.eye(6) + t**2 / 2 * A) @ B)),
+            ("G = 2ΔT·B", lin(G=lambda A, B, C, t: 2 * t * B)),
+            ("H = ΔT·C", lin(H=lambda A, B, C, t: t * C)),
+            ("H's bearing rows negated", lin(H=lambda A, B, C, t: C * np.array(
+                [[-1], [1], [-1], [1], [1]])))):
+        out.append((f"homework q2 {label}", hw_coop.dt_linearization(fn, n_random=2), answers))
+    return out + _coop_ekf_reports(answers)
+
+
+def _coop_ekf_reports(answers: tuple[str, ...]) -> list[tuple[str, Report, tuple[str, ...]]]:
+    """The homework's question 3: each EKF mistake it names, and one it does not."""
+    from gpsaccel.assignments import coop as hw_coop
+    from gpsaccel.coop.filters import run_ekf
+    from gpsaccel.coop.mistakes import ingredients
+    from gpsaccel.coop.model import CoopModel
+
+    model = CoopModel()
+    y = model.log()
+    out = []
+    for m in hw_coop.ekf_mistakes():
+        def student(y, x0, P0, Q, R, m=m):
+            res = run_ekf(model, y, Q, R, x0, P0, ingredients=ingredients((m,)))
+            return res.x_hat, res.P
+        out.append((f"homework q3 {m.code}", hw_coop.ekf(student, y), answers))
+
+    def doubled_q(y, x0, P0, Q, R):
+        res = run_ekf(model, y, 2 * Q, R, x0, P0)
+        return res.x_hat, res.P
+    out.append(("homework q3 Q doubled", hw_coop.ekf(doubled_q, y), answers))
+    return out
+
+
+def test_no_coop_question_states_an_earlier_questions_answer():
+    """A question may state what to compute; it never states another question's expected
+    result: the hand-out's question 3 (the EKF) names question 2's F and H, not their forms."""
+    import json
+
+    from gpsaccel.assignments.generate import student_package_dir
+
+    nb = json.loads((student_package_dir() / "coop" / "coop.ipynb").read_text(encoding="utf-8"))
+    texts = ["".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "markdown"]
+    q3 = [t for t in texts if t.startswith("**Question 3")]
+    assert q3 and "question 2" in q3[0]
+    found = [(a, t[:80]) for t in texts if "Question 2 " not in t for a in _coop_answers()
+             if a in t]
+    assert not found, found
+
+
+@pytest.mark.parametrize("source", ["calibration", "linear", "nees", "dt_model", "coop"])
 def test_no_check_of_a_matrix_or_a_formula_states_the_answer(source):
     reports = {"calibration": _calibration_reports, "linear": _linear_reports,
-               "nees": _nees_reports, "dt_model": _dt_model_reports}[source]()
+               "nees": _nees_reports, "dt_model": _dt_model_reports,
+               "coop": _coop_reports}[source]()
     assert sum(not r.passed for _, r, _ in reports) >= 6  # the test sees failing checks
     _no_leaks(reports)
 
