@@ -23,10 +23,6 @@ from gpsaccel import _taught, registry
 from gpsaccel.lessons import lessons_dir
 from gpsaccel.lessons.release import masters
 
-#: Template names of a system's table that are no code: the wording of a catalogue entry's
-#: finding in a homework (the finding carries the entry's own code).
-TEMPLATES = {"update-mistake"}
-
 _SELF_CHECK = re.compile(r'self_check\("([^"]+)"')
 _SUBMISSION_ERROR = re.compile(r'SubmissionError\("([a-z-]+)"')
 
@@ -50,7 +46,7 @@ def finding_codes() -> dict[str, set[str]]:
     def add(table: str, keys) -> None:
         for key in keys:
             code = _code(key)
-            if code not in TEMPLATES and code not in ("hint", "lost"):
+            if code not in ("hint", "lost"):
                 found.setdefault(code, set()).add(table)
 
     add("check.wording.STUDENT", STUDENT)

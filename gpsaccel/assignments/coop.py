@@ -149,7 +149,7 @@ def _explained(report: Report, name: str, base: str, form: str, mat: np.ndarray,
         B_ = np.stack([true_B(x, u, model.L) for x, u in zip(X, U, strict=True)])
         zoh = (dt * eye + dt**2 / 2 * A_) @ B_  # A² = 0: ∫₀^ΔT e^{Aτ} dτ = ΔT I + ΔT²A/2
         if _close(mat, zoh):
-            report.add("zero-order-hold", text=TEXT["zero-order-hold"], where="G")
+            report.add("zero-order-hold", text=TEXT["zero-order-hold"], where="G", part="G")
             return True
     return False
 
@@ -164,7 +164,8 @@ def dt_linearization(func: object, seed: int = 0, n_random: int = 5,
     that fails there but equals the course's form *built from the student's own* Jacobian
     (jacobian_A, jacobian_B, jacobian_C, when given) passes: a wrong element of B costs
     question 1, not question 2 too.  An exact zero-order-hold G = ∫₀^ΔT e^{Aτ} dτ B is named as
-    such (the question asks for the Euler form).
+    such (the question asks for the Euler form).  Each matrix's findings are its part (F, G, H:
+    partial credit); a call that fails or returns the wrong shapes concerns the whole question.
     """
     from gpsaccel.check import dt_model
 
@@ -189,7 +190,7 @@ def dt_linearization(func: object, seed: int = 0, n_random: int = 5,
         if sub.passed or _explained(report, name, base, form, mats[name], X, U, own_fns[base],
                                     model):
             continue
-        report.findings.extend(sub.findings)
+        report.findings.extend(sub.tag(name).findings)  # this matrix's part
     if report.passed:
         report.add("ok", severity="note", text=TEXT["ok.dt"])
     report.sort()

@@ -22,6 +22,7 @@ import numpy as np
 
 from gpsaccel import registry
 from gpsaccel.assignments._answers import array, assert_report, call
+from gpsaccel.check.findings import mistake_finding
 from gpsaccel.check.report import Report
 from gpsaccel.ship.mistakes import MESSAGES as SHIP_MESSAGES
 from gpsaccel.ship.model import GPS_ROWS, ShipModel
@@ -110,10 +111,18 @@ def _matches(x, P, x_ref, P_ref) -> tuple[bool, float, float]:
 
 
 def update_answer(update: object, seed: int = 0) -> Report:
-    """Check ``update(x_bar, M, z, H, V) -> (x_hat, P)`` on :func:`cases`; never raises."""
+    """Check ``update(x_bar, M, z, H, V) -> (x_hat, P)`` on :func:`cases`; never raises.
+
+    Its two outputs are two parts (``x_hat``, ``P``: partial credit): a case where only one of
+    them departs from the optimal update is a finding of that part, and the other is still
+    checked on the cases after it; a recognised mistake of the update (:func:`update_mistakes`,
+    which changes both), a departure of both, or an update that cannot be called or returns the
+    wrong shapes concerns the whole question.  The student reads the mistake's code and what
+    their update does, never the optimal update's formulas."""
     from gpsaccel.ship.mistakes import update as ship_update
 
     report = Report("question 1: the multirate update")
+    failed: set[str] = set()
     for label, args in cases(seed):
         out = call(report, "update(x_bar, M, z, H, V)", update, *(a.copy() for a in args))
         if out is None:
@@ -130,18 +139,21 @@ def update_answer(update: object, seed: int = 0) -> Report:
         ok, dx, dP = _matches(x, P, x_ref, P_ref)
         if ok:
             continue
-        for m in update_mistakes():
-            x_bar, M, z, H, V = args
-            xm, Pm = ship_update(x_bar, M, z, H, V, (m,))
-            if _matches(x, P, xm, Pm)[0]:
-                report.add(m.code, text=TEXT["update-mistake"], where=label,
-                           observed={"what": m.message, "hint": m.hint})
-                break
-        else:
-            report.add("update-mismatch", text=TEXT["update-mismatch"], where=label,
-                       observed={"dx": dx, "dP": dP, "none": TEXT["update-mismatch.none"]
-                                 if label == "nothing arrived" else ""})
-        break
+        mistake = next((m for m in update_mistakes()
+                        if _matches(x, P, *ship_update(*args, (m,)))[0]), None)
+        if mistake is not None:
+            mistake_finding(report, mistake, where=label)
+            break
+        part = "x_hat" if dP <= TOL else "P" if dx <= TOL else ""
+        if part in failed:
+            continue  # that part is already lost; the other is still checked
+        failed.add(part)
+        report.add("update-mismatch", TEXT["update-mismatch.formulas"], text=TEXT[
+            "update-mismatch"], where=label, part=part, observed={
+                "dx": dx, "dP": dP, "what": TEXT[f"update-mismatch.{part or 'both'}"],
+                "none": TEXT["update-mismatch.none"] if label == "nothing arrived" else ""})
+        if not part or failed == {"x_hat", "P"}:
+            break
     if report.passed:
         report.add("ok", severity="note", text=TEXT["ok.update"],
                    observed={"n": len(cases(seed))})

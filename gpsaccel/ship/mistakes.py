@@ -60,7 +60,8 @@ from gpsaccel.ship.zeroed_gain import ZeroedGainUpdate
 
 #: The ship's wording, one table: code -> the filter entry's message (``{cost}``: the σ excess of
 #: the student's filter's true covariance over the optimal, said in words by the checker);
-#: ``update.<code>`` -> what the homework's one update is, ``update.<code>.hint`` -> its hint;
+#: ``update.<code>`` -> what the homework's one update is (the student reads it after the code's
+#: wording), ``update.<code>.hint`` -> its hint (the instructor's: it states the optimal gain);
 #: ``homework.<code>`` -> the homework's findings (:mod:`gpsaccel.assignments.ship`).
 MESSAGES: dict[str, str] = {
     "zeroed-gain": "Your update computes the full gain M Hᵀ (H M Hᵀ + V)⁻¹ as if every sensor had "
@@ -106,12 +107,20 @@ MESSAGES: dict[str, str] = {
                                    "z_r), do not replace it with 0.",
     # -------------------------------------- the homework's findings (assignments/ship.py)
     "homework.return-value": "update must return a pair (x_hat, P); it returned a {type}.",
-    "homework.update-mistake": "Case “{where}”: your update is {what}. {hint}",
-    "homework.update-mismatch": "Case “{where}”: x̂ differs from the update with the rows that "
-                                "arrived by up to {dx:.3g} σ and P by up to {dP:.3g} σσ. Use the "
-                                "rows r where z is not NaN: K_r = M H_rᵀ (H_r M H_rᵀ + V_r)⁻¹, "
-                                "x̂ = x̄ + K_r (z_r − H_r x̄), P in Joseph form.{none}",
-    "homework.update-mismatch.none": " With nothing arrived, x̂ = x̄ and P = M.",
+    "homework.update-mismatch": "Case “{where}”: {what} (by up to {dx:.3g} σ in x̂ and "
+                                "{dP:.3g} σσ in P). Use only the rows r where z is not NaN, "
+                                "their H_r, V_r and z_r, in the gain, the estimate and P.{none}",
+    "homework.update-mismatch.both": "your x̂ and P differ from the update with the rows that "
+                                     "arrived",
+    "homework.update-mismatch.x_hat": "your x̂ differs from the update with the rows that "
+                                      "arrived, your P does not",
+    "homework.update-mismatch.P": "your P differs from the update with the rows that arrived, "
+                                  "your x̂ does not",
+    "homework.update-mismatch.none": " Nothing arrived here: the question says what the update "
+                                     "returns then.",
+    "homework.update-mismatch.formulas": "The optimal update: K_r = M H_rᵀ (H_r M H_rᵀ + "
+                                         "V_r)⁻¹, x̂ = x̄ + K_r (z_r − H_r x̄), P in Joseph form; "
+                                         "with nothing arrived x̂ = x̄ and P = M.",
     "homework.ok.update": "The update matches the optimal one with the rows that arrived on {n} "
                           "cases (IMU-only, all rows, one row missing, none).",
     "homework.not-a-number": "{where} must be one number; got {value}.",

@@ -71,3 +71,15 @@ def test_question_1_uses_the_students_rate():
     answers = [Answer("ok", values=(g,)) for g in given]
     assert graded._q1_grade(Draw(0, {"rate_hz": 400}), answers).passed
     assert not graded._q1_grade(Draw(0, {"rate_hz": 200}), answers).passed
+
+
+def test_v_given_as_sigma_costs_v_s_half_point():
+    """The rule the packaged homeworks share (docs/grading.md's table): a part per matrix, no
+    slip keeps any of it; V with σ where σ² belongs is 2.5 / 3."""
+    dt = 1 / 400
+    Phi = np.array([[1.0, dt, -dt**2 / 2], [0.0, 1.0, -dt], [0.0, 0.0, 1.0]])
+    given = [Phi, -np.array([[dt**2 / 2], [dt], [0.0]]), np.eye(2, 3), np.diag([1.0, 0.04]),
+             np.array([[0.02**2]]), np.diag([100.0, 1.0, 0.01])]
+    q1 = graded.graded_questions()[0]
+    report = q1.grade(Draw(0, {"rate_hz": 400}), [Answer("ok", values=(g,)) for g in given])
+    assert report.codes == ["std-as-variance"] and q1.score(report) == 2.5

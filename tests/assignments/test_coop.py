@@ -73,8 +73,8 @@ def test_mistakes_lose_exactly_their_questions_and_name_the_codes(graded):
     a = graded["wrong C, no wrap"]
     assert a.scores == {"q1": 2.0, "q2": 2.0, "q3": 0.0}, a.feedback  # C is one of q1's parts
     assert a.codes["q1"] == ["jacobian-C"] and a.codes["q3"] == ["no-angle-wrap"]
-    b = graded["F without I"]
-    assert b.scores == {"q1": 3.0, "q2": 0.0, "q3": 5.0} and b.codes["q2"] == ["dt-linearization"]
+    b = graded["F without I"]  # F is one of q2's parts (1 of 2 points)
+    assert b.scores == {"q1": 3.0, "q2": 1.0, "q3": 5.0} and b.codes["q2"] == ["dt-linearization"]
 
 
 def test_one_wrong_B_element_costs_only_the_jacobian_question(graded):
@@ -85,7 +85,7 @@ def test_one_wrong_B_element_costs_only_the_jacobian_question(graded):
 
 def test_an_exact_zero_order_hold_G_is_named(graded):
     g = graded["zoh"]
-    assert g.scores["q2"] == 0 and g.codes["q2"] == ["zero-order-hold"]
+    assert g.scores["q2"] == 1.5 and g.codes["q2"] == ["zero-order-hold"]  # G's half point
     assert "zero-order-hold" in g.feedback
 
 
@@ -126,6 +126,44 @@ def test_dt_linearization_grades_G_against_the_students_own_B():
                               jacobian_C=cm.jacobian_C)
     assert r.passed and "uses-own-jacobian" in [f.code for f in r.findings]
     assert dt == 0.1
+
+
+def test_a_wrong_dt_matrix_costs_only_its_part():
+    """q2's F, G, H are parts (1, 0.5, 0.5), as q1's A, B, C: the packaged homeworks' one rule
+    (the calibration homework's); a slip keeps nothing. At main q2 was all or nothing (0 / 2)."""
+    from gpsaccel.assignments.grading import assignment_module
+    from gpsaccel.assignments.questions import Answer, Draw
+
+    q2 = assignment_module("coop").graded_questions()[1]
+    draw = Draw(3, {})
+    own = {"jacobian_A": cm.jacobian_A, "jacobian_B": cm.jacobian_B, "jacobian_C": cm.jacobian_C}
+
+    def score(F=None, G=None, H=None, raises=False):
+        def lin(x, u, dt):
+            if raises:
+                raise ZeroDivisionError
+            A, B, C = cm.jacobian_A(x, u), cm.jacobian_B(x, u), cm.jacobian_C(x)
+            return ((np.eye(6) + dt * A) if F is None else F(A, dt), dt * B if G is None else
+                    G(B, dt), C if H is None else H(C, dt))
+        answers = []
+        for r in q2.reads(draw):
+            fn = own.get(r.name, lin)
+            try:
+                out = fn(*r.args)
+            except ZeroDivisionError:
+                answers.append(Answer("exception", "ZeroDivisionError"))
+                continue
+            answers.append(Answer("ok", values=tuple(np.asarray(a, float) for a in (
+                out if isinstance(out, tuple) else (out,)))))
+        report = q2.grade(draw, answers)
+        return q2.score(report), report.codes
+
+    assert score() == (2.0, [])
+    assert score(F=lambda A, dt: dt * A) == (1.0, ["dt-linearization"])
+    assert score(G=lambda B, dt: B) == (1.5, ["dt-linearization"])
+    assert score(H=lambda C, dt: dt * C) == (1.5, ["dt-linearization"])
+    assert score(F=lambda A, dt: A, H=lambda C, dt: dt * C) == (0.5, ["dt-linearization"])
+    assert score(raises=True) == (0.0, ["exception"])
 
 
 def test_the_homework_grades_with_the_package_ekf_and_recognises_each_mistake():

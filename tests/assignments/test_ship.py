@@ -71,7 +71,8 @@ def test_solution_full_marks_blank_zero(graded):
 def test_mistakes_lose_exactly_their_questions_and_name_the_codes(graded):
     a, b = graded["mistake_q1"], graded["mistake_q2"]
     assert a.scores == {"q1": 0.0, "q2": 4.0} and a.codes["q1"] == ["zeroed-gain"]
-    assert b.scores == {"q1": 6.0, "q2": 0.0} and b.codes["q2"] == ["claimed-not-actual"]
+    # the claimed σ for the actual one costs sigma_zeroed's part only
+    assert b.scores == {"q1": 6.0, "q2": 2.0} and b.codes["q2"] == ["claimed-not-actual"]
 
 
 def test_a_copied_number_is_wrong_for_the_students_own_variant(graded):
@@ -119,6 +120,68 @@ def test_update_answer_names_each_mistake():
         return ship.optimal_update(x_bar, M, z, H, V) if rows.size else (x_bar * 0, M)
     r = ship.update_answer(forgets_none)
     assert r.codes == ["update-mismatch"] and "nothing arrived" in str(r)
+
+
+def test_a_wrong_output_costs_only_its_part():
+    """The packaged homeworks' one rule (the calibration homework's): q1's x̂ and P, q2's two σ,
+    a part each; a mistake that changes both of q1's outputs (the zeroed gain) costs both. At
+    main each question was all or nothing: 0 / 6 and 0 / 4 for every case below."""
+    from gpsaccel.assignments.grading import assignment_module
+    from gpsaccel.assignments.questions import Answer, Draw
+
+    q1, q2 = assignment_module("ship").graded_questions()
+    draw = Draw(7, {"mass_kg": 12.0, "gps_rate_hz": 1.0})
+
+    def q1_score(update):
+        answers = [Answer("ok", values=tuple(np.asarray(a, float) for a in update(*r.args)))
+                   for r in q1.reads(draw)]
+        report = q1.grade(draw, answers)
+        return q1.score(report), report.codes
+
+    def p_not_updated(x_bar, M, z, H, V):
+        return ship.optimal_update(x_bar, M, z, H, V)[0], M
+
+    def x_not_updated(x_bar, M, z, H, V):
+        return x_bar, ship.optimal_update(x_bar, M, z, H, V)[1]
+
+    assert q1_score(ship.optimal_update) == (6.0, [])
+    assert q1_score(p_not_updated) == (3.0, ["update-mismatch"])
+    assert q1_score(x_not_updated) == (3.0, ["update-mismatch"])
+    assert q1_score(lambda x, M, z, H, V: (x, M)) == (0.0, ["update-mismatch"])
+    assert q1_score(ship.zeroed_update) == (0.0, ["zeroed-gain"])
+    want = ship.zeroed_gain_cost(**draw.variant)
+
+    def q2_score(*values):
+        answers = [Answer("ok", values=(np.asarray(v, float),)) if v is not None
+                   else Answer("not-defined") for v in values]
+        report = q2.grade(draw, answers)
+        return q2.score(report), report.codes
+
+    assert q2_score(want["sigma_optimal"], want["sigma_actual"]) == (4.0, [])
+    assert q2_score(want["sigma_optimal"], want["sigma_actual"] ** 2) == (2.0, ["std-as-variance"])
+    assert q2_score(want["sigma_optimal"], want["sigma_claimed"]) == (2.0, ["claimed-not-actual"])
+    assert q2_score(want["sigma_optimal"], None) == (2.0, ["not-defined"])
+    assert q2_score(1.0, 2.0) == (0.0, ["sigma-value"])
+
+
+def test_q1_feedback_states_no_formula_of_the_optimal_update():
+    """The student reads what their update does; the gain K_r = M H_rᵀ (H_r M H_rᵀ + V_r)⁻¹ and
+    x̂ = x̄ + K_r (...) (the answer) are the instructor's."""
+    from gpsaccel.ship.mistakes import update
+
+    said = []
+    for m in ship.update_mistakes():
+        r = ship.update_answer(lambda x_bar, M, z, H, V, m=m: update(x_bar, M, z, H, V, (m,)))
+        said.append((r, str(r)))
+    r = ship.update_answer(lambda x_bar, M, z, H, V: (ship.optimal_update(x_bar, M, z, H, V)[0],
+                                                       M))
+    said.append((r, str(r)))
+    assert r.findings[0].part == "P" and "your P differs" in str(r)
+    for report, text in said:
+        assert not report.passed
+        for formula in ("K_r =", "(H_r M H_rᵀ + V_r)⁻¹", "x̂ = x̄ + K", "x̂ = x̄ and P = M"):
+            assert formula not in text, (formula, text)
+        assert "K_r = M H_rᵀ" in report.instructor_text() or report.codes != ["update-mismatch"]
 
 
 def test_cost_answer_accepts_six_digits_tells_the_filters_apart_without_the_answer():

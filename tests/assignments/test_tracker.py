@@ -56,15 +56,49 @@ def test_an_honest_notebook_gets_full_marks_a_blank_one_nothing(graded):
     assert "not-defined" in blank.codes["q1"] and blank.codes["q2"]
 
 
-def test_each_mistake_loses_exactly_its_question_with_the_catalogue_code(graded):
+def test_each_mistake_loses_exactly_its_part_with_the_catalogue_code(graded):
     codes = set(TRACKER.codes())
-    for student, question, code in (("transposed", "q1", "phi-transposed"),
-                                    ("sigma_in_R", "q2", "std-as-variance"),
-                                    ("a_priori", "q2", "returns-a-priori")):
+    # q1's Φᵀ costs Φ's point (a part per matrix); q2, the whole filter, is all or nothing
+    for student, question, code, score in (("transposed", "q1", "phi-transposed", 3.0),
+                                           ("sigma_in_R", "q2", "std-as-variance", 0.0),
+                                           ("a_priori", "q2", "returns-a-priori", 0.0)):
         g = graded[student]
         full = {"q1": 4.0, "q2": 6.0}
-        assert g.scores == {**full, question: 0.0}, (student, g.feedback)
+        assert g.scores == {**full, question: score}, (student, g.feedback)
         assert g.codes[question] == [code] and code in codes, (student, g.codes)
+
+
+def _q1_score(model, changes: dict) -> tuple[float, list[str]]:
+    """q1's score and codes when the matrices are the model's but for ``changes`` (a matrix, or
+    an Answer: what the box sent back for it)."""
+    from gpsaccel.assignments.linear import MATRICES
+    from gpsaccel.assignments.questions import Answer, Draw
+
+    q1 = graded_module.graded_questions()[0]
+    draw = Draw(1, graded_module.DEFAULT_VARIANT)
+    given = {**_right(model), **changes}
+    answers = [v if isinstance(v, Answer) else Answer("ok", values=(np.asarray(v, float),))
+               for v in (given[k] for k in MATRICES)]
+    report = q1.grade(draw, answers)
+    return q1.score(report), report.codes
+
+
+def test_a_wrong_or_missing_matrix_costs_only_its_part():
+    """The packaged homeworks' one rule (the calibration homework's: V as σ 2.5 / 3): a part per
+    matrix, no recognised slip keeps any of it. At main q1 was all or nothing: 0 / 4 for each."""
+    from gpsaccel.assignments.questions import Answer
+
+    model = variant_model(**graded_module.DEFAULT_VARIANT)
+    right, W = _right(model), model.W[0, 0]
+    assert _q1_score(model, {}) == (4.0, [])
+    for changes, score, codes in (
+            ({"V": np.sqrt(right["V"])}, 3.5, ["std-as-variance"]),
+            ({"Phi": right["Phi"].T}, 3.0, ["phi-transposed"]),
+            ({"Q": W * np.eye(2)}, 3.0, ["q-without-gamma"]),
+            ({"M0": Answer("not-defined")}, 3.5, ["not-defined"]),
+            ({"V": np.sqrt(right["V"]), "M0": np.sqrt(right["M0"])}, 3.0, ["std-as-variance"]),
+            ({k: Answer("not-defined") for k in right if k != "W"}, 0.0, ["not-defined"])):
+        assert _q1_score(model, changes) == (score, codes), changes
 
 
 def test_question_1_is_the_students_own_variant(graded):

@@ -115,9 +115,11 @@ def warm() -> None:
     import gpsaccel.check.jacobians  # noqa: F401
 
 def graded_questions():
-    """The coop homework's graded questions (:mod:`gpsaccel.assignments.questions`)."""
+    """The coop homework's graded questions (:mod:`gpsaccel.assignments.questions`): q1 and q2
+    a part per matrix (A, B, C; F, G, H), the packaged homeworks' one rule (the calibration
+    homework's): a wrong matrix loses its own points, no recognised slip keeps any of them."""
     from gpsaccel.assignments.questions import Question
 
     return (Question("q1", 3, _q1_reads, _q1_grade, parts=(("A", 1), ("B", 1), ("C", 1))),
-            Question("q2", 2, _q2_reads, _q2_grade),
+            Question("q2", 2, _q2_reads, _q2_grade, parts=(("F", 1), ("G", 0.5), ("H", 0.5))),
             Question("q3", 5, _q3_reads, _q3_grade))

@@ -52,10 +52,12 @@ def _q2_grade(draw, answers) -> Report:
     from gpsaccel.assignments.questions import value
 
     report = Report("question 2: what the zeroed gain costs")
-    got = [value(report, r.name, a) for r, a in zip(_q2_reads(draw), answers, strict=True)]
-    if not report.passed:
-        return report
-    return cost_answer(*got, **draw.variant)
+    got = [value(report, r.name, a, r.name)
+           for r, a in zip(_q2_reads(draw), answers, strict=True)]
+    checked = cost_answer(*got, **draw.variant)  # a missing σ: not-a-number there, its part's
+    report.findings += [f for f in checked.findings if f.part not in report.failed_parts()]
+    report.sort()
+    return report
 
 
 def warm() -> None:
@@ -72,8 +74,16 @@ def warm() -> None:
 
     cases()
 
+#: The packaged homeworks' one rule (the calibration homework's): each output a part of its own;
+#: a wrong one loses its points, no recognised slip keeps any of them.  q1: the update's x̂ and P
+#: (a mistake that changes both, such as the zeroed gain, costs both); q2: the two σ.
+Q1_PARTS = {"x_hat": 3.0, "P": 3.0}
+Q2_PARTS = {"sigma_optimal": 2.0, "sigma_zeroed": 2.0}
+
+
 def graded_questions():
     """The ship homework's graded questions (:mod:`gpsaccel.assignments.questions`)."""
     from gpsaccel.assignments.questions import Question
 
-    return (Question("q1", 6, _q1_reads, _q1_grade), Question("q2", 4, _q2_reads, _q2_grade))
+    return (Question("q1", 6, _q1_reads, _q1_grade, parts=Q1_PARTS),
+            Question("q2", 4, _q2_reads, _q2_grade, parts=Q2_PARTS))

@@ -40,13 +40,20 @@ def _q1_reads(draw):
 
 
 def _q1_grade(draw, answers) -> Report:
+    """Each matrix the box read (a finding of its part when it is missing or not a matrix), then
+    the defined ones against the student's model: every finding is its matrix's part."""
     from gpsaccel.assignments.questions import value
 
-    report = Report("question 1: model matrices")
-    given = {name: value(report, name, a) for name, a in zip(MATRICES, answers, strict=True)}
-    if not report.passed:
-        return report
-    return matrices_answer(variant_model(**draw.variant), given, "question 1: model matrices")
+    title = "question 1: model matrices"
+    report = Report(title)
+    given = {name: value(report, name, a, name)
+             for name, a in zip(MATRICES, answers, strict=True)}
+    defined = {k: v for k, v in given.items() if v is not None}
+    if defined:
+        checked = matrices_answer(variant_model(**draw.variant), defined, title, tuple(defined))
+        report.findings += checked.findings
+    report.sort()
+    return report
 
 
 def _q2_grade(path, draw, timeout: float) -> Report:
@@ -56,9 +63,15 @@ def _q2_grade(path, draw, timeout: float) -> Report:
                       timeout=timeout)
 
 
+#: q1's parts, a matrix each: the packaged homeworks' one rule (the calibration homework's), a
+#: wrong or missing matrix loses its own points and no recognised slip keeps any of them (σ for
+#: σ² in V: 3.5 / 4).  Φ and Q, the ones with the model's working in them, a point each.
+Q1_PARTS = {"Phi": 1.0, "Gamma": 0.5, "Q": 1.0, "H": 0.5, "V": 0.5, "M0": 0.5}
+
+
 def graded_questions():
     """The tracker homework's graded questions (:mod:`gpsaccel.assignments.questions`)."""
     from gpsaccel.assignments.questions import Question
 
-    return (Question("q1", 4, _q1_reads, _q1_grade),
+    return (Question("q1", 4, _q1_reads, _q1_grade, parts=Q1_PARTS),
             Question("q2", 6, file="kalman_filter.py", grade_file=_q2_grade))
