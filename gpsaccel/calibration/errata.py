@@ -202,7 +202,7 @@ def position_sigma_as_variance() -> Erratum:
     """Report 003: posiSigma = 10 (a standard deviation) used as the variance M0₁₁."""
     m = report_model("003")
     return Erratum("003", "m0-position-10", "M0₁₁ = 10 m² (posiSigma)", "M0₁₁ = 100 m²",
-                   m, "error-model", mutant("std-as-variance", m, variant="M0₁₁ = 10"),
+                   m, "error-model", mutant("std-as-variance", m, variant="M0₁₁ = 10, δp's prior variance"),
                    reference(m), m)
 
 

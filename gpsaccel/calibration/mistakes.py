@@ -262,7 +262,7 @@ def covariance_mistakes(model: CalibrationModel | None = None) -> tuple[Mistake,
     f = _fields(model)
     lm, text = linear_model(model), _text(model)
     out = (_model_mistakes(model, f) + _propagation_mistakes(model, f)
-           + tuple(entries.std_as_variance(lm, text, element=entries.subscript)))
+           + tuple(entries.std_as_variance(lm, text)))
     out += tuple(transposed_mistakes(lm, text))  # (the last epoch's: what is returned says it)
     return out + tuple(shared_mistakes(lm, text, skip=("process-noise-interval",))[0])
 

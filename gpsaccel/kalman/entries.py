@@ -35,14 +35,32 @@ Text = Callable[..., str]
 _SUB = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
 
 
-def bracket(name: str, i: int) -> str:
-    """``V[1,1]``: an element of a matrix, as code writes it (0-based)."""
-    return f"{name}[{i},{i}]"
-
-
 def subscript(name: str, i: int) -> str:
     """``V₂₂``: an element of a matrix, as the reports write it (1-based)."""
     return name + f"{i + 1}{i + 1}".translate(_SUB)
+
+
+def measured(m: Any, i: int) -> str:
+    """What measurement ``i`` of ``m`` is called: the name the problem gives it, else the state
+    its row of H measures alone, else z with its 1-based number."""
+    names = tuple(getattr(m, "measurements", ()) or ())
+    if i < len(names) and names[i] != f"z{i + 1}":  # z1, z2 ...: LinearModel's unnamed default
+        return names[i]
+    row = np.asarray(m.H, dtype=float)[i]
+    if np.count_nonzero(row) == 1:
+        return str(m.states[int(np.flatnonzero(row)[0])])
+    return f"z{i + 1}"
+
+
+def holds(m: Any, name: str, i: int) -> str:
+    """What the diagonal element ``i`` of covariance ``name`` (V, W or M0) holds, in the
+    problem's own names: "the δv measurement's variance", "δp's prior variance"."""
+    if name == "V":
+        return f"the {measured(m, i)} measurement's variance"
+    if name == "M0":
+        return f"{m.states[i]}'s prior variance"
+    n = np.asarray(getattr(m, name)).shape[0]
+    return "the process noise's variance" if n == 1 else f"process noise {i + 1}'s variance"
 
 
 def same(a: np.ndarray, b: np.ndarray) -> bool:
@@ -146,13 +164,17 @@ def phi_sign(m: Any, text: Text, skip: tuple[str, ...] = ()) -> list[Mistake]:
 
 # ------------------------------------------------------------------------------ variances
 def std_as_variance(m: Any, text: Text, names: tuple[str, ...] = ("V", "W", "M0"),
-                    element: Callable[[str, int], str] = bracket, whole: int = 4
-                    ) -> list[Mistake]:
+                    whole: int = 4) -> list[Mistake]:
     """``std-as-variance``: σ for σ², or σ² squared again, in one diagonal element of each of
     ``names``, and in every element of one matrix at once (a matrix written with the σ's) where
     it has at least ``whole`` elements that show the slip: a linear diagnosis combines up to three
     entries, so a smaller matrix's whole slip is already a combination of its elements' (and a
-    lesson counts those); the ship's matches its entries one at a time (``whole=2``)."""
+    lesson counts those); the ship's matches its entries one at a time (``whole=2``).
+
+    An element's variant, which the student reads, names it as the feedback does everywhere, in
+    1-based course notation and the problem's own names, with the student's value ("V₂₂ =
+    0.04, the δv measurement's variance"; a 1 × 1 matrix without indices, as the reports write
+    W), never the value it should have."""
     out: list[Mistake] = []
     for name in names:
         mat = np.asarray(getattr(m, name), dtype=float)
@@ -162,10 +184,10 @@ def std_as_variance(m: Any, text: Text, names: tuple[str, ...] = ("V", "W", "M0"
             for value, label in ((np.sqrt(right), "sigma"), (right**2, "squared")):
                 if np.isclose(value, right, rtol=1e-6):
                     continue  # σ = σ² (a variance of 1): this slip cannot be seen
-                # the reports write a 1 × 1 W without indices; code writes W[0,0]
-                elem = name if mat.shape[0] == 1 and element is subscript else element(name, i)
+                elem = name if mat.shape[0] == 1 else subscript(name, i)
                 per_label[label].append((name, (i, i), float(value)))
-                out.append(Mistake("std-as-variance", f"{elem} = {value:.4g}",
+                out.append(Mistake("std-as-variance", f"{elem} = {value:.4g}, "
+                                   f"{holds(m, name, i)}",
                                    text("std-as-variance", elem=elem, value=float(value),
                                         right=right, label=text(f"std-as-variance.{label}"),
                                         sigma=float(np.sqrt(right))),

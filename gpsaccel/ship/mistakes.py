@@ -220,7 +220,7 @@ def shared_catalogue(model: ShipModel | None = None) -> tuple[Mistake, ...]:
     (:mod:`gpsaccel.kalman.entries`) on the ship's numbers, and the ship's own."""
     m = _numbers(ShipModel() if model is None else model)
     out = entries.phi_sign(m, _text)
-    out += entries.std_as_variance(m, _text, element=entries.subscript, whole=2)
+    out += entries.std_as_variance(m, _text, whole=2)
     out += entries.prior_scale(m, _text) + entries.joseph_sign(m, _text)
     out += entries.residual_covariance(m, _text) + entries.process_noise(m, _text)
     out += entries.x0_wrong(m, _text, from_z=False) + entries.measurement_late(

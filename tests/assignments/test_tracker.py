@@ -154,7 +154,7 @@ def test_the_homework_is_registered_where_it_is_defined():
 
 def test_feedback_names_the_mistake_without_the_expected_value(graded):
     text = graded["sigma_in_R"].feedback
-    assert "std-as-variance" in text and "V[" in text
+    assert "std-as-variance" in text and "(V = 2, the p measurement's variance)" in text
     assert "should be 4" not in text and "σ² = 4" not in text
     q1 = graded["transposed"].feedback
     assert "phi-transposed" in q1 and "Φᵀ" in q1

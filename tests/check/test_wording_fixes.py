@@ -6,7 +6,9 @@
 * ``gain-or-residual`` names x0 among what forms x̂ (x0 was the mistake it left out);
 * a wrong-sign Joseph filter is pointed to its sign slip, not advised "a Joseph update";
 * the ship's cost is true for its filter (no "0 %" for an x̂ 120 σ off);
-* docs/checker.md gives every problem's shapes as the checker declares them.
+* docs/checker.md gives every problem's shapes as the checker declares them;
+* σ for σ² names its element as every other finding does, 1-based, with what it holds in the
+  problem's own names ("V₂₂ = 0.04, the δv measurement's variance"; it read "V[0,0] = 3").
 """
 
 from __future__ import annotations
@@ -65,6 +67,44 @@ def test_every_catalogue_entry_renders_whole(name):
         assert "  " not in text and "()" not in text and "{" not in text, (str(m), text)
         assert not re.search(r"\b(At|at|in|of) [,.:;)]", text), (str(m), text)
         assert m.variant in text  # what the student's filter was recognised as doing
+
+
+#: How an element of V, W or M0 is named in every other finding: course notation, 1-based (V₂₂),
+#: or the matrix alone when it is 1 × 1 (as the reports write W).
+_ELEMENT = r"(V|W|M0)([₁-₉]{2})?"
+
+
+@pytest.mark.parametrize("name", PROBLEMS[:3] + ("wind",))
+def test_std_as_variance_names_the_element_and_what_it_holds(name):
+    """σ for σ² read "V[0,0] = 3" (code's 0-based index, no name): it names the element as the
+    feedback does everywhere and what it holds in the problem's own names, with the student's
+    value, never the one it should be."""
+    problem, entries = _catalogue(name)
+    slips = [m for m in entries if m.code == "std-as-variance"]
+    assert slips
+    roles = set()
+    for m in slips:
+        text = _student_text(problem, m)
+        assert "[" not in m.variant and "[" not in text, (m.variant, text)
+        if m.variant.startswith("every element"):
+            continue
+        got = re.fullmatch(_ELEMENT + r" = ([-\d.e+]+), (.+)", m.variant)
+        assert got, m.variant
+        (_, (i, _j), value), = m.changes  # the student's value, the element it is in
+        assert float(got.group(3)) == pytest.approx(value, rel=1e-3), m.variant
+        assert got.group(2) in (None, f"{i + 1}{i + 1}".translate(str.maketrans(
+            "123456789", "₁₂₃₄₅₆₇₈₉"))), m.variant
+        roles.add(got.group(4))
+    named = re.compile(r"the (\S+) measurement's variance|(\S+)'s prior variance|"
+                       r"the process noise's variance|process noise \d's variance")
+    assert all(named.fullmatch(r) for r in roles), roles
+    assert not any(re.search(r"\bz\d", r) for r in roles), roles  # a name, not a row number
+    if name == "calibration":
+        assert {"the δv measurement's variance", "δp's prior variance", "b's prior variance",
+                "the process noise's variance"} <= roles, roles
+    if name == "tracker":
+        assert roles == {"the p measurement's variance", "the process noise's variance",
+                         "p's prior variance", "v's prior variance"}, roles
 
 
 def test_an_instructor_s_problem_is_worded_in_its_own_names():

@@ -125,7 +125,8 @@ def test_mutant_is_flagged_with_its_code(mutant, name, codes):
 def test_report003_shows_both_variance_slips_and_what_they_do(mutant):
     report = mutant("report003.py", N_RUNS)
     variants = [m["variant"] for m in report.details["matched"]]
-    assert "V₂₂ = 0.04" in variants and "M0₁₁ = 10" in variants
+    assert "V₂₂ = 0.04, the δv measurement's variance" in variants
+    assert "M0₁₁ = 10, δp's prior variance" in variants
     # its P is too small for its errors: the NEES test sees it even on 20 runs
     assert "inconsistent" in [f.code for f in report.findings]
 
