@@ -22,10 +22,11 @@ to rounding; a central finite difference with a good step is 1e-8 relative away,
 Every wrong element is named in 1-based course notation (A₁₃), with the student's value at the
 first state where it differs and, for the recognised mistakes, the likely cause: the student reads
 what their element does and what it depends on; the instructor also reads the expected expression,
-its value and the derivative that is right (never the student: that is the answer).  Codes: ``jacobian-A``, ``jacobian-B``, ``jacobian-C``;
-``not-callable``, ``exception``, ``returns-none``, ``shape``, ``not-finite`` for what cannot be
-checked.  The DT linearization built from these Jacobians is checked by
-:mod:`gpsaccel.check.dt_model`, with the same states and element-by-element findings.
+its value and the derivative that is right (never the student: that is the answer).  Codes:
+``jacobian-A``, ``jacobian-B``, ``jacobian-C``; ``not-callable``, ``exception``, ``returns-none``,
+``shape``, ``not-finite`` for what cannot be checked.  The DT linearization built from these
+Jacobians is checked by :mod:`gpsaccel.check.dt_model`, with the same states and element-by-element
+findings.
 """
 
 from __future__ import annotations
@@ -220,7 +221,8 @@ def _element_cause(name: str, idx: tuple[int, int], a: np.ndarray, e: np.ndarray
                     "the sign is wrong: ρ grows with ξa − ξg, so ∂ρ/∂ξa = +Δξ/ρ and ∂ρ/∂ξg = "
                     "−Δξ/ρ")
         return ("the sign is wrong: check the sign of each derivative that makes it (a cos or "
-                "a sin differentiated, a difference taken the other way round)", "the sign is wrong (∂cos θ/∂θ = −sin θ, ∂sin θ/∂θ = cos θ)")
+                "a sin differentiated, a difference taken the other way round)",
+                "the sign is wrong (∂cos θ/∂θ = −sin θ, ∂sin θ/∂θ = cos θ)")
     if np.all(np.abs(a) <= tol):
         if name == "C" and j in (2, 5):
             return (f"it is missing (zero at every state): {_HEADING}, so it depends on θ",
