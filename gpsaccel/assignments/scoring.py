@@ -513,8 +513,8 @@ def _feedback_text(g: Grade, notes: list[str], reports: dict[str, Report],
                    variant: dict, cells: Sequence[str] = ()) -> str:
     """The student's feedback: the notes about their notebook (where it stopped), per question
     the student's projection of each finding (:meth:`gpsaccel.check.report.Finding.for_student`:
-    no expected value reaches this text), each error and warning with the lesson section that
-    teaches its fix under it, then the notes on its cells (``cells``); at most
+    no expected value reaches this text), each error and warning (and a note it shows) with the
+    lesson section that teaches its fix under it, then the notes on its cells (``cells``); at most
     :data:`MAX_FEEDBACK` bytes, the notes on cells cut first
     (:func:`gpsaccel._untrusted.bounded`: a finding and its section are kept or left out
     together)."""

@@ -22,7 +22,8 @@ instructor; its student text is the code's template from :data:`gpsaccel.check.w
 (or a plain sentence naming the code), never the prose.  No regular expression scrubs any text.
 
 Every finding of a student's text says where the course teaches its fix: the lesson section of
-its code (:mod:`gpsaccel._taught`), under each error and warning and in the JSON (``taught``).
+its code (:mod:`gpsaccel._taught`), under each finding, a note's too, and in the JSON
+(``taught``).
 
 ``severity`` is ``"error"`` (the check fails), ``"warning"`` (worth reading, the check still
 passes) or ``"note"`` (information, e.g. the statistics of a correct filter).  A :class:`Report`
@@ -102,9 +103,8 @@ class StudentFinding:
         return taught(self.code)
 
     def see(self) -> str:
-        """Where the course teaches the fix, as the student's text says it under the finding
-        ("" for a note, which asks for nothing)."""
-        return see(self.code, self.severity)
+        """Where the course teaches the fix, as the student's text says it under the finding."""
+        return see(self.code)
 
     def to_dict(self) -> dict:
         section = self.taught
@@ -113,11 +113,12 @@ class StudentFinding:
                 "taught": section.to_dict() if section else None}
 
 
-def see(code: str, severity: str = "error") -> str:
-    """The line under a finding of ``code``: the lesson section that teaches its fix ("" for a
-    note or a code no lesson teaches)."""
+def see(code: str) -> str:
+    """The line under a finding of ``code``, whatever its severity (a note's section explains
+    what it reports, as the JSON's ``taught`` says): the lesson section that teaches its fix, or
+    "" for a code no lesson teaches."""
     section = taught(code)
-    return f"→ {section.cite()}" if section and severity != "note" else ""
+    return f"→ {section.cite()}" if section else ""
 
 
 @dataclass(frozen=True)
@@ -240,15 +241,15 @@ class StudentReport:
 
 def brief(result: Mapping) -> str:
     """The student's first look at one check (``gpsaccel check FILE`` without ``-v``): the verdict
-    and each finding's first line — where and what — with the lesson section under each error
-    and warning; no table.  ``result`` is a report's student dictionary
+    and each finding's first line — where and what — with the lesson section under each; no
+    table.  ``result`` is a report's student dictionary
     (:meth:`StudentReport.to_dict`, which ``gpsaccel check`` receives from each check's process),
     so it holds no expected value to print."""
     lines: list[str | tuple[str, str]] = []
     for f in result.get("findings", []):
         severity, code = str(f.get("severity", "error")), str(f.get("code", ""))
         first = str(f.get("message", "")).split("\n")[0]
-        lines.append((f"[{severity}] {code}: {first}", see(code, severity)))
+        lines.append((f"[{severity}] {code}: {first}", see(code)))
     return render(str(result.get("subject", "")), result.get("passed") is True,
                   [str(c) for c in result.get("codes", [])], lines, [])
 
@@ -327,7 +328,7 @@ class Report:
     def instructor_text(self) -> str:
         """The instructor's readable report (expected values shown)."""
         return render(self.subject, self.passed, self.codes,
-                      [(f"[{f.severity}] {f.code}: {f.for_instructor()}", see(f.code, f.severity))
+                      [(f"[{f.severity}] {f.code}: {f.for_instructor()}", see(f.code))
                        for f in self.findings], self.tables)
 
     def __str__(self) -> str:

@@ -43,7 +43,8 @@ def test_the_first_look_is_each_findings_line_and_where_the_course_teaches_it():
         "    → lesson 08, 'Step 5: when the check cannot run your code'",
         "  - [warning] inconsistent: Your P does not describe your errors at t = 1.6 s.",
         "    → lesson 08, 'The consistency test: NEES and its bounds' (exercise 2)",
-        "  - [note] matches-optimal: Right on 10 runs."]
+        "  - [note] matches-optimal: Right on 10 runs.",
+        "    → lesson 08, 'Step 3: fix and check again'"]
     assert "0.0016" not in text and "ZeroDivisionError" not in text and "23.1" not in text
 
 
@@ -84,6 +85,19 @@ def test_one_file_gets_the_first_look_and_is_told_of_v(tmp_path, capsys):
     assert _report_out(_args(tmp_path, 1, verbose=True), [result]) == 1
     out = capsys.readouterr().out
     assert "ZeroDivisionError" in out and "max |ΔP|/(σσ) = 23.1" in out
+
+
+def test_a_note_carries_its_lesson_in_the_text_as_in_the_json():
+    """A note (a correct filter's statistics) says where the course explains it, in the text as
+    its JSON's ``taught`` does; it said so only in the JSON."""
+    result = batch.student_result(_report())
+    note = next(f for f in result["findings"] if f["severity"] == "note")
+    assert note["taught"] == taught("matches-optimal").to_dict()
+    line = "    → " + taught("matches-optimal").cite()
+    for text in (result["text"], brief(result), _report().instructor_text()):
+        lines = text.splitlines()
+        at = next(i for i, ln in enumerate(lines) if "[note] matches-optimal" in ln)
+        assert lines[at + 1] == line, lines[at:at + 2]
 
 
 def test_a_class_gets_the_table_and_which_lesson_teaches_each_mistake(tmp_path, capsys):
