@@ -83,7 +83,11 @@ def _ship_covariances() -> tuple[np.ndarray, np.ndarray]:
     return res.M[imu_only[5]].copy(), res.M[gps[3]].copy()
 
 
-def cases(seed: int = 0) -> list[tuple[str, tuple[np.ndarray, ...]]]:
+#: One update's inputs: x_bar, M, z, H, V.
+UpdateInputs = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+
+
+def cases(seed: int = 0) -> list[tuple[str, UpdateInputs]]:
     """(label, (x_bar, M, z, H, V)) test cases: IMU-only, all rows, one GPS row, none arrived."""
     model = ShipModel()
     H, V = model.H, model.V
@@ -91,7 +95,7 @@ def cases(seed: int = 0) -> list[tuple[str, tuple[np.ndarray, ...]]]:
     M_imu, M_gps = _ship_covariances()
     L = rng.standard_normal((9, 9))
     M_rand = L @ L.T / 9 + np.diag(rng.uniform(0.1, 1.0, 9))
-    out: list[tuple[str, tuple[np.ndarray, ...]]] = []
+    out: list[tuple[str, UpdateInputs]] = []
     for label, M, missing in (("IMU rows only (GPS missing)", M_imu, list(GPS_ROWS)),
                               ("every row arrived", M_gps, []),
                               ("x position only missing, random M", M_rand, [GPS_ROWS[0]]),
@@ -140,7 +144,7 @@ def update_answer(update: object, seed: int = 0) -> Report:
         if ok:
             continue
         mistake = next((m for m in update_mistakes()
-                        if _matches(x, P, *ship_update(*args, (m,)))[0]), None)
+                        if _matches(x, P, *ship_update(*args, mistakes=(m,)))[0]), None)
         if mistake is not None:
             mistake_finding(report, mistake, where=label)
             break
