@@ -35,20 +35,24 @@ import os
 import zipfile
 from pathlib import Path
 
-#: What ``run_autograder`` runs (Gradescope runs it as root in ``/autograder``).
+#: What ``run_autograder`` runs (Gradescope runs it as root in ``/autograder``): ``python -I``,
+#: so neither the working folder nor ``PYTHONPATH`` comes before the installed package.
 RUN_AUTOGRADER = """#!/usr/bin/env bash
 # gpsaccel's autograder: the notebook runs only in gpsaccel's sandbox, scores are computed outside
-exec /autograder/venv/bin/python -m gpsaccel.assignments.gradescope /autograder
+exec /autograder/venv/bin/python -I -m gpsaccel.assignments.gradescope /autograder
 """
 
 #: ``setup.sh``: bubblewrap if the image has it, a venv, the carried wheel (its dependencies from
-#: PyPI), and the source folder readable by root only (the secret and the roster are there).
+#: PyPI), the source folder readable by root only (the secret and the roster are there), and the
+#: installed package's folders a box may not read made root's alone (:func:`fence`), so a basic
+#: box (the box user) cannot read them even where no Landlock or mount namespace fences them.
 SETUP_SH = """#!/usr/bin/env bash
 set -euo pipefail
 apt-get update -q && (apt-get install -y -q bubblewrap python3-venv || apt-get install -y -q python3-venv)
 python3 -m venv /autograder/venv
 /autograder/venv/bin/pip install -q "$(ls /autograder/source/gpsaccel-*.whl)[grading]"
 chmod -R go-rwx /autograder/source
+/autograder/venv/bin/python -I -m gpsaccel.assignments.gradescope --fence
 """
 
 
@@ -110,20 +114,60 @@ def package_wheel(out: Path) -> Path:
     return path
 
 
+def fence(package: str | os.PathLike | None = None) -> list[Path]:
+    """Make the folders of the installed gpsaccel that no box may read
+    (:data:`gpsaccel.check.problem.BOX_HIDES`: the checks, the homework's answers, the lessons'
+    masters and solutions) readable by their owner alone (``chmod -R go-rwx``); the folders
+    changed.  ``setup.sh`` runs it as root, for whom the grader still reads them."""
+    import gpsaccel
+    from gpsaccel.check.problem import BOX_HIDES
+
+    root = Path(package if package is not None else Path(gpsaccel.__file__).parent)
+    done = []
+    for rel in BOX_HIDES:
+        top = root / rel
+        if not top.is_dir() or top.is_symlink():
+            continue
+        for dirpath, dirnames, filenames in os.walk(top):
+            for n in dirnames + filenames:
+                path = os.path.join(dirpath, n)
+                if not os.path.islink(path):
+                    os.chmod(path, os.lstat(path).st_mode & ~0o077)
+        os.chmod(top, top.stat().st_mode & ~0o077)
+        done.append(top)
+    return done
+
+
+def _keys(s) -> list[str]:  # noqa: ANN001 - a roster's Student
+    """What names a roster's student in Gradescope's submission metadata: their email (or an
+    id that is one), their SID."""
+    return [k for k in (s.email.lower(), s.id.lower() if "@" in s.id else "", s.sis_id) if k]
+
+
+def unmatched(roster) -> list[str]:  # noqa: ANN001 - Students
+    """The roster's ids of the students Gradescope could never find: neither an email (an id
+    that is one counts) nor a SID, the two ways its metadata names a submitter."""
+    return [s.id for s in roster or () if not _keys(s)]
+
+
 def build(name: str, out: str | os.PathLike, roster=None, secret: bytes | None = None) -> Path:
     """``out/NAME-gradescope.zip`` (module docstring); ``roster``: the
     :class:`~gpsaccel.assignments.roster.Student` s (their email and SID name the Gradescope
-    account), ``secret``: the instructor's (None: everyone gets the public notebook's numbers)."""
+    account), ``secret``: the instructor's (None: everyone gets the public notebook's numbers).
+    A roster with students Gradescope cannot name (:func:`unmatched`: a plain roster of names)
+    is a ValueError naming them: their every submission would score 0."""
     import tempfile
 
     from gpsaccel.assignments.generate import _FOLDERS
 
     out = Path(out)
+    lost = unmatched(roster)
+    if lost:
+        raise ValueError(unmatched_message(lost))
     ids: dict[str, str] = {}
     for s in roster or ():
-        for key in (s.email.lower(), s.sis_id, s.id):
-            if key:
-                ids.setdefault(key, s.id)
+        for key in _keys(s):
+            ids.setdefault(key, s.id)
     config = {"assignment": name, "ids": ids, "own_folder": name if name in _FOLDERS else None}
     target = out / f"{name}-gradescope.zip"
     with tempfile.TemporaryDirectory(prefix="gpsaccel-gs-") as tmp:
@@ -143,6 +187,18 @@ def build(name: str, out: str | os.PathLike, roster=None, secret: bytes | None =
                     if p.is_file() and "__pycache__" not in p.parts:
                         z.write(p, (Path("homework") / name / p.relative_to(folder)).as_posix())
     return target
+
+
+def unmatched_message(lost: list[str]) -> str:
+    """Why no zip is written for a roster with students Gradescope cannot name."""
+    from gpsaccel._untrusted import shown
+
+    names = ", ".join(repr(shown(x, 60)) for x in lost[:5]) + (
+        f" and {len(lost) - 5} more" if len(lost) > 5 else "")
+    return (f"Gradescope names a submitter by email and SID, and the roster has neither for "
+            f"{len(lost)} student(s) ({names}): their every submission would score 0. Give "
+            f"Gradescope's roster (Roster > Download), or a CSV roster with email or sis_id "
+            f"columns (docs/grading.md)")
 
 
 # ------------------------------------------------------------------ in Gradescope's container
@@ -213,6 +269,10 @@ def main(argv: list[str] | None = None) -> int:
     import sys
 
     args = sys.argv[1:] if argv is None else argv
+    if args == ["--fence"]:  # setup.sh, as root
+        for path in fence():
+            print(f"readable by root only: {path}")
+        return 0
     run(args[0] if args else "/autograder")
     return 0
 

@@ -108,7 +108,8 @@ class Grade:
     to the submissions folder, as found), or "" ; scores, possible : question -> points;
     status : graded, a sandbox failure (timeout, memory-limit, crashed, ...), no-notebook,
     ambiguous, unreadable, file-limit, id-collision or grader-error; codes : question ->
-    mistake codes; feedback : the text for the student.
+    mistake codes; feedback : the text for the student; late : handed in after the deadline, as
+    the export marks it (Canvas's ``_LATE_``).
     """
 
     student: str
@@ -120,6 +121,7 @@ class Grade:
     codes: dict[str, list[str]] = field(default_factory=dict)
     seconds: float = 0.0
     id: str = ""
+    late: bool = False
 
     @property
     def total(self) -> float:

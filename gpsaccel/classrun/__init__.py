@@ -14,6 +14,8 @@ Below the command line and above the items it runs (:mod:`gpsaccel.check` checks
   path, or the status and reason why there is none), for a kind of submission (:data:`PYTHON`,
   :func:`notebooks`) and a :data:`Naming` (who an export's name is: where LMS exports meet the
   roster);
+* :mod:`~gpsaccel.classrun.exports`: the namings of Canvas's, Moodle's and Gradescope's
+  submission downloads, each name mapped to the roster through the ids it carries;
 * :mod:`~gpsaccel.classrun.running`: one run of a :class:`Task` over the entries (the secret
   seed, the jobs, the backend, the imports before forking, the sandbox's pool or Dask, deadlines,
   lost items in the sandbox's words, Ctrl-C);

@@ -21,6 +21,8 @@ the LMS's identifiers:
   Max Points, Status`` and one column per question (``q1 (3.0 pts)``, as its score export names
   them), for an offline assignment's score upload (matched by email or SID).
 
+A submission whose name maps to no one (:data:`UNMAPPED`) is in no row.  Rows meet grades by
+the students' names as shown (:func:`gpsaccel._untrusted.shown`, applied to the roster's ids).
 A student on the roster without a submission gets an empty cell (the LMS keeps what it has);
 so does a grade whose status the student did not cause (:mod:`gpsaccel.classrun.statuses`:
 ``id-collision``, ``grader-error``, ``not-graded``, ...): a grade that was not computed is never
@@ -44,6 +46,10 @@ from gpsaccel.assignments.roster import Student
 from gpsaccel.assignments.scoring import Grade
 from gpsaccel.classrun import statuses
 from gpsaccel.classrun.writing import Outputs, csv_text
+
+#: The statuses of a submission whose name maps to no one on the roster, or to several
+#: (:mod:`gpsaccel.classrun.exports`): nobody's grade, in no roster row.
+UNMAPPED = ("not-on-roster", "ambiguous-student", "unrecognised-name")
 
 #: The gradebook files :func:`write_gradebooks` writes.
 FILES = ("canvas.csv", "moodle.csv", "gradescope-roster.csv", "gradescope-scores.csv")
@@ -85,18 +91,28 @@ def _num(x: float) -> str:
     return f"{x:g}"
 
 
+def _key(student: str) -> str:
+    """The key a roster row meets its grade by: the id as a grade shows its student
+    (:func:`gpsaccel._untrusted.shown`, the one rule for folder names), so an id matches the
+    export's name whatever its characters (a newline, a comma, NFD), and never a look-alike's
+    (a zero-width character is written out, not dropped)."""
+    return shown(student)
+
+
 def _total(grades: dict, s: Student) -> str:
-    g = grades.get(s.id)
+    g = grades.get(_key(s.id))
     return "" if g is None else statuses.cell(g.status, g.total)
 
 
 def _by_student(grades: Sequence[Grade]) -> dict[str, Grade]:
-    """Each roster key's grade.  Two grades under one name (two folders that show alike, one of
-    them named exactly by the roster and graded, the other an ``id-collision``): the one that is
-    not a collision; when that does not single one out, none (the cell stays empty)."""
+    """Each roster key's grade (:func:`_key`), none of a submission mapped to no one.  Two
+    grades under one name (two folders that show alike, one of them named exactly by the roster
+    and graded, the other an ``id-collision``): the one that is not a collision; when that does
+    not single one out, none (the cell stays empty)."""
     found: dict[str, list[Grade]] = {}
     for g in grades:
-        found.setdefault(g.student, []).append(g)
+        if g.status not in UNMAPPED:
+            found.setdefault(g.student, []).append(g)
     out = {}
     for key, gs in found.items():
         if len(gs) > 1:
@@ -133,7 +149,7 @@ def gradescope_rows(grades: dict, possible: dict[str, float], roster: Sequence[S
         first, last = s.split_name
         people.append([cell(first), cell(last), cell(s.email), cell(s.sis_id or s.id),
                        cell(s.section)])
-        g = grades.get(s.id)
+        g = grades.get(_key(s.id))
         done = g is not None and statuses.scored(g.status)
         scores.append([cell(first), cell(last), cell(s.sis_id or s.id), cell(s.email),
                        _total(grades, s), _num(sum(possible.values())),
@@ -149,13 +165,14 @@ def write_gradebooks(grades: Sequence[Grade], possible: dict[str, float],
     on the roster (written nowhere but ``grades.csv``)."""
     out = Path(out)
     by_id = _by_student(grades)
-    ids = {s.id for s in roster}
+    ids = {_key(s.id) for s in roster}
     write_text(out / "canvas.csv", csv_text(canvas_rows(by_id, possible, roster, title)))
     write_text(out / "moodle.csv", csv_text(moodle_rows(by_id, roster, title)))
     people, scores = gradescope_rows(by_id, possible, roster)
     write_text(out / "gradescope-roster.csv", csv_text(people))
     write_text(out / "gradescope-scores.csv", csv_text(scores))
-    return sorted(g.student for g in grades if g.student not in ids)
+    return sorted(g.student for g in grades if g.status not in UNMAPPED  # said by the run
+                  and g.student not in ids)
 
 
 # --------------------------------------------------------------------------------- similarity

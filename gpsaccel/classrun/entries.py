@@ -48,17 +48,25 @@ class Name:
     attempt : which resubmission (Canvas' ``-1``, ``-2``); a student's highest attempt is graded;
     problem : ``(status, message)`` when the name maps to no student, or to several: the entry is
         reported with that status (under its name as found) and never run (nothing is graded on a
-        guessed variant).
+        guessed variant);
+    skip : why the entry is no one's submission at all (an LMS's other files: Moodle's online
+        text folder): it is noted and left out.
     """
 
     student: str
     late: bool = False
     attempt: int = 0
     problem: tuple[str, str] | None = None
+    skip: str = ""
 
 
 #: ``naming(found, is_file) -> Name``: who the top-level entry named ``found`` is.
 Naming = Callable[[str, bool], Name]
+
+#: ``layout(folder, names) -> Naming``: who the entries of one folder are, decided once from the
+#: folder and every top-level name it holds that may be a submission (which LMS exported it:
+#: :func:`gpsaccel.classrun.exports.layout`).
+Layout = Callable[[Path, Sequence[str]], Naming]
 
 
 @dataclass(frozen=True)
@@ -148,7 +156,8 @@ def plain(kind: Kind) -> Naming:
 
 # ------------------------------------------------------------------------------ the walk
 def walk(paths: str | os.PathLike | Sequence[str | os.PathLike], kind: Kind,
-         naming: Naming | None = None, known: Collection[str] = ()
+         naming: Naming | None = None, known: Collection[str] = (),
+         layout: Layout | None = None
          ) -> tuple[list[Entry], list[str]]:
     """Every entry of a class (module docstring) and notes on what is not one.
 
@@ -156,11 +165,13 @@ def walk(paths: str | os.PathLike | Sequence[str | os.PathLike], kind: Kind,
     found in it); or a list of files and folders (the command line's: a file is one entry, a
     missing one too, for its item to report; a folder holds one per top-level entry; the notes
     name them by their paths).  Entries come in the order given, each folder's by name without
-    case.  ``naming`` (default :func:`plain`) says who each one is.  ``known``: the roster's
-    ids; of entries that collide, the one whose student is one of them exactly (the folder's
-    name as found, byte for byte, or the naming's id), when no other of them is, is that
+    case.  ``naming`` (default :func:`plain`) says who each one is; a ``layout`` (an LMS
+    export's) is asked for the naming of each folder, with the names found in it.  ``known``:
+    the roster's ids; of entries that collide, the one whose student is one of them exactly (the
+    folder's name as found, byte for byte, or the naming's id), when no other of them is, is that
     student and kept; the others stay refused."""
-    naming = naming or plain(kind)
+    fixed = naming or plain(kind)
+    layout = layout or (lambda _folder, _names: fixed)
     if isinstance(paths, (str, os.PathLike)):
         roots, one_folder = [Path(paths)], True
     else:
@@ -169,10 +180,12 @@ def walk(paths: str | os.PathLike | Sequence[str | os.PathLike], kind: Kind,
     notes: list[str] = []
     for root in roots:
         if not one_folder and not root.is_dir():
-            found.append(_named(naming, Entry("", root, found=root.name), is_file=True))
+            one = _named(layout(root.parent, [root.name]), Entry("", root, found=root.name),
+                         True, notes, str(root.parent))
+            found += [one] if one is not None else []
             continue
         n = len(found)
-        found += _folder(root, kind, naming, notes, "" if one_folder else str(root))
+        found += _folder(root, kind, layout, notes, "" if one_folder else str(root))
         if len(found) == n and not one_folder:
             notes.append(f"{_untrusted.shown(str(root))}: no submission in it ({kind.what} "
                          f"each)")
@@ -180,24 +193,29 @@ def walk(paths: str | os.PathLike | Sequence[str | os.PathLike], kind: Kind,
     return _with_ids(_latest(unique, notes), kind, notes, frozenset(known)), notes
 
 
-def _folder(root: Path, kind: Kind, naming: Naming, notes: list[str], where: str
+def _folder(root: Path, kind: Kind, layout: Layout, notes: list[str], where: str
             ) -> list[Entry]:
     """The entries at the top of ``root``; ``where`` prefixes the names in notes."""
-    out: list[Entry] = []
     with os.scandir(root) as it:
         listing = sorted(it, key=lambda e: (os.fsencode(e.name).lower(), os.fsencode(e.name)))
+    candidates = []
     for e in listing:
-        shown = _untrusted.shown(os.path.join(where, e.name) if where else e.name)
         why = kind.ignored(e.name) or _not_a_submission(e, kind)
         if why:
-            notes.append(f"{shown}: skipped ({why})")
-            continue
+            notes.append(f"{_untrusted.shown(os.path.join(where, e.name))}: skipped ({why})")
+        else:
+            candidates.append(e)
+    naming = layout(root, [e.name for e in candidates])
+    out: list[Entry] = []
+    for e in candidates:
         is_file = not e.is_dir(follow_symlinks=False)
         entry = Entry("", Path(e.path), found=e.name)
         if not is_file and kind.inside is not None:
             path, problem = kind.inside(Path(e.path))
             entry = replace(entry, path=path, problem=problem)
-        out.append(_named(naming, entry, is_file))
+        named = _named(naming, entry, is_file, notes, where)
+        if named is not None:
+            out.append(named)
     return out
 
 
@@ -211,8 +229,13 @@ def _not_a_submission(e: os.DirEntry, kind: Kind) -> str:
     return "" if e.name.lower().endswith(kind.suffix) else f"not {kind.what}"
 
 
-def _named(naming: Naming, entry: Entry, is_file: bool) -> Entry:
+def _named(naming: Naming, entry: Entry, is_file: bool, notes: list[str], where: str = ""
+           ) -> Entry | None:
     name = naming(entry.found, is_file)
+    if name.skip:
+        notes.append(f"{_untrusted.shown(os.path.join(where, entry.found))}: skipped "
+                     f"({name.skip})")
+        return None
     problem = name.problem or entry.problem
     return replace(entry, student=name.student or entry.found, late=name.late,
                    attempt=name.attempt, problem=problem, path=None if problem else entry.path)

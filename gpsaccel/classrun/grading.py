@@ -30,9 +30,12 @@ inside the checker's sandbox, every score computed outside, every file written b
   (:class:`~gpsaccel.classrun.writing.Outputs`): the grades and every other file are kept, and
   ``grading.json``'s ``missing`` names what is not written; :func:`rewrite_class` writes the
   class-wide files again from ``grades.json`` once there is room, without grading;
-* ``student=ID`` regrades one student with the recorded seed: the old row stays until the new
-  one is written, and the regrade is appended to ``grading.json``'s ``regrades`` (the class
-  record is kept);
+* a rerun into the same output without ``seed`` keeps the recorded seed and the recorded grade
+  of every notebook whose SHA-256 is unchanged (same homework, secret, sandbox, time limit and
+  gpsaccel; ``regrade=True`` grades every one again); ``student=ID`` (or several ids) regrades
+  those students with the recorded seed: each old row stays until its new one is written, and
+  the regrade is appended to ``grading.json``'s ``regrades``; a run that starts a new record
+  keeps the earlier ones in its ``earlier``;
 * ``dask=...`` sends each notebook to a Dask cluster (same function, same seed: same grades)
   with the same deadline.
 """
@@ -47,6 +50,7 @@ from collections import Counter
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -54,8 +58,10 @@ from gpsaccel import _untrusted
 from gpsaccel.assignments import grading as item
 from gpsaccel.assignments.roster import Student, read_roster
 from gpsaccel.assignments.scoring import TIMEOUT, Grade
-from gpsaccel.classrun import classwide, running, writing
+from gpsaccel.classrun import classwide, running, statuses, writing
+from gpsaccel.classrun.classwide import UNMAPPED
 from gpsaccel.classrun.entries import Entry, Naming, notebooks, walk
+from gpsaccel.classrun.exports import Export
 
 
 class _Grade(running.Task):
@@ -113,20 +119,27 @@ class _Record:
     student's old row until the new one is written.  ``grading.json`` holds the class record;
     a regrade appends itself to its ``regrades``."""
 
-    def __init__(self, out: Path, possible: dict[str, float], student: str | None,
+    def __init__(self, out: Path, possible: dict[str, float], student: Sequence[str] | None,
                  progress: bool = False) -> None:
         self.out, self.possible, self.student, self.progress = out, possible, student, progress
         self.record = out / "grading.json"
         self.kept_path = out / "grades.json"
         self.feedback = out / "feedback"
         self.previous = self._json(self.record, {})
+        if not isinstance(self.previous, dict):
+            self.previous = {}
         # a regrade keeps what the folder still misses (another student's feedback)
         kept = self.previous.get("missing") if student and isinstance(self.previous, dict) \
             else None
         self.outputs = writing.Outputs(out, kept if isinstance(kept, dict) else None)
-        self.old = [Grade(**d) for d in self._json(self.kept_path, [])] if student else []
+        try:
+            self.old = [Grade(**d) for d in self._json(self.kept_path, [])]
+        except TypeError:  # grades.json of another version: nothing is reused from it
+            self.old = []
         for g in self.old:  # a row of an earlier version, without its id
             g.id = g.id or _untrusted.student_id(g.student)
+        self.notebooks: dict[str, str] = {}
+        self.reused: dict[int, Grade] = {}
         self.entries: Sequence[Entry] = []
         self.grades: list[Grade | None] = []
         self.t0 = time.perf_counter()
@@ -135,19 +148,47 @@ class _Record:
     def _json(path: Path, default):  # noqa: ANN001, ANN205 - a dict or a list
         return json.loads(path.read_text(encoding="utf-8")) if path.is_file() else default
 
+    def reusable(self, entries: Sequence[Entry], settings: dict) -> str:
+        """Fill :attr:`reused` with the recorded grade of every entry whose notebook is
+        unchanged (its SHA-256) under the recorded seed and settings; "" or why nothing is."""
+        self.notebooks = {e.id: _digest(e.path) for e in entries if e.path is not None}
+        before = self.previous.get("reuse")
+        if not self.previous.get("seed") or before != _fingerprint(settings):
+            return ("no earlier run in this folder" if not self.previous else
+                    "the earlier run's homework, secret, sandbox, time limit or gpsaccel "
+                    "differ")
+        old = {g.id: g for g in self.old}
+        recorded = self.previous.get("notebooks") or {}
+        for i, e in enumerate(entries):
+            g = old.get(e.id)
+            if g is None:
+                continue
+            refused = e.path is None and e.problem is not None and g.status == e.problem[0]
+            if refused or (statuses.scored(g.status) and e.id in self.notebooks
+                           and recorded.get(e.id) == self.notebooks[e.id]):
+                self.reused[i] = g  # the same refusal, or the same notebook's own grade
+        return ""
+
     def start(self, entries: Sequence[Entry], info: dict) -> None:
         from tqdm.auto import tqdm
 
-        self.bar = tqdm(total=len(entries), desc=info["assignment"], unit="notebook",
-                        leave=False, disable=None if self.progress else True)
+        self.bar = tqdm(total=len(entries) - len(self.reused), desc=info["assignment"],
+                        unit="notebook", leave=False, disable=None if self.progress else True)
         self.entries, self.grades = entries, [None] * len(entries)
+        for i, g in self.reused.items():
+            g.late = entries[i].late
+            self.grades[i] = g
         self.feedback.mkdir(exist_ok=True)
-        if self.student is None or not isinstance(self.previous, dict) or not self.previous:
-            self.info = {**info, "regrades": []}
+        if self.student is None or not self.previous:
+            earlier = self.previous.get("earlier", []) + (
+                [{k: v for k, v in self.previous.items() if k not in ("earlier", "notebooks")}]
+                if self.previous else [])
+            self.info = {**info, "regrades": [], "earlier": earlier}
         else:  # the class record stays; the regrade is appended to it
             self.info = self.previous
             self.info.setdefault("regrades", []).append(
                 {k: info[k] for k in ("student", "seed", "started")})
+        self.info.setdefault("notebooks", {}).update(self.notebooks)
         writing.dump_json(self.record, self.info, indent=2)
         if self.student is None:  # a full run: the feedback of students no longer there is stale
             keep = {f"{e.id}.txt" for e in entries}
@@ -164,7 +205,7 @@ class _Record:
                        for e, g in zip(self.entries, self.grades, strict=True) if g is None]
             return sorted(now + missing, key=lambda g: (g.student.lower(), g.id))
         new = {g.id for g in now}
-        kept = [g for g in self.old if g.id not in new]
+        kept = [g for g in self.old if g.id not in new]  # a regrade keeps the other rows
         return sorted(kept + now, key=lambda g: (g.student.lower(), g.id))
 
     def flush(self) -> None:
@@ -178,6 +219,7 @@ class _Record:
 
     def done(self, i: int, data: dict) -> None:
         g = Grade(**data)
+        g.late = self.entries[i].late
         self.bar.set_postfix_str(f"{g.student[:40]}: {g.status}")
         self.bar.update()
         sid = self.entries[i].id
@@ -197,7 +239,8 @@ class _Record:
         entry = self.info["regrades"][-1] if self.student is not None and \
             self.info.get("regrades") else self.info
         entry["seconds"] = round(time.perf_counter() - self.t0, 1)
-        entry["graded"] = sum(g is not None for g in self.grades)
+        entry["graded"] = sum(g is not None for g in self.grades) - len(self.reused)
+        entry["reused"] = len(self.reused)
         entry["interrupted"] = interrupted
         if not interrupted:
             self.outputs.pending([*SUMMARY, *pending])
@@ -237,10 +280,11 @@ def default_out(submissions: str | os.PathLike) -> Path:
 
 def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLike | None = None,
                 jobs: int | None = None, timeout: float = TIMEOUT, seed: int | None = None,
-                secret: bytes | None = None, student: str | None = None, dask: str | None = None,
-                sandbox: str = "auto", progress: bool = False,
+                secret: bytes | None = None, student: str | Sequence[str] | None = None,
+                dask: str | None = None, sandbox: str = "auto", progress: bool = False,
                 roster: Sequence[Student] | str | os.PathLike | None = None,
-                similarity: bool = True, naming: Naming | None = None) -> Graded:
+                similarity: bool = True, naming: Naming | None = None,
+                export: str = "auto", regrade: bool = False) -> Graded:
     """Grade every student of ``submissions`` for homework ``name`` and write every file
     (module docstring); :func:`grade` is this with the grades alone.
 
@@ -251,45 +295,56 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
     numbers); dask : a Dask address or "dask-local"; progress : a tqdm bar on stderr when it is
     a terminal; roster : the class roster (students, or its file: :func:`~gpsaccel.assignments
     .roster.read_roster`), for the LMS gradebooks; similarity : write the similarity report;
-    naming : who each entry of the export is (:data:`~gpsaccel.classrun.entries.Naming`;
-    default: the folder's or the notebook's name).
+    export : how the submissions were downloaded (:data:`gpsaccel.classrun.exports.LAYOUTS`;
+    "auto": told from their names), each mapped to the roster through the ids its name carries;
+    naming : who each entry is, instead (:data:`~gpsaccel.classrun.entries.Naming`);
+    student : regrade these students only (an id, or several), with the recorded seed;
+    regrade : grade every notebook again; without it (and without ``seed``) a rerun in the same
+    ``out`` reuses the recorded seed and the recorded grade of every notebook that is unchanged
+    (its SHA-256) under the same homework, secret, sandbox, time limit and gpsaccel.
     """
     folder = Path(submissions)
     out, jobs = _checked(folder, out, timeout, jobs)
     students = read_roster(roster) if isinstance(roster, (str, os.PathLike)) else roster
     possible = item.possible_of(name)
+    layout = Export(notebooks(name), export, students)
     entries, notes = walk(folder, notebooks(name), naming,
-                          known={s.id for s in students} if students else ())
+                          known={s.id for s in students} if students else (),
+                          layout=None if naming is not None else layout)
     if not entries:
         raise ValueError(f"submissions: no student's folder or notebook in {folder}")
+    _check_mapped(entries, students, layout)
     out.mkdir(parents=True, exist_ok=True)
-    record = _Record(out, possible, student, progress)
-    if student is not None:  # by the name as found, its id or as it is shown
-        entries = [e for e in entries if student in (e.student, e.id, e.shown)]
-        if not entries:
-            raise ValueError(f"student: no submission of {student!r} in {folder}")
-        seed = record.previous.get("seed") if seed is None else seed
-    seed, _ = running.seed_of(seed)
+    wanted = (student,) if isinstance(student, str) else \
+        tuple(student) if student is not None else None
+    record = _Record(out, possible, wanted, progress)
     backend = running.backend_of(sandbox)  # a class is not graded where basic cannot isolate it
-    settings = {"name": name, "seed": seed, "secret": secret, "sandbox": backend,
-                "timeout": float(timeout)}
+    settings: dict[str, Any] = {"name": name, "seed": seed, "secret": secret,
+                                "sandbox": backend, "timeout": float(timeout)}
+    entries, reuse = _resumed(record, entries, wanted, folder, settings, regrade)
+    seed = settings["seed"]  # drawn by running.seed_of where none was given or recorded
     record.start(entries, {
         "assignment": name, "seed": seed, "sandbox": backend, "timeout": timeout,
         "variants": "per student (HMAC of the id under the instructor's secret)" if secret
         else "none (no secret given: every student has the public notebook's numbers)",
         "questions": possible, "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-        "student": student, "skipped": notes})
+        "student": None if wanted is None else wanted[0] if len(wanted) == 1 else list(wanted),
+        "export": layout.found, "skipped": notes, "reuse": _fingerprint(settings)})
+    todo = [i for i in range(len(entries)) if i not in record.reused]
     try:
-        running.run(_Grade(folder, settings), entries, jobs, dask or "processes", record.done)
+        if todo:
+            running.run(_Grade(folder, settings), [entries[i] for i in todo], jobs,
+                        dask or "processes", lambda k, data: record.done(todo[k], data))
     except BaseException:  # Ctrl-C, a lost cluster: what is done stays, the rest not-graded
         record.finish(interrupted=True)
         raise
     rows = record.finish(False, classwide.files(students is not None, similarity))
     lines = classwide.write(folder, out, name, rows, possible, students, similarity,
                             record.outputs)
+    lines += _unmapped(students, layout) + ([f"rerun: {reuse}"] if reuse else [])
     record.save()
-    return Graded([g for g in record.grades if g is not None], rows, out, lines,
-                  dict(record.outputs.missing))
+    return Graded([g for i, g in enumerate(record.grades) if g is not None
+                   and i not in record.reused], rows, out, lines, dict(record.outputs.missing))
 
 
 def rewrite_class(submissions: str | os.PathLike, name: str, out: str | os.PathLike | None = None,
@@ -339,20 +394,117 @@ def rewrite_class(submissions: str | os.PathLike, name: str, out: str | os.PathL
 
 def grade(submissions: str | os.PathLike, name: str, out: str | os.PathLike | None = None,
           jobs: int | None = None, timeout: float = TIMEOUT, seed: int | None = None,
-          secret: bytes | None = None, student: str | None = None, dask: str | None = None,
-          sandbox: str = "auto", progress: bool = False,
+          secret: bytes | None = None, student: str | Sequence[str] | None = None,
+          dask: str | None = None, sandbox: str = "auto", progress: bool = False,
           roster: Sequence[Student] | str | os.PathLike | None = None,
-          similarity: bool = True, naming: Naming | None = None) -> list[Grade]:
+          similarity: bool = True, naming: Naming | None = None, export: str = "auto",
+          regrade: bool = False) -> list[Grade]:
     """Grade a class (:func:`grade_class`: the same files as ``gpsaccel grade`` writes); this
     run's grades, one per student graded, in the class's order.  OSError when a file could not
     be written (every other one is; ``grading.json`` names them, :func:`rewrite_class` writes
     the class-wide ones once there is room)."""
     graded = grade_class(submissions, name, out, jobs, timeout, seed, secret, student, dask,
-                         sandbox, progress, roster, similarity, naming)
+                         sandbox, progress, roster, similarity, naming, export, regrade)
     if graded.missing:
         raise OSError(f"not written in {graded.out}: " + ", ".join(
             f"{f} ({why})" for f, why in graded.missing.items()))
     return graded.grades
+
+
+def _resumed(record: _Record, entries: list[Entry], wanted: Sequence[str] | None,
+             folder: Path, settings: dict, regrade: bool) -> tuple[list[Entry], str]:
+    """What this run grades and on which seed (``settings["seed"]`` set): the students
+    ``wanted`` with the recorded seed; else, without a seed or ``regrade``, every notebook that
+    changed since the recorded run (:meth:`_Record.reusable`), the others' grades kept; else
+    all.  Returns the entries and the line that says what was kept ("" when nothing could
+    be)."""
+    seed, reuse = settings["seed"], ""
+    if wanted is not None:  # by the name as found, its id or as it is shown
+        entries = _chosen(entries, wanted, folder)
+        seed = record.previous.get("seed") if seed is None else seed
+    elif seed is None and not regrade:
+        why = record.reusable(entries, settings)
+        seed = record.previous.get("seed") if not why else None
+        reuse = "" if not record.previous else f"nothing kept: {why}" if why else \
+            f"{len(record.reused)} unchanged notebook(s) not graded again (their recorded " \
+            f"grades kept; --regrade grades every one)"
+    if not record.notebooks:
+        record.notebooks = {e.id: _digest(e.path) for e in entries if e.path is not None}
+    settings["seed"], _ = running.seed_of(seed)
+    return entries, reuse
+
+
+def _digest(path: Path) -> str:
+    """The SHA-256 of a notebook (what a rerun compares): read in blocks, never parsed."""
+    import hashlib
+
+    with open(path, "rb") as f:
+        return hashlib.file_digest(f, "sha256").hexdigest()
+
+
+def _fingerprint(settings: dict) -> str:
+    """What a recorded grade depends on besides the notebook and the seed: the homework (its
+    questions), the secret, the sandbox, the time limit, gpsaccel's version; hashed (the record
+    holds no secret)."""
+    import hashlib
+
+    from gpsaccel._version import __version__
+
+    text = json.dumps([settings["name"], (settings["secret"] or b"").hex(), settings["sandbox"],
+                       settings["timeout"], __version__, possible_names(settings["name"])])
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def possible_names(name: str) -> list[str]:
+    """The homework's questions and points, and for a folder of the instructor's own the
+    SHA-256 of its every file (a changed ``graded.py`` grades differently)."""
+    import hashlib
+
+    from gpsaccel.assignments.generate import _FOLDERS
+
+    out = [f"{q}={p}" for q, p in item.possible_of(name).items()]
+    folder = _FOLDERS.get(name)
+    if folder is not None:
+        out += [f"{f.relative_to(folder)}={hashlib.sha256(f.read_bytes()).hexdigest()}"
+                for f in sorted(Path(folder).rglob("*.py")) + sorted(Path(folder).rglob("*.ipynb"))
+                if "__pycache__" not in f.parts]
+    return out
+
+
+def _chosen(entries: Sequence[Entry], wanted: Sequence[str], folder: Path) -> list[Entry]:
+    """The entries of the students ``wanted`` (each by the name as found, its id or as shown);
+    ValueError naming any that has no submission."""
+    missing = [w for w in wanted if not any(w in (e.student, e.id, e.shown) for e in entries)]
+    if missing:
+        raise ValueError(f"student: no submission of {', '.join(map(repr, missing))} in "
+                         f"{folder}")
+    return [e for e in entries if any(w in (e.student, e.id, e.shown) for w in wanted)]
+
+
+def _check_mapped(entries: Sequence[Entry], students: Sequence[Student] | None,
+                  layout: Export) -> None:
+    """A roster that names none of the submissions is the wrong roster (or export): refused
+    before any notebook runs."""
+    if students and all(e.problem is not None and e.problem[0] in UNMAPPED for e in entries):
+        raise ValueError(f"roster: none of the {len(entries)} submissions names a student of "
+                         f"the roster (read as {'; '.join(layout.found) or 'given'}); give the "
+                         f"roster the submissions were handed out from, or --export")
+
+
+def _unmapped(students: Sequence[Student] | None, layout: Export) -> list[str]:
+    """Lines for the instructor: how the export was read (the submissions it mapped to no one
+    are named with the other empty cells: :func:`gpsaccel.classrun.statuses.unscored_lines`),
+    and the roster's ids that no file or folder can be named (under a plain layout: they can
+    never match)."""
+    from gpsaccel.assignments.roster import unmatchable
+
+    lines = [f"export read as {how}" for how in layout.found]
+    never = unmatchable(students or [])
+    if never and any(how.startswith("plain") for how in layout.found):
+        lines.append("roster: no file or folder can be named as these ids, so no submission "
+                     "can match them: " + ", ".join(repr(_untrusted.shown(x, 80))
+                                                    for x in never))
+    return lines
 
 
 def _checked(folder: Path, out: str | os.PathLike | None, timeout: float, jobs: int | None

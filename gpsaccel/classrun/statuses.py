@@ -77,6 +77,10 @@ STATUSES: dict[str, Status] = {
     "ambiguous-student": Status(False, EMPTY, "the export's name maps to several students of "
                                               "the roster",
                                 "make the roster's identifiers unique and " + _REGRADE),
+    "unrecognised-name": Status(False, EMPTY, "the name is not written as its export (Canvas, "
+                                              "Moodle, Gradescope) writes a submission's",
+                                "give --export, or rename it as the export names it, and "
+                                + _REGRADE),
 }
 
 

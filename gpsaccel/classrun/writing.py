@@ -102,15 +102,16 @@ def write_grades(grades: Sequence, possible: dict[str, float], path: Path) -> No
     qs = list(possible)
     whole = f"{sum(possible.values()):g}"
     rows: list[list[object]] = [
-        [*HEADER, *qs, "total", "possible", "status", "seconds"],
-        ["Points Possible", "", "", *(f"{possible[q]:g}" for q in qs), whole, whole, "", ""]]
+        [*HEADER, *qs, "total", "possible", "status", "seconds", "late"],
+        ["Points Possible", "", "", *(f"{possible[q]:g}" for q in qs), whole, whole, "", "",
+         ""]]
     for g in grades:
         points = statuses.scored(g.status)
         rows.append([_untrusted.cell(g.student), _untrusted.cell(g.id),
                      _untrusted.cell(_untrusted.shown(g.file, 1000)),
                      *(f"{g.scores.get(q, 0):g}" if points else "" for q in qs),
                      f"{g.total:g}" if points else "", f"{g.max_total:g}", g.status,
-                     f"{g.seconds:.1f}"])
+                     f"{g.seconds:.1f}", "late" if getattr(g, "late", False) else ""])
     write_text(path, csv_text(rows))
 
 

@@ -49,7 +49,9 @@ def _cmd_assignment(args: argparse.Namespace) -> int:
             raise ValueError("--roster: per-student variants need the instructor's secret "
                              "(--secret-file FILE, or $GPSACCEL_GRADING_SECRET)")
     t0 = time.perf_counter()
-    from gpsaccel.assignments.gradescope import build
+    from gpsaccel.assignments.gradescope import build, unmatched, unmatched_message
+
+    lost = unmatched(students)  # no zip that would give them 0: said, before otter runs
 
     with tqdm(total=2 + (len(students) if students else 0), desc=name, unit="step",
               leave=False, disable=None) as bar:  # on stderr, when it is a terminal
@@ -66,14 +68,15 @@ def _cmd_assignment(args: argparse.Namespace) -> int:
             folder = personalize(name, g.student, [s.id for s in students], secret,
                                  g.out / "students", progress=bar)
         bar.set_postfix_str("Gradescope autograder")
-        gradescope = build(name, g.out, students, secret)
+        gradescope = (f"no zip written: {unmatched_message(lost)}" if lost else
+                      f"{build(name, g.out, students, secret)} (scores computed outside the "
+                      f"sandbox; otter's own zip: {g.autograder.name})")
         bar.update()
     # the grader recomputes each student's variant from the same roster and secret
     variant_flags = (f" --roster {shlex.quote(str(args.roster))} --secret-file "
                      f"{shlex.quote(str(args.secret_file))}" if students is not None else "")
     print(f"hand out:  {g.student}\ngrade with: gpsaccel grade SUBMISSIONS --assignment "
-          f"{args.name}{variant_flags}\nGradescope: {gradescope} (scores computed outside the sandbox; "
-          f"otter's own zip: {g.autograder.name})\nsolution:  {g.solution}")
+          f"{args.name}{variant_flags}\nGradescope: {gradescope}\nsolution:  {g.solution}")
     if students is not None:
         print(f"per student: {folder}/<id>/{name}.ipynb ({len(students)} students)")
     print(f"{time.perf_counter() - t0:.1f} s")
@@ -132,7 +135,8 @@ def _cmd_grade(args: argparse.Namespace) -> int:
                                  timeout=args.timeout or TIMEOUT, seed=args.seed,
                                  secret=read_secret(args.secret_file), student=args.student,
                                  dask=args.dask, sandbox=args.sandbox, progress=True,
-                                 roster=roster, similarity=not args.no_similarity)
+                                 roster=roster, similarity=not args.no_similarity,
+                                 export=args.export, regrade=args.regrade)
             term.out(grades_table(graded.grades))
             for line in grade_mistakes(graded.grades):
                 term.out(line)
@@ -163,7 +167,8 @@ def _wrote(term: Terminal, args: argparse.Namespace, out: Path, graded: Graded) 
 #: The flags of a grade that ``--from-grades`` (no notebook graded) cannot honour, and their
 #: defaults.
 _GRADING_ONLY = {"student": None, "seed": None, "jobs": None, "timeout": None,
-                 "secret_file": None, "dask": None, "sandbox": "auto"}
+                 "secret_file": None, "dask": None, "sandbox": "auto", "export": "auto",
+                 "regrade": False}
 
 
 def _only_class_wide(args: argparse.Namespace) -> None:
@@ -188,8 +193,9 @@ def add_assignment(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-run-tests", action="store_true",
                    help="do not execute the solution against its tests first (faster)")
     p.add_argument("--roster", type=Path, default=None,
-                   help="the class: one student id a line, or a CSV file with an id column "
-                        "(docs/grading.md): one notebook each, with its variant")
+                   help="the class: one student id a line, a CSV file with an id column, or "
+                        "the LMS's roster file (docs/grading.md): one notebook each, with its "
+                        "variant")
     p.add_argument("--secret-file", type=Path, default=None,
                    help="the instructor's secret (default $GPSACCEL_GRADING_SECRET)")
     p.set_defaults(func=_cmd_assignment)
@@ -203,8 +209,15 @@ def add_grade(sub: argparse._SubParsersAction) -> None:
                    metavar="NAME", help="the homework: %(choices)s, or a folder of your own "
                                         "holding NAME.ipynb and graded.py")
     p.add_argument("--roster", type=Path, default=None,
-                   help="the class roster (a CSV file with id, name, email, sis_id, ... "
-                        "columns): write canvas.csv, moodle.csv and Gradescope's CSV files too")
+                   help="the class roster as the LMS downloads it (Canvas's gradebook export, "
+                        "Moodle's participants, grades or grading worksheet, Gradescope's "
+                        "roster), one id a line, or a CSV file with an id column: maps each "
+                        "submission to its student and writes canvas.csv, moodle.csv and "
+                        "Gradescope's CSV files too (docs/grading.md)")
+    p.add_argument("--export", choices=("auto", "plain", "canvas", "moodle", "gradescope"),
+                   default="auto",
+                   help="how SUBMISSIONS was downloaded (default auto: told from the names; "
+                        "plain: a folder or notebook per roster id)")
     p.add_argument("--no-similarity", action="store_true",
                    help="skip the similarity report (similarity.csv, similarity.html)")
     p.add_argument("--out", type=_v.output_dir, default=None,
@@ -218,7 +231,12 @@ def add_grade(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--secret-file", type=Path, default=None,
                    help="the instructor's secret for per-student variants (default "
                         "$GPSACCEL_GRADING_SECRET; none: no variants)")
-    p.add_argument("--student", default=None, help="regrade this student only")
+    p.add_argument("--student", nargs="+", default=None, metavar="ID",
+                   help="regrade these students only (the roster's id, the name as found, or "
+                        "the id grades.csv shows), with the recorded seed")
+    p.add_argument("--regrade", action="store_true",
+                   help="grade every notebook again (default: a rerun into the same --out "
+                        "without --seed keeps the recorded grade of each unchanged notebook)")
     p.add_argument("--dask", default=None,
                    help="grade on Dask: 'dask-local' or a scheduler address tcp://host:port")
     p.add_argument("--sandbox", choices=("auto", "bwrap", "basic"), default="auto",

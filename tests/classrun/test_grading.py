@@ -7,6 +7,8 @@ from __future__ import annotations
 import csv
 from dataclasses import asdict
 
+import pytest
+
 from gpsaccel.assignments import grading as item
 from gpsaccel.assignments.roster import Student
 from gpsaccel.classrun import grade, grade_class, running
@@ -113,3 +115,49 @@ def test_a_roster_that_names_neither_folder_exactly_leaves_both_refused(tmp_path
     graded, _ = _case_collision(tmp_path, monkeypatch, [Student("jane doe", name="Jane Doe")])
     assert [g.status for g in graded.grades] == ["id-collision", "id-collision"]
     assert _canvas(graded.out)["Jane Doe"] == ""
+
+
+# ------------------------------------------------------------ runs that resume (issue 38.4)
+def test_a_rerun_keeps_the_grades_of_unchanged_notebooks_and_the_record_every_regrade(
+        tmp_path, monkeypatch):
+    import json
+
+    sent: list = []
+
+    def fake(task, entries, jobs, executor, on_result):
+        sent.append(sorted(e.student for e in entries))
+        for i, e in enumerate(entries):
+            g = item.unusable(task.name, e.student, e.found, "graded", "", e.id)
+            g.scores = dict.fromkeys(g.scores, float(len(e.path.read_text()) % 2))
+            on_result(i, asdict(g))
+        return [None] * len(entries)
+
+    monkeypatch.setattr(running, "run", fake)
+    sub, out = tmp_path / "class", tmp_path / "out"
+    for who, text in (("ann", "{}"), ("ben", "{ }"), ("cy", "{}")):
+        (sub / who).mkdir(parents=True)
+        (sub / who / "calibration.ipynb").write_text(text)
+
+    def again(**kw):
+        g = grade(sub, "calibration", out=out, similarity=False, **kw)
+        return g, json.loads((out / "grading.json").read_text())
+
+    first, rec1 = again()
+    assert sent == [["ann", "ben", "cy"]] and len(first) == 3
+    rows1 = (out / "grades.csv").read_text()
+    now, rec2 = again()  # nothing changed: nothing graded, the same seed, the same rows
+    assert sent[1:] == [] and now == [] and rec2["seed"] == rec1["seed"]
+    assert (out / "grades.csv").read_text().replace("0.0", "") == rows1.replace("0.0", "")
+    assert rec2["reused"] == 3 and rec2["graded"] == 0
+    (sub / "ben" / "calibration.ipynb").write_text("{  }")  # ben hands in again
+    now, rec3 = again()
+    assert sent[1:] == [["ben"]] and [g.student for g in now] == ["ben"]
+    assert rec3["seed"] == rec1["seed"]
+    now, _ = again(student=["ann", "cy"])  # several students at once, the recorded seed
+    assert sent[2:] == [["ann", "cy"]]
+    now, rec5 = again(regrade=True)  # everyone, a new seed; the earlier records kept
+    assert sent[3:] == [["ann", "ben", "cy"]] and rec5["seed"] != rec1["seed"]
+    assert [r["seed"] for r in rec5["earlier"]] == [rec1["seed"]] * 3
+    assert [x["student"] for x in rec5["earlier"][-1]["regrades"]] == [["ann", "cy"]]  # one: "ann"
+    with pytest.raises(ValueError, match="'dan'"):
+        again(student=["ann", "dan"])

@@ -61,7 +61,8 @@ def _files(folder: Path) -> dict[str, str]:
         if p.is_file() and p.suffix != ".png":
             text = p.read_text(encoding="utf-8")
             text = re.sub(r'"(seconds|started)": [^,}\n]+', r'"\1": T', text)
-            out[p.relative_to(folder).as_posix()] = re.sub(r",\d+\.\d\r?\n", ",T\n", text)
+            out[p.relative_to(folder).as_posix()] = re.sub(r",\d+\.\d(,[a-z]*\r?\n)", r",T\1",
+                                                           text)  # grades.csv's seconds
     return out
 
 
