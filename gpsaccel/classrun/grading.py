@@ -315,8 +315,7 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
         raise ValueError(f"submissions: no student's folder or notebook in {folder}")
     _check_mapped(entries, students, layout)
     out.mkdir(parents=True, exist_ok=True)
-    wanted = (student,) if isinstance(student, str) else \
-        tuple(student) if student is not None else None
+    wanted = _wanted(student)
     record = _Record(out, possible, wanted, progress)
     backend = running.backend_of(sandbox)  # a class is not graded where basic cannot isolate it
     settings: dict[str, Any] = {"name": name, "seed": seed, "secret": secret,
@@ -328,7 +327,7 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
         "variants": "per student (HMAC of the id under the instructor's secret)" if secret
         else "none (no secret given: every student has the public notebook's numbers)",
         "questions": possible, "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-        "student": None if wanted is None else wanted[0] if len(wanted) == 1 else list(wanted),
+        "student": wanted if wanted is None or len(wanted) > 1 else wanted[0],
         "export": layout.found, "skipped": notes, "reuse": _fingerprint(settings)})
     todo = [i for i in range(len(entries)) if i not in record.reused]
     try:
@@ -409,6 +408,11 @@ def grade(submissions: str | os.PathLike, name: str, out: str | os.PathLike | No
         raise OSError(f"not written in {graded.out}: " + ", ".join(
             f"{f} ({why})" for f, why in graded.missing.items()))
     return graded.grades
+
+
+def _wanted(student: str | Sequence[str] | None) -> list[str] | None:
+    """The students a regrade is for (None: the class)."""
+    return None if student is None else [student] if isinstance(student, str) else list(student)
 
 
 def _resumed(record: _Record, entries: list[Entry], wanted: Sequence[str] | None,
