@@ -95,7 +95,7 @@ def _dom(page: Path, tmp_path: Path) -> str:
         cmd = ["unshare", "-n", *cmd]  # no network at all: MathJax must come from the site
     else:
         pytest.skip("unshare -n (a network namespace) is not available to cut the network")
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=180)
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)  # a hang guard
     assert proc.returncode == 0, proc.stderr[-2000:]
     return proc.stdout
 

@@ -10,6 +10,7 @@ a check's (``LIMITS``).
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import glob
 import os
@@ -200,28 +201,36 @@ def test_huge_values_are_the_student_s_result_not_a_breach(backend, hostile):
 def test_a_box_folder_of_a_killed_supervisor_is_removed(tmp_path, hostile):
     """A worker SIGKILLed mid-check leaves its box folder (a copy of the submission): the next
     box removes it."""
+    # room for all 80 of fork_lingers' children: its box then lives 20 s (its runner's sleep),
+    # not the moment until the process limit stops it, and the look below cannot miss it
     code = ("import numpy as np\nfrom gpsaccel import sandbox as sb\n"
             f"sub = sb.load_submission({str(hostile.DIR / 'fork_lingers.py')!r}, "
             f"'kalman_filter')\n"
             "sb.run(sub, [sb.Call('kalman_filter', (np.zeros((3, 2)),), "
-            "(sb.Output('x', (3, 3)),))], sb.Limits(time=30), 'basic')\n")
+            "(sb.Output('x', (3, 3)),))], sb.Limits(time=30, processes=100), 'basic')\n")
     proc = subprocess.Popen([sys.executable, "-c", code], env=hostile.env())
     try:
         pattern = os.path.join(tempfile.gettempdir(), f"{sb.BOX_PREFIX}{proc.pid}-*")
-        for _ in range(600):
-            if glob.glob(pattern + "/control/plan.json"):
-                break
+        # the event: the runner has imported the student's file (its marker); a hang guard only
+        give_up = time.monotonic() + hostile.HANG
+        while not hostile.marked_pids() and proc.poll() is None and time.monotonic() < give_up:
             time.sleep(0.05)
-        assert glob.glob(pattern), "the box never started"
+        assert hostile.marked_pids() and glob.glob(pattern), \
+            f"the box never started (exit {proc.poll()})"
     finally:
         proc.send_signal(signal.SIGKILL)
         proc.wait()
     sb.sweep_stale_boxes()
     assert not glob.glob(pattern)
     # its students outlived it (the runner's children, re-parented to init); under root they
-    # run as the box's uid, which the next box of that uid kills
-    for pid in hostile.marked_pids():
-        os.kill(pid, signal.SIGKILL)
+    # run as the box's uid, which the next box of that uid kills; here until none is left (the
+    # runner may be forking still)
+    give_up = time.monotonic() + hostile.HANG
+    while hostile.marked_pids() and time.monotonic() < give_up:
+        for pid in hostile.marked_pids():
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+        time.sleep(0.05)
     if CGROUP is not None:  # its cgroup is removed by the next box made
         _cgroup.create(1 << 30, 8).remove()
         bases = (_cgroup._v1_bases().values() if CGROUP == "cgroup1" else [_cgroup._v2_base()])
