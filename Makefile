@@ -23,7 +23,7 @@ endif
 
 .PRECIOUS: $(VENV)/.installed-%
 
-.PHONY: run test test-fast lab lint bench docs lessons-html wheel clean
+.PHONY: run test test-slow test-all test-fast lab lint bench docs lessons-html wheel clean
 
 $(BIN)/python:
 	$(MKVENV)
@@ -40,7 +40,7 @@ $(VENV)/.installed-%: pyproject.toml | $(BIN)/python
 run: $(VENV)/.installed-core
 	MPLBACKEND=Agg $(BIN)/gpsaccel run
 
-# PYTEST_ARGS: more arguments for pytest (e.g. -m "not slow"); empty runs everything
+# PYTEST_ARGS: more arguments for pytest (e.g. -k lesson)
 PYTEST_ARGS ?=
 # --dist loadscope: each module (and class) runs whole on one worker, so a module fixture (a graded
 # class, a Monte Carlo ensemble, a sweep) is built once, not once per worker that got one of its
@@ -48,15 +48,26 @@ PYTEST_ARGS ?=
 # makes each lesson a unit of its own and hands out the costliest units first (FIRST), so the two
 # workers end together
 XDIST = $(if $(filter-out 0,$(JOBS)),-n $(JOBS) --dist loadscope)
+PYTEST = MPLBACKEND=Agg $(BIN)/python -m pytest -q $(XDIST)
+# `make test` (the README's): every test but the slow ones (notebooks executed, wheels, browsers,
+# the docs site, whole reports drawn, big Monte Carlo), and of each slow kind one (tests/conftest.py
+# KEPT); `make test-slow`: the slow ones; `make test-all`: both.  CI runs test, then test-slow:
+# each test once (.ci/run)
 test: $(VENV)/.installed-test
-	MPLBACKEND=Agg $(BIN)/python -m pytest -q $(XDIST) $(PYTEST_ARGS)
+	$(PYTEST) -m "not slow" $(PYTEST_ARGS)
+
+test-slow: $(VENV)/.installed-test
+	$(PYTEST) -m slow $(PYTEST_ARGS)
+
+test-all: $(VENV)/.installed-test
+	$(PYTEST) $(PYTEST_ARGS)
 
 # the core's tests (the Kalman core, the calibration system, the package's shape) without the
 # slow ones (notebooks, wheels, browsers, big Monte Carlo): under a minute on two idle cores
 FAST_TESTS ?= tests/kalman tests/calibration tests/test_validation.py tests/test_layout.py \
               tests/test_packaging.py
 test-fast: $(VENV)/.installed-test
-	MPLBACKEND=Agg $(BIN)/python -m pytest -q -m "not slow" $(XDIST) $(FAST_TESTS)
+	$(PYTEST) -m "not slow" $(FAST_TESTS)
 
 # LAB_FLAGS: e.g. --no-browser, --port 8890.  As root (a container, a lab machine's image) JupyterLab
 # refuses to start without --allow-root: it is added when `id -u` is 0.  The pre-save hook saves a

@@ -1,8 +1,10 @@
 """The whole suite's markers: ``slow`` for the tests that take more than a few seconds.
 
-``make test`` runs everything; ``pytest -m "not slow"`` (and ``make test-fast`` on the core's
-folders) leaves these out.  A test may carry ``@pytest.mark.slow`` itself; the ones below are
-marked here from measured durations (``pytest --durations=40``, serial, a shared 2-core machine),
+``make test`` (the README's) runs all but the slow ones, and of each slow kind one test
+(:data:`KEPT`); ``make test-slow`` runs the slow ones, ``make test-all`` everything; CI runs
+``make test`` and ``make test-slow``, so each test once (``.ci/run``).  A test may carry
+``@pytest.mark.slow`` itself; the ones below are marked here from measured durations
+(``pytest --durations=40``, serial, a shared 2-core machine, and benchmarks/suite_per_test.py),
 so their modules need not change: each entry is a node id prefix ("file" or "file::test").
 """
 
@@ -29,6 +31,31 @@ SLOW: tuple[str, ...] = (
     "tests/cli/test_lessons.py::test_lessons_html",
     "tests/cli/test_lessons.py::test_lessons_kernel",
     "tests/assignments/",
+    # a report's figures, every one drawn in a module fixture (report 002: 10.6 CPU s; 000, 001 and
+    # 003: 9.3); report 004's (tests/figures/test_r004.py) and one report through the command
+    # (test_cli_figures_one_report) stay in the default run
+    "tests/figures/test_r002.py::test_every_listed_figure_and_the_extras_are_written",
+    "tests/figures/test_r002.py::test_every_axes_has_labels_with_units_and_every_figure_a_caption",
+    "tests/figures/test_r002.py::test_no_legend_lies_over_its_axes",
+    "tests/figures/test_r002.py::test_captions_carry_the_measured_numbers",
+    "tests/figures/test_figures.py::test_one_png_per_listed_figure_named_by_report_and_number",
+    "tests/figures/test_figures.py::test_named_sub_figures",
+    "tests/figures/test_figures.py::test_index_lists_every_figure_with_its_caption",
+    "tests/figures/test_figures.py::test_every_axes_is_labelled",
+    "tests/figures/test_figures.py::test_figures_are_reproducible_from_the_seed",
+)
+
+#: Of each slow kind, the one test the default run keeps (never marked, though a SLOW entry
+#: covers it), so ``make test`` still executes a lesson and grades a homework in its boxes: the
+#: cheapest lesson (02, 1.4 CPU s at 20 runs; its student version reads the same execution) and
+#: the tracker's homework (3.7 CPU s for its class).  The others of these kinds keep themselves:
+#: the docs site's links (tests/test_docs.py, on the site CI builds, else built once per content)
+#: and the core wheel in a fresh environment (tests/test_packaging.py).
+KEPT: tuple[str, ...] = (
+    "tests/lessons/test_lessons.py::test_solutions_version_runs_with_a_tick_under_every_self_check"
+    "[02-error-model]",
+    "tests/lessons/test_lessons.py::test_student_version_runs_and_shows_no_answer[02-error-model]",
+    "tests/assignments/test_tracker.py",
 )
 
 
@@ -71,7 +98,7 @@ def pytest_configure(config: pytest.Config) -> None:
 
 @pytest.hookimpl(tryfirst=True)  # before -k and -m deselect: every collected item is marked
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    mark_slow(items, SLOW)
+    mark_slow(items, SLOW, KEPT)
     if hasattr(config, "workerinput"):  # an xdist worker: the controller hands out in this order
         items.sort(key=lambda item: first_rank(item.nodeid.replace("\\", "/"), FIRST))
 
@@ -107,27 +134,31 @@ def first_rank(nodeid: str, first: tuple[str, ...]) -> int:
     return next((k for k, prefix in enumerate(first) if nodeid.startswith(prefix)), len(first))
 
 
-def mark_slow(items: list[pytest.Item], slow: tuple[str, ...]) -> None:
-    """Mark the items that an entry of ``slow`` names; UsageError for an entry that names no test.
+def mark_slow(items: list[pytest.Item], slow: tuple[str, ...], kept: tuple[str, ...] = ()) -> None:
+    """Mark the items that an entry of ``slow`` names and none of ``kept`` does; UsageError for an
+    entry of either that names no test.
 
     An entry is stale when its file was collected but defines no test it names (the test was
-    renamed: it would then run in every "not slow" run, as 30 lesson notebooks did on 3.13).  That
-    is read from the module itself, not from the items, which are only the selected ones under
-    ``pytest file::test``: a slow test run on its own, or ``-k``, must not make its neighbours'
-    entries look stale.
+    renamed: it would then run in every "not slow" run, as 30 lesson notebooks did on 3.13, or,
+    kept, in none).  That is read from the module itself, not from the items, which are only the
+    selected ones under ``pytest file::test``: a slow test run on its own, or ``-k``, must not make
+    its neighbours' entries look stale.
     """
     modules: dict[str, object] = {}
     for item in items:
         node = item.nodeid.replace("\\", "/")
-        if any(node.startswith(prefix) for prefix in slow):
+        if any(node.startswith(prefix) for prefix in slow) and \
+                not any(node.startswith(prefix) for prefix in kept):
             item.add_marker(pytest.mark.slow)
         module = item.getparent(pytest.Module)
         if module is not None:
             modules.setdefault(node.split("::")[0], module.obj)
-    stale = [p for p in slow if "::" in p and p.split("::")[0] in modules
-             and not _defines(modules[p.split("::")[0]], p.split("::")[1:])]
-    if stale:
-        raise pytest.UsageError(f"tests/conftest.py SLOW names tests that do not exist: {stale}")
+    for name, entries in (("SLOW", slow), ("KEPT", kept)):
+        stale = [p for p in entries if "::" in p and p.split("::")[0] in modules
+                 and not _defines(modules[p.split("::")[0]], p.split("::")[1:])]
+        if stale:
+            raise pytest.UsageError(f"tests/conftest.py {name} names tests that do not exist: "
+                                    f"{stale}")
 
 
 def _defines(obj: object, parts: list[str]) -> bool:

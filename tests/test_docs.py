@@ -2,8 +2,11 @@
 no network it shows typeset math (MathJax's output, no raw ``$…$`` or ``\\(``), working internal
 links and every lesson.  Skips where Sphinx or Chromium is missing.
 
-``GPSACCEL_DOCS_HTML`` names a site already built by ``make docs`` (CI builds it once); otherwise the
-test builds one into a temporary folder.
+``GPSACCEL_DOCS_HTML`` names a site already built by ``make docs`` (CI builds it once, then runs
+these tests on it); otherwise the site is built once per content (18 CPU s) into the suite's disk
+cache (tests/conftest.py), keyed by every file Sphinx reads: docs/ (not what it writes there),
+lessons/, the package and the versions of Sphinx and its extensions.  The links test is the
+default run's one test of the docs (tests/conftest.py KEPT); the browser tests are slow.
 """
 
 from __future__ import annotations
@@ -19,28 +22,56 @@ from urllib.parse import unquote, urlsplit
 
 import pytest
 
-pytestmark = pytest.mark.slow  # a Sphinx build, a browser
-
 ROOT = Path(__file__).resolve().parent.parent
 CHROMIUM = next((p for p in ("/usr/bin/chromium", shutil.which("chromium") or "",
                              shutil.which("chromium-browser") or "") if p and os.path.exists(p)),
                 None)
 
 
+#: What Sphinx writes into docs/ itself (conf.py): not part of what the site is built from.
+_WRITTEN = ("_build", "_lessons", "api/generated", "benchmarks/index.md")
+_SPHINX = ("sphinx", "myst-nb", "myst-parser", "pydata-sphinx-theme", "numpydoc",
+           "jupyter-server-mathjax")
+
+
+def _sources_digest() -> bytes:
+    """sha256 over the files Sphinx reads (the package is in every disk-cache key already) and the
+    versions of Sphinx and its extensions."""
+    import hashlib
+    import importlib.metadata as md
+
+    h = hashlib.sha256()
+    for name in _SPHINX:
+        try:
+            h.update(f"{name}={md.version(name)};".encode())
+        except md.PackageNotFoundError:
+            h.update(f"{name}=none;".encode())
+    docs = ROOT / "docs"
+    files = [p for p in docs.rglob("*") if p.is_file() and not any(
+        p.relative_to(docs).as_posix().startswith(w) for w in _WRITTEN)]
+    files += [p for p in (ROOT / "lessons").rglob("*") if p.is_file()]
+    for path in sorted(files):
+        if "__pycache__" not in path.parts and ".ipynb_checkpoints" not in path.parts:
+            h.update(path.relative_to(ROOT).as_posix().encode() + b"\0" + path.read_bytes())
+    return h.digest()
+
+
 @pytest.fixture(scope="module")
-def site(tmp_path_factory) -> Path:
+def site(disk_cache) -> Path:
     given = os.environ.get("GPSACCEL_DOCS_HTML")
     if given:
         assert (Path(given) / "index.html").is_file(), f"GPSACCEL_DOCS_HTML={given} holds no site"
         return Path(given)
     pytest.importorskip("sphinx")
     pytest.importorskip("myst_nb")
-    out = tmp_path_factory.mktemp("site") / "html"
-    proc = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-b", "html", "-q",
-                           str(ROOT / "docs"), str(out)], capture_output=True, text=True,
-                          env=dict(os.environ, MPLBACKEND="Agg"), timeout=600)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    return out
+
+    def build(target: Path) -> None:
+        proc = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-b", "html",
+                               "-q", str(ROOT / "docs"), str(target)], capture_output=True,
+                              text=True, env=dict(os.environ, MPLBACKEND="Agg"), timeout=1800)
+        assert proc.returncode == 0, proc.stderr[-3000:]
+
+    return disk_cache.path("docs", disk_cache.key("site", _sources_digest()), build)
 
 
 class _Page(HTMLParser):
@@ -152,6 +183,7 @@ def test_math_is_typeset_offline_in_a_browser(site, tmp_path):
         assert not raw, f"{name}: TeX left raw: {raw[:5]}"
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed")
 def test_a_lessons_html_typesets_its_math_offline(lesson_02_html, tmp_path):
     """``gpsaccel lessons --html``: MathJax is copied next to the pages and loaded from there

@@ -1,6 +1,7 @@
 """What ``pip install gpsaccel`` gives: declared dependencies, one version, the metadata, the
 lessons as package data, ``--version``, ``python -m gpsaccel``, ``lessons --copy``, ``lab``; and a
-built wheel installed in a fresh environment outside the repository (slow)."""
+built wheel installed in a fresh environment outside the repository: with the core alone (the
+default run's wheel test), and with the grading extra for an instructor's steps (slow)."""
 
 from __future__ import annotations
 
@@ -209,8 +210,8 @@ def _uv() -> str | None:
     return shutil.which("uv")
 
 
-#: The extra the wheel is installed with first: none, so the steps below show that the core alone
-#: does them; the instructor's steps (HOMEWORK_STEPS) add "[grading]" to the same environment.
+#: The extra the wheel is installed with for a student's steps: none, so the steps below show that
+#: the core alone does them (the instructor's steps, HOMEWORK_STEPS, have "[grading]").
 WHEEL_EXTRA = ""
 
 #: What a user does from the installed wheel, in a folder outside the repository: (name, argv,
@@ -278,27 +279,45 @@ def _share_bytecode(venv: Path) -> None:
             continue
 
 
-@pytest.mark.slow
-@pytest.mark.skipif(_uv() is None, reason="needs uv to build and install quickly")
-def test_the_wheel_in_a_fresh_environment_outside_the_repository(tmp_path):
-    """Build the wheel (from the sdist, as uv does), install it with the core dependencies only
-    into a new venv under /tmp, and use it from there."""
-    dist = tmp_path / "dist"
-    subprocess.run([_uv(), "build", "-q", "-o", str(dist), str(ROOT)], check=True, timeout=240)
-    (wheel,) = dist.glob("gpsaccel-*.whl")
-    venv = tmp_path / "venv"
-    subprocess.run([_uv(), "venv", "-q", "-p", sys.executable, str(venv)], check=True, timeout=120)
-    subprocess.run([_uv(), "pip", "install", "-q", "--python", str(venv / "bin" / "python"),
-                    f"{wheel}{WHEEL_EXTRA}"], check=True, timeout=240)
-    _share_bytecode(venv)
+needs_uv = pytest.mark.skipif(_uv() is None, reason="needs uv to build and install quickly")
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory) -> Path:
+    """The wheel, built from the sdist as uv builds it (once for this module's two tests)."""
+    dist = tmp_path_factory.mktemp("dist")
+    subprocess.run([_uv(), "build", "-q", "-o", str(dist), str(ROOT)], check=True, timeout=600)
+    (built,) = dist.glob("gpsaccel-*.whl")
+    return built
+
+
+def _fresh_venv(where: Path, requirement: str) -> tuple[Path, dict[str, str]]:
+    """A new venv at ``where`` with ``requirement`` installed (the wheel, perhaps with an extra),
+    and a user's environment to run it in: not this checkout's PYTHONPATH or venv; and bytecode
+    is written (pip compiles it at install, uv does not): under a developer's
+    PYTHONDONTWRITEBYTECODE every process of the steps, the sandbox's boxes included, compiled
+    numpy and scipy again."""
+    subprocess.run([_uv(), "venv", "-q", "-p", sys.executable, str(where)], check=True,
+                   timeout=600)
+    subprocess.run([_uv(), "pip", "install", "-q", "--python", str(where / "bin" / "python"),
+                    requirement], check=True, timeout=600)
+    _share_bytecode(where)
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("PYTHONPATH", "VIRTUAL_ENV", "PYTHONDONTWRITEBYTECODE",
+                        "GPSACCEL_ASSIGNMENTS")}
+    env["MPLBACKEND"] = "Agg"
+    return where, env
+
+
+@needs_uv
+def test_the_wheel_in_a_fresh_environment_outside_the_repository(wheel, tmp_path):
+    """The wheel with the core dependencies only, in a new venv under /tmp, used from there: a
+    student's steps, the lessons and the homework's student side shipped, the instructor's kit
+    in it (the default run's one wheel test; the instructor's steps with the grading extra are
+    the slow one below)."""
+    venv, env = _fresh_venv(tmp_path / "venv", f"{wheel}{WHEEL_EXTRA}")
     work = tmp_path / "student"
     work.mkdir()
-    # a user's environment: not this checkout's PYTHONPATH or venv; and bytecode is written (pip
-    # compiles it at install, uv does not): under a developer's PYTHONDONTWRITEBYTECODE every
-    # process of the steps below, the sandbox's boxes included, compiled numpy and scipy again
-    env = {k: v for k, v in os.environ.items()
-           if k not in ("PYTHONPATH", "VIRTUAL_ENV", "PYTHONDONTWRITEBYTECODE")}
-    env["MPLBACKEND"] = "Agg"
     where = subprocess.run([str(venv / "bin" / "python"), "-c",
                             "import gpsaccel, gpsaccel.lessons as l; print(gpsaccel.__file__); "
                             "print(l.lessons_dir())"], cwd=work, env=env, capture_output=True,
@@ -306,7 +325,7 @@ def test_the_wheel_in_a_fresh_environment_outside_the_repository(tmp_path):
     assert all(Path(p).is_relative_to(venv) for p in where), where  # not the checkout
     for name, argv, expected in WHEEL_STEPS:
         proc = subprocess.run([str(venv / "bin" / "gpsaccel"), *argv], cwd=work, env=env,
-                              capture_output=True, text=True, timeout=240)
+                              capture_output=True, text=True, timeout=600)
         assert proc.returncode == 0 and expected in proc.stdout, (name, proc.stdout, proc.stderr)
     shipped = sorted(p.relative_to(work / "course").as_posix()
                      for p in (work / "course").rglob("*.ipynb"))
@@ -329,21 +348,25 @@ def test_the_wheel_in_a_fresh_environment_outside_the_repository(tmp_path):
     # the instructor's kit is in the wheel: every homework's master and graded questions
     for name in packaged:
         assert (installed / "assignments" / "masters" / name / "graded.py").is_file(), name
-    # an instructor: the grading extra, nothing else (no checkout, no $GPSACCEL_ASSIGNMENTS)
-    subprocess.run([_uv(), "pip", "install", "-q", "--python", str(venv / "bin" / "python"),
-                    f"{wheel}[grading]"], check=True, timeout=240)
-    _share_bytecode(venv)  # the grading extra's
+
+
+@pytest.mark.slow
+@needs_uv
+def test_an_instructor_hands_out_and_grades_from_the_wheel_with_the_grading_extra(wheel,
+                                                                                   tmp_path):
+    """The grading extra, nothing else (no checkout, no $GPSACCEL_ASSIGNMENTS), in a new venv:
+    :data:`HOMEWORK_STEPS` from the installed package alone."""
+    venv, env = _fresh_venv(tmp_path / "venv", f"{wheel}[grading]")
     instructor = tmp_path / "instructor"
     instructor.mkdir()
     (instructor / "roster.csv").write_text(ROSTER, encoding="utf-8")
     (instructor / "secret.txt").write_text("k" * 64, encoding="utf-8")
     for who in ("Alice Smith", "Bob Jones"):  # Bob handed in Alice's notebook
         _solved_notebook("calibration", instructor / "class" / who / "calibration.ipynb")
-    env.pop("GPSACCEL_ASSIGNMENTS", None)
     out = {}
     for name, argv, expected in HOMEWORK_STEPS:
         proc = subprocess.run([str(venv / "bin" / "gpsaccel"), *argv], cwd=instructor, env=env,
-                              capture_output=True, text=True, timeout=400)
+                              capture_output=True, text=True, timeout=600)
         assert proc.returncode == 0 and expected in proc.stdout, (name, proc.stdout, proc.stderr)
         out[name] = proc.stdout
     dist = instructor / "dist" / "calibration"

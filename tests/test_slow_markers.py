@@ -50,7 +50,7 @@ def pytest_configure(config):
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
-    suite.mark_slow(items, SLOW)
+    suite.mark_slow(items, SLOW, {kept!r})
 '''
 
 GOOD = ("test_a.py::test_slow", "test_a.py::test_sweep_", "test_a.py::TestGroup::test_inside")
@@ -65,14 +65,15 @@ class Run:
 
 @pytest.fixture
 def pytest_in(monkeypatch, capsys):
-    """``pytest_in(folder, slow, *args)``: pytest run on ``folder`` in this process (a pytest
+    """``pytest_in(folder, slow, *args, kept=())``: pytest run on ``folder`` in this process (a pytest
     process of its own cost 0.7 CPU s a case, nearly all its start-up), with no plugin but
     pytest's own and the folder's conftest; the modules it imported are forgotten after
     (``--import-mode=importlib``: this process may hold a module named ``conftest`` already)."""
 
-    def run(folder: Path, slow: tuple[str, ...], *args: str) -> Run:
+    def run(folder: Path, slow: tuple[str, ...], *args: str, kept: tuple[str, ...] = ()) -> Run:
         (folder / "test_a.py").write_text(TESTS)
-        (folder / "conftest.py").write_text(CONFTEST.format(path=str(SUITE_CONFTEST), slow=slow))
+        (folder / "conftest.py").write_text(CONFTEST.format(path=str(SUITE_CONFTEST), slow=slow,
+                                                            kept=kept))
         for name in [k for k in os.environ if k.startswith(("PYTEST_", "COV_"))]:
             monkeypatch.delenv(name)
         monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
@@ -117,3 +118,17 @@ def test_an_entry_of_a_file_not_collected_is_not_judged(pytest_in, tmp_path):
     (tmp_path / "test_b.py").write_text("def test_b():\n    pass\n")
     res = pytest_in(tmp_path, (*GOOD, "test_a.py::test_renamed"), "test_b.py")
     assert res.returncode == 0, res.stdout + res.stderr
+
+
+def test_a_kept_test_of_a_slow_kind_runs_in_the_default_run_and_a_stale_one_stops_it(pytest_in,
+                                                                                       tmp_path):
+    """KEPT: the one test of a slow kind the default run keeps (``make test``, ``-m "not
+    slow"``), though a SLOW entry covers it; a kept entry naming no test stops the run, or the
+    kind would silently leave the default run."""
+    slow = ("test_a.py::test_sweep_one",)
+    res = pytest_in(tmp_path, slow, "test_a.py", "-m", "not slow",
+                    kept=("test_a.py::test_sweep_one[2]",))
+    assert res.returncode == 0 and "4 passed, 1 deselected" in res.stdout, res.stdout
+    res = pytest_in(tmp_path, slow, "test_a.py", "-m", "not slow", kept=("test_a.py::test_gone",))
+    assert res.returncode == 4, res.stdout + res.stderr
+    assert "KEPT names tests that do not exist: ['test_a.py::test_gone']" in res.stderr
