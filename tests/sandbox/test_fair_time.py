@@ -2,18 +2,21 @@
 ran or waited for itself, not the time it waited for a CPU on a busy machine; past the backstop
 a starved box is the machine's problem (``machine-busy``), never the student's timeout.
 
-The busy machine is made here (:func:`_starving`): busy processes pinned to one core, each in a
-session of its own (with autogroup scheduling one session's tasks share one weight), and every
-process the box starts moved to that core as soon as it appears; the checker's supervisor (this
-process) stays free to run anywhere, so its own waits do not become the box's (pinned with the
-box, it stretched the box's own time almost as much as its wait: 0.57 s of own time and 1.56 s of
-wait with six hogs, 1.18 and 2.49 with twelve; the box alone on its core: 0.45 and 2.32 with
-twelve).  The hogs are killed by PID.
+The busy machine is made here (:func:`_busy`), in one of two ways, both of which Linux reports as
+the box's wait on a run queue (/proc/<pid>/schedstat), which is what the clock reads:
+
+* where the box is a cgroup with a CPU quota (root, or a delegated cgroup2), by lowering that
+  quota to a share of a CPU: the kernel keeps the box waiting and nothing else burns a CPU;
+* elsewhere, by busy processes pinned to one core, each in a session of its own (with autogroup
+  scheduling one session's tasks share one weight), every process the box starts moved to that
+  core as soon as it appears (the checker's supervisor, this process, stays free: pinned with the
+  box, its own waits stretched the box's own time almost as much as its wait).  The hogs burn that
+  core for as long as the box runs (21 CPU s of the first test at load 12) and are killed by PID.
 
 No verdict depends on how fast this machine is or how busy it is otherwise: the limit the starved
 box must outlast is set between the box's own time and its wait, both measured in the same run by a
-box of the same work under the same hogs (a fixed 1.5 s failed at load 5: a faster host finished the
-starved box inside it).  The tests assert verdicts, never how fast anything ran."""
+box of the same work starved the same way (a fixed 1.5 s failed at load 5: a faster host finished
+the starved box inside it).  The tests assert verdicts, never how fast anything ran."""
 
 from __future__ import annotations
 
@@ -31,7 +34,7 @@ from gpsaccel import sandbox as sb
 from gpsaccel.assignments import scoring
 from gpsaccel.check import findings
 from gpsaccel.check.report import Report
-from gpsaccel.sandbox import clock
+from gpsaccel.sandbox import _cgroup, clock
 from gpsaccel.sandbox.outcomes import OUTCOMES, ours
 
 pytestmark = pytest.mark.skipif(
@@ -44,16 +47,16 @@ WORK = ("import numpy as np\n\n"
         "    return np.array([float(s)])\n")
 ENDLESS = "import numpy as np\n\ndef f(x):\n    while True:\n        pass\n"
 SLEEPER = "import time\nimport numpy as np\n\ndef f(x):\n    time.sleep(600)\n"
-#: Busy processes on the box's core: the box gets about 1/(HOGS + 1) of it.  Its wait is less
-#: than HOGS times its own time, since part of its own is not CPU (the disk, the box's set-up and
-#: end): measured with bwrap, 2.8 times with six hogs, 4 to 5 with twelve, 6 with twenty-four.
-HOGS = 12
+#: The share of a CPU a starved box gets: its wait is then less than 1/SHARE - 1 times its own
+#: time, since part of its own is not CPU (the disk, the box's set-up and end): measured with
+#: bwrap and hogs, 2.8 times at a seventh, 4 to 5 at a thirteenth, 6 at a twenty-fifth.
+SHARE = 1 / 13
 #: How much longer than its own time the probe must have waited for the limit set between the
 #: two (their geometric mean) to be at least RATIO ** 0.5 (1.7) away from each: a box of the same
-#: work under the same hogs is then timed out only if its own time is 1.7 times the probe's, and
-#: outlasts the limit unless it waits 1.7 times less (about 2.1 times either way at twelve hogs).
+#: work starved the same way is then timed out only if its own time is 1.7 times the probe's, and
+#: outlasts the limit unless it waits 1.7 times less (about 2.1 times either way at a thirteenth).
 RATIO = 3.0
-#: Starving is tried again, with twice the hogs each time, when the core was not busy enough for
+#: Starving is tried again, at half the share each time, when the box was not starved enough for
 #: the probe to reach RATIO or for a box to outlast its limit: such a run says nothing of either
 #: clock, and is not a failure of the clock.
 TRIES = 3
@@ -85,6 +88,34 @@ def _descendants(pid: int) -> set[int]:
             todo += kids - found
             found |= kids
     return found
+
+
+def _quota_applies() -> bool:
+    """Whether a box's cgroup here has a CPU quota (:data:`_cgroup.CPU_QUOTA`)."""
+    box = _cgroup.create(256 << 20, 8)
+    if box is None:
+        return False
+    try:
+        return "cpu" in box.dirs and (box.dirs["cpu"] / ("cpu.max" if box.kind == "cgroup2" else
+                                                         "cpu.cfs_quota_us")).exists()
+    finally:
+        box.remove()
+
+
+QUOTA = _quota_applies() if os.path.exists("/proc/self/schedstat") else False
+
+
+@contextlib.contextmanager
+def _busy(share: float):
+    """Every box started in the block gets ``share`` of a CPU (module docstring): its cgroup's
+    quota where there is one, else ``round(1 / share) - 1`` hogs on its core."""
+    if QUOTA:
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(_cgroup, "CPU_QUOTA", max(1000, round(share * _cgroup.CPU_PERIOD)))
+            yield
+    else:
+        with _starving(max(1, round(1 / share) - 1)):
+            yield
 
 
 @contextlib.contextmanager
@@ -144,27 +175,27 @@ def _finding(box: sb.BoxResult, limit: float) -> str:
     return "\n".join(f.message for f in report.for_student().findings)
 
 
-def _starved_limit(tmp_path, hogs: int) -> tuple[float, tuple]:
-    """A limit between the own time and the wait of a box of :data:`WORK` under ``hogs``
-    (their geometric mean), 0 when the hogs did not make it wait :data:`RATIO` times its own
-    time; and what was measured (for the failure messages)."""
+def _starved_limit(tmp_path, share: float) -> tuple[float, tuple]:
+    """A limit between the own time and the wait of a box of :data:`WORK` at ``share`` of a CPU
+    (their geometric mean), 0 when it did not wait :data:`RATIO` times its own time; and what
+    was measured (for the failure messages)."""
     probe = _box(tmp_path, WORK, 600.0)
     assert probe.failure is None and probe.waited is not None, probe.detail
     own = probe.seconds - probe.waited  # the whole sb.run's wall: an upper bound on its own
-    seen = (hogs, round(own, 2), round(probe.waited, 2))
+    seen = (round(share, 3), round(own, 2), round(probe.waited, 2))
     return (math.sqrt(own * probe.waited) if probe.waited >= RATIO * own else 0.0), seen
 
 
 def test_a_box_starved_by_a_busy_machine_is_not_timed_out(tmp_path, patient, monkeypatch):
-    """A box that waited for its core past its limit finishes; the wall clock times out the
-    same box under the same hogs.  The limit is :func:`_starved_limit`'s, measured in this
-    run: a false alarm needs a box's own time to double, or its wait to halve, between two boxes
-    of the same work a second apart under the same hogs."""
+    """A box that waited for a CPU past its limit finishes; the wall clock times out the same
+    box starved the same way.  The limit is :func:`_starved_limit`'s, measured in this run: a
+    false alarm needs a box's own time to grow 1.7 times, or its wait to shrink as much, between
+    two boxes of the same work a second apart, starved the same way."""
     tries: list[tuple] = []
-    hogs, starved = HOGS, None
+    share, starved = SHARE, None
     for _ in range(TRIES):
-        with _starving(hogs):
-            limit, seen = _starved_limit(tmp_path, hogs)
+        with _busy(share):
+            limit, seen = _starved_limit(tmp_path, share)
             box = _box(tmp_path, WORK, limit) if limit else None
         if box is not None:
             assert box.failure is None, (limit, box.detail)  # its waits are not its time
@@ -175,12 +206,12 @@ def test_a_box_starved_by_a_busy_machine_is_not_timed_out(tmp_path, patient, mon
                 break
         else:
             tries.append(seen)
-        hogs *= 2
-    assert starved is not None, f"the hogs never starved the box past its limit: {tries}"
+        share /= 2
+    assert starved is not None, f"the box was never starved past its limit: {tries}"
     monkeypatch.setattr(clock, "FAIR_CLOCK", False)  # the wall clock: the same box times out
     walled = []
     for _ in range(TRIES):
-        with _starving(hogs):
+        with _busy(share):
             box = _box(tmp_path, WORK, starved)
         walled.append((box.failure, round(box.seconds, 2)))
         if box.failure is not None:
@@ -208,10 +239,10 @@ def test_a_sleeper_times_out_sleeping_is_its_own_time(tmp_path, monkeypatch):
 def test_a_box_starved_past_the_backstop_is_the_machines_problem(tmp_path, monkeypatch):
     """An endless loop starved to the backstop: the machine gave it too little to tell.  The
     backstop at 1.515 s of wall time under a 1.5 s limit: the box's own time is under its limit
-    there unless it waited less than 15 ms for its core, with twelve hogs on it (it waits four
-    times its own time and more)."""
+    there unless it waited less than 15 ms for a CPU, at a thirteenth of one (it waits four times
+    its own time and more)."""
     monkeypatch.setattr(clock, "BACKSTOP_FACTOR", 1.01)
-    with _starving(HOGS):
+    with _busy(SHARE):
         box = _box(tmp_path, ENDLESS, 1.5)
     assert box.failure == "machine-busy", (box.failure, box.detail, box.seconds, box.waited)
     text = _finding(box, 1.5)
@@ -225,13 +256,13 @@ def test_a_box_starved_past_the_backstop_is_the_machines_problem(tmp_path, monke
 
 
 def test_a_box_that_lowered_its_own_priority_is_timed_out(tmp_path, monkeypatch):
-    """An endless loop after os.nice(19), one hog on its core: a timeout, never machine-busy.
-    Where the box is a cgroup or a session of its own its nice does not lower its share against
-    the hog's, and its own time reaches the limit first; where it does, the clock's verdict at
-    the backstop reads the lowered priority (the next test).  The backstop at 15 s: the runner
-    reaches os.nice there unless it got under a fiftieth of its core."""
+    """An endless loop after os.nice(19) at half a CPU: a timeout, never machine-busy.  Where
+    the box is a cgroup or a session of its own its nice does not lower its share, and its own
+    time reaches the limit first; where it does, the clock's verdict at the backstop reads the
+    lowered priority (the next test).  The backstop at 15 s: the runner reaches os.nice there
+    unless it got under a fiftieth of a CPU."""
     monkeypatch.setattr(clock, "BACKSTOP_FACTOR", 10.0)
-    with _starving(1):
+    with _busy(1 / 2):
         box = _box(tmp_path, ENDLESS.replace("while True", "os.nice(19)\n    while True")
                    .replace("import numpy", "import os\nimport numpy"), 1.5)
     assert box.failure == "timeout", (box.failure, box.detail)
