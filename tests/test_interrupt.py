@@ -41,12 +41,15 @@ def _lose_an_interrupt():
 
 
 def test_python_drops_an_interrupt_raised_in_a_finaliser_and_the_latch_keeps_it(dropped):
+    """The handler is put back as it was: Python's default_int_handler, or SIG_IGN where the
+    suite itself was started with SIGINT ignored (a background job of a script)."""
+    was = signal.getsignal(signal.SIGINT)
     with latched_sigint(raise_now=True) as latch:
         _lose_an_interrupt()
         assert dropped == [KeyboardInterrupt] and latch.signals == 1
         with pytest.raises(KeyboardInterrupt):
             latch.check()
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # put back
+    assert signal.getsignal(signal.SIGINT) is was  # put back
 
 
 def test_without_raise_now_the_signal_is_only_recorded(dropped):
