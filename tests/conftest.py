@@ -31,18 +31,16 @@ SLOW: tuple[str, ...] = (
     "tests/cli/test_lessons.py::test_lessons_html",
     "tests/cli/test_lessons.py::test_lessons_kernel",
     "tests/assignments/",
-    # a report's figures, every one drawn in a module fixture (report 002: 10.6 CPU s; 000, 001 and
-    # 003: 9.3); report 004's (tests/figures/test_r004.py) and one report through the command
-    # (test_cli_figures_one_report) stay in the default run
-    "tests/figures/test_r002.py::test_every_listed_figure_and_the_extras_are_written",
-    "tests/figures/test_r002.py::test_every_axes_has_labels_with_units_and_every_figure_a_caption",
-    "tests/figures/test_r002.py::test_no_legend_lies_over_its_axes",
-    "tests/figures/test_r002.py::test_captions_carry_the_measured_numbers",
-    "tests/figures/test_figures.py::test_one_png_per_listed_figure_named_by_report_and_number",
-    "tests/figures/test_figures.py::test_named_sub_figures",
-    "tests/figures/test_figures.py::test_index_lists_every_figure_with_its_caption",
-    "tests/figures/test_figures.py::test_every_axes_is_labelled",
-    "tests/figures/test_figures.py::test_figures_are_reproducible_from_the_seed",
+)
+
+#: Module fixtures that draw every figure of a report ("file::fixture"): every test that uses one,
+#: however indirectly, is slow (report 002's: 10.6 CPU s; 000, 001 and 003's: 9.3; 004's: 5.3); a
+#: new test on them joins the slow ones by itself.  The default run keeps one report drawn through
+#: the command (test_figures.py::test_cli_figures_one_report, 2.7) and the legend check's own test.
+SLOW_FIXTURES: tuple[str, ...] = (
+    "tests/figures/test_r002.py::drawn",
+    "tests/figures/test_figures.py::drawn",
+    "tests/figures/test_r004.py::drawn",
 )
 
 #: Of each slow kind, the one test the default run keeps (never marked, though a SLOW entry
@@ -63,18 +61,21 @@ KEPT: tuple[str, ...] = (
 #: hands them out first, so the two workers end together instead of one running a long unit alone
 #: at the end.  From ``--durations`` (2 workers, load 10 and more).
 FIRST: tuple[str, ...] = (
-    "tests/assignments/test_attacks.py",
+    "tests/assignments/test_attacks.py",  # the slow run's (make test-slow)
     "tests/assignments/test_coop.py",
     "tests/assignments/test_hostile_class.py",
     "tests/assignments/test_grading.py",
-    "tests/test_packaging.py",
+    "tests/check/test_batch.py",  # the default run's (make test)
     "tests/test_docs.py",
+    "tests/test_packaging.py",
     "tests/lessons/test_lessons.py",
     "tests/assignments/",
+    "tests/check/problems/test_coop.py",
+    "tests/check/problems/test_calibration.py",
+    "tests/sandbox/test_hostile.py",
     "tests/calibration/test_montecarlo_memory.py",
     "tests/figures/",
     "tests/sandbox/test_attacks.py",
-    "tests/check/test_batch.py",
 )
 
 #: Modules whose parametrized tests are work units of their own, one per parameter (a lesson):
@@ -98,7 +99,7 @@ def pytest_configure(config: pytest.Config) -> None:
 
 @pytest.hookimpl(tryfirst=True)  # before -k and -m deselect: every collected item is marked
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    mark_slow(items, SLOW, KEPT)
+    mark_slow(items, SLOW, KEPT, SLOW_FIXTURES)
     if hasattr(config, "workerinput"):  # an xdist worker: the controller hands out in this order
         items.sort(key=lambda item: first_rank(item.nodeid.replace("\\", "/"), FIRST))
 
@@ -134,31 +135,44 @@ def first_rank(nodeid: str, first: tuple[str, ...]) -> int:
     return next((k for k, prefix in enumerate(first) if nodeid.startswith(prefix)), len(first))
 
 
-def mark_slow(items: list[pytest.Item], slow: tuple[str, ...], kept: tuple[str, ...] = ()) -> None:
-    """Mark the items that an entry of ``slow`` names and none of ``kept`` does; UsageError for an
-    entry of either that names no test.
+def mark_slow(items: list[pytest.Item], slow: tuple[str, ...], kept: tuple[str, ...] = (),
+              fixtures: tuple[str, ...] = ()) -> None:
+    """Mark the items that an entry of ``slow`` names, or that use a fixture ``fixtures`` names
+    ("file::fixture"), and that no entry of ``kept`` names; UsageError for an entry that names
+    no test (no fixture).
 
-    An entry is stale when its file was collected but defines no test it names (the test was
-    renamed: it would then run in every "not slow" run, as 30 lesson notebooks did on 3.13, or,
-    kept, in none).  That is read from the module itself, not from the items, which are only the
-    selected ones under ``pytest file::test``: a slow test run on its own, or ``-k``, must not make
-    its neighbours' entries look stale.
+    An entry is stale when its file was collected but defines no test (fixture) it names (the
+    test was renamed: it would then run in every "not slow" run, as 30 lesson notebooks did on
+    3.13, or, kept, in none).  That is read from the module itself, not from the items, which are
+    only the selected ones under ``pytest file::test``: a slow test run on its own, or ``-k``,
+    must not make its neighbours' entries look stale.
     """
     modules: dict[str, object] = {}
+    by_file: dict[str, set[str]] = {}
+    for entry in fixtures:
+        file, name = entry.split("::", 1)
+        by_file.setdefault(file, set()).add(name)
     for item in items:
         node = item.nodeid.replace("\\", "/")
-        if any(node.startswith(prefix) for prefix in slow) and \
+        file = node.split("::")[0]
+        uses = by_file.get(file, set()) & set(getattr(item, "fixturenames", ()))
+        if (uses or any(node.startswith(prefix) for prefix in slow)) and \
                 not any(node.startswith(prefix) for prefix in kept):
             item.add_marker(pytest.mark.slow)
         module = item.getparent(pytest.Module)
         if module is not None:
-            modules.setdefault(node.split("::")[0], module.obj)
+            modules.setdefault(file, module.obj)
     for name, entries in (("SLOW", slow), ("KEPT", kept)):
         stale = [p for p in entries if "::" in p and p.split("::")[0] in modules
                  and not _defines(modules[p.split("::")[0]], p.split("::")[1:])]
         if stale:
             raise pytest.UsageError(f"tests/conftest.py {name} names tests that do not exist: "
                                     f"{stale}")
+    stale = [p for p in fixtures if p.split("::")[0] in modules
+             and not hasattr(modules[p.split("::")[0]], p.split("::")[1])]
+    if stale:
+        raise pytest.UsageError(f"tests/conftest.py SLOW_FIXTURES names fixtures that do not "
+                                f"exist: {stale}")
 
 
 def _defines(obj: object, parts: list[str]) -> bool:

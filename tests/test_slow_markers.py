@@ -20,6 +20,17 @@ SUITE_CONFTEST = Path(__file__).with_name("conftest.py")
 TESTS = '''
 import pytest
 
+@pytest.fixture(scope="module")
+def heavy():
+    return 1
+
+@pytest.fixture
+def on_heavy(heavy):
+    return heavy
+
+def test_uses_heavy(on_heavy):
+    pass
+
 def test_slow():
     pass
 
@@ -50,7 +61,7 @@ def pytest_configure(config):
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
-    suite.mark_slow(items, SLOW, {kept!r})
+    suite.mark_slow(items, SLOW, {kept!r}, {fixtures!r})
 '''
 
 GOOD = ("test_a.py::test_slow", "test_a.py::test_sweep_", "test_a.py::TestGroup::test_inside")
@@ -65,15 +76,17 @@ class Run:
 
 @pytest.fixture
 def pytest_in(monkeypatch, capsys):
-    """``pytest_in(folder, slow, *args, kept=())``: pytest run on ``folder`` in this process (a pytest
-    process of its own cost 0.7 CPU s a case, nearly all its start-up), with no plugin but
-    pytest's own and the folder's conftest; the modules it imported are forgotten after
-    (``--import-mode=importlib``: this process may hold a module named ``conftest`` already)."""
+    """``pytest_in(folder, slow, *args, kept=(), fixtures=())``: pytest run on ``folder`` in this
+    process (a pytest process of its own cost 0.7 CPU s a case, nearly all its start-up), with
+    no plugin but pytest's own and the folder's conftest; the modules it imported are forgotten
+    after (``--import-mode=importlib``: this process may hold a module named ``conftest``
+    already)."""
 
-    def run(folder: Path, slow: tuple[str, ...], *args: str, kept: tuple[str, ...] = ()) -> Run:
+    def run(folder: Path, slow: tuple[str, ...], *args: str, kept: tuple[str, ...] = (),
+            fixtures: tuple[str, ...] = ()) -> Run:
         (folder / "test_a.py").write_text(TESTS)
         (folder / "conftest.py").write_text(CONFTEST.format(path=str(SUITE_CONFTEST), slow=slow,
-                                                            kept=kept))
+                                                            kept=kept, fixtures=fixtures))
         for name in [k for k in os.environ if k.startswith(("PYTEST_", "COV_"))]:
             monkeypatch.delenv(name)
         monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
@@ -100,6 +113,7 @@ def pytest_in(monkeypatch, capsys):
     (["test_a.py::test_sweep_one[2]", "-m", "slow"], 1),
     (["test_a.py", "-k", "fast"], 1),
     (["test_a.py", "-m", "slow"], 4),
+    (["test_a.py", "-m", "not slow"], 2),
 ])
 def test_any_single_test_runs_and_the_slow_ones_are_marked(pytest_in, tmp_path, args, passed):
     res = pytest_in(tmp_path, GOOD, *args)
@@ -128,7 +142,18 @@ def test_a_kept_test_of_a_slow_kind_runs_in_the_default_run_and_a_stale_one_stop
     slow = ("test_a.py::test_sweep_one",)
     res = pytest_in(tmp_path, slow, "test_a.py", "-m", "not slow",
                     kept=("test_a.py::test_sweep_one[2]",))
-    assert res.returncode == 0 and "4 passed, 1 deselected" in res.stdout, res.stdout
+    assert res.returncode == 0 and "5 passed, 1 deselected" in res.stdout, res.stdout
     res = pytest_in(tmp_path, slow, "test_a.py", "-m", "not slow", kept=("test_a.py::test_gone",))
     assert res.returncode == 4, res.stdout + res.stderr
     assert "KEPT names tests that do not exist: ['test_a.py::test_gone']" in res.stderr
+
+
+def test_a_test_on_a_slow_fixture_is_slow_however_indirectly_and_a_stale_one_stops_the_run(
+        pytest_in, tmp_path):
+    """SLOW_FIXTURES: a test that uses a fixture drawing a whole report, through another fixture
+    too, is slow by itself; an entry naming a fixture the file does not define stops the run."""
+    res = pytest_in(tmp_path, GOOD, "test_a.py", "-m", "slow", fixtures=("test_a.py::heavy",))
+    assert res.returncode == 0 and "5 passed" in res.stdout, res.stdout
+    res = pytest_in(tmp_path, GOOD, "test_a.py", "-m", "not slow", fixtures=("test_a.py::gone",))
+    assert res.returncode == 4, res.stdout + res.stderr
+    assert "SLOW_FIXTURES names fixtures that do not exist: ['test_a.py::gone']" in res.stderr
