@@ -5,7 +5,9 @@ earlier version.
 * ``gpsaccel check DIR --workers 1`` on copies of a correct calibration filter, at the problem's
   default number of runs and at 2 runs (the floor: one box and the reference per file);
 * ``gpsaccel grade DIR --jobs 1`` on copies of a homework notebook's student version as handed out
-  (otter's init and check cells included, no answers): the floor of a notebook.
+  (otter's init and check cells included, no answers): the floor of a notebook; and on copies of
+  the same notebook filled in, the master's solutions in (an honest student's, as
+  tests/assignments/conftest.py's ``solved`` makes it): what a notebook that answers costs.
 
 Each runs on a class of 1 and of 3; the "one more file" rows are the difference per file (what a
 class pays per student, the command's start-up and the summary paid once).
@@ -13,7 +15,8 @@ class pays per student, the command's start-up and the summary paid once).
 ``--before DIR`` runs the same commands on the checkout in DIR (its ``gpsaccel/`` first on
 ``PYTHONPATH``, this environment's packages; e.g. ``git worktree add --detach DIR main``).  Both
 versions use this environment's jsonschema: where it is >= 4.25, every box that imports otter pays
-about 2 CPU s more (benchmarks/startup.py's rfc3987_syntax row).
+about 2 CPU s more (benchmarks/startup.py's rfc3987_syntax row).  ``make bench`` publishes the
+medians (benchmarks/_figures.py): ``cpu_s/KIND/N`` for a class of N, ``cpu_s/KIND/one_more``.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ import tempfile
 from pathlib import Path
 
 import _cpu
+from _figures import publish
 
 ROOT = Path(__file__).resolve().parents[1]
 SUBMISSION = ROOT / "tests" / "submissions" / "correct_joseph.py"
@@ -37,30 +41,51 @@ STUDENT = ROOT / "gpsaccel" / "assignments" / "student"
 SIZES = (1, 3)
 
 
-def _cases(tmp: Path) -> list[tuple[str, int, list[str]]]:
-    """(kind, files, command arguments) for each kind of file at each class size."""
+def _filled(name: str, target: Path) -> bool:
+    """The master of homework ``name`` filled in as an honest student hands it in (the homework
+    tests' own maker); False where the master is not in this checkout."""
+    import nbformat
+
+    sys.path.insert(0, str(ROOT))
+    from tests.assignments.conftest import solved
+
+    try:
+        nb = solved(name)
+    except (FileNotFoundError, KeyError, ValueError):
+        return False
+    nbformat.write(nb, str(target))
+    return True
+
+
+def _cases(tmp: Path) -> list[tuple[str, str, int, list[str]]]:
+    """(kind, its key, files, command arguments) for each kind of file at each class size."""
     cases = []
     for n in SIZES:
         folder = tmp / f"check-{n}"
         folder.mkdir()
         for i in range(n):
             shutil.copy(SUBMISSION, folder / f"student{i}.py")
-        cases.append(("check (default runs)", n,
+        cases.append(("check (default runs)", "check/default", n,
                       ["check", str(folder), "--seed", "0", "--workers", "1"]))
-        cases.append(("check (--runs 2)", n,
+        cases.append(("check (--runs 2)", "check/runs2", n,
                       ["check", str(folder), "--seed", "0", "--workers", "1", "--runs", "2"]))
     for name in ("calibration", "coop"):
         notebook = STUDENT / name / f"{name}.ipynb"
         if not notebook.exists():
             continue
-        for n in SIZES:
-            folder = tmp / f"class-{name}-{n}"
-            folder.mkdir()
-            for i in range(n):
-                shutil.copy(notebook, folder / f"student{i}.ipynb")
-            cases.append((f"grade ({name} notebook as handed out)", n,
-                          ["grade", str(folder), "--assignment", name, "--jobs", "1", "--seed",
-                           "0", "--out", str(tmp / f"grades-{name}-{n}")]))
+        filled = tmp / f"{name}-filled.ipynb"
+        kinds = [("as handed out", "blank", notebook)]
+        if _filled(name, filled):
+            kinds.append(("filled: the master's solutions", "filled", filled))
+        for what, key, source in kinds:
+            for n in SIZES:
+                folder = tmp / f"class-{name}-{key}-{n}"
+                folder.mkdir()
+                for i in range(n):
+                    shutil.copy(source, folder / f"student{i}.ipynb")
+                cases.append((f"grade ({name} notebook {what})", f"grade/{name}/{key}", n,
+                              ["grade", str(folder), "--assignment", name, "--jobs", "1",
+                               "--seed", "0", "--out", str(tmp / f"grades-{name}-{key}-{n}")]))
     return cases
 
 
@@ -77,10 +102,12 @@ def main(argv: list[str] | None = None) -> None:
     print(f"start: {_cpu.load()}")
     rows: list[tuple[str, dict[str, tuple[float, float]]]] = []
     medians: dict[tuple[str, int], dict[str, tuple[float, float]]] = {}
+    keys: dict[str, str] = {}
     with tempfile.TemporaryDirectory() as tmp:
-        for kind, n, cmd in _cases(Path(tmp)):
+        for kind, key, n, cmd in _cases(Path(tmp)):
             if args.only not in kind:
                 continue
+            keys[kind] = key
             samples: dict[str, list[_cpu.Sample]] = {v: [] for v in roots}
             for _ in range(args.repeats):
                 for version, root in roots.items():
@@ -92,14 +119,19 @@ def main(argv: list[str] | None = None) -> None:
             medians[kind, n] = {v: _cpu.median(s) for v, s in samples.items()}
             rows.append((f"{kind}, class of {n}", medians[kind, n]))
     small, large = SIZES
+    figures: dict[str, float] = {}
+    for (kind, n), by_version in medians.items():
+        figures[f"cpu_s/{keys[kind]}/{n}"] = by_version["now"][0]
     for kind in dict.fromkeys(k for k, _ in medians):
         a, b = medians[kind, small], medians[kind, large]
         rows.append((f"{kind}: one more file", {
             v: ((b[v][0] - a[v][0]) / (large - small), (b[v][1] - a[v][1]) / (large - small))
             for v in roots}))
+        figures[f"cpu_s/{keys[kind]}/one_more"] = rows[-1][1]["now"][0]
     print(f"end: {_cpu.load()}; medians of {args.repeats}, CPU = user + system, children "
           f"included\n")
     print(_cpu.table(rows, list(roots)))
+    publish(figures)
 
 
 if __name__ == "__main__":

@@ -5,15 +5,25 @@ exits non-zero if any script failed.  Arguments after ``--only`` restrict to scr
 name contains one of them (``python benchmarks/run.py --only montecarlo``).  ``--markdown DIR``
 (``make bench`` gives ``docs/benchmarks``) also writes each script's output to ``DIR/NAME.txt``
 under a line saying when, where and at what load it was measured; the documentation's benchmark
-page is made of these files, so no table there is typed by hand.
+page is made of these files, so no table there is typed by hand.  With it, each script also
+publishes its figures (benchmarks/_figures.py): ``DIR/NAME.json`` holds them, the header line and
+the sha256 of ``DIR/NAME.txt``, written together once the script has succeeded (a failed script
+leaves the last pair as it was); tests/test_published_figures.py compares the docs' quoted
+figures with them.
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
+import os
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
+
+from _figures import ENV
 
 #: Scripts run on their own, not by ``make bench``: suite_cost.py runs the whole test suite;
 #: lessons.py runs notebooks for many minutes and writes docs/benchmarks/lessons.txt itself (--write);
@@ -30,6 +40,19 @@ def _header(script: Path, seconds: float) -> str:
     return (f"`python benchmarks/{script.name}`, {datetime.date.today().isoformat()}, Python "
             f"{platform.python_version()}, {os.cpu_count()} CPUs, load average {load:.1f} at the "
             f"end, {seconds:.0f} s wall")
+
+
+def _write(markdown: Path, script: Path, header: str, stdout: str, figures: Path) -> None:
+    """``NAME.txt`` (the header and the table) and ``NAME.json`` (the figures the script
+    published, if any, the header and the table's sha256)."""
+    text = header + "\n" + stdout
+    published = json.loads(figures.read_text(encoding="utf-8")) if figures.exists() else {}
+    record = {"script": script.name, "measured": header,
+              "txt_sha256": hashlib.sha256(text.encode("utf-8")).hexdigest(),
+              "figures": published.get("figures", {})}
+    (markdown / f"{script.stem}.txt").write_text(text, encoding="utf-8")
+    (markdown / f"{script.stem}.json").write_text(json.dumps(record, indent=1, sort_keys=True)
+                                                  + "\n", encoding="utf-8")
 
 
 def main(argv: list[str]) -> int:
@@ -49,15 +72,17 @@ def main(argv: list[str]) -> int:
     for script in scripts:
         print(f"=== {script.name} " + "=" * max(0, 70 - len(script.name)), flush=True)
         t0 = time.perf_counter()
-        proc = subprocess.run([sys.executable, str(script)], cwd=here.parent, text=True,
-                              stdout=subprocess.PIPE if markdown else None)
-        rc = proc.returncode
-        seconds = time.perf_counter() - t0
-        if markdown is not None:
-            print(proc.stdout, end="", flush=True)
-            if rc == 0:
-                (markdown / f"{script.stem}.txt").write_text(
-                    _header(script, seconds) + "\n" + proc.stdout, encoding="utf-8")
+        with tempfile.TemporaryDirectory(prefix="bench-figures-") as tmp:
+            figures = Path(tmp) / "figures.json"
+            env = dict(os.environ, **({ENV: str(figures)} if markdown else {}))
+            proc = subprocess.run([sys.executable, str(script)], cwd=here.parent, text=True,
+                                  stdout=subprocess.PIPE if markdown else None, env=env)
+            rc = proc.returncode
+            seconds = time.perf_counter() - t0
+            if markdown is not None:
+                print(proc.stdout, end="", flush=True)
+                if rc == 0:
+                    _write(markdown, script, _header(script, seconds), proc.stdout, figures)
         print(f"--- {script.name}: exit {rc}, {seconds:.1f} s wall\n", flush=True)
         if rc != 0:
             failed.append(script.name)
