@@ -390,13 +390,17 @@ def test_an_instructor_hands_out_and_grades_from_the_wheel_with_the_grading_extr
         assert (grades / f).is_file(), f
     assert "Alice Smith,,1000,,,10" in (grades / "canvas.csv").read_text()
     assert "Alice Smith & Bob Jones" in out["grade a class"]  # the copy is flagged
-    _own_homework(venv, env, work / "own" / "cv2d", instructor)
+    # the example the core install writes out (the student's steps above show it does)
+    proc = subprocess.run([str(venv / "bin" / "gpsaccel"), "assignment", "--example", "own"],
+                          cwd=instructor, env=env, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0 and "graded.py" in proc.stdout, proc.stderr
+    _own_homework(venv, env, instructor / "own" / "cv2d", instructor)
 
 
 def _own_homework(venv: Path, env: dict, course: Path, instructor: Path) -> None:
-    """An instructor's own homework from the example the wheel ships (written out by the core
-    install above), nothing else: handed out, and a class of two graded, one with V given as σ:
-    that costs half of V's part (the example's credit), not the whole question."""
+    """An instructor's own homework from the example the wheel ships (written out by the
+    command), nothing else: handed out, and a class of two graded, one with V given as σ: that
+    costs half of V's part (the example's credit), not the whole question."""
     import nbformat
 
     gpsaccel_bin = str(venv / "bin" / "gpsaccel")
