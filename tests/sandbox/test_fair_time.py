@@ -21,6 +21,7 @@ the starved box inside it).  The tests assert verdicts, never how fast anything 
 from __future__ import annotations
 
 import contextlib
+import functools
 import math
 import os
 import subprocess
@@ -90,8 +91,10 @@ def _descendants(pid: int) -> set[int]:
     return found
 
 
+@functools.cache
 def _quota_applies() -> bool:
-    """Whether a box's cgroup here has a CPU quota (:data:`_cgroup.CPU_QUOTA`)."""
+    """Whether a box's cgroup here has a CPU quota (:data:`_cgroup.CPU_QUOTA`); asked once, when
+    a test first starves a box (not at collection)."""
     box = _cgroup.create(256 << 20, 8)
     if box is None:
         return False
@@ -102,14 +105,11 @@ def _quota_applies() -> bool:
         box.remove()
 
 
-QUOTA = _quota_applies() if os.path.exists("/proc/self/schedstat") else False
-
-
 @contextlib.contextmanager
 def _busy(share: float):
     """Every box started in the block gets ``share`` of a CPU (module docstring): its cgroup's
     quota where there is one, else ``round(1 / share) - 1`` hogs on its core."""
-    if QUOTA:
+    if _quota_applies():
         with pytest.MonkeyPatch.context() as mp:
             mp.setattr(_cgroup, "CPU_QUOTA", max(1000, round(share * _cgroup.CPU_PERIOD)))
             yield
