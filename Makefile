@@ -23,7 +23,7 @@ endif
 
 .PRECIOUS: $(VENV)/.installed-%
 
-.PHONY: run test test-slow test-all test-fast lab lint bench docs lessons-html wheel clean
+.PHONY: run test test-quick test-fast lab lint bench docs lessons-html wheel clean
 
 $(BIN)/python:
 	$(MKVENV)
@@ -49,18 +49,14 @@ PYTEST_ARGS ?=
 # workers end together
 XDIST = $(if $(filter-out 0,$(JOBS)),-n $(JOBS) --dist loadscope)
 PYTEST = MPLBACKEND=Agg $(BIN)/python -m pytest -q $(XDIST)
-# `make test` (the README's): every test but the slow ones (notebooks executed, wheels, browsers,
-# the docs site, whole reports drawn, big Monte Carlo), and of each slow kind one (tests/conftest.py
-# KEPT); `make test-slow`: the slow ones; `make test-all`: both.  CI runs test, then test-slow:
-# each test once (.ci/run)
+# `make test` (the README's): the whole suite.  `make test-quick`: every test but the slow ones
+# (notebooks executed, wheels, browsers, the docs site, whole reports drawn, big Monte Carlo), and
+# of each slow kind one (tests/conftest.py KEPT), for development and CI's second Python (.ci/run)
 test: $(VENV)/.installed-test
-	$(PYTEST) -m "not slow" $(PYTEST_ARGS)
-
-test-slow: $(VENV)/.installed-test
-	$(PYTEST) -m slow $(PYTEST_ARGS)
-
-test-all: $(VENV)/.installed-test
 	$(PYTEST) $(PYTEST_ARGS)
+
+test-quick: $(VENV)/.installed-test
+	$(PYTEST) -m "not slow" $(PYTEST_ARGS)
 
 # the core's tests (the Kalman core, the calibration system, the package's shape) without the
 # slow ones (notebooks, wheels, browsers, big Monte Carlo): under a minute on two idle cores

@@ -5,8 +5,8 @@ One pytest per folder of ``tests/`` (the top-level test files together as ``test
 the other, so a folder's figure is its own.  Not part of ``make bench``: it runs the suite, which
 the machine may share (benchmarks/run.py leaves it out).  Examples::
 
-    python benchmarks/suite_cost.py                       # every folder, as `make test-all` would
-    python benchmarks/suite_cost.py -m "not slow"         # as `make test` would
+    python benchmarks/suite_cost.py                       # every folder, as `make test` would
+    python benchmarks/suite_cost.py -m "not slow"         # as `make test-quick` would
     python benchmarks/suite_cost.py tests/kalman -m "not slow"
     python benchmarks/suite_cost.py -n 2 --out docs/benchmarks/suite_cost.txt
     python benchmarks/suite_cost.py -n 2 --root /tmp/main --root /tmp/branch  # before, after

@@ -6,7 +6,7 @@ each paying its own start-up and without the other folders' shared disk cache), 
 one run CI makes, with its two workers and its schedule, and splits it by test::
 
     cd CLONE && PYTHONPATH=/path/to/benchmarks CPU_PER_TEST=/tmp/after/cpu \\
-        make test PYTEST_ARGS="-p suite_per_test"                  # or make test-all, test-slow
+        make test PYTEST_ARGS="-p suite_per_test"                  # or make test-quick
     python benchmarks/suite_per_test.py /tmp/before /tmp/after      # the Markdown table
 
 A test item's CPU is user + system of its worker process and of the children the worker waited

@@ -1,8 +1,8 @@
 """The whole suite's markers: ``slow`` for the tests that take more than a few seconds.
 
-``make test`` (the README's) runs all but the slow ones, and of each slow kind one test
-(:data:`KEPT`); ``make test-slow`` runs the slow ones, ``make test-all`` everything; CI runs
-``make test`` and ``make test-slow``, so each test once (``.ci/run``).  A test may carry
+``make test`` (the README's) runs every test; ``make test-quick`` all but the slow ones, and of each
+slow kind one test (:data:`KEPT`); CI runs ``make test`` on one Python and ``make test-quick`` on
+the other (``.ci/run``).  A test may carry
 ``@pytest.mark.slow`` itself; the ones below are marked here from measured durations
 (``pytest --durations=40``, serial, a shared 2-core machine, and benchmarks/suite_per_test.py),
 so their modules need not change: each entry is a node id prefix ("file" or "file::test").
@@ -35,7 +35,7 @@ SLOW: tuple[str, ...] = (
 
 #: Module fixtures that draw every figure of a report ("file::fixture"): every test that uses one,
 #: however indirectly, is slow (report 002's: 10.6 CPU s; 000, 001 and 003's: 9.3; 004's: 5.3); a
-#: new test on them joins the slow ones by itself.  The default run keeps one report drawn through
+#: new test on them joins the slow ones by itself.  The quick run keeps one report drawn through
 #: the command (test_figures.py::test_cli_figures_one_report, 2.7) and the legend check's own test.
 SLOW_FIXTURES: tuple[str, ...] = (
     "tests/figures/test_r002.py::drawn",
@@ -43,9 +43,9 @@ SLOW_FIXTURES: tuple[str, ...] = (
     "tests/figures/test_r004.py::drawn",
 )
 
-#: Of each slow kind, the one test the default run keeps (never marked, though a SLOW entry
-#: covers it), so ``make test`` still executes a lesson and grades a homework in its boxes: the
-#: cheapest lesson (02, 1.4 CPU s at 20 runs; its student version reads the same execution) and
+#: Of each slow kind, the one test the quick run keeps (never marked, though a SLOW entry
+#: covers it), so ``make test-quick`` still executes a lesson and grades a homework in its boxes:
+#: the cheapest lesson (02, 1.4 CPU s at 20 runs; its student version reads the same execution) and
 #: the tracker's homework (3.7 CPU s for its class).  The others of these kinds keep themselves:
 #: the docs site's links (tests/test_docs.py, on the site CI builds, else built once per content)
 #: and the core wheel in a fresh environment (tests/test_packaging.py).
@@ -61,11 +61,11 @@ KEPT: tuple[str, ...] = (
 #: hands them out first, so the two workers end together instead of one running a long unit alone
 #: at the end.  From ``--durations`` (2 workers, load 10 and more).
 FIRST: tuple[str, ...] = (
-    "tests/assignments/test_attacks.py",  # the slow run's (make test-slow)
+    "tests/assignments/test_attacks.py",  # the whole run's (make test)
     "tests/assignments/test_coop.py",
     "tests/assignments/test_hostile_class.py",
     "tests/assignments/test_grading.py",
-    "tests/check/test_batch.py",  # the default run's (make test)
+    "tests/check/test_batch.py",  # the quick run's too (make test-quick)
     "tests/test_docs.py",
     "tests/test_packaging.py",
     "tests/lessons/test_lessons.py",

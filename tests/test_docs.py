@@ -6,7 +6,7 @@ links and every lesson.  Skips where Sphinx or Chromium is missing.
 these tests on it); otherwise the site is built once per content (18 CPU s) into the suite's disk
 cache (tests/conftest.py), keyed by every file Sphinx reads: docs/ (not what it writes there),
 lessons/, the package and the versions of Sphinx and its extensions.  The links test is the
-default run's one test of the docs (tests/conftest.py KEPT); the browser tests are slow.
+quick run's one test of the docs (tests/conftest.py KEPT); the browser tests are slow.
 """
 
 from __future__ import annotations

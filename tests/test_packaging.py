@@ -1,7 +1,7 @@
 """What ``pip install gpsaccel`` gives: declared dependencies, one version, the metadata, the
 lessons as package data, ``--version``, ``python -m gpsaccel``, ``lessons --copy``, ``lab``; and a
 built wheel installed in a fresh environment outside the repository: with the core alone (the
-default run's wheel test), and with the grading extra for an instructor's steps (slow)."""
+quick run's wheel test), and with the grading extra for an instructor's steps (slow)."""
 
 from __future__ import annotations
 
@@ -313,7 +313,7 @@ def _fresh_venv(where: Path, requirement: str) -> tuple[Path, dict[str, str]]:
 def test_the_wheel_in_a_fresh_environment_outside_the_repository(wheel, tmp_path):
     """The wheel with the core dependencies only, in a new venv under /tmp, used from there: a
     student's steps, the lessons and the homework's student side shipped, the instructor's kit
-    in it (the default run's one wheel test; the instructor's steps with the grading extra are
+    in it (the quick run's one wheel test; the instructor's steps with the grading extra are
     the slow one below)."""
     venv, env = _fresh_venv(tmp_path / "venv", f"{wheel}{WHEEL_EXTRA}")
     work = tmp_path / "student"

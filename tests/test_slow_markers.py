@@ -134,11 +134,11 @@ def test_an_entry_of_a_file_not_collected_is_not_judged(pytest_in, tmp_path):
     assert res.returncode == 0, res.stdout + res.stderr
 
 
-def test_a_kept_test_of_a_slow_kind_runs_in_the_default_run_and_a_stale_one_stops_it(pytest_in,
-                                                                                       tmp_path):
-    """KEPT: the one test of a slow kind the default run keeps (``make test``, ``-m "not
+def test_a_kept_test_of_a_slow_kind_runs_in_the_quick_run_and_a_stale_one_stops_it(pytest_in,
+                                                                                     tmp_path):
+    """KEPT: the one test of a slow kind the quick run keeps (``make test-quick``, ``-m "not
     slow"``), though a SLOW entry covers it; a kept entry naming no test stops the run, or the
-    kind would silently leave the default run."""
+    kind would silently leave the quick run."""
     slow = ("test_a.py::test_sweep_one",)
     res = pytest_in(tmp_path, slow, "test_a.py", "-m", "not slow",
                     kept=("test_a.py::test_sweep_one[2]",))

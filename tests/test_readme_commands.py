@@ -1,0 +1,49 @@
+"""The README opens with exactly two set-up commands, the main job and the whole test suite, and CI
+(.ci/run) runs that test command: a subset under the README's name would leave tests no one runs
+by the book (``make test-quick`` is the subset, under "Developing")."""
+
+from __future__ import annotations
+
+import re
+import shlex
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _first_block(text: str) -> list[str]:
+    """The commands of the README's first fenced block (comments dropped)."""
+    block = re.search(r"```\w*\n(.*?)```", text, re.S)
+    assert block is not None, "README.md has no fenced block"
+    return [line.split("#")[0].strip() for line in block.group(1).splitlines() if line.strip()]
+
+
+def _pytest_argv(target: str) -> list[str]:
+    """The arguments make's ``target`` gives pytest (``make -n``: printed, not run)."""
+    out = subprocess.run(["make", "-n", "-C", str(ROOT), target, "VENV=.venv-never-made"],
+                         capture_output=True, text=True, timeout=60).stdout
+    lines = [line for line in out.splitlines() if " -m pytest" in line]
+    assert len(lines) == 1, out
+    return shlex.split(lines[0].split(" -m pytest", 1)[1])
+
+
+def test_the_readme_opens_with_the_main_job_and_the_test_command():
+    assert _first_block((ROOT / "README.md").read_text(encoding="utf-8")) == \
+        ["make run", "make test"]
+
+
+@pytest.mark.skipif(shutil.which("make") is None, reason="make is not installed")
+def test_make_test_selects_every_test_and_test_quick_leaves_the_slow_ones_out():
+    whole, quick = _pytest_argv("test"), _pytest_argv("test-quick")
+    # no marker, keyword, file or folder narrows the whole run; only its workers
+    assert not {"-m", "-k"} & set(whole) and not [a for a in whole if a.startswith("tests")], whole
+    assert quick[-2:] == ["-m", "not slow"] and quick[:-2] == whole, quick
+
+
+def test_ci_runs_the_readmes_test_command():
+    ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
+    assert re.search(r"^\s*make test PYTHON=", ci, re.M), "CI does not run `make test`"
