@@ -4,6 +4,7 @@ by the book (``make test-quick`` is the subset, under "Developing")."""
 
 from __future__ import annotations
 
+import os
 import re
 import shlex
 import shutil
@@ -23,9 +24,13 @@ def _first_block(text: str) -> list[str]:
 
 
 def _pytest_argv(target: str) -> list[str]:
-    """The arguments make's ``target`` gives pytest (``make -n``: printed, not run)."""
+    """The arguments make's ``target`` gives pytest (``make -n``: printed, not run), as the README
+    runs it: no PYTEST_ARGS, and none of an enclosing make's variables (under ``make test
+    PYTEST_ARGS=...`` they reach this make through MAKEFLAGS)."""
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("MAKEFLAGS", "MFLAGS", "MAKELEVEL", "PYTEST_ARGS", "JOBS")}
     out = subprocess.run(["make", "-n", "-C", str(ROOT), target, "VENV=.venv-never-made"],
-                         capture_output=True, text=True, timeout=60).stdout
+                         capture_output=True, text=True, timeout=60, env=env).stdout
     lines = [line for line in out.splitlines() if " -m pytest" in line]
     assert len(lines) == 1, out
     return shlex.split(lines[0].split(" -m pytest", 1)[1])

@@ -141,7 +141,7 @@ def _wait(predicate, proc: subprocess.Popen) -> None:
     """Until ``predicate()``; fails if ``proc`` ends first or the hang guard passes."""
     deadline = time.monotonic() + HANG
     while not predicate():
-        assert proc.poll() is None, f"the regrade ended first: {proc.communicate()}"
+        assert proc.poll() is None, f"the grader ended first: {proc.communicate()}"
         assert time.monotonic() < deadline, "the event never came"
         time.sleep(0.05)
 
@@ -250,7 +250,7 @@ def test_a_grade_stopped_in_a_box_leaves_no_temporary_folder(tmp_path):
             seen.update(p.pid for p in me.children(recursive=True))
             return any("-nb-" in p.name for p in tmp.iterdir())
 
-        _wait(in_its_folder)
+        _wait(in_its_folder, proc)
         assert all(p.name.startswith(("gpsaccel-box-", "gpsaccel-uids")) for p in tmp.iterdir())
         os.kill(proc.pid, signal.SIGINT)
         stdout, stderr = proc.communicate(timeout=120)
