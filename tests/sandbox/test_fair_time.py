@@ -195,10 +195,11 @@ def test_a_box_starved_by_a_busy_machine_is_not_timed_out(tmp_path, patient, mon
     The wall clock's box is judged on what its clock counts: the starved box's wait, read by the
     clock inside its own window (from the box's start to its end), was past the limit, so the
     window of a box starved as much is too; not on ``BoxResult.seconds``, the whole ``sb.run``
-    with the box's set-up and removal, which the clock does not count (a fixed 1.5 s against a
-    box of 1.8 s there failed three times on cgroup1, whose set-up and removal took the
-    difference).  It is starved twice as hard at each try, which costs nothing (it is stopped at
-    its limit): not timed out thrice, its wait would have shrunk 1.7, 3.4 and 6.8 times."""
+    with the box's set-up (its folder, its cgroup, its launch) and its emptying, which the clock
+    does not count (a fixed 1.5 s against boxes of 1.76-1.8 s there failed three times in CI,
+    bwrap on cgroup1: they took the difference).  It is starved twice as hard at each try, which
+    costs nothing (it is stopped at its limit): not timed out thrice, its wait would have shrunk
+    1.7, 3.4 and 6.8 times."""
     tries: list[tuple] = []
     share, starved = SHARE, None
     for _ in range(TRIES):

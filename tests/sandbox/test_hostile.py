@@ -107,7 +107,10 @@ def _single_check(tmp_path, backend, hostile, watch, sig, processes):
     spin.write_text("import ctypes, os\n\nctypes.CDLL(None).prctl(15, b'gpsacc-hostile', 0, 0, 0)"
                     "\n\n\ndef kalman_filter(z):\n" + "    os.fork()\n" * (processes - 1) +
                     "    while True:\n        pass\n")
-    code = (f"from gpsaccel import check\n"
+    # SIGINT's handler put back: a suite started as a script's background job has it ignored,
+    # which this process would inherit (POSIX), and Ctrl-C would then never reach the check
+    code = (f"import signal\nsignal.signal(signal.SIGINT, signal.default_int_handler)\n"
+            f"from gpsaccel import check\n"
             f"check.submission({str(spin)!r}, n_runs=2, timeout={2 * hostile.HANG}, "
             f"sandbox={backend!r})\n")
     proc = subprocess.Popen([sys.executable, "-c", code], env=hostile.env(),
