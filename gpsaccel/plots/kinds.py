@@ -175,7 +175,7 @@ def chi2_band(t: np.ndarray, values: np.ndarray, bounds: tuple[float, float], *,
         ax.axhline(dof, color=STYLE["truth"], ls=":", lw=0.8, label=f"expected {dof}")
     if log:
         ax.set_yscale("log")
-    finish(ax, title, "time (s)", f"average {statistic} (dimensionless)")
+    finish(ax, title, "time (s)", f"average {statistic} (–)")
     return fig
 
 
