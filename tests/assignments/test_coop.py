@@ -189,3 +189,33 @@ def test_the_homework_grades_with_the_package_ekf_and_recognises_each_mistake():
     prior = run_ekf(model, y, Q=model.Qtrue, ingredients=replace(ingredients(), output="prior"))
     np.testing.assert_array_equal(prior.x_hat, ref.x_bar)
     np.testing.assert_array_equal(prior.P, ref.M)
+
+
+def test_packaged_q2_check_passes_a_right_answer_through_otter():
+    """The student's ``grader.check("q2")`` as otter runs it (its test file a module of its own,
+    the notebook's variables passed by name): a right dt_linearization passes; one whose G is
+    built from a wrong B passes when that B is the notebook's own jacobian_B (question 1 pays for
+    it) and fails when the notebook's jacobian_B is right."""
+    import json
+
+    from otter.test_files import ExceptionTestFile
+
+    nb = json.loads((student_package_dir() / "coop" / "coop.ipynb").read_text(encoding="utf-8"))
+    source = nb["metadata"]["otter"]["tests"]["q2"]
+
+    def wrong_b(x, u):
+        return 2 * cm.jacobian_B(x, u)
+
+    def run(b_in_g, own_b):
+        def dt_linearization(x, u, dt):
+            return np.eye(6) + dt * cm.jacobian_A(x, u), dt * b_in_g(x, u), cm.jacobian_C(x)
+        env = {"dt_linearization": dt_linearization, "jacobian_A": cm.jacobian_A,
+               "jacobian_B": own_b, "jacobian_C": cm.jacobian_C}
+        test = ExceptionTestFile.from_string(source, path="q2.py")
+        test.run(env)
+        return test.passed_all, test.summary()
+
+    assert run(cm.jacobian_B, cm.jacobian_B)[0]
+    assert run(wrong_b, wrong_b)[0]
+    passed, summary = run(wrong_b, cm.jacobian_B)
+    assert not passed and "NameError" not in summary and "AssertionError" in summary

@@ -14,8 +14,8 @@ import pytest
 from gpsaccel import _untrusted, registry
 from gpsaccel.assignments import grading
 from gpsaccel.assignments import notebook as nbm
-from gpsaccel.classrun import default_out, grade, notebooks, walk
 from gpsaccel.assignments.questions import question_seed, variant_number
+from gpsaccel.classrun import default_out, grade, notebooks, walk
 from gpsaccel.cli import main
 
 from .conftest import CHI2_SPECIAL, read_grades, tracker_with_numpy_filter, write_variant
@@ -252,3 +252,48 @@ def test_the_notebook_module_is_data_and_calls_only():
     assert ast.literal_eval(start.args[2]) == [("f", False, [(3,), (2, 2)]), ("y", True, [()])]
     with pytest.raises(ValueError, match="Python name"):
         nbm.module_source(nb, [nbm.Read("f(); import os", ())])
+
+
+def _unbound_names(test_source: str) -> set[str]:
+    """The names a test function of ``test_source`` reads that it neither takes as a parameter,
+    binds itself, nor finds in its file or in builtins."""
+    import ast
+    import builtins
+
+    tree = ast.parse(test_source)
+    module = {t.id for node in tree.body if isinstance(node, ast.Assign) for t in node.targets
+              if isinstance(t, ast.Name)}
+    module |= {a.asname or a.name.split(".")[0] for node in tree.body
+               if isinstance(node, ast.Import | ast.ImportFrom) for a in node.names}
+    unbound: set[str] = set()
+    for fn in (n for n in tree.body if isinstance(n, ast.FunctionDef)):
+        bound = {a.arg for a in fn.args.args + fn.args.kwonlyargs}
+        bound |= {n.id for n in ast.walk(fn) if isinstance(n, ast.Name)
+                  and isinstance(n.ctx, ast.Store)}
+        bound |= {a.asname or a.name.split(".")[0] for n in ast.walk(fn)
+                  if isinstance(n, ast.Import | ast.ImportFrom) for a in n.names}
+        bound |= {n.name for n in ast.walk(fn) if isinstance(n, ast.FunctionDef) and n is not fn}
+        loads = {n.id for n in ast.walk(fn) if isinstance(n, ast.Name)
+                 and isinstance(n.ctx, ast.Load)}
+        unbound |= loads - bound - module - set(dir(builtins))
+    return unbound
+
+
+def test_unbound_names_finds_a_notebook_variable_read_without_a_parameter():
+    src = ("import os\nname = 'q'\ndef test_q(f):\n    import math\n    g = f\n"
+           "    return h(g, math, os, len)\n")
+    assert _unbound_names(src) == {"h"}
+
+
+@pytest.mark.parametrize("name", registry.assignments())
+def test_public_tests_take_every_notebook_variable_they_use_as_a_parameter(name):
+    """otter runs a public test (``grader.check``) as a module of its own and hands its test
+    function only the notebook variables named as parameters: any other notebook name is a
+    NameError for every student, right answer or not (coop's q2 read jacobian_A so), while
+    ``otter assign`` runs the same test in the notebook's namespace and passes."""
+    from gpsaccel.assignments.generate import student_package_dir
+
+    packaged = nbformat.read(str(student_package_dir() / name / f"{name}.ipynb"), as_version=4)
+    tests = packaged.metadata["otter"]["tests"]
+    assert tests
+    assert {q: _unbound_names(src) for q, src in tests.items()} == {q: set() for q in tests}
