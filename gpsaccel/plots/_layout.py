@@ -12,10 +12,15 @@ caller adds after the figure is made (a title, a legend, another line) is laid o
 The axes must sit in one grid (``fig.subplots``, ``fig.add_subplot``), as every house figure's
 do; a figure given a layout engine afterwards (``fig.set_layout_engine("constrained")``) is left
 to it, and one with axes in two grids is left as matplotlib places it.
+
+A hat written the course's way, a letter and U+0302 (``b̂``), is drawn by matplotlib at x-height:
+on a letter with an ascender it lands on the stem and ``b − b̂`` reads ``b − b``.  Before the
+layout such a letter becomes mathtext's upright ``\\hat`` (:func:`hats_above_ascenders`).
 """
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import matplotlib
@@ -25,6 +30,7 @@ from matplotlib.axis import Axis
 from matplotlib.figure import Figure
 from matplotlib.font_manager import FontProperties
 from matplotlib.gridspec import GridSpec, SubplotSpec
+from matplotlib.text import Text
 
 #: Inches: the space kept at the figure's edges, and between one axes' labels and the next's.
 EDGE = 0.08
@@ -40,9 +46,24 @@ class HouseFigure(Figure):
     """A :class:`~matplotlib.figure.Figure` laid out by :func:`lay_out` each time it is drawn."""
 
     def draw(self, renderer: Any) -> None:
+        hats_above_ascenders(self)
         if self.get_layout_engine() is None:
             lay_out(self, renderer)
         super().draw(renderer)
+
+
+#: A letter with an ascender (or a capital) and a combining circumflex.
+_TALL_HAT = re.compile("([A-Zbdfhklt])\u0302")
+
+
+def hats_above_ascenders(fig: Figure) -> None:
+    """Every text of ``fig`` with a hat on a tall letter (``b̂``) rewritten as mathtext
+    (``$\\hat{\\mathrm{b}}$``), whose hat clears the stem; a text already holding a ``$`` (mathtext
+    or a dollar) is left as it is."""
+    for text in fig.findobj(Text):
+        s = text.get_text()
+        if "\u0302" in s and "$" not in s:
+            text.set_text(_TALL_HAT.sub(r"$\\hat{\\mathrm{\1}}$", s))
 
 
 def lay_out(fig: Figure, renderer: Any) -> None:

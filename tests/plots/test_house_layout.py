@@ -123,3 +123,28 @@ def test_a_figure_given_a_layout_engine_is_left_to_it(ensemble):
     # constrained layout moved the axes; the house layout did not run on top of it
     assert [ax.get_position().bounds for ax in fig.axes] != before
     assert fig.subplotpars.left == matplotlib.rcParams["figure.subplot.left"]
+
+
+def test_a_hat_on_a_tall_letter_is_drawn_above_its_stem():
+    """matplotlib draws U+0302 at x-height, on the stem of b: ``b − b̂`` read ``b − b`` in every
+    bias figure.  Drawn, the hat on a tall letter is mathtext's, whose glyph sits higher than the
+    letter's top; the hat on p stays as written, and a text with a ``$`` is left alone."""
+    fig = plots.error_band(np.arange(3.0), np.zeros(3), np.ones(3), label="b − b̂", unit="m/s²")
+    ax = fig.axes[0]
+    ax.set_title("δp − δp̂ costs $1")
+    fig.savefig(io.BytesIO(), format="png")
+    assert ax.get_ylabel() == r"b − $\hat{\mathrm{b}}$ (m/s²)"
+    assert [t.get_text() for t in ax.get_legend().get_texts()][0] == r"b − $\hat{\mathrm{b}}$"
+    assert ax.get_title() == "δp − δp̂ costs $1"
+
+    def ink_runs(text):  # the bands of inked rows of ``text`` drawn alone: 2 when the hat clears
+        f = matplotlib.figure.Figure(figsize=(2, 1), dpi=100)  # a notebook's inline figure
+        FigureCanvasAgg(f)
+        f.text(0.1, 0.3, text, fontsize=8.5)  # a legend's "small"
+        f.canvas.draw()
+        rows = (np.asarray(f.canvas.buffer_rgba())[..., :3].min(axis=(1, 2)) < 128).astype(int)
+        return int((np.diff(rows) == 1).sum() + rows[0])
+
+    assert ink_runs("p\u0302") == 2  # the hat on a short letter clears it
+    assert ink_runs("b\u0302") == 1  # on b it touches the stem
+    assert ink_runs(r"$\hat{\mathrm{b}}$") == 2
