@@ -64,6 +64,11 @@ def nees_reference(x_true: np.ndarray, x_hat: np.ndarray, P: np.ndarray, k: int 
 
 
 def _number(report: Report, name: str, value: object, part: str = "") -> float | None:
+    if value is None:  # np.asarray(None, dtype=float) is nan: a missing return would read "= nan"
+        report.add("not-a-number", text="{where} is None: the function must return one number "
+                   "(end it with a return statement).", where=name, observed={"value": "None"},
+                   part=part)
+        return None
     try:
         out = float(np.asarray(value, dtype=float).reshape(()))
     except (TypeError, ValueError):

@@ -43,6 +43,10 @@ def test_nees_answer_accepts_the_reference_and_names_each_mistake():
     one = tuple(stats.chi2.ppf([0.025, 0.975], 3))
     assert nees_answer(eps, one, N, x, xh, P).codes == ["nees-bounds-one-run"]
     assert nees_answer("abc", "x", N, x, xh, P).codes == ["not-a-number", "nees-bounds"]
+    # a function without a return (the handed-out `...` body): None, never read as nan
+    missing = nees_answer(None, None, N, x, xh, P)
+    assert missing.codes == ["not-a-number", "nees-bounds"]
+    assert "nees_30 is None" in str(missing) and "nan" not in str(missing)
 
 
 def test_question_3_grades_the_functions_on_the_draws_data():
