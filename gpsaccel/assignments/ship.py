@@ -196,6 +196,8 @@ def cost_answer(sigma_optimal: object, sigma_zeroed: object, mass_kg: float = 12
     for name, value, key in (("sigma_optimal", sigma_optimal, "sigma_optimal"),
                              ("sigma_zeroed", sigma_zeroed, "sigma_actual")):
         try:
+            if value is None:  # np.asarray(None, dtype=float) is nan: "= nan" for no answer
+                raise TypeError
             v = float(np.asarray(value, dtype=float).reshape(()))
         except (TypeError, ValueError):
             report.add("not-a-number", text=TEXT["not-a-number"], where=name,

@@ -198,4 +198,7 @@ def test_cost_answer_accepts_six_digits_tells_the_filters_apart_without_the_answ
         "claimed-not-actual"]
     r = ship.cost_answer(1.0, 2.0)
     assert r.codes == ["sigma-value"]
+    # no answer yet (None) is named as None, never read as nan
+    r = ship.cost_answer(None, want["sigma_actual"])
+    assert r.codes == ["not-a-number"] and "got None" in str(r) and "nan" not in str(r)
     assert all(f"{v:.4g}" not in str(r) for v in want.values())
