@@ -58,11 +58,11 @@ def ekf_mistakes() -> tuple:
 # ------------------------------------------------------------------ Jacobians, DT model
 def states(seed: int = 0, n_random: int = 20) -> tuple[np.ndarray, np.ndarray]:
     """(X (n, 6), U (n, 4)): the states and inputs :func:`gpsaccel.check.jacobians` uses."""
-    from gpsaccel.check.jacobians import _inputs, check_states
+    from gpsaccel.check.jacobians import check_states, state_inputs
 
     model = CoopModel()
     X, _ = check_states(model, n_random, seed)
-    return X, _inputs(model, len(X), seed)
+    return X, state_inputs(model, len(X), seed)
 
 
 def jacobians(jacobian_A: object, jacobian_B: object, jacobian_C: object, seed: int = 0,

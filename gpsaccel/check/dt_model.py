@@ -23,11 +23,11 @@ from gpsaccel.check.jacobians import (
     ARGS,
     FORMULAS,
     RTOL,
-    _inputs,
     analytic,
     check_states,
     close,
     matrix_finding,
+    state_inputs,
     student_matrices,
 )
 from gpsaccel.check.report import Report, as_array
@@ -145,7 +145,7 @@ def _dt_states(model: CoopModel, matrices: tuple[object, ...], x: object, u: obj
     matrix given is a function, else the one state ``x`` (default the nominal x0, u0)."""
     if all(callable(v) or v is None for v in matrices):
         X, labels = check_states(model, n_random, seed)
-        return X, _inputs(model, len(X), seed), labels
+        return X, state_inputs(model, len(X), seed), labels
     xs = model.x0 if x is None else np.asarray(x, dtype=float)
     us = model.u0 if u is None else np.asarray(u, dtype=float)
     if xs.shape != (6,) or us.shape != (4,) or not (np.isfinite(xs).all()

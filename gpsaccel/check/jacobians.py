@@ -111,9 +111,10 @@ def check_states(model: CoopModel | None = None, n_random: int = 60, seed: int =
     return np.array(states), labels
 
 
-def _inputs(model: CoopModel, n: int, seed: int) -> np.ndarray:
-    """u for every state: u0 for the first, then inputs drawn around it (so no element is
-    compared only at one value of vg, φg, va)."""
+def state_inputs(model: CoopModel, n: int, seed: int) -> np.ndarray:
+    """u for each of ``n`` states of :func:`check_states` (the same ``seed``): u0 for the first,
+    then inputs drawn around it (so no element is compared only at one value of vg, φg, va).
+    Public: the DT model's check and the homework's question 1 call the student at these too."""
     rng = np.random.default_rng(seed + 1)
     u = np.broadcast_to(model.u0, (n, 4)).copy()
     u[1::2] *= rng.uniform(0.5, 1.5, (len(u[1::2]), 4))
@@ -340,7 +341,7 @@ def jacobians(A: Callable | None = None, B: Callable | None = None, C: Callable 
     t0 = time.perf_counter()
     model = CoopModel() if model is None else model
     X, labels = check_states(model, n_random, seed)
-    U = _inputs(model, len(X), seed)
+    U = state_inputs(model, len(X), seed)
     report = Report("Jacobians A, B, C")
     report.details.update({"n_states": len(X), "rtol": rtol})
     checked = []
