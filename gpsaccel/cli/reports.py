@@ -18,7 +18,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     from gpsaccel.calibration.model import STATE_NAMES, STATE_UNITS
     from gpsaccel.figures import write_figures
-    from gpsaccel.figures._shared import single_run
+    from gpsaccel.figures.runs import single_run
 
     single = single_run("000", args.seed)  # computed once: printed here, drawn below
     model, run, res = single
@@ -47,7 +47,7 @@ def _run_ensemble(runs: int | None, seed: int):
     import time
 
     from gpsaccel.figures import r000
-    from gpsaccel.figures._shared import report_ensemble
+    from gpsaccel.figures.runs import report_ensemble
 
     runs = r000.DEFAULT_RUNS if runs is None else runs
     t0 = time.perf_counter()

@@ -1,6 +1,6 @@
 """The Monte Carlo figures of reports 000, 001 and 003, from one cached ensemble per problem.
 
-The ensembles come from :func:`gpsaccel.figures._shared.report_ensemble` (cached there; reports
+The ensembles come from :func:`gpsaccel.figures.runs.report_ensemble` (cached there; reports
 001 and 003 state one problem, so one ensemble serves both).
 """
 
@@ -11,7 +11,7 @@ from collections.abc import Iterator
 from gpsaccel import plots
 from gpsaccel.calibration.montecarlo import MonteCarloResult
 from gpsaccel.figures import ReportFigure
-from gpsaccel.figures._shared import report_ensemble
+from gpsaccel.figures.runs import report_ensemble
 
 
 def _captions(mc: MonteCarloResult) -> dict[str, str]:

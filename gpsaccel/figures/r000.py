@@ -2,7 +2,7 @@
 
 Figures 1-6 are one realization (seed ``seed``) filtered by filterpy under the multirate driver,
 with the error-model truth as report 000's code builds it.  Figure 7 is the Monte Carlo ensemble
-(``runs`` realizations, :func:`gpsaccel.figures._shared.ensemble`), drawn like the report: the
+(``runs`` realizations, :func:`gpsaccel.figures.runs.ensemble`), drawn like the report: the
 nine elements of P_ave − P on one axes; 7b (not in the report) the same nine elements each in
 units of its own standard error, so that more than element (1,1) is visible.
 """
@@ -16,7 +16,7 @@ import numpy as np
 from gpsaccel import plots, registry
 from gpsaccel.calibration.montecarlo import MonteCarloResult
 from gpsaccel.figures import ReportFigure
-from gpsaccel.figures._shared import single_run
+from gpsaccel.figures.runs import single_run
 
 TITLE = "GPS-aided accelerometer calibration (MAE 271A, 10,000-run Monte Carlo)"
 DEFAULT_RUNS = 10_000

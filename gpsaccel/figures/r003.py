@@ -12,7 +12,7 @@ from collections.abc import Iterator
 
 from gpsaccel import plots, registry
 from gpsaccel.figures import ReportFigure
-from gpsaccel.figures._shared import single_run
+from gpsaccel.figures.runs import single_run
 
 REPORT = "003"
 TITLE = "Calibration of an accelerometer using GPS measurements (MAE 271A, 10,000-run Monte Carlo)"

@@ -17,7 +17,7 @@ from gpsaccel.calibration.montecarlo import BLOCK_RUNS, gps_interval_noise, plan
 from gpsaccel.calibration.montecarlo.reduction import _run_block
 from gpsaccel.calibration.montecarlo.streams import _standard_normals
 from gpsaccel.calibration.simulation import simulate, truth_mean
-from gpsaccel.figures._shared import ensemble
+from gpsaccel.figures.runs import ensemble
 from gpsaccel.kalman.consistency import nees, nis, z_sample_mean, z_threshold
 from gpsaccel.kalman.multirate import run_multirate
 

@@ -5,12 +5,12 @@ from __future__ import annotations
 
 from gpsaccel.calibration import montecarlo
 from gpsaccel.cli import main
-from gpsaccel.figures import _shared
+from gpsaccel.figures import runs
 
 
 def test_run_computes_the_ensemble_and_the_single_run_once(tmp_path, monkeypatch):
     calls = {"monte_carlo": 0, "single_run": 0}
-    real_mc, real_single = montecarlo.monte_carlo, _shared.single_run
+    real_mc, real_single = montecarlo.monte_carlo, runs.single_run
 
     def counted_mc(*args, **kwargs):
         calls["monte_carlo"] += 1
@@ -20,9 +20,9 @@ def test_run_computes_the_ensemble_and_the_single_run_once(tmp_path, monkeypatch
         calls["single_run"] += 1
         return real_single(*args, **kwargs)
 
-    _shared.ensemble.cache_clear()
-    monkeypatch.setattr(_shared, "monte_carlo", counted_mc)
-    monkeypatch.setattr(_shared, "single_run", counted_single)
+    runs.ensemble.cache_clear()
+    monkeypatch.setattr(runs, "monte_carlo", counted_mc)
+    monkeypatch.setattr(runs, "single_run", counted_single)
     import gpsaccel.figures.r000 as r000
 
     monkeypatch.setattr(r000, "single_run", counted_single)

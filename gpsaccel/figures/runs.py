@@ -1,5 +1,6 @@
-"""What several report figure modules (and ``gpsaccel run``) share: the single run of a report and
-each Monte Carlo ensemble, computed once.
+"""The runs the report figures draw: the single run of a report and each Monte Carlo ensemble,
+computed once, and shared by several report modules and ``gpsaccel run`` (which prints from the
+same results it draws, so the command imports this module: it is not private to the figures).
 
 ``ensemble(10_000, 0, "error-model")`` is report 000's Monte Carlo on the default
 :class:`~gpsaccel.calibration.model.CalibrationModel`; the first call runs it (about a second),
