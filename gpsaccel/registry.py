@@ -8,40 +8,66 @@ A module that defines a problem registers it when imported::
 
 and everything that lists problems reads the registry instead of a literal tuple: the CLI's
 ``--problem`` choices (``gpsaccel check``), :func:`gpsaccel.classrun.check_many`,
-:func:`gpsaccel.check.submission`, the tests (and the homework generator).  The registry imports
-nothing of the package itself (it sits with the infrastructure): the modules that fill it are
-named in :data:`PROVIDERS` and imported, by name, the first time a list is asked for.
+:func:`gpsaccel.check.submission`, the tests (and the homework generator).  The same for the
+homework (:func:`add_assignment` in ``gpsaccel/assignments/NAME.py``: the CLI's
+``assignment``/``grade`` choices, the generator, the grader) and the reports (:func:`add_report` in
+``gpsaccel/figures/rNNN.py``: ``gpsaccel figures``, the lessons' index of which lesson shows which
+figure, the tests).
 
-The same for the homework (:func:`add_assignment` in ``gpsaccel/assignments/NAME.py``, listed in
-:data:`ASSIGNMENT_PROVIDERS`: the CLI's ``assignment``/``grade`` choices, the generator, the
-grader) and the reports (:func:`add_report` in ``gpsaccel/figures/rNNN.py``, listed in
-:data:`REPORT_PROVIDERS`: ``gpsaccel figures``, the lessons' index of which lesson shows which
-figure, the tests).  Each kind is loaded on its own, so asking for the problems does not import
-matplotlib.  The command's help and choices list the problems and the homework without importing
-any (:func:`problem_titles`, :func:`assignment_names`): its answer must not wait for numpy.
+The registry sits on the ground floor and names no module above it.  The package that owns a kind
+declares, when it is imported, which of its modules register entries of that kind
+(:func:`provide`: ``gpsaccel.check`` its problems, with their titles, ``gpsaccel.assignments`` its
+homework, ``gpsaccel.figures`` its reports); those modules are imported, by name, the first time a
+list of the kind is asked for.  Whatever imports a module of the owning package has run its
+``__init__`` and so the declaration.  Each kind is loaded on its own, so asking for the problems
+does not import matplotlib.  The command's help and choices list the problems and the homework
+without importing any (:func:`problem_titles`, :func:`assignment_names`): its answer must not wait
+for numpy.
 """
 
 from __future__ import annotations
 
 import importlib
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
-#: Modules that register problems when imported (a new problem module: one line here, and its
-#: title in PROBLEM_TITLES).
-PROVIDERS = ("gpsaccel.check.problems.calibration", "gpsaccel.check.problems.coop",
-             "gpsaccel.check.problems.ship", "gpsaccel.check.problems.tracker")
+#: The kinds of entry and the word their errors use.
+KINDS = ("problem", "assignment", "report")
 
-#: The titles of the package's own problems, each named as its module in PROVIDERS, for what lists
-#: them before any is imported: the command's help and ``--problem`` choices, which must not wait
-#: for numpy and the checker.  Each module registers its problem with the same title
-#: (tests/test_registry.py holds the two equal).
-PROBLEM_TITLES = {
-    "calibration": "Report 000: GPS/accelerometer calibration filter (3 states, 200 Hz + 5 Hz GPS)",
-    "coop": "Report 002: cooperative localization, EKF and LKF (6 states, 5 measurements)",
-    "ship": "Report 004: the ship's multirate GPS/IMU filter (9 states)",
-    "tracker": "Tracker: constant velocity, 10 Hz propagation, 2 Hz position fixes (2 states)",
-}
+#: Kind -> the modules that register entries of it when imported, in order (declared by the
+#: package that owns the kind: :func:`provide`).
+_PROVIDED: dict[str, tuple[str, ...]] = {}
+
+#: Problem name -> title of the package's own problems, declared with their modules: what lists
+#: them before any is imported (the command's help and ``--problem`` choices).
+_TITLES: dict[str, str] = {}
+
+
+def provide(kind: str, modules: tuple[str, ...], *, titles: Mapping[str, str] | None = None
+            ) -> None:
+    """Declare the modules that register entries of ``kind`` (one of :data:`KINDS`) when imported,
+    in the order they are listed.  Called by the package that owns the kind, in its
+    ``__init__``; ``titles`` (problems only) are the titles of its problems, each named as its
+    module (the last part of the dotted name), the one place each title is written."""
+    if kind not in KINDS:
+        raise ValueError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")
+    names = [m.rpartition(".")[2] for m in modules]
+    if titles is not None and list(titles) != names:
+        raise ValueError(f"titles must name the {kind} modules in their order {names}, got "
+                         f"{list(titles)}")
+    _PROVIDED[kind] = tuple(modules)
+    if titles is not None:
+        _TITLES.update(titles)
+
+
+def providers(kind: str) -> tuple[str, ...]:
+    """The modules declared for ``kind`` (:func:`provide`); LookupError when no package has
+    declared them yet (the owning package declares them when imported: a lookup before that would
+    silently list nothing)."""
+    if kind not in _PROVIDED:
+        raise LookupError(f"no package has declared its {kind} modules yet: the package that owns "
+                          f"the {kind}s declares them (registry.provide) when it is imported")
+    return _PROVIDED[kind]
 
 
 @dataclass(frozen=True)
@@ -52,16 +78,6 @@ class ProblemEntry:
     factory: Callable[[], object]
     system: str = ""
     title: str = ""
-
-
-#: Modules that register a homework assignment when imported (a new homework: one line here).
-ASSIGNMENT_PROVIDERS = ("gpsaccel.assignments.calibration", "gpsaccel.assignments.coop",
-                        "gpsaccel.assignments.ship", "gpsaccel.assignments.tracker")
-
-#: Modules that register a course report's figures when imported, in reading order (a new
-#: report: one line here).
-REPORT_PROVIDERS = ("gpsaccel.figures.r000", "gpsaccel.figures.r001", "gpsaccel.figures.r003",
-                    "gpsaccel.figures.r002", "gpsaccel.figures.r004")
 
 
 @dataclass(frozen=True)
@@ -111,19 +127,21 @@ def add_problem(name: str, factory: Callable[[], object], *, system: str = "", t
 def _load() -> None:
     global _loaded
     if not _loaded:
+        modules = providers("problem")
         _loaded = True
-        for module in PROVIDERS:
+        for module in modules:
             importlib.import_module(module)
 
 
 def problems() -> tuple[str, ...]:
-    """The names of every registered problem: those of :data:`PROVIDERS` in its order, then the
-    others (an instructor's) in the order they were registered."""
+    """The names of every registered problem: those of the declared modules in their order, then
+    the others (an instructor's) in the order they were registered."""
     _load()
+    modules = providers("problem")
 
     def rank(e: ProblemEntry) -> int:
         module = getattr(e.factory, "__module__", "")
-        return PROVIDERS.index(module) if module in PROVIDERS else len(PROVIDERS)
+        return modules.index(module) if module in modules else len(modules)
 
     return tuple(e.name for e in sorted(_PROBLEMS.values(), key=rank))
 
@@ -146,9 +164,10 @@ def problem(name: str) -> object:
 
 def problem_titles() -> dict[str, str]:
     """Name -> title of every problem, importing none (what the command's help shows): the
-    package's own (:data:`PROBLEM_TITLES`), then those registered in this process (an
-    instructor's); an entry registered here gives its own title."""
-    titles = dict(PROBLEM_TITLES)
+    package's own (declared with their modules: :func:`provide`), then those registered in this
+    process (an instructor's); an entry registered here gives its own title."""
+    providers("problem")  # LookupError before the owning package declared its problems
+    titles = dict(_TITLES)
     titles.update((e.name, e.title) for e in _PROBLEMS.values())
     return titles
 
@@ -169,10 +188,10 @@ def systems() -> tuple[str, ...]:
 # ------------------------------------------------------------------ homework and reports
 class _Table:
     """One kind of registered entry (homework, reports): entries by key, filled by importing the
-    kind's providers, by name, the first time a list is asked for."""
+    kind's declared modules (:func:`provide`), by name, the first time a list is asked for."""
 
-    def __init__(self, what: str, providers: tuple[str, ...]) -> None:
-        self.what, self.providers = what, providers
+    def __init__(self, what: str) -> None:
+        self.what = what
         self.entries: dict[str, object] = {}
         self.loaded = False
 
@@ -184,11 +203,12 @@ class _Table:
         self.entries[key] = entry
 
     def names(self) -> tuple[str, ...]:
-        """Every key: those registered by the providers in their order, then any other."""
+        """Every key: those registered by the declared modules in their order, then any other."""
+        modules = providers(self.what)
         if not self.loaded:
             self.loaded = True  # first, so a provider that lists its kind does not recurse
             try:
-                for module in self.providers:
+                for module in modules:
                     importlib.import_module(module)
             except BaseException:
                 self.loaded = False
@@ -196,8 +216,7 @@ class _Table:
 
         def rank(key: str) -> int:
             module = getattr(self.entries[key], "module", "")
-            known = module in self.providers
-            return self.providers.index(module) if known else len(self.providers)
+            return modules.index(module) if module in modules else len(modules)
 
         return tuple(sorted(self.entries, key=rank))
 
@@ -208,8 +227,8 @@ class _Table:
         return self.entries[key]
 
 
-_ASSIGNMENTS = _Table("assignment", ASSIGNMENT_PROVIDERS)
-_REPORTS = _Table("report", REPORT_PROVIDERS)
+_ASSIGNMENTS = _Table("assignment")
+_REPORTS = _Table("report")
 
 
 def add_assignment(name: str, module: str, *, system: str = "", problem: str = "",
@@ -223,15 +242,15 @@ def add_assignment(name: str, module: str, *, system: str = "", problem: str = "
 
 
 def assignments() -> tuple[str, ...]:
-    """The names of every registered homework, in :data:`ASSIGNMENT_PROVIDERS`' order."""
+    """The names of every registered homework, in the declared modules' order."""
     return _ASSIGNMENTS.names()
 
 
 def assignment_names() -> tuple[str, ...]:
     """The names of every homework, importing none (the command's choices): the package's own,
-    each named as its module in :data:`ASSIGNMENT_PROVIDERS`, then any registered in this
-    process (an instructor's folder)."""
-    own = tuple(module.rpartition(".")[2] for module in ASSIGNMENT_PROVIDERS)
+    each named as its declared module, then any registered in this process (an instructor's
+    folder)."""
+    own = tuple(module.rpartition(".")[2] for module in providers("assignment"))
     return own + tuple(name for name in _ASSIGNMENTS.entries if name not in own)
 
 
@@ -254,7 +273,7 @@ def add_report(report: str, module: str, figures: tuple[str, ...], *, title: str
 
 
 def reports() -> tuple[str, ...]:
-    """Every registered report, in reading order (:data:`REPORT_PROVIDERS`)."""
+    """Every registered report, in reading order (the declared modules' order)."""
     return _REPORTS.names()
 
 

@@ -41,7 +41,8 @@ ALLOWED = {
     "plots": INFRA | {"kalman"} | SYSTEMS,
     "figures": INFRA | {"kalman", "plots"} | SYSTEMS,
     "exercises": INFRA,
-    "lessons": INFRA | {"exercises"},
+    # the lessons' index reads which figures each report lists (its figure modules register them)
+    "lessons": INFRA | {"exercises", "figures"},
     "assignments": INFRA | {"kalman", "sandbox", "boxside", "check"} | SYSTEMS,
     # the instructor's public API of a homework of their own (and its shipped example), on
     # check/ and assignments/; only the command (``--example``) imports it

@@ -9,8 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from gpsaccel import registry
+from gpsaccel import figures, registry
 from gpsaccel.assignments.generate import assignments_dir, student_package_dir
+from gpsaccel.check.titles import PROBLEM_TITLES
 from gpsaccel.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -39,16 +40,38 @@ def test_what_the_command_lists_without_importing_is_what_the_modules_register()
     """The help and choices read the problems' titles and the homework's names without importing
     a module (registry.problem_titles, registry.assignment_names): they must be what the modules
     register when imported, in the same order."""
-    packaged = tuple(m.rpartition(".")[2] for m in registry.PROVIDERS)
-    assert tuple(registry.PROBLEM_TITLES) == packaged
+    packaged = tuple(m.rpartition(".")[2] for m in registry.providers("problem"))
+    assert tuple(PROBLEM_TITLES) == packaged
     assert registry.problems()[:len(packaged)] == packaged
-    for name, title in registry.PROBLEM_TITLES.items():
-        assert registry.entry(name).title == title, name
+    for name, title in PROBLEM_TITLES.items():
+        assert registry.entry(name).title == title == registry.problem(name).title, name
     assert tuple(registry.problem_titles())[:len(packaged)] == packaged
     assert set(registry.problem_titles()) == set(registry.problems())
     assert registry.assignment_names() == registry.assignments()
     assert tuple(_packaged_assignments()) == tuple(sorted(
-        m.rpartition(".")[2] for m in registry.ASSIGNMENT_PROVIDERS))
+        m.rpartition(".")[2] for m in registry.providers("assignment")))
+
+
+def test_a_kind_no_package_declared_is_an_error_not_an_empty_list():
+    """The registry names no module above it: a list asked for before the owning package declared
+    its modules would be silently empty, so it is refused.  Run in a fresh interpreter, where only
+    the registry is imported."""
+    code = ("from gpsaccel import registry\n"
+            "for ask in (registry.problems, registry.assignments, registry.reports):\n"
+            "    try:\n        ask()\n    except LookupError as e:\n        print(e)\n"
+            "import gpsaccel.check\nprint(registry.problem_titles()['coop'][:10])")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
+                         check=True, timeout=120).stdout.splitlines()
+    assert [line.split(" modules")[0] for line in out[:3]] == [
+        f"no package has declared its {kind}" for kind in ("problem", "assignment", "report")]
+    assert out[3] == "Report 002"
+
+
+def test_declared_titles_must_name_the_modules_in_order():
+    with pytest.raises(ValueError, match="titles must name the problem modules"):
+        registry.provide("problem", ("a.b.one", "a.b.two"), titles={"two": "T", "one": "O"})
+    with pytest.raises(ValueError, match="kind must be one of problem, assignment, report"):
+        registry.provide("problems", ())
 
 
 def test_a_problem_in_a_file_is_told_from_a_registered_name():
@@ -59,7 +82,8 @@ def test_a_problem_in_a_file_is_told_from_a_registered_name():
 
 
 def test_every_report_is_registered_by_its_figure_module_in_reading_order():
-    assert registry.reports() == tuple(m.rsplit(".r", 1)[1] for m in registry.REPORT_PROVIDERS)
+    assert figures.available_reports() == list(registry.reports())
+    assert registry.reports() == tuple(m.rsplit(".r", 1)[1] for m in registry.providers("report"))
     for number in registry.reports():
         entry = registry.report(number)
         module = sys.modules[entry.module]

@@ -20,7 +20,12 @@ graded by the class run one floor up, ``gpsaccel.classrun.grade``, one notebook 
 
 from typing import TYPE_CHECKING
 
-from gpsaccel import _lazy
+from gpsaccel import _lazy, registry
+
+#: The package's own homework, each registered by its module ``gpsaccel.assignments.NAME`` when
+#: imported, in the order they are listed (a new homework: its module, and one line here).
+registry.provide("assignment", tuple(f"{__name__}.{name}" for name in
+                                     ("calibration", "coop", "ship", "tracker")))
 
 if TYPE_CHECKING:  # for mypy and editors; at run time each name loads on first use (_lazy)
     from gpsaccel.assignments.generate import Generated, generate, master_notebook, questions

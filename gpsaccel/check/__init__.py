@@ -29,6 +29,7 @@ declared outputs) every problem uses through :meth:`Problem.check`.
 from typing import TYPE_CHECKING
 
 from gpsaccel import _lazy
+from gpsaccel.check import titles  # noqa: F401 - declares the package's problems to the registry
 
 if TYPE_CHECKING:  # for mypy and editors; at run time each name loads on first use (_lazy)
     from gpsaccel.calibration.mistakes import codes

@@ -31,6 +31,7 @@ class Registered:
 
 
 def registered_assignments() -> tuple[str, ...]:
+    import gpsaccel.assignments  # noqa: F401 - declares the homework modules (imports none)
     from gpsaccel import registry
 
     return registry.assignment_names()

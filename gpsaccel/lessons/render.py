@@ -77,7 +77,9 @@ def remote_scripts(page: str) -> list[str]:
 
 def report_figures() -> dict[str, tuple[str, ...]]:
     """Every figure each report lists, the numbers a lesson must walk through (registered by each
-    report's figure module: :func:`gpsaccel.registry.report_figures`)."""
+    report's figure module: :func:`gpsaccel.registry.report_figures`, which the figures package
+    declares when imported)."""
+    import gpsaccel.figures  # noqa: F401 - declares the report modules to the registry
     from gpsaccel import registry
 
     return registry.report_figures()

@@ -77,6 +77,7 @@ from gpsaccel.check.linear import (  # noqa: F401 - the calibration names of the
 )
 from gpsaccel.check.problem import Argument, Function
 from gpsaccel.check.report import Report
+from gpsaccel.check.titles import PROBLEM_TITLES
 from gpsaccel.sandbox import Output
 
 #: The function a submission defines.
@@ -148,7 +149,7 @@ class CalibrationProblem(LinearProblem):
     """
 
     name = "calibration"
-    title = "Report 000: GPS/accelerometer calibration filter (3 states, 200 Hz + 5 Hz GPS)"
+    title = PROBLEM_TITLES["calibration"]
     tolerance = "1e-6 σ in x̂ and P (see gpsaccel.check.problems.calibration)"
     default_runs = DEFAULT_RUNS
     step = "accelerometer step"

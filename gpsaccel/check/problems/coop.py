@@ -21,6 +21,7 @@ from gpsaccel.check.problems.compare import (
     nearest_within,
 )
 from gpsaccel.check.report import Report
+from gpsaccel.check.titles import PROBLEM_TITLES
 from gpsaccel.check.wording import STUDENT
 from gpsaccel.kalman import consistency
 from gpsaccel.sandbox import Call, Output
@@ -60,7 +61,7 @@ class CoopProblem(Problem):
     """
 
     name = "coop"
-    title = "Report 002: cooperative localization, EKF and LKF (6 states, 5 measurements)"
+    title = PROBLEM_TITLES["coop"]
     required = "any"
     default_runs = 4
     TOL = {"ekf": (1e-4, 1e-4), "lkf": (1.0, 1e-2)}

@@ -20,6 +20,7 @@ from gpsaccel.check.problems.compare import (
     nearest_within,
 )
 from gpsaccel.check.report import Report
+from gpsaccel.check.titles import PROBLEM_TITLES
 from gpsaccel.check.wording import STUDENT
 from gpsaccel.kalman import consistency
 from gpsaccel.sandbox import Call, Output
@@ -49,7 +50,7 @@ class ShipProblem(Problem):
     """
 
     name = "ship"
-    title = "Report 004: the ship's multirate GPS/IMU filter (9 states)"
+    title = PROBLEM_TITLES["ship"]
     default_runs = 4
     TOL = 1e-6
     tolerance = "1e-6 σ in x̂ and P"

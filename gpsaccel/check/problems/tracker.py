@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from gpsaccel.check.problems import Problem
+from gpsaccel.check.titles import PROBLEM_TITLES
 
 DT = 0.1        # s, one propagation step
 EVERY = 5       # steps per position fix (2 Hz)
@@ -37,6 +38,6 @@ def model(dt: float = DT, sigma_a: float = SIGMA_A, sigma_p: float = SIGMA_P) ->
 TRACKER = Problem.linear(
     "tracker", **model(), every=EVERY, n_epochs=N_FIXES, dt=DT,
     states=("p", "v"), measurements=("p",),
-    title="Tracker: constant velocity, 10 Hz propagation, 2 Hz position fixes (2 states)",
+    title=PROBLEM_TITLES["tracker"],
     z_meaning="the position fix (m) at t = 0, 0.5, ..., 20 s",
 )
