@@ -12,8 +12,8 @@ before and after is printed with the table.
 
 ``--before DIR`` also measures an earlier version (DIR holds its ``gpsaccel/``, e.g. ``git archive
 main gpsaccel | tar -x -C DIR``): this script is run again in a child Python with DIR first on
-its path, right after this one, and its table printed below (its sandbox is
-``gpsaccel.sandbox``, or ``gpsaccel.check.sandbox`` before the layer existed).
+its path, right after this one, and its table printed below (a version with the sandbox layer,
+``gpsaccel.sandbox``).
 """
 
 from __future__ import annotations
@@ -29,17 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
-import gpsaccel
-
-# which sandbox is gpsaccel's own (an editable install's finder would hand an earlier version
-# the current layer, so look at the package's folder): the layer, or before it a module of check/
-if (Path(gpsaccel.__file__).parent / "sandbox").is_dir():
-    from gpsaccel import sandbox as sb
-    from gpsaccel.sandbox.confinement import _site_dirs
-else:  # an earlier version (--before)
-    from gpsaccel.check import sandbox as sb  # type: ignore[no-redef]
-
-    _site_dirs = sb._site_dirs
+from gpsaccel import sandbox as sb
+from gpsaccel.sandbox.confinement import _site_dirs  # the box's own path, for the numpy floor
 
 
 def cpu() -> float:
