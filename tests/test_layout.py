@@ -9,8 +9,9 @@ items -> ``classrun``, a class's run of them: the walk, the pool, the files writ
 ``homework``, the public API of an instructor's own) -> ``plots`` -> ``figures`` -> ``lessons``,
 ``cli`` (the only unit that imports ``classrun`` or ``homework``).  The sandbox
 (``gpsaccel/sandbox/``) is a layer of its own below ``check``: it imports nothing of gpsaccel but
-the infrastructure, and nothing outside it uses a private name of it (a module or an attribute
-whose name starts with ``_``: ``sb._prctl``, ``gpsaccel.sandbox._runner``).  Read from the source
+the infrastructure.  No unit uses a private name of another (a module or an attribute whose name
+starts with ``_``: ``sb._prctl``, ``gpsaccel.sandbox._runner``, ``check.jacobians._inputs``); the
+registry names no module above it (the owners declare theirs).  Read from the source
 with ``ast`` (every ``import`` and ``from ... import``, at module level or inside a function), so
 a lazy import counts too.
 """
@@ -104,32 +105,32 @@ def test_the_rule_catches_a_system_importing_another(tmp_path):
     assert _imported_units(bad) == {"coop", "check"}
 
 
-LAYER = "gpsaccel.sandbox"
-
-
 def _private_uses(path: Path) -> list[str]:
-    """Private names of the sandbox layer that ``path`` uses: imported (``from gpsaccel.sandbox
-    import _x``, ``gpsaccel.sandbox._x``) or reached as an attribute of a name bound to the layer
-    or one of its modules (``sb._prctl``)."""
+    """Private names of another unit that ``path`` uses: imported (``from gpsaccel.sandbox import
+    _x``, ``gpsaccel.sandbox._x``, ``from gpsaccel.check.jacobians import _y``) or reached as an
+    attribute of a name bound to that unit or one of its modules (``sb._prctl``).  The
+    infrastructure's modules (``gpsaccel._untrusted``) are the package's own, shared by all: a
+    name under them is private only when it starts with ``_`` itself."""
+    unit = _unit(path) if path.is_relative_to(ROOT) else ""
     tree = ast.parse(path.read_text(encoding="utf-8"))
     bound: set[str] = set()
     bad: list[str] = []
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
-            for a in node.names:
-                if a.name == LAYER or a.name.startswith(LAYER + "."):
-                    if any(part.startswith("_") for part in a.name.split(".")[2:]):
-                        bad.append(a.name)
-                    bound.add(a.asname or a.name)
+            # ``import gpsaccel.x.y`` binds ``gpsaccel``, whose attributes are units, not names of one
+            pairs = [(a.name, a.asname or "") for a in node.names]
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-            full = [f"{node.module}.{a.name}" for a in node.names]
-            for a, name in zip(node.names, full, strict=True):
-                if not (name == LAYER or name.startswith(LAYER + ".")
-                        or node.module.startswith(LAYER + ".")):
-                    continue
-                if any(part.startswith("_") for part in name.split(".")[2:]):
-                    bad.append(name)
-                bound.add(a.asname or a.name)
+            pairs = [(f"{node.module}.{a.name}", a.asname or a.name) for a in node.names]
+        else:
+            continue
+        for name, local in pairs:
+            parts = name.split(".")
+            if parts[0] != "gpsaccel" or len(parts) < 2 or parts[1] == unit:
+                continue
+            if any(part.startswith("_") and not part.startswith("__") for part in parts[2:]):
+                bad.append(name)
+            if local:
+                bound.add(local)
     for node in ast.walk(tree):
         if isinstance(node, ast.Attribute) and node.attr.startswith("_") \
                 and not node.attr.startswith("__"):
@@ -139,10 +140,25 @@ def _private_uses(path: Path) -> list[str]:
     return bad
 
 
-@pytest.mark.parametrize("path", [p for p in _modules() if _unit(p) != "sandbox"],
-                         ids=lambda p: str(p.relative_to(ROOT)))
-def test_nothing_outside_the_sandbox_uses_its_private_names(path):
-    assert not _private_uses(path), f"gpsaccel/{path.relative_to(ROOT)} uses {_private_uses(path)}"
+#: Reach-ins not yet mended (module -> the private names it may still use), each with why.
+PRIVATE_PENDING = {
+    # the homework API re-exports the assignments' safe call of a student's function; making the
+    # module public (answers.py) touches the import lines polish's branch changes: after it lands
+    "homework/__init__.py": {"gpsaccel.assignments._answers.call"},
+}
+
+
+@pytest.mark.parametrize("path", _modules(), ids=lambda p: str(p.relative_to(ROOT)))
+def test_no_unit_uses_another_unit_s_private_names(path):
+    rel = path.relative_to(ROOT).as_posix()
+    bad = set(_private_uses(path)) - PRIVATE_PENDING.get(rel, set())
+    assert not bad, f"gpsaccel/{rel} uses {sorted(bad)}: make them public or move the code"
+
+
+def test_the_pending_reach_ins_are_still_there():
+    """An allowance that is no longer used is struck (the list only shrinks)."""
+    for rel, names in PRIVATE_PENDING.items():
+        assert names <= set(_private_uses(ROOT / rel)), rel
 
 
 def test_the_sandbox_imports_nothing_above_it():
@@ -151,15 +167,19 @@ def test_the_sandbox_imports_nothing_above_it():
         assert _imported_units(path) <= INFRA | {"sandbox"}, path
 
 
-def test_the_rule_catches_a_private_name_of_the_sandbox(tmp_path):
+def test_the_rule_catches_a_private_name_of_another_unit(tmp_path):
     bad = tmp_path / "x.py"
     bad.write_text("from gpsaccel import sandbox as sb\nfrom gpsaccel.sandbox import _boxuser\n"
                    "import gpsaccel.sandbox._runner\nfrom gpsaccel.sandbox.procs import sweep\n"
-                   "sb._prctl(4, 0)\nsb.run\n")
-    assert sorted(_private_uses(bad)) == ["gpsaccel.sandbox._boxuser", "gpsaccel.sandbox._runner",
+                   "from gpsaccel.check.jacobians import _inputs, jacobians\n"
+                   "import gpsaccel.figures.runs as fr\nfr._x\nsb._prctl(4, 0)\nsb.run\n")
+    assert sorted(_private_uses(bad)) == ["fr._x", "gpsaccel.check.jacobians._inputs",
+                                          "gpsaccel.sandbox._boxuser", "gpsaccel.sandbox._runner",
                                           "sb._prctl"]
     good = tmp_path / "y.py"
-    good.write_text("from gpsaccel import sandbox as sb\nsb.run(sb.Limits()).__class__\n")
+    good.write_text("from gpsaccel import sandbox as sb\nsb.run(sb.Limits()).__class__\n"
+                    "from gpsaccel import _validation as _v\nfrom gpsaccel._untrusted import cell\n"
+                    "import gpsaccel.check\ngpsaccel._lazy\n_v.choice\n")
     assert _private_uses(good) == []
 
 
