@@ -19,6 +19,7 @@ a lazy import counts too.
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -95,6 +96,37 @@ def test_the_class_run_is_one_floor_below_the_command_above_its_items():
     assert not ALLOWED["classrun"] & {"cli", "plots", "figures", "lessons", "exercises", "top"}
     assert [u for u, allowed in ALLOWED.items() if "classrun" in allowed] == ["cli"]
     assert all(_unit(p) == "classrun" for p in (ROOT / "classrun").rglob("*.py"))
+
+
+def _named_modules(path: Path) -> set[str]:
+    """The units that a string of ``path`` names as a module (``"gpsaccel.check.problems.x"``,
+    loaded by ``importlib`` where the imports above do not see it); docstrings are left out."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    docs = {id(b.body[0].value) for b in ast.walk(tree)
+            if isinstance(b, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef))
+            and b.body and isinstance(b.body[0], ast.Expr)
+            and isinstance(b.body[0].value, ast.Constant)}
+    found = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in docs:
+            found.update(m.group(1) for m in re.finditer(r"\bgpsaccel\.(\w+)", node.value))
+    return found
+
+
+@pytest.mark.parametrize("path", [p for p in _modules() if _unit(p) in INFRA],
+                         ids=lambda p: str(p.relative_to(ROOT)))
+def test_the_ground_floor_names_no_module_above_it(path):
+    """Not even as a string to import by name: the registry's providers are declared by the
+    packages that own them (``registry.provide``), so the picture of imports is the whole truth."""
+    above = _named_modules(path) - INFRA
+    assert not above, f"gpsaccel/{path.relative_to(ROOT)} names {sorted(above)}"
+
+
+def test_the_rule_catches_a_module_named_in_a_string(tmp_path):
+    bad = tmp_path / "x.py"
+    bad.write_text('"""Docs may cite gpsaccel.check."""\nPROVIDERS = ("gpsaccel.check.problems.a",)\n'
+                   'f"gpsaccel.figures.r{1}"\n')
+    assert _named_modules(bad) == {"check", "figures"}
 
 
 def test_the_rule_catches_a_system_importing_another(tmp_path):
