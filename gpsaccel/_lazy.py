@@ -1,9 +1,10 @@
 """A package's public names imported on first use (PEP 562), so importing it costs nothing.
 
 ``import gpsaccel`` used to import every system, and with them filterpy, scipy.stats and mpmath
-(1.3–2.5 CPU s), paid by every CLI call, every test worker and every sandbox box.  A package's
-``__init__`` now lists where each public name lives and lets :func:`attach` import it when it is
-first read (``gpsaccel.CalibrationModel``, ``from gpsaccel.check import submission``)::
+(their price: ``benchmarks/imports.py``), paid by every CLI call, every test worker and every
+sandbox box.  A package's ``__init__`` now lists where each public name lives and lets
+:func:`attach` import it when it is first read (``gpsaccel.CalibrationModel``, ``from
+gpsaccel.check import submission``)::
 
     __getattr__, __dir__ = _lazy.attach(__name__, submodules=("model",),
                                         attributes={"model": ("CalibrationModel",)})

@@ -66,8 +66,8 @@ def deadline(timeout: float) -> float:
 def warm(name: str) -> None:
     """Import here what grading a notebook of homework ``name`` imports on first use (IPython's
     input transformer, the registered problems a question checks a file against), so each
-    notebook's forked process inherits it instead of importing it again: about 0.4 CPU s a
-    notebook (``python benchmarks/grading.py --profile``), and what the homework's ``warm``
+    notebook's forked process inherits it instead of importing it again (what that saves a
+    notebook: ``python benchmarks/grading.py --profile``), and what the homework's ``warm``
     makes (modules, inputs of its reads: never a reference answer, which exists only once a
     notebook's box is empty).  Nothing of a student's runs here."""
     questions_of(name)
@@ -82,7 +82,7 @@ def warm(name: str) -> None:
     import scipy.integrate  # noqa: F401
 
     # the homework's own (graded.py's optional ``warm``): the modules its references import
-    # (filterpy, scipy.stats: 1-2 CPU s a notebook) and the inputs its reads share
+    # (filterpy, scipy.stats: benchmarks/imports.py) and the inputs its reads share
     homework_warm = getattr(assignment_module(name), "warm", None)
     if callable(homework_warm):
         homework_warm()

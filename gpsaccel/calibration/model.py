@@ -54,7 +54,7 @@ import numpy as np
 from gpsaccel import _validation as _v
 from gpsaccel.kalman.schedule import Schedule
 
-if TYPE_CHECKING:  # filterpy pulls in scipy.stats (0.6 CPU s): imported where a filter is made
+if TYPE_CHECKING:  # filterpy pulls in scipy.stats (benchmarks/imports.py): imported where a filter is made
     from filterpy.kalman import KalmanFilter
 
 #: Report 000's angular frequency of the true acceleration (rad/s), used when neither

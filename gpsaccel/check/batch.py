@@ -58,8 +58,9 @@ def warm(problem: str) -> None:
     """Import here what checking a file of ``problem`` imports on first use (scipy.special for
     the χ² bounds, the system's catalogue of mistakes), so each check's forked process inherits it
     instead of importing it again (``python benchmarks/per_file.py``).  No check imports
-    filterpy or scipy.stats (1.5 CPU s), so neither is imported here.  Only modules: nothing is
-    computed, so no answer exists here before a file's box is empty."""
+    filterpy or scipy.stats (their price: ``benchmarks/imports.py``), so neither is imported
+    here.  Only modules: nothing is computed, so no answer exists here before a file's box is
+    empty."""
     import importlib
     import importlib.util
 

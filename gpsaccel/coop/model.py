@@ -429,7 +429,7 @@ class CoopModel:
         return kept.copy()
 
     def _integrate(self, x_start: np.ndarray, rtol: float, atol: float) -> np.ndarray:
-        from scipy.integrate import solve_ivp  # here, not at import (0.3 CPU s): gpsaccel._lazy
+        from scipy.integrate import solve_ivp  # here, not at import (benchmarks/imports.py)
 
         u = self.u0
         sol = solve_ivp(lambda _t, x: f(x, u, self.L), (0.0, self.t[-1]), x_start,

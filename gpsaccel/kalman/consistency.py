@@ -39,7 +39,7 @@ def chi2_bounds(dof: int, n_runs: int = 1, alpha: float = 0.05) -> tuple[float, 
 
 # scipy.stats' chi2 and norm are these scipy.special functions under an argument check
 # (scipy.stats.chi2._ppf, ._cdf, ._sf; norm._ppf, ._isf): called directly, bit for bit the same
-# numbers, without importing scipy.stats (about 1 CPU s, the larger part of a check's start-up;
+# numbers, without importing scipy.stats (the larger part of a check's start-up: benchmarks/imports.py;
 # tests/kalman/test_consistency.py holds them equal)
 def _chi2_ppf(q: np.ndarray | float, dof: np.ndarray | float) -> np.ndarray:
     from scipy import special

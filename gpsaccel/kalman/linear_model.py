@@ -23,7 +23,7 @@ from gpsaccel.kalman.epochs import EpochFilter
 from gpsaccel.kalman.schedule import Schedule
 from gpsaccel.kalman.update import epoch_transition
 
-if TYPE_CHECKING:  # filterpy pulls in scipy.stats (0.6 CPU s): imported where a filter is made
+if TYPE_CHECKING:  # filterpy pulls in scipy.stats (benchmarks/imports.py): imported where a filter is made
     from filterpy.kalman import KalmanFilter
 
 #: ``.memo``: (Φ, Q, n) -> (Φⁿ, Q_e) while :func:`shared_transitions` is open in this thread.

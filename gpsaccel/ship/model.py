@@ -81,7 +81,7 @@ from gpsaccel import _validation as _v
 from gpsaccel.kalman.schedule import Schedule
 from gpsaccel.ship.plan import nominal_plan
 
-if TYPE_CHECKING:  # filterpy pulls in scipy.stats (0.6 CPU s): imported where a filter is made
+if TYPE_CHECKING:  # filterpy pulls in scipy.stats (benchmarks/imports.py): imported where a filter is made
     from filterpy.kalman import KalmanFilter
 
 #: Names and units of the 9 ship states, in order.
