@@ -46,9 +46,10 @@ _TITLES: dict[str, str] = {}
 def provide(kind: str, modules: tuple[str, ...], *, titles: Mapping[str, str] | None = None
             ) -> None:
     """Declare the modules that register entries of ``kind`` (one of :data:`KINDS`) when imported,
-    in the order they are listed.  Called by the package that owns the kind, in its
-    ``__init__``; ``titles`` (problems only) are the titles of its problems, each named as its
-    module (the last part of the dotted name), the one place each title is written."""
+    in the order they are listed.  Called when the package that owns the kind is imported (its
+    ``__init__``, or for the problems ``gpsaccel/check/titles.py``, which it imports);
+    ``titles`` (problems only) are the titles of its problems, each named as its module (the last
+    part of the dotted name), the one place each title is written."""
     if kind not in KINDS:
         raise ValueError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")
     names = [m.rpartition(".")[2] for m in modules]
