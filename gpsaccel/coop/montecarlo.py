@@ -119,8 +119,9 @@ def consistency_test(model: CoopModel, method: str, Q: np.ndarray | None = None,
                              truth if keep else None)
 
 
-#: Runs filtered in one call by :func:`_tests`: ~5 ms CPU per 100-second EKF run from 100 runs
-#: on (7 ms at 50, 10 at 25: the per-step cost of a call is shared), ~1 MB of output per run.
+#: Runs filtered in one call by :func:`_tests`: the per-step cost of a call is shared by its runs,
+#: so a run's CPU falls with the runs a call holds and has flattened by here
+#: (``benchmarks/coop_chunk.py``); each run adds ~1 MB of output to the call.
 _CHUNK_RUNS = 200
 
 
