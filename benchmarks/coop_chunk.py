@@ -16,6 +16,7 @@ import statistics
 import sys
 
 import _cpu
+import _figures
 
 from gpsaccel.coop import montecarlo as mc
 from gpsaccel.coop.model import CoopModel
@@ -58,6 +59,7 @@ def main(argv: list[str]) -> int:
     print("|---|---|")
     for n in SIZES:
         print(f"| {n} | {1e3 * statistics.median(per_run[n]):.1f} |")
+    _figures.publish({f"cpu_ms/run/{n}": 1e3 * statistics.median(per_run[n]) for n in SIZES})
     return 0
 
 

@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 
 import _cpu
+import _figures
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -49,6 +50,8 @@ def main(argv: list[str]) -> int:
     print("|---|---|---|---|")
     for name, (cpu, wall) in rows:
         print(f"| {name} | {cpu:.2f} | {cpu - floor:.2f} | {wall:.2f} |")
+    _figures.publish({f"cpu_s/{code.removeprefix('import ') or 'numpy'}": cpu
+                      for (_, code), (_, (cpu, _)) in zip(CASES, rows, strict=True)})
     return 0
 
 
