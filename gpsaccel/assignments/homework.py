@@ -44,6 +44,12 @@ def homework_dir(name: str) -> Path:
     return _FOLDERS[name] if name in _FOLDERS else assignments_dir() / name
 
 
+def own_folder(name: str) -> Path | None:
+    """The instructor's own folder of homework ``name`` (:func:`use_folder`), None for one of the
+    package's (whose files the wheel fixes)."""
+    return _FOLDERS.get(name)
+
+
 def use_folder(folder: str | os.PathLike) -> str:
     """Register the instructor's own homework in ``folder`` and return its name (the folder's).
 

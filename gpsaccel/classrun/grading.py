@@ -464,10 +464,10 @@ def possible_names(name: str) -> list[str]:
     SHA-256 of its every file (a changed ``graded.py`` grades differently)."""
     import hashlib
 
-    from gpsaccel.assignments.generate import _FOLDERS
+    from gpsaccel.assignments.homework import own_folder
 
     out = [f"{q}={p}" for q, p in item.possible_of(name).items()]
-    folder = _FOLDERS.get(name)
+    folder = own_folder(name)
     if folder is not None:
         out += [f"{f.relative_to(folder)}={hashlib.sha256(f.read_bytes()).hexdigest()}"
                 for f in sorted(Path(folder).rglob("*.py")) + sorted(Path(folder).rglob("*.ipynb"))
