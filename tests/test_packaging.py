@@ -389,7 +389,9 @@ def test_an_instructor_hands_out_and_grades_from_the_wheel_with_the_grading_extr
               "similarity.html", "grades.json"):
         assert (grades / f).is_file(), f
     assert "Alice Smith,,1000,,,10" in (grades / "canvas.csv").read_text()
-    assert "Alice Smith & Bob Jones" in out["grade a class"]  # the copy is flagged
+    # the copy is flagged, and both hand in the published solution, which the wheel carries
+    assert "q2: group of 2: Alice Smith, Bob Jones" in out["grade a class"]
+    assert "Bob Jones matches the published solution of calibration q2" in out["grade a class"]
     # the example the core install writes out (the student's steps above show it does)
     proc = subprocess.run([str(venv / "bin" / "gpsaccel"), "assignment", "--example", "own"],
                           cwd=instructor, env=env, capture_output=True, text=True, timeout=600)

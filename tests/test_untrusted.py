@@ -261,7 +261,7 @@ def test_every_writer_of_a_name_uses_the_one_rule(tmp_path):
 
     from gpsaccel import sandbox as sb
     from gpsaccel.assignments.scoring import Grade
-    from gpsaccel.assignments.similarity import Pair, write_report
+    from gpsaccel.assignments.similarity import Group, Report, write_report
     from gpsaccel.classrun.writing import write_grades
 
     evil = "e\x1b[2Jvil\u202e.py"
@@ -282,9 +282,12 @@ def test_every_writer_of_a_name_uses_the_one_rule(tmp_path):
                                                email="@e", canvas_id="+1")], "HW", tmp_path)
     with open(tmp_path / "canvas.csv", newline="", encoding="utf-8") as f:
         assert list(csv.reader(f))[2][:3] == ["'=HYPERLINK(1)", "'+1", "'-7"]
-    write_report([Pair("q1", "@a", "+b", 1.0, 1.0)], tmp_path, "HW")
+    write_report(Report("HW", groups=[Group("q1", ("+b", "@a"), (("+b", "@a", 1.0),))],
+                        not_compared={"-c": "=why"}), tmp_path)
     with open(tmp_path / "similarity.csv", newline="", encoding="utf-8") as f:
-        assert list(csv.reader(f))[1][:3] == ["q1", "'@a", "'+b"]
+        assert list(csv.reader(f))[1:] == [["not compared", "", "'-c", "1", "", "'=why"],
+                                           ["group", "q1", "'+b; @a", "2", "1.00",
+                                            "1 flagged pair(s)"]]
 
 
 LEFT = {1: "- {n} finding(s) left out ({kb} KB)", 2: "{n} note(s) left out ({kb} KB)"}

@@ -87,3 +87,41 @@ def resolve(name_or_folder: str) -> str:
         return use_folder(name_or_folder)
     raise ValueError(f"assignment must be one of {', '.join(registry.assignments())} or a "
                      f"folder holding NAME.ipynb and graded.py, got {name_or_folder!r}")
+
+
+def copy_homework(name: str, folder: str | os.PathLike) -> Path:
+    """Copy packaged homework ``name`` into ``folder``, a new folder the instructor keeps
+    private, as a homework of their own: ``FOLDER/FOLDER.ipynb`` (the master, solutions in, its
+    otter ``name`` set to the folder's) and ``graded.py`` (and ``requirements.txt``).  The
+    packaged solutions are public (every install carries them); a copy is where the instructor
+    changes what is asked, then hands it out and grades it like any folder of their own
+    (:func:`use_folder`).  Returns the copied master; ValueError naming what is wrong."""
+    import re
+    import shutil
+
+    registry.assignment(name)  # ValueError naming the homework registered
+    src = packaged_masters() / name
+    if name in _FOLDERS or not (src / f"{name}.ipynb").is_file():
+        raise ValueError(f"--copy: {name!r} is not a homework of the package (a folder of your "
+                         f"own is already yours)")
+    dest = Path(folder).expanduser().resolve()
+    new = dest.name
+    if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_-]*", new):
+        raise ValueError(f"--copy: the folder's name becomes the homework's; {new!r} must be "
+                         f"letters, digits, '-' and '_', starting with a letter")
+    if new in registry.assignments():
+        raise ValueError(f"--copy: {new!r} is the name of a homework of the package; name "
+                         f"your folder otherwise (e.g. {name}-private)")
+    if dest.exists() and (not dest.is_dir() or any(dest.iterdir())):
+        raise ValueError(f"--copy: {dest} exists and is not an empty folder")
+    dest.mkdir(parents=True, exist_ok=True)
+    master = (src / f"{name}.ipynb").read_text(encoding="utf-8")
+    head = f'"name: {name}\\n"'
+    if head not in master:
+        raise ValueError(f"--copy: the master of {name} has no '{head}' line to rename")
+    (dest / f"{new}.ipynb").write_text(master.replace(head, f'"name: {new}\\n"', 1),
+                                       encoding="utf-8")
+    for extra in ("graded.py", "requirements.txt"):
+        if (src / extra).is_file():
+            shutil.copy2(src / extra, dest / extra)
+    return dest / f"{new}.ipynb"

@@ -109,7 +109,9 @@ class Grade:
     status : graded, a sandbox failure (timeout, memory-limit, crashed, ...), no-notebook,
     ambiguous, unreadable, file-limit, id-collision or grader-error; codes : question ->
     mistake codes; feedback : the text for the student; late : handed in after the deadline, as
-    the export marks it (Canvas's ``_LATE_``).
+    the export marks it (Canvas's ``_LATE_``); similarity : the notebook's record for
+    the class's similarity report, made from this grading's parse of it
+    (:func:`gpsaccel.assignments.answercode.record`; never shown to the student).
     """
 
     student: str
@@ -122,6 +124,7 @@ class Grade:
     seconds: float = 0.0
     id: str = ""
     late: bool = False
+    similarity: dict = field(default_factory=dict)
 
     @property
     def total(self) -> float:
@@ -426,6 +429,7 @@ def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
     draws = {q.name: Draw(question_seed(seed, name, q.name, student), variant) for q in qs}
     run = _prepare(nb, variant)
     reads, p = _plan(run, nb, qs, draws)
+    compared = _similarity_record(name, qs, run, reads, p.spans)
     limits = sb.Limits(memory=BOX_MEMORY, time=float(timeout), processes=BOX_PROCESSES)
     with _scratch("nb") as tmp:
         folder = Path(tmp) / "submission"
@@ -444,7 +448,8 @@ def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
     if ours(status) or any(ours(c) for cs in codes.values() for c in cs):
         status = "grader-error"  # the machine's or the checker's, not a grade: graded again
     g = Grade(_untrusted.shown(student), file, scores, possible, status, "", codes,
-              time.perf_counter() - t0, sid or _untrusted.student_id(student))
+              time.perf_counter() - t0, sid or _untrusted.student_id(student),
+              similarity=compared)
     g.feedback = _feedback_text(g, notes, reports, variant, cell_notes)
     return g
 
@@ -457,6 +462,19 @@ def _scratch(kind: str) -> tempfile.TemporaryDirectory:
     from gpsaccel import sandbox as sb
 
     return tempfile.TemporaryDirectory(prefix=f"{sb.BOX_PREFIX}{os.getpid()}-{kind}-")
+
+
+def _similarity_record(name: str, qs: Sequence[Question], run: nbm.Notebook,
+                       reads: list[nbm.Read], spans: dict[str, tuple[int, int]]) -> dict:
+    """The notebook's record for the similarity report, from the cells this grading parsed and
+    runs (never raises: a failure is the record's ``why``)."""
+    from gpsaccel.assignments import answercode
+
+    try:
+        asked = answercode.asked(name, qs, {q: reads[a:b] for q, (a, b) in spans.items()})
+    except Exception as exc:  # noqa: BLE001 - the report's, never the grade's
+        return {"why": f"the grader could not list what its questions read ({type(exc).__name__})"}
+    return answercode.from_notebook(run, asked)
 
 
 def _grader_error(q: Question, exc: Exception) -> Report:

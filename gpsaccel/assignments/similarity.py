@@ -1,262 +1,420 @@
-"""The class similarity report: pairs of students whose answer code is suspiciously alike.
+r"""The class similarity report: copied answers, the published solution, hidden code.
 
-Per-student data and variants already make a copied *output* worthless; this looks at copied
-*code*.  It flags, never grades: no score depends on it.
+Per-student data and variants make a copied *output* worthless; this looks at copied *code*.
+It flags, never grades: no score depends on it.  It is judged like a grade, under attack: the
+class it reports on is its attacker.
 
-For each graded question, each student's answer is the code that question grades: the
-``%%writefile`` body of a file question, else the top-level definitions of the names the question
-reads (``kalman_filter``, ``Phi``, ``average_nees`` ...) and of the helpers they use.  The code is
-normalised by Python itself (``ast.unparse``: comments, blank lines and layout gone) and compared
-by copydetect (winnowing fingerprints of the token stream, identifiers and literals folded, as
-MOSS does; maintained, on PyPI, pure Python): renaming variables or reformatting changes nothing.
-Fingerprints that many students share (what any solution of a short question looks like: the
-matrices of a model are the same for everybody) are discarded as boilerplate, so what is left
-is what a *pair* shares.  A pair is flagged when each of the two has at least
-:data:`THRESHOLD` of its remaining code in common with the other.
+What it compares.  Each graded notebook's record (:mod:`gpsaccel.assignments.answercode`, made
+from the grader's own parse of the notebook and kept with the grade): per question, the answer's
+fingerprints (:mod:`gpsaccel.assignments.fingerprint`: names folded, dead and unreachable code
+dropped, every run of :data:`~gpsaccel.assignments.fingerprint.K` tokens hashed), less those of
+the hand-out (:func:`gpsaccel.assignments.published.boilerplate`).
 
-The notebooks are the students' (attackers') files: each is read with the grader's size limit
-(:func:`gpsaccel.assignments.notebook.read`), each answer cut at :data:`MAX_CHARS`, and the
-whole report is computed in a child process under CPU-time and memory limits
-(:func:`report_in_child`), so a notebook built to choke the parser loses the report, never a
-grade.
+What it flags, per question (thresholds chosen by ``benchmarks/similarity.py``, docs/grading.md):
+
+* a **group**: students whose answers share at least :data:`SHARE` of the smaller answer's
+  fingerprints (containment, not a mutual share: a small answer inside a padded one counts), as
+  connected groups: k students handing in one answer are one group of size k, however big;
+* a **match of the published solution**: an answer inside a published text (a packaged master,
+  a lesson's solution), or the master's answer to the question inside the answer
+  (:func:`gpsaccel.assignments.published.references`); likewise an earlier year's submission
+  (``compare_with``);
+* **hidden code**: code that runs text the notebook does not show
+  (:mod:`gpsaccel.assignments.hidden`), or a graded name that no visible code defines although
+  the question scored.
+
+An answer with fewer than :data:`MIN_PRINTS` fingerprints is never flagged as a copy or as the
+published solution: it is too short to tell a copy from the one way of writing it (a model
+matrix is one line for everybody).  Nothing is "common" because many students share it: a ring
+of twenty is one group of twenty.
+
+A notebook that could not be parsed within the grader's limits, or whose record could not be
+made, is **not compared**, named with the reason; it never costs the class its report.
 """
 
 from __future__ import annotations
 
-import ast
-import html
 import io
-import math
 from collections import Counter
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 
-#: Shortest shared token run that counts (characters of the filtered token stream).
-K = 20
+from gpsaccel.assignments import answercode, fingerprint, hidden
+from gpsaccel.assignments.published import Reference
 
-#: A pair is flagged when both students share at least this fraction of their (non-common) code.
-THRESHOLD = 0.7
+#: Share of the smaller answer's fingerprints found in the other that flags a pair, and of an
+#: answer found in a published text (or of the master's answer found in it).
+SHARE = 0.8
 
-#: A fingerprint held by more than this many students (or this fraction of the class) is common
-#: code, not copying.
-COMMON_STUDENTS = 3
-COMMON_FRACTION = 0.25
-
-#: Answers shorter than this (filtered characters, after removing common code) are not compared:
-#: too little to tell copying from convergence.
-MIN_CHARS = 60
-
-#: Longest answer code read per student and question.
-MAX_CHARS = 64_000
+#: Fewest fingerprints (after the hand-out's are left out) an answer needs to be flagged.
+MIN_PRINTS = 120
 
 
 @dataclass(frozen=True)
-class Pair:
-    """Two students' answers to one question that share most of their code."""
+class Group:
+    """Students of one question whose answers are copies of one another: ``pairs`` are the
+    flagged (a, b, share of the smaller answer found in the other)."""
 
     question: str
-    a: str
-    b: str
-    similarity_a: float  # share of a's code found in b's
-    similarity_b: float
-    code_a: str = ""
-    code_b: str = ""
+    students: tuple[str, ...]
+    pairs: tuple[tuple[str, str, float], ...]
+
+    @property
+    def size(self) -> int:
+        return len(self.students)
+
+    @property
+    def share(self) -> float:
+        return min(p[2] for p in self.pairs)
 
 
-def _defined(node: ast.stmt) -> set[str]:
-    if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
-        return {node.name}
-    if isinstance(node, (ast.Assign, ast.AnnAssign, ast.AugAssign)):
-        targets = node.targets if isinstance(node, ast.Assign) else [node.target]
-        return {n.id for t in targets for n in ast.walk(t) if isinstance(n, ast.Name)}
-    return set()
+@dataclass(frozen=True)
+class Match:
+    """One student's answer found in (or holding) a published or earlier text."""
+
+    question: str
+    student: str
+    source: str
+    share: float
 
 
-_DEFS = ("FunctionDef", "AsyncFunctionDef", "ClassDef")
+@dataclass
+class Report:
+    """The report's findings (plain data; :func:`write_report` writes it)."""
+
+    title: str
+    compared: int = 0
+    groups: list[Group] = field(default_factory=list)
+    published: list[Match] = field(default_factory=list)
+    earlier: list[Match] = field(default_factory=list)
+    earlier_read: list[str] = field(default_factory=list)
+    earlier_left: dict[str, str] = field(default_factory=dict)
+    hidden: dict[str, list[str]] = field(default_factory=dict)
+    not_compared: dict[str, str] = field(default_factory=dict)
+    short: dict[str, int] = field(default_factory=dict)
+    code: dict[tuple[str, str], str] = field(default_factory=dict)
 
 
-def _used(node: ast.AST) -> set[str]:
-    return {n.id for n in ast.walk(node) if isinstance(n, ast.Name)}
+# ------------------------------------------------------------------------------ comparing
+def _shared(rows: Sequence[frozenset[int]], cols: Sequence[frozenset[int]]):
+    """The matrix of |rows[i] ∩ cols[j]| (sparse products: a class of 200 in milliseconds)."""
+    import numpy as np
+    from scipy import sparse
+
+    vocab: dict[int, int] = {}
+    for s in cols:
+        for h in s:
+            vocab.setdefault(h, len(vocab))
+
+    def matrix(sets: Sequence[frozenset[int]]):
+        at = [(i, vocab[h]) for i, s in enumerate(sets) for h in s if h in vocab]
+        i, j = (list(x) for x in zip(*at, strict=True)) if at else ([], [])
+        return sparse.csr_matrix((np.ones(len(i)), (i, j)), shape=(len(sets), max(len(vocab), 1)))
+
+    return (matrix(rows) @ matrix(cols).T).toarray()
 
 
-def answer_code(sources: Sequence[str], names: set[str]) -> str:
-    """The normalised code defining ``names`` (and the helpers it uses) in ``sources``, the
-    notebook's code cells in order (a cell Python cannot parse is left out)."""
-    from gpsaccel.assignments.notebook import transform
+def _groups(question: str, names: Sequence[str], prints: Sequence[frozenset[int]]
+            ) -> list[Group]:
+    """The connected groups of pairs sharing :data:`SHARE` of the smaller answer."""
+    if len(names) < 2:
+        return []
+    import numpy as np
 
-    stmts: list[ast.stmt] = []
-    for src in sources:
-        try:
-            stmts += ast.parse(transform(src)).body
-        except (SyntaxError, ValueError, RecursionError, MemoryError):
+    size = np.array([len(p) for p in prints], dtype=float)
+    share = _shared(prints, prints) / np.minimum.outer(size, size)
+    parent = list(range(len(names)))
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    edges = [(int(i), int(j), float(share[i, j]))
+             for i, j in zip(*np.nonzero(np.triu(share >= SHARE, 1)), strict=True)]
+    for i, j, _ in edges:
+        parent[root(i)] = root(j)
+    members: dict[int, list[int]] = {}
+    for i in range(len(names)):
+        members.setdefault(root(i), []).append(i)
+    out = []
+    for group in members.values():
+        if len(group) < 2:
             continue
-    funcs = {s.name for s in stmts
-             if isinstance(s, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))}
-    wanted, keep = set(names), []
-    for _ in range(4):  # the names' definitions, then what they use, a few levels down
-        keep = [s for s in stmts if _defined(s) & wanted]
-        more: set[str] = set()
-        for s in keep:  # a function's helpers; a value's inputs (dt of Phi)
-            more |= _used(s) & funcs if s.__class__.__name__ in _DEFS else _used(s)
-        if more <= wanted:
-            break
-        wanted |= more
+        inside = set(group)
+        pairs = tuple((names[i], names[j], s) for i, j, s in edges if i in inside)
+        out.append(Group(question, tuple(sorted(names[i] for i in group)), pairs))
+    return sorted(out, key=lambda g: (-g.size, g.students))
+
+
+def _matches(question: str, names: Sequence[str], prints: Sequence[frozenset[int]],
+             refs: Sequence[Reference]) -> list[Match]:
+    """Each answer's best match among ``refs`` when it reaches :data:`SHARE`: the answer inside
+    a reference, or a reference of this question (itself long enough) inside the answer."""
+    refs = [r for r in refs if r.question in (None, question) and r.prints]
+    if not names or not refs:
+        return []
+    shared = _shared(prints, [r.prints for r in refs])
+    out = []
+    for i, name in enumerate(names):
+        best = (0.0, "")
+        for j, r in enumerate(refs):  # in order: on a tie the first named (published) wins
+            share = shared[i, j] / len(prints[i])
+            if r.question is not None and len(r.prints) >= MIN_PRINTS:
+                share = max(share, shared[i, j] / len(r.prints))
+            if share > best[0]:
+                best = (float(share), r.label)
+        if best[0] >= SHARE:
+            out.append(Match(question, name, best[1], best[0]))
+    return out
+
+
+def compare(question: str, answers: Mapping[str, Sequence[int]],
+            boilerplate: frozenset[int] = frozenset(), refs: Sequence[Reference] = (),
+            earlier: Sequence[Reference] = ()) -> tuple[list[Group], list[Match], list[Match],
+                                                         int]:
+    """One question: (groups, published matches, earlier matches, answers too short to judge)
+    among ``answers`` (student -> tokens)."""
+    prints = {s: fingerprint.kgrams(t) - boilerplate for s, t in answers.items() if t}
+    names = sorted(s for s, p in prints.items() if len(p) >= MIN_PRINTS)
+    short = sum(1 for s, p in prints.items() if len(p) < MIN_PRINTS)
+    sets = [prints[s] for s in names]
+    return (_groups(question, names, sets), _matches(question, names, sets, refs),
+            _matches(question, names, sets, earlier), short)
+
+
+# ------------------------------------------------------------------------------ the class
+def report(records: Mapping[str, dict], title: str,
+           boilerplate: Mapping[str, frozenset[int]] | None = None,
+           refs: Sequence[Reference] = (), earlier: Sequence[Reference] = (),
+           scores: Mapping[str, Mapping[str, float]] | None = None) -> Report:
+    """The report on a class: ``records`` maps each student to their notebook's record
+    (:func:`gpsaccel.assignments.answercode.record`) or to ``{"why": reason}`` (not compared);
+    ``scores`` (student -> question -> points) flags a graded name no visible code defines."""
+    rep = Report(title)
+    tokens: dict[str, dict[str, list[int]]] = {}
+    for student, rec in records.items():
+        why, answers = _read(rec)
+        if why:
+            rep.not_compared[student] = why
+            continue
+        tokens[student] = {q: a["tokens"] for q, a in answers.items()}
+        for q, a in answers.items():
+            rep.code[(student, q)] = a["code"]
+        found = _findings(rec)
+        for q, a in answers.items():
+            got = (scores or {}).get(student, {}).get(q, 0.0)
+            if a["undefined"] and got > 0:
+                found.append(f"{q}: {', '.join(a['undefined'][:5])} scored {got:g} although no "
+                             f"code the notebook shows defines it")
+        if found:
+            rep.hidden[student] = [str(f)[:300] for f in found]
+    rep.compared = len(tokens)
+    questions = sorted({q for t in tokens.values() for q in t})
+    for q in questions:
+        groups, pub, old, short = compare(
+            q, {s: t.get(q, []) for s, t in tokens.items()},
+            (boilerplate or {}).get(q, frozenset()), refs,
+            [r for r in earlier if r.question == q])
+        rep.groups += groups
+        rep.published += pub
+        rep.earlier += old
+        rep.short[q] = short
+    return rep
+
+
+def _findings(rec: dict) -> list[str]:
+    """A record's hidden-code findings (a list of text, bounded; anything else: none)."""
+    found = rec.get("hidden", [])
+    return [str(f)[:300] for f in found[:hidden.MAX_FINDINGS]] if isinstance(found, list) else []
+
+
+def _read(rec: object) -> tuple[str, dict[str, dict]]:
+    """(why not compared, question -> {"tokens", "code", "undefined"}) of a record, its shape
+    checked (it crossed a process boundary and a file)."""
+    if not isinstance(rec, dict) or not rec:
+        return "no record of its code (graded before this report existed: regrade it)", {}
+    if rec.get("why"):
+        return str(rec["why"])[:300], {}
+    out = {}
     try:
-        return "\n".join(ast.unparse(s) for s in keep)[:MAX_CHARS]
-    except (RecursionError, ValueError):
-        return ""
+        for q, a in dict(rec.get("questions", {})).items():
+            out[str(q)] = {"tokens": answercode.unpack(a.get("tokens", "")),
+                           "code": str(a.get("code", ""))[:answercode.MAX_SHOWN],
+                           "undefined": [str(n)[:80] for n in list(a.get("undefined", []))[:20]]}
+    except (TypeError, ValueError, AttributeError):
+        return "its record is damaged", {}
+    return "", out
 
 
-def normalise_file(text: str) -> str:
-    """A file question's text, normalised as :func:`answer_code` does (unparsable: as written)."""
-    try:
-        return ast.unparse(ast.parse(text[:MAX_CHARS]))
-    except (SyntaxError, ValueError, RecursionError, MemoryError):
-        return text[:MAX_CHARS]
+def class_report(grades: Sequence, name: str,
+                 earlier: Sequence[tuple[str, Path | None]] = ()) -> Report:
+    """The report on a graded class (:class:`~gpsaccel.assignments.scoring.Grade` s, each with
+    the record its grading kept), against the published solutions of homework ``name`` and the
+    ``earlier`` submissions ((name as shown, notebook or None): an earlier year's export, as the
+    class run walks it)."""
+    from gpsaccel import registry
+    from gpsaccel.assignments import published
+    from gpsaccel.assignments.generate import master_notebook
+
+    asked = questions_asked(name)
+    master = master_notebook(name)
+    records: dict[str, dict] = {}
+    shown = Counter(g.student for g in grades)
+
+    def who(g) -> str:  # the name as shown; with its id where two show alike
+        return g.student if shown[g.student] == 1 else f"{g.student} [{g.id}]"
+
+    for g in grades:
+        if not g.file:
+            continue  # no notebook: its status says so in grades.csv
+        record = getattr(g, "similarity", None) or {}
+        if g.status == "unreadable":
+            record = {"why": "its notebook could not be read within the grader's limits "
+                             "(status unreadable)"}
+        elif not record and g.status in ("not-graded", "grader-error"):
+            record = {"why": f"its grading did not finish (status {g.status}): rerun it"}
+        records[who(g)] = record
+    title = registry.assignment(name).title or name
+    old, read, left = earlier_references(earlier, asked)
+    rep = report(records, title, published.boilerplate(master, asked),
+                 published.references(name, master, asked), old,
+                 {who(g): g.scores for g in grades})
+    rep.earlier_read, rep.earlier_left = read, left
+    return rep
 
 
-def answers(notebook: Path, questions: Sequence, draw) -> dict[str, str]:
-    """Question -> the student's normalised answer code in ``notebook`` ("" if none)."""
+def questions_asked(name: str) -> dict[str, answercode.Asked]:
+    """Question -> what it grades, for homework ``name`` (its reads drawn once, public
+    variant: only their names are used)."""
+    from gpsaccel.assignments.questions import Draw
+    from gpsaccel.assignments.scoring import assignment_module, questions_of
+
+    draw = Draw(0, dict(assignment_module(name).DEFAULT_VARIANT))
+    qs = questions_of(name)
+    return answercode.asked(name, qs, {q.name: q.reads(draw) for q in qs if q.file is None})
+
+
+def earlier_references(found: Sequence[tuple[str, Path | None]],
+                       asked: Mapping[str, answercode.Asked]
+                       ) -> tuple[list[Reference], list[str], dict[str, str]]:
+    """(every answer of the earlier submissions ``found`` ((name as shown, notebook)), the
+    names read, name -> why one was left out): each notebook parsed and its record made under
+    the grader's limits; one that fails is left out and said (the report names it)."""
     from gpsaccel.assignments import notebook as nbm
 
-    try:
-        nb = nbm.read(notebook)
-    except nbm.NotebookError:
-        return {}
-    sources = [c.source[:MAX_CHARS] for c in nb.cells]
-    out = {}
-    for q in questions:
-        if q.file:
-            found = nb.writefile(q.file)
-            out[q.name] = normalise_file(found[1]) if found else ""
-        else:
-            out[q.name] = answer_code(sources, {r.name for r in q.reads(draw)})
+    out: list[Reference] = []
+    read: list[str] = []
+    left: dict[str, str] = {}
+    for shown, path in found:
+        if path is None:
+            left[shown] = "no notebook in it"
+            continue
+        try:
+            rec = answercode.from_notebook(nbm.load(path), asked)
+        except (nbm.NotebookError, OSError) as exc:
+            left[shown] = str(exc)[:300]
+            continue
+        why, answers = _read(rec)
+        if why:
+            left[shown] = why
+            continue
+        read.append(shown)
+        for q, a in answers.items():
+            prints = fingerprint.kgrams(a["tokens"])
+            if prints:
+                out.append(Reference(f"earlier submission {shown}", prints, q))
+    return out, read, left
+
+
+# ------------------------------------------------------------------------------- writing
+def _shown(text: str, limit: int = 60) -> str:
+    """A student id (a folder name a student chose) or a finding, as one printable line."""
+    from gpsaccel._untrusted import shown
+
+    return shown(text, limit)
+
+
+def rows(rep: Report) -> list[list[str]]:
+    """The report as table rows: kind, question, students, size, share, detail."""
+    out = []
+    for s, why in sorted(rep.not_compared.items()):
+        out.append(["not compared", "", s, "1", "", why])
+    for s, why in sorted(rep.earlier_left.items()):
+        out.append(["earlier submission left out", "", s, "1", "", why])
+    for s, found in sorted(rep.hidden.items()):
+        out += [["hidden code", f.split(":", 1)[0] if f.startswith("q") else "", s, "1", "", f]
+                for f in found]
+    for m in rep.published:
+        out.append(["published solution", m.question, m.student, "1", f"{m.share:.2f}",
+                    m.source])
+    for m in rep.earlier:
+        out.append(["earlier submission", m.question, m.student, "1", f"{m.share:.2f}",
+                    m.source])
+    for g in rep.groups:
+        out.append(["group", g.question, "; ".join(g.students), str(g.size), f"{g.share:.2f}",
+                    f"{len(g.pairs)} flagged pair(s)"])
     return out
 
 
-def _fingerprint(code: str):
-    import copydetect
-
-    return copydetect.CodeFingerprint("answer.py", K, 1, language="python",
-                                      fp=io.StringIO(code))
-
-
-def _drop(fp, common: set) -> None:
-    """Remove the class's common fingerprints from ``fp`` (copydetect's own boilerplate filter
-    assumes unique hashes; with every k-gram kept they repeat)."""
-    from copydetect.utils import get_token_coverage
-
-    fp.hashes = fp.hashes - common
-    fp.hash_idx = {h: i for h, i in fp.hash_idx.items() if h not in common}
-    fp.token_coverage = get_token_coverage(fp.hash_idx, fp.k, len(fp.filtered_code))
-
-
-def compare(codes: dict[str, str], question: str = "") -> list[Pair]:
-    """The flagged pairs among ``codes`` (student -> normalised code of one question)."""
-    import copydetect
-
-    codes = {s: c for s, c in codes.items() if c.strip()}
-    prints = {s: _fingerprint(c) for s, c in codes.items()}
-    df = Counter(h for fp in prints.values() for h in fp.hashes)
-    limit = max(COMMON_STUDENTS, math.ceil(COMMON_FRACTION * len(codes)))
-    common = {h for h, n in df.items() if n > limit}
-    for fp in prints.values():
-        _drop(fp, common)
-    names = sorted(s for s, fp in prints.items() if fp.token_coverage >= MIN_CHARS)
-    pairs = []
-    for i, a in enumerate(names):
-        for b in names[i + 1:]:
-            _, (sa, sb), _ = copydetect.compare_files(prints[a], prints[b])
-            if min(sa, sb) >= THRESHOLD:
-                pairs.append(Pair(question, a, b, float(sa), float(sb), codes[a], codes[b]))
-    return sorted(pairs, key=lambda p: -min(p.similarity_a, p.similarity_b))
-
-
-def report(submissions: Path, grades: Sequence, questions: Sequence, variant: dict
-           ) -> list[Pair]:
-    """Every question's flagged pairs for the graded notebooks of ``grades``
-    (:class:`~gpsaccel.assignments.grading.Grade`: ``file`` relative to ``submissions``)."""
-    from gpsaccel.assignments.questions import Draw
-
-    draw = Draw(0, dict(variant))
-    per_student = {g.student: answers(submissions / g.file, questions, draw)
-                   for g in grades if g.file}
-    out: list[Pair] = []
-    for q in questions:
-        out += compare({s: a.get(q.name, "") for s, a in per_student.items()}, q.name)
-    return out
-
-
-#: Limits of the child that computes the report: CPU seconds and address space.
-CHILD_CPU_S = 600
-CHILD_MEMORY = 4 << 30
-
-
-def _child(conn, args) -> None:
-    import resource
-
-    resource.setrlimit(resource.RLIMIT_CPU, (CHILD_CPU_S, CHILD_CPU_S))
-    resource.setrlimit(resource.RLIMIT_AS, (CHILD_MEMORY, CHILD_MEMORY))
-    try:
-        conn.send(("ok", report(*args)))
-    except Exception as exc:  # the report is lost, never a grade
-        conn.send(("error", f"{type(exc).__name__}: {exc}"[:300]))
-    finally:
-        conn.close()
-
-
-def report_in_child(submissions: Path, grades: Sequence, questions: Sequence, variant: dict
-                    ) -> tuple[list[Pair] | None, str]:
-    """:func:`report` in a forked child under :data:`CHILD_CPU_S` and :data:`CHILD_MEMORY`:
-    (pairs, "") or (None, why it failed)."""
-    import multiprocessing as mp
-
-    ctx = mp.get_context("fork")
-    parent, child = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_child, args=(child, (submissions, grades, questions, variant)))
-    proc.start()
-    child.close()
-    try:
-        if parent.poll(CHILD_CPU_S * 2):
-            status, value = parent.recv()
-        else:
-            status, value = "error", "took too long"
-    except EOFError:
-        status, value = "error", "the report's process died"
-    finally:
-        proc.kill()
-        proc.join()
-    return (value, "") if status == "ok" else (None, str(value))
-
-
-def write_report(pairs: Sequence[Pair], out: Path, title: str) -> None:
-    """``similarity.csv`` (question, student a, student b, shares) and ``similarity.html``."""
+def write_report(rep: Report, out: Path) -> None:
+    """``similarity.csv`` (:func:`rows`) and ``similarity.html``."""
     import csv
 
     from gpsaccel._atomic import write_text
-    from gpsaccel._untrusted import cell as _cell
+    from gpsaccel._untrusted import cell
+    from gpsaccel.assignments.similarity_page import page
 
     buf = io.StringIO()
     w = csv.writer(buf)
-    w.writerow(["question", "student a", "student b", "share of a in b", "share of b in a"])
-    for p in pairs:
-        w.writerow([p.question, _cell(p.a), _cell(p.b), f"{p.similarity_a:.2f}",
-                    f"{p.similarity_b:.2f}"])
+    w.writerow(["kind", "question", "students", "size", "share", "detail"])
+    for r in rows(rep):
+        w.writerow([cell(_shown(x, 2000)) for x in r])  # one line, printable, no formula
     write_text(out / "similarity.csv", buf.getvalue())
-    write_text(out / "similarity.html", _html(pairs, title))
+    write_text(out / "similarity.html", page(rep, SHARE, MIN_PRINTS))
 
 
-def _html(pairs: Sequence[Pair], title: str) -> str:
-    e = html.escape
-    rows = "".join(
-        f"<h2>{e(p.question)}: {e(p.a)} &amp; {e(p.b)} "
-        f"({p.similarity_a:.0%} / {p.similarity_b:.0%})</h2>"
-        f"<div class=pair><pre>{e(p.code_a)}</pre><pre>{e(p.code_b)}</pre></div>"
-        for p in pairs) or "<p>No pair of students shares most of an answer's code.</p>"
-    return (f"<!doctype html><meta charset=utf-8><title>{e(title)}: similar answers</title>"
-            "<style>body{font-family:sans-serif;margin:2em}.pair{display:flex;gap:1em}"
-            "pre{flex:1;background:#f4f4f4;padding:.5em;overflow:auto;font-size:12px}</style>"
-            f"<h1>{e(title)}: answers with most of their code in common</h1>"
-            "<p>A flag to look at, not a verdict: the code shown is normalised (comments and "
-            "layout removed). Grades are not affected.</p>" + rows)
+def summary_rows(rep: Report) -> list[list[str]]:
+    """The report's counts as rows of the class's ``summary.csv`` (its columns: question,
+    possible, mean, full marks, students, code, count)."""
+    rows = []
+    for q in sorted({g.question for g in rep.groups} | {m.question for m in rep.published}):
+        copied = {s for g in rep.groups if g.question == q for s in g.students}
+        pasted = [m for m in rep.published if m.question == q]
+        if copied:
+            rows.append([q, "", "", "", "", "integrity: in a group of copies", str(len(copied))])
+        if pasted:
+            rows.append([q, "", "", "", "", "integrity: matches the published solution",
+                         str(len(pasted))])
+    for what, n in (("hidden code", len(rep.hidden)), ("not compared", len(rep.not_compared))):
+        rows.append(["integrity", "", "", "", "", what, str(n)])
+    return rows
+
+
+def summary_lines(rep: Report, out: Path | None = None) -> list[str]:
+    """What the terminal shows of the report (names printable, one line each)."""
+    where = f" ({out / 'similarity.html'}; grades unchanged)" if out else " (grades unchanged)"
+    head = (f"similarity: {rep.compared} notebooks compared; {len(rep.groups)} group(s) of "
+            f"copies, {len(rep.published)} answer(s) matching the published solution, "
+            f"{len(rep.hidden)} with hidden code, {len(rep.not_compared)} not compared{where}")
+    lines = [head]
+    for g in rep.groups:
+        lines.append(f"  {g.question}: group of {g.size}: "
+                     f"{', '.join(_shown(s) for s in g.students[:8])}"
+                     f"{' ...' if g.size > 8 else ''} (at least {g.share:.0%} shared)")
+    for m in rep.published + rep.earlier:
+        lines.append(f"  {m.question}: {_shown(m.student)} matches {m.source} ({m.share:.0%})")
+    for s, found in sorted(rep.hidden.items()):
+        lines.append(f"  hidden code: {_shown(s)}: {_shown(found[0], 200)}"
+                     f"{f' (+{len(found) - 1} more)' if len(found) > 1 else ''}")
+    for s, why in sorted(rep.not_compared.items()):
+        lines.append(f"  not compared: {_shown(s)}: {_shown(why, 300)}")
+    if rep.earlier_read or rep.earlier_left:
+        lines.append(f"  earlier submissions: {len(rep.earlier_read)} compared with, "
+                     f"{len(rep.earlier_left)} left out")
+    for s, why in sorted(rep.earlier_left.items()):
+        lines.append(f"  earlier submission left out: {_shown(s)}: {_shown(why, 300)}")
+    return lines
+

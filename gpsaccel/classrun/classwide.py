@@ -29,8 +29,9 @@ so does a grade whose status the student did not cause (:mod:`gpsaccel.classrun.
 a score.  A status the student caused holds the total its table says.  A graded student absent
 from the roster is not written: the lines returned name them.
 
-The similarity report (:mod:`gpsaccel.assignments.similarity`) is asked for through one
-function, :func:`similar`, and flags, never grades.
+The similarity and integrity report (:mod:`gpsaccel.assignments.similarity`: groups of copies,
+the published solutions, hidden code) is asked for through one function, :func:`similar`, and
+flags, never grades.
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ from typing import Any
 
 from gpsaccel import registry
 from gpsaccel._atomic import write_text
-from gpsaccel._untrusted import cell, shown
+from gpsaccel._untrusted import cell
 from gpsaccel.assignments.roster import Student
 from gpsaccel.assignments.scoring import Grade
 from gpsaccel.classrun import statuses
@@ -66,10 +67,12 @@ def files(roster: bool, similarity: bool) -> tuple[str, ...]:
 
 def write(submissions: Path, out: Path, name: str, grades: Sequence[Grade],
           possible: dict[str, float], roster: Sequence[Student] | None,
-          similarity: bool = True, outputs: Outputs | None = None) -> list[str]:
-    """Write the gradebook files (with a roster) and the similarity report into ``out``; the
-    lines to show the instructor.  ``outputs``: where a write the file system refuses is
-    recorded (the other files are still written); without it, the error is raised."""
+          similarity: bool = True, outputs: Outputs | None = None,
+          compare_with: Path | None = None) -> list[str]:
+    """Write the gradebook files (with a roster) and the similarity report (with
+    ``compare_with``: against earlier submissions too) into ``out``; the lines to show the
+    instructor.  ``outputs``: where a write the file system refuses is recorded (the other files
+    are still written); without it, the error is raised."""
     def each(names: Sequence[str], writer: Callable[..., Any], *args: Any) -> Any:
         return outputs.write(names, writer, *args) if outputs is not None else writer(*args)
 
@@ -82,7 +85,8 @@ def write(submissions: Path, out: Path, name: str, grades: Sequence[Grade],
         if missing:
             lines.append(f"not on the roster (in grades.csv only): {', '.join(missing)}")
     if similarity:
-        lines += each(REPORT, similar, submissions, out, name, grades) or []
+        # the report, then its counts at the end of summary.csv: a file refused is named
+        lines += each(REPORT + ("summary.csv",), similar, out, name, grades, compare_with) or []
     return lines
 
 
@@ -176,18 +180,36 @@ def write_gradebooks(grades: Sequence[Grade], possible: dict[str, float],
 
 
 # --------------------------------------------------------------------------------- similarity
-def similar(submissions: Path, out: Path, name: str, grades: Sequence[Grade]) -> list[str]:
-    """The similarity report of the graded notebooks (``similarity.csv``, ``.html``): the one
-    place the class run asks for it; the lines to show."""
-    from gpsaccel.assignments.grading import questions_of, student_variant
-    from gpsaccel.assignments.similarity import report_in_child, write_report
+def similar(out: Path, name: str, grades: Sequence[Grade], compare_with: Path | None = None
+            ) -> list[str]:
+    """The similarity and integrity report of the graded notebooks (``similarity.csv``,
+    ``.html``, and its counts at the end of ``summary.csv``): the one place the class run asks
+    for it; the lines to show.  Each notebook's record was made by its grading, from the
+    grader's own parse (:attr:`Grade.similarity`): nothing is parsed again here, and a notebook
+    without one is named "not compared", never a reason to lose the report.  ``compare_with``:
+    a folder of earlier submissions every answer is compared with too."""
+    from gpsaccel.assignments import similarity as sim
+    from gpsaccel.classrun.entries import notebooks, walk
 
-    pairs, why = report_in_child(submissions, grades, questions_of(name),
-                                 student_variant(name, "", None))
-    if pairs is None:
-        return [f"similarity report not written: {why}"]
-    write_report(pairs, out, name)
-    return [f"similarity: {len(pairs)} pair(s) flagged for a look "
-            f"({out / 'similarity.html'}; grades unchanged)"] + [
-        f"  {p.question}: {shown(p.a, 60)} & {shown(p.b, 60)} "
-        f"({p.similarity_a:.0%} / {p.similarity_b:.0%} of their code)" for p in pairs]
+    earlier: list[tuple[str, Path | None]] = []
+    if compare_with is not None:  # walked as a class is: no link followed, bounded depth
+        entries, _ = walk(compare_with, notebooks(name))
+        earlier = [(e.shown, e.path) for e in entries]
+    rep = sim.class_report(grades, name, earlier)
+    sim.write_report(rep, out)  # an OSError (a full disk): the caller's Outputs names the files
+    _add_to_summary(out / "summary.csv", sim.summary_rows(rep))
+    return sim.summary_lines(rep, out)
+
+
+#: The line that starts the integrity block of ``summary.csv``.
+_MARK = "integrity report,similarity.html,,,,,\r\n"
+
+
+def _add_to_summary(path: Path, rows: list[list[str]]) -> None:
+    """The integrity counts appended to the class's ``summary.csv`` (written before the report;
+    rewritten whole, once, with them; an earlier report's block replaced, never repeated)."""
+    if not path.is_file():
+        return
+    text = path.read_bytes().decode("utf-8")  # as written: csv's \r\n line ends kept
+    kept = text.split("\r\n" + _MARK, 1)[0].rstrip("\r\n")
+    write_text(path, f"{kept}\r\n\r\n{_MARK}{csv_text(rows)}")

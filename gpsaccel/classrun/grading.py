@@ -284,7 +284,8 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
                 dask: str | None = None, sandbox: str = "auto", progress: bool = False,
                 roster: Sequence[Student] | str | os.PathLike | None = None,
                 similarity: bool = True, naming: Naming | None = None,
-                export: str = "auto", regrade: bool = False) -> Graded:
+                export: str = "auto", regrade: bool = False,
+                compare_with: str | os.PathLike | None = None) -> Graded:
     """Grade every student of ``submissions`` for homework ``name`` and write every file
     (module docstring); :func:`grade` is this with the grades alone.
 
@@ -302,9 +303,14 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
     regrade : grade every notebook again; without it (and without ``seed``) a rerun in the same
     ``out`` reuses the recorded seed and the recorded grade of every notebook that is unchanged
     (its SHA-256) under the same homework, secret, sandbox, time limit and gpsaccel.
+    compare_with : a folder of earlier submissions (an export as graded) the similarity report
+    compares every answer with too.
     """
     folder = Path(submissions)
     out, jobs = _checked(folder, out, timeout, jobs)
+    if compare_with is not None and not (similarity and Path(compare_with).is_dir()):
+        raise ValueError(f"compare_with: {compare_with} must be a folder of earlier submissions, "
+                         f"and the similarity report asked for (it makes the comparison)")
     students = read_roster(roster) if isinstance(roster, (str, os.PathLike)) else roster
     possible = item.possible_of(name)
     layout = Export(notebooks(name), export, students)
@@ -339,7 +345,8 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
         raise
     rows = record.finish(False, classwide.files(students is not None, similarity))
     lines = classwide.write(folder, out, name, rows, possible, students, similarity,
-                            record.outputs)
+                            record.outputs,
+                            Path(compare_with) if compare_with is not None else None)
     lines += _unmapped(students, layout) + ([f"rerun: {reuse}"] if reuse else [])
     record.save()
     return Graded([g for i, g in enumerate(record.grades) if g is not None

@@ -20,9 +20,12 @@ def _cmd_assignment(args: argparse.Namespace) -> int:
     """``otter assign`` a homework (the package's or a folder of the instructor's own): the
     student notebook and the autograder zip; with ``--roster`` one notebook per student carrying
     that student's variant.  Every flag is checked before the minutes of ``otter assign``.
-    ``--example DIR`` only writes the example homework (core install: no otter needed)."""
+    ``--example DIR`` only writes the example homework (core install: no otter needed);
+    ``NAME --copy DIR`` only copies a packaged homework into a private folder."""
     if args.example is not None:
         return _write_example(args)
+    if args.copy is not None:
+        return _copy(args)
     import time
 
     from tqdm.auto import tqdm
@@ -79,6 +82,10 @@ def _cmd_assignment(args: argparse.Namespace) -> int:
           f"{args.name}{variant_flags}\nGradescope: {gradescope}\nsolution:  {g.solution}")
     if students is not None:
         print(f"per student: {folder}/<id>/{name}.ipynb ({len(students)} students)")
+    if name == args.name:  # a homework of the package: its solutions ship with it
+        print(f"public:    the solutions of {name} are in every install of gpsaccel and in its "
+              f"repository; for graded work hand out a private copy you changed: gpsaccel "
+              f"assignment {name} --copy DIR (docs/grading.md, \"Integrity\")")
     print(f"{time.perf_counter() - t0:.1f} s")
     return 0
 
@@ -89,7 +96,8 @@ def _write_example(args: argparse.Namespace) -> int:
     given = [flag for flag, value in (("NAME", args.name), ("--out", args.out),
                                       ("--roster", args.roster),
                                       ("--secret-file", args.secret_file),
-                                      ("--no-run-tests", args.no_run_tests or None))
+                                      ("--no-run-tests", args.no_run_tests or None),
+                                      ("--copy", args.copy))
              if value is not None]
     if given:
         raise ValueError(f"--example writes the example and does nothing else: leave out "
@@ -101,6 +109,28 @@ def _write_example(args: argparse.Namespace) -> int:
     print(f"wrote {folder}: {folder.name}.ipynb (the master), graded.py (its graded questions), "
           f"problems.py (its problem)\nhand out:  gpsaccel assignment {here} --out hw/"
           f"{folder.name}\ngrade with: gpsaccel grade SUBMISSIONS --assignment {here}")
+    return 0
+
+
+def _copy(args: argparse.Namespace) -> int:
+    """``assignment NAME --copy DIR``: the packaged homework into a private folder of yours."""
+    from gpsaccel.assignments.homework import copy_homework
+
+    if args.name is None:
+        raise ValueError("--copy: give the packaged homework NAME to copy")
+    extra = [f for f, v in (("--out", args.out), ("--roster", args.roster),
+                            ("--secret-file", args.secret_file),
+                            ("--no-run-tests", args.no_run_tests)) if v]
+    if extra:
+        raise ValueError(f"--copy only copies the homework; {', '.join(extra)} belong to handing "
+                         f"out the copy afterwards (gpsaccel assignment DIR --out ...)")
+    master = copy_homework(args.name, args.copy)
+    folder = shlex.quote(str(master.parent))
+    print(f"copied {args.name} into {master.parent} (the master {master.name}, with its "
+          f"solutions, and graded.py): keep this folder private.\nchange what is asked (numbers, "
+          f"questions, graded.py's checks: docs/grading.md, \"Integrity\"), then\nhand out: "
+          f"gpsaccel assignment {folder} --out DIR\ngrade:    gpsaccel grade SUBMISSIONS "
+          f"--assignment {folder}")
     return 0
 
 
@@ -118,6 +148,9 @@ def _cmd_grade(args: argparse.Namespace) -> int:
     from gpsaccel.classrun.grading import default_out, grade_class, rewrite_class
     from gpsaccel.classrun.writing import grade_mistakes, grades_table, terminal
 
+    if args.compare_with is not None and args.no_similarity:
+        raise ValueError("--compare-with: the comparison is the similarity report's; leave out "
+                         "--no-similarity")
     name = resolve(args.assignment)
     if args.dask is not None and name != args.assignment:
         raise ValueError("--dask: a homework from a folder of your own is known to this process "
@@ -136,7 +169,8 @@ def _cmd_grade(args: argparse.Namespace) -> int:
                                  secret=read_secret(args.secret_file), student=args.student,
                                  dask=args.dask, sandbox=args.sandbox, progress=True,
                                  roster=roster, similarity=not args.no_similarity,
-                                 export=args.export, regrade=args.regrade)
+                                 export=args.export, regrade=args.regrade,
+                                 compare_with=args.compare_with)
             term.out(grades_table(graded.grades))
             for line in grade_mistakes(graded.grades):
                 term.out(line)
@@ -168,7 +202,7 @@ def _wrote(term: Terminal, args: argparse.Namespace, out: Path, graded: Graded) 
 #: defaults.
 _GRADING_ONLY = {"student": None, "seed": None, "jobs": None, "timeout": None,
                  "secret_file": None, "dask": None, "sandbox": "auto", "export": "auto",
-                 "regrade": False}
+                 "regrade": False, "compare_with": None}
 
 
 def _only_class_wide(args: argparse.Namespace) -> None:
@@ -178,6 +212,13 @@ def _only_class_wide(args: argparse.Namespace) -> None:
     if given:
         raise ValueError(f"--from-grades writes the class-wide files from the recorded grades "
                          f"and grades no notebook: leave out {', '.join(given)}")
+
+
+def _existing_dir(text: str) -> Path:
+    path = Path(text)
+    if not path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text} is not a folder")
+    return path
 
 
 def add_assignment(sub: argparse._SubParsersAction) -> None:
@@ -190,6 +231,9 @@ def add_assignment(sub: argparse._SubParsersAction) -> None:
                         "graded.py, problems.py: docs/grading.md) and do nothing else")
     p.add_argument("--out", type=_v.output_dir, default=None,
                    help="folder to write (replaced); required with NAME")
+    p.add_argument("--copy", type=_v.output_dir, default=None, metavar="DIR",
+                   help="copy the packaged homework NAME (master with solutions, graded.py) into "
+                        "DIR, a new folder you keep private, to change and hand out as your own")
     p.add_argument("--no-run-tests", action="store_true",
                    help="do not execute the solution against its tests first (faster)")
     p.add_argument("--roster", type=Path, default=None,
@@ -220,6 +264,9 @@ def add_grade(sub: argparse._SubParsersAction) -> None:
                         "plain: a folder or notebook per roster id)")
     p.add_argument("--no-similarity", action="store_true",
                    help="skip the similarity report (similarity.csv, similarity.html)")
+    p.add_argument("--compare-with", type=_existing_dir, default=None, metavar="DIR",
+                   help="earlier submissions (an export as graded, e.g. last year's) each answer "
+                        "is compared with too")
     p.add_argument("--out", type=_v.output_dir, default=None,
                    help="folder for grades.csv, feedback/, summary (default SUBMISSIONS-grades)")
     p.add_argument("--jobs", type=_v.flag_int(minimum=1), default=None,
