@@ -193,3 +193,25 @@ def test_from_grades_refuses_a_grades_json_the_last_run_could_not_replace(
     full.clear()
     with pytest.raises(ValueError, match="no grades.json of the last run"):
         rewrite_class(sub, "calibration", tmp_path / "out")
+
+
+def test_a_refused_similarity_report_is_named_and_from_grades_writes_it(tmp_path, monkeypatch,
+                                                                         full):
+    """The report's files and its counts at the end of summary.csv go through the run's
+    outputs: a refused write names them (the grades and the other files stand), and the
+    class-wide step alone writes them once there is room."""
+    sub = _class(tmp_path, monkeypatch)
+    full.add("similarity.html")
+    graded = grade_class(sub, "calibration", out=tmp_path / "out", seed=1)
+    out = graded.out
+    # similarity.csv was written before the page failed; the counts after it never were
+    assert graded.missing == {"similarity.html": ENOSPC, "summary.csv": ENOSPC}
+    assert (out / "similarity.csv").is_file() and not (out / "similarity.html").exists()
+    assert "integrity report" not in (out / "summary.csv").read_text(encoding="utf-8")
+    assert [g.status for g in graded.grades] == ["graded", "graded"]
+    full.clear()
+    again = rewrite_class(sub, "calibration", out)
+    assert again.missing == {} and (out / "similarity.html").is_file()
+    summary = (out / "summary.csv").read_text(encoding="utf-8")
+    assert summary.count("integrity report,similarity.html") == 1
+    assert any(ln.startswith("similarity: 0 notebooks compared") for ln in again.classwide)
