@@ -42,7 +42,7 @@ from typing import Any
 
 from gpsaccel import registry
 from gpsaccel._atomic import write_text
-from gpsaccel._untrusted import cell
+from gpsaccel._untrusted import cell, shown
 from gpsaccel.assignments.roster import Student
 from gpsaccel.assignments.scoring import Grade
 from gpsaccel.classrun import statuses

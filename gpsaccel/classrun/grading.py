@@ -278,6 +278,16 @@ def default_out(submissions: str | os.PathLike) -> Path:
     return s.parent / f"{s.name}-grades"
 
 
+def _earlier(compare_with: str | os.PathLike | None, similarity: bool) -> Path | None:
+    """The folder of earlier submissions the similarity report compares with (None: none)."""
+    if compare_with is None:
+        return None
+    if not (similarity and Path(compare_with).is_dir()):
+        raise ValueError(f"compare_with: {compare_with} must be a folder of earlier submissions, "
+                         f"and the similarity report asked for (it makes the comparison)")
+    return Path(compare_with)
+
+
 def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLike | None = None,
                 jobs: int | None = None, timeout: float = TIMEOUT, seed: int | None = None,
                 secret: bytes | None = None, student: str | Sequence[str] | None = None,
@@ -308,9 +318,7 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
     """
     folder = Path(submissions)
     out, jobs = _checked(folder, out, timeout, jobs)
-    if compare_with is not None and not (similarity and Path(compare_with).is_dir()):
-        raise ValueError(f"compare_with: {compare_with} must be a folder of earlier submissions, "
-                         f"and the similarity report asked for (it makes the comparison)")
+    earlier = _earlier(compare_with, similarity)
     students = read_roster(roster) if isinstance(roster, (str, os.PathLike)) else roster
     possible = item.possible_of(name)
     layout = Export(notebooks(name), export, students)
@@ -345,8 +353,7 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
         raise
     rows = record.finish(False, classwide.files(students is not None, similarity))
     lines = classwide.write(folder, out, name, rows, possible, students, similarity,
-                            record.outputs,
-                            Path(compare_with) if compare_with is not None else None)
+                            record.outputs, earlier)
     lines += _unmapped(students, layout) + ([f"rerun: {reuse}"] if reuse else [])
     record.save()
     return Graded([g for i, g in enumerate(record.grades) if g is not None
