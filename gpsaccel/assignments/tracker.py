@@ -15,8 +15,8 @@ from gpsaccel import registry
 from gpsaccel.assignments._answers import assert_report
 from gpsaccel.assignments.linear import matrices_answer
 from gpsaccel.check.linear import ModelProblem
-from gpsaccel.check.report import Report
 from gpsaccel.check.problems.tracker import N_FIXES, TRACKER, model
+from gpsaccel.check.report import Report
 from gpsaccel.kalman.linear_model import LinearModel
 
 #: The position fixes' rate (Hz): the same for every variant.

@@ -2,9 +2,10 @@
 content earns, changes no file outside its box, leaves no process and cannot stop the run.
 
 All of them are graded in one class run (module fixture, two at a time; once under bwrap and once
-under basic as root) next to two honest classmates whose grades must not move.  Every process an attack starts carries the marker
-:data:`MARK` in its command line; after the run a scan of ``/proc`` must find none (and kills by
-PID whatever it finds, so a failing test leaves nothing on the shared machine).  Floods are
+under basic as root) next to two honest classmates whose grades must not move.  Every process an
+attack starts carries the marker :data:`MARK` in its command line; after the run a scan of
+``/proc`` must find none (and kills by PID whatever it finds, so a failing test leaves nothing on
+the shared machine).  Floods are
 bounded by the attack itself as well as by the sandbox.
 """
 

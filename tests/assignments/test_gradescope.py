@@ -5,8 +5,8 @@ tests/test_kit.py and tests/test_packaging.py."""
 from __future__ import annotations
 
 import zipfile
-from pathlib import Path
 from importlib import metadata
+from pathlib import Path
 
 from gpsaccel.assignments.gradescope import package_wheel
 

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from gpsaccel import registry
-from gpsaccel.classrun import grade
 from gpsaccel.assignments.grading import assignment_module, student_variant
 from gpsaccel.assignments.linear import matrices, matrices_answer
 from gpsaccel.assignments.tracker import variant_model
 from gpsaccel.check.problems.tracker import TRACKER
+from gpsaccel.classrun import grade
 from gpsaccel.kalman.linear_model import LinearIngredients
 
 from .conftest import tracker_with_numpy_filter, write_variant

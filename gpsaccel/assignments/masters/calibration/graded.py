@@ -116,7 +116,8 @@ def _q3_grade(draw, answers) -> Report:
 def warm() -> None:
     """Imported once in the class's parent (:func:`gpsaccel.assignments.grading.warm`), not in
     every notebook's process: scipy.stats, whose χ² quantiles are q3's bounds (its price a
-    notebook: benchmarks/imports.py), and the modules q1 and the variants use.  Modules only: nothing is computed."""
+    notebook: benchmarks/imports.py), and the modules q1 and the variants use.  Modules only:
+    nothing is computed."""
     import scipy.stats  # noqa: F401
 
     import gpsaccel.assignments.variants  # noqa: F401
