@@ -171,7 +171,8 @@ def _cmd_grade(args: argparse.Namespace) -> int:
                                  roster=roster, similarity=not args.no_similarity,
                                  export=args.export, regrade=args.regrade,
                                  compare_with=args.compare_with)
-            term.out(grades_table(graded.grades))
+            if graded.grades:  # a rerun that kept every grade has no table (its line says so)
+                term.out(grades_table(graded.grades))
             for line in grade_mistakes(graded.grades):
                 term.out(line)
         _wrote(term, args, out, graded)

@@ -161,3 +161,29 @@ def test_a_rerun_keeps_the_grades_of_unchanged_notebooks_and_the_record_every_re
     assert [x["student"] for x in rec5["earlier"][-1]["regrades"]] == [["ann", "cy"]]  # one: "ann"
     with pytest.raises(ValueError, match="'dan'"):
         again(student=["ann", "dan"])
+
+
+def test_a_rerun_that_keeps_every_grade_prints_no_empty_table(tmp_path, monkeypatch, capsys):
+    """`gpsaccel grade ... | head -1` after a rerun that graded nothing showed an empty line:
+    the table of no grades. Its first line is now what the run wrote."""
+    from gpsaccel.cli import main
+
+    def fake(task, entries, jobs, executor, on_result):
+        for i, e in enumerate(entries):
+            g = item.unusable(task.name, e.student, e.found, "graded", "", e.id)
+            on_result(i, asdict(g))
+        return [None] * len(entries)
+
+    monkeypatch.setattr(running, "run", fake)
+    sub = tmp_path / "class"
+    for who in ("ann", "ben"):
+        (sub / who).mkdir(parents=True)
+        (sub / who / "calibration.ipynb").write_text("{}")
+    argv = ["grade", str(sub), "--assignment", "calibration", "--no-similarity"]
+    assert main(argv) == 0
+    first = capsys.readouterr().out.splitlines()
+    assert [ln.split()[0] for ln in first[:2]] == ["ann", "ben"]  # the table of the grading
+    assert main(argv) == 0
+    again = capsys.readouterr().out.splitlines()
+    assert again[0].startswith("wrote ") and "" not in again
+    assert any("2 unchanged notebook(s) not graded again" in ln for ln in again)
