@@ -273,7 +273,18 @@ def main(argv: list[str] | None = None) -> int:
         for path in fence():
             print(f"readable by root only: {path}")
         return 0
-    run(args[0] if args else "/autograder")
+    usage = ("usage: python -m gpsaccel.assignments.gradescope [ROOT | --fence]: grades "
+             "ROOT/submission/ (default ROOT /autograder) with the autograder zip unpacked "
+             "in ROOT/source/, writes ROOT/results/results.json")
+    if len(args) > 1 or (args and args[0].startswith("-")):
+        print(f"{usage}\nerror: unexpected argument(s): {' '.join(args)}", file=sys.stderr)
+        return 2
+    root = Path(args[0] if args else "/autograder")
+    if not (root / "source" / "config.json").is_file():
+        print(f"{usage}\nerror: ROOT: {root} has no source/config.json (unpack "
+              "NAME-gradescope.zip into ROOT/source/)", file=sys.stderr)
+        return 2
+    run(root)
     return 0
 
 

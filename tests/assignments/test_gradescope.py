@@ -114,3 +114,16 @@ def test_setup_fences_the_folders_no_box_may_read(tmp_path):
     for p in pkg.rglob("*"):
         hidden = any(p.relative_to(pkg).as_posix().startswith(rel) for rel in BOX_HIDES)
         assert (stat.S_IMODE(p.stat().st_mode) & 0o077 == 0) == hidden, p
+
+
+def test_the_module_refuses_an_option_and_a_root_without_the_zip_in_words(tmp_path, capsys):
+    """`python -m gpsaccel.assignments.gradescope --help` (an instructor trying the zip) was a
+    FileNotFoundError traceback for '--help/source/config.json'."""
+    from gpsaccel.assignments.gradescope import main
+
+    assert main(["--help"]) == 2
+    assert "unexpected argument(s): --help" in capsys.readouterr().err
+    assert main([str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert f"{tmp_path} has no source/config.json" in err and "gradescope.zip" in err
+    assert not (tmp_path / "results").exists()
