@@ -44,6 +44,23 @@ def test_every_homework_master_is_in_the_package_under_a_folder_the_box_never_se
     assert any(folder.is_relative_to(h) for h in hidden), (folder, hidden)
 
 
+def test_every_solution_and_graded_file_the_package_ships_is_hidden_from_a_box():
+    """Every notebook in the package that holds solutions (otter's SOLUTION markers) and every
+    graded.py (hidden checks) sits under a folder the box never sees: a redteam student's box
+    walked the site-packages and read homework/example/cv2d/graded.py, which an instructor who
+    grades the example homework uses as it ships."""
+    from gpsaccel.assignments.notebook import BOX_HIDES
+    from gpsaccel.sandbox import PACKAGE_DIR
+
+    hidden = [PACKAGE_DIR / rel for rel in BOX_HIDES]
+    secret = [p for p in PACKAGE_DIR.rglob("*")
+              if p.is_file() and (p.name == "graded.py" or (
+                  p.suffix == ".ipynb" and "SOLUTION" in p.read_text(encoding="utf-8")))]
+    assert any(p.name == "graded.py" for p in secret)  # the walk finds what it looks for
+    exposed = [p for p in secret if not any(p.is_relative_to(h) for h in hidden)]
+    assert exposed == [], exposed
+
+
 def test_the_override_folder_replaces_the_packaged_masters(tmp_path, monkeypatch):
     shutil.copytree(packaged_masters() / "ship", tmp_path / "ship")
     monkeypatch.setenv(ASSIGNMENTS_ENV, str(tmp_path))

@@ -41,11 +41,13 @@ from gpsaccel.sandbox import Call, Output, defines
 
 #: The folders of gpsaccel (relative to it) that a student's box may not read when it may import
 #: the package (``allow_gpsaccel``: the course's models for data): the checks, the homework's
-#: graded questions and reference answers, the lessons' self-check answers and the lessons'
-#: masters and solutions.  The sandbox keeps them out of reach on every backend
+#: graded questions and reference answers, the lessons' self-check answers, the lessons'
+#: masters and solutions, and the example homework (its master and graded.py, which an
+#: instructor may grade as shipped).  The sandbox keeps them out of reach on every backend
 #: (:func:`gpsaccel.sandbox.run`'s ``hide``); a graded notebook's box hides the same
 #: (:mod:`gpsaccel.assignments.notebook`).
-BOX_HIDES = ("check", "assignments", "exercises", "_lessons/masters", "_lessons/solutions")
+BOX_HIDES = ("check", "assignments", "exercises", "_lessons/masters", "_lessons/solutions",
+             "homework/example")
 
 
 def _hides(allow_gpsaccel: bool) -> tuple[str, ...]:
