@@ -363,7 +363,7 @@ def test_a_box_that_may_import_gpsaccel_reads_no_check_nor_answer_file(backend, 
     namespace: ENOENT).  A public module of the same package is read."""
     rel = ["check/batch.py", "check/problem.py", "assignments/ship.py",
            "assignments/__init__.py", "assignments/masters/calibration/graded.py",
-           "exercises/answers.py", "calibration/model.py"]
+           "exercises/answers.py", "homework/example/cv2d/graded.py", "calibration/model.py"]
     read = read_in_box(tmp_path, rel, backend, HIDE)
     assert set(read[:-1].ravel().tolist()) <= REFUSED, read
     size = min((sb.PACKAGE_DIR / rel[-1]).stat().st_size, 1 << 16)
