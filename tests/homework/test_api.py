@@ -176,19 +176,7 @@ def test_variants_never_give_the_public_point_and_say_how_often_students_share_o
 
 
 # ------------------------------------------------------------------------------- problems
-@pytest.fixture
-def registered_here():
-    """The problems a test registers are forgotten after it: the registry lives as long as the
-    pytest process, and a 'wind-test' left behind changed what the CLI's help lists for the
-    tests that ran after this module (test_front_door's registered choices, in some orders)."""
-    before = set(registry.problems())
-    yield
-    for name in set(registry._PROBLEMS) - before:
-        registry._PROBLEMS.pop(name)
-        registry._INSTANCES.pop(name, None)
-
-
-def test_a_problem_from_a_file_and_its_model_for_a_variant(tmp_path, registered_here):
+def test_a_problem_from_a_file_and_its_model_for_a_variant(tmp_path):
     path = tmp_path / "mine.py"
     path.write_text("import numpy as np\nfrom gpsaccel import check\n"
                     "wind = check.Problem.linear('wind-test', Phi=np.eye(2), Gamma=np.eye(2), "
