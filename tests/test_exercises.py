@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from gpsaccel import exercises
-from gpsaccel.exercises import RECORD_VARIABLE, _verdict, describe_miss, self_check, tolerance
+from gpsaccel._taught import taught
+from gpsaccel.exercises import RECORD_VARIABLE, WIDTH, _verdict, describe_miss, self_check, tolerance, wrapped
 
 
 def verdict(answer, expected, hint="", digits=3):
@@ -69,11 +70,27 @@ def test_a_miss_names_the_lesson_section_to_read_again(capsys, monkeypatch):
     monkeypatch.setattr("gpsaccel.exercises.answers.ANSWERS", {"00.2": 0.5, "99.5": 0.5})
     self_check("00.2", 2.0, hint="h")
     assert capsys.readouterr().out == ("✗ exercise 00.2: about 4× too large. Hint: h. Read again: "
-                                       "lesson 00, 'Forty predictions to the next fix'.\n")
+                                       "lesson 00, 'Forty predictions\n  to the next fix'.\n")
     self_check("00.2", 0.5)
     assert capsys.readouterr().out == "✓ exercise 00.2: right\n"
     self_check("99.5", 2.0)                       # a key the table does not know: no pointer
     assert capsys.readouterr().out == "✗ exercise 99.5: about 4× too large.\n"
+
+
+def test_a_long_verdict_is_wrapped_to_fit_the_output_area(capsys, monkeypatch):
+    """Lesson 09's hint, on one line, made JupyterLab's output scroll sideways at 1400 px: the
+    verdict is broken at spaces into lines of at most WIDTH characters, nothing lost or reordered."""
+    monkeypatch.setattr("gpsaccel.exercises.answers.ANSWERS", {"09.1": 0.5})
+    hint = ("the multirate σ of x is the square root of P[0, 0] at the first measurement time at "
+            "or after 50 s; P needs no data")
+    self_check("09.1", 2.0, hint=hint)
+    out = capsys.readouterr().out
+    lines = out.rstrip("\n").split("\n")
+    assert len(lines) >= 2 and max(len(s) for s in lines) <= WIDTH
+    assert all(s.startswith("  ") and not s.startswith("   ") for s in lines[1:])
+    assert " ".join(s.strip() for s in lines) == _verdict("exercise 09.1", 2.0, 0.5, hint, 3) + (
+        ". Read again: " + taught("09.1").cite() + ".")
+    assert wrapped("a " + "x" * 120 + " b", 20) == "a\n  " + "x" * 120 + "\n  b"   # a word stays whole
 
 
 def test_record_mode_writes_the_answer_instead_of_checking(tmp_path, monkeypatch, capsys):

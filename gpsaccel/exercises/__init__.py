@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import os
+import textwrap
 
 import numpy as np
 
@@ -25,6 +26,10 @@ from gpsaccel._taught import taught
 #: When set (by ``python -m gpsaccel.lessons measure``), :func:`self_check` appends each key and the
 #: answer it was given to this JSON-lines file instead of checking it.
 RECORD_VARIABLE = "GPSACCEL_RECORD_ANSWERS"
+
+#: The width a self-check's verdict is wrapped at: a hint on one long line made JupyterLab's output
+#: area scroll sideways at 1400 px; continuation lines are indented two spaces.
+WIDTH = 88
 
 def _expected(key: str):
     from gpsaccel.exercises.answers import ANSWERS
@@ -62,11 +67,18 @@ def self_check(key: str, answer, *, hint: str = "", name: str | None = None, dig
     section = taught(key)
     if line.startswith("✗") and section is not None:
         line += ("" if line.endswith(".") else ".") + f" Read again: {section.cite()}."
-    print(line)
+    print(wrapped(line))
+
+
+def wrapped(line: str, width: int = WIDTH) -> str:
+    """``line`` broken at spaces into lines of at most ``width`` characters (a word longer than
+    that, e.g. a path, stays whole), the continuation lines indented by two spaces."""
+    return textwrap.fill(line, width=width, subsequent_indent="  ", break_long_words=False,
+                         break_on_hyphens=False)
 
 
 def _verdict(label: str, answer, expected, hint: str, digits: int) -> str:
-    """The one line :func:`self_check` prints."""
+    """The verdict :func:`self_check` prints (on one line, before :func:`wrapped`)."""
     if answer is None:
         return f"… {label}: not answered yet (replace the None with your answer, then run this cell)"
     try:
