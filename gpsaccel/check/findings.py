@@ -176,6 +176,7 @@ def _runner_fields(failure: str, problem: dict, outputs: Sequence[sb.Output],
     done, n = int(f["done"]), int(f["n_calls"])  # type: ignore[call-overload]
     out: dict[str, object] = {
         "type": ret.get("type", ""), "name": problem.get("name", ""),
+        "a_type": "None" if ret.get("type") == "None" else f"a {ret.get('type', '')}",
         "error": str(problem.get("error", "")).rstrip("."),
         "shape_text": f" of shape {tuple(ret['shape'])}" if ret.get("shape") else "",
         "length_text": (f" with {problem['length']} items"

@@ -194,9 +194,12 @@ def _limit_hit(exc: BaseException | None) -> str | None:
 
 
 def _describe(value: object) -> dict:
-    """Type and (if it has one) shape of something the student returned."""
+    """Type and (if it has one) shape of something the student returned; ``None`` is named
+    ``None`` (a function without a return statement returns it; "builtins.NoneType" puzzles)."""
     import numpy as np
 
+    if value is None:
+        return {"type": "None"}
     out: dict = {"type": type(value).__module__ + "." + type(value).__qualname__}
     if isinstance(value, np.ndarray):
         out["shape"] = list(value.shape)

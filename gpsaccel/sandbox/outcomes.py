@@ -88,8 +88,8 @@ OUTCOMES: dict[str, Outcome] = {
     "exception": Outcome(
         "{function}(...) raised an exception on {label}; the traceback ends with:\n{traceback}"),
     "return-value": Outcome(
-        "{function}(...) must return a tuple ({outputs}); on {label} it returned a "
-        "{type}{shape_text}{length_text}. End it with: return {outputs}."),
+        "{function}(...) must return a tuple ({outputs}); on {label} it returned "
+        "{a_type}{shape_text}{length_text}. End it with: return {outputs}."),
     "not-numeric": Outcome(
         "{name} returned by {function} is not an array of numbers ({type}): np.array({name}, "
         "dtype=float) fails with: {error}."),

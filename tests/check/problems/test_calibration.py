@@ -164,6 +164,9 @@ def test_broken_submission_becomes_a_finding(name, code, words):
     ("def kalman_filter(z)\n    return z\n", "import-error", ["SyntaxError", "line 1"]),
     ("def kalman_filter(z):\n    return (r for r in z), [[1.0]]\n", "not-numeric", ["generator"]),
     ("def kalman_filter(z):\n    return [[1, 2], [3]], [[1.0]]\n", "not-numeric", ["x_hat"]),
+    # no return statement: None is named None (it read "a builtins.NoneType")
+    ("def kalman_filter(z):\n    x_hat = z\n", "return-value", ["on run 0 it returned None."]),
+    ("def kalman_filter(z):\n    return 1.5\n", "return-value", ["it returned a builtins.float."]),
 ])
 def test_files_written_on_the_fly(tmp_path, source, code, words):
     """Cases that cannot live in tests/submissions (a syntax error would break ruff there)."""
@@ -174,7 +177,7 @@ def test_files_written_on_the_fly(tmp_path, source, code, words):
     msg = report.findings[0].message
     for w in words:
         assert w in msg, (w, msg)
-    assert "_runner.py" not in msg and "<frozen" not in msg
+    assert "_runner.py" not in msg and "<frozen" not in msg and "NoneType" not in msg
 
 
 def test_a_p_that_is_no_covariance_is_flagged(calibration, tmp_path):
