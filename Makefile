@@ -68,9 +68,11 @@ test-fast: $(VENV)/.installed-test
 # LAB_FLAGS: e.g. --no-browser, --port 8890.  As root (a container, a lab machine's image) JupyterLab
 # refuses to start without --allow-root: it is added when `id -u` is 0.  The pre-save hook saves a
 # lesson without its outputs, so opening and running one leaves `git status` clean (docs/lessons.md).
+# JUPYTER_CONFIG_PATH: no "official Jupyter news?" prompt, as in `gpsaccel lab` (lessons/lab.py).
 LAB_FLAGS ?=
 LAB_ROOT  := $(if $(filter 0,$(shell id -u)),--allow-root,)
 lab: $(STAMP)
+	JUPYTER_CONFIG_PATH=gpsaccel/lessons/jupyter-config$${JUPYTER_CONFIG_PATH:+:$$JUPYTER_CONFIG_PATH} \
 	$(BIN)/jupyter lab --notebook-dir=lessons \
 	    --FileContentsManager.pre_save_hook=gpsaccel.lessons.pre_save $(LAB_ROOT) $(LAB_FLAGS)
 

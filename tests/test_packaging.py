@@ -184,14 +184,36 @@ def test_lessons_copy_copies_once_and_keeps_a_students_edits(tmp_path, capsys):
 
 def test_lab_copies_the_lessons_then_starts_jupyterlab_as_this_python(tmp_path, monkeypatch):
     pytest.importorskip("jupyterlab")
-    calls = []
-    monkeypatch.setattr(os, "execv", lambda path, cmd: calls.append(cmd))
+    calls, envs = [], []
+    monkeypatch.setattr(os, "execve", lambda path, cmd, env: (calls.append(cmd), envs.append(env)))
+    monkeypatch.setenv("JUPYTER_CONFIG_PATH", str(tmp_path / "mine"))
     assert main(["lab", str(tmp_path / "course"), "--no-browser", "--port", "8899"]) == 0
-    (cmd,) = calls
+    (cmd,), (env,) = calls, envs
+    # the news prompt off: gpsaccel's config directory first, the student's own kept after it
+    assert env["JUPYTER_CONFIG_PATH"].split(os.pathsep) == [str(lessons.lab.LAB_CONFIG),
+                                                          str(tmp_path / "mine")]
     assert cmd[:3] == [sys.executable, "-m", "jupyterlab"]
     assert f"--notebook-dir={tmp_path / 'course'}" in cmd and "--port=8899" in cmd
     assert ("--allow-root" in cmd) == (os.geteuid() == 0)
     assert (tmp_path / "course" / "01-truth-and-sensors.ipynb").is_file()
+
+
+def test_the_lab_gpsaccel_starts_does_not_ask_about_jupyter_news(tmp_path, monkeypatch):
+    """JupyterLab asks "Would you like to get notified about official Jupyter news?" while its
+    notification setting fetchNews is "none": the environment ``gpsaccel lab`` starts it in makes
+    jupyterlab_server's default for it "false" (read as the settings API reads it), and nothing
+    else; without that environment the default is untouched."""
+    pytest.importorskip("jupyterlab")
+    from jupyterlab_server.settings_utils import _get_overrides
+
+    monkeypatch.setenv("JUPYTER_CONFIG_DIR", str(tmp_path / "user"))  # no user's own labconfig
+    monkeypatch.delenv("JUPYTER_CONFIG_PATH", raising=False)
+    before, error = _get_overrides(str(tmp_path / "app-settings"))
+    assert error == "" and "@jupyterlab/apputils-extension:notification" not in before
+    monkeypatch.setenv("JUPYTER_CONFIG_PATH", lessons.lab.lab_environment()["JUPYTER_CONFIG_PATH"])
+    after, error = _get_overrides(str(tmp_path / "app-settings"))
+    assert error == "" and after == {**before, "@jupyterlab/apputils-extension:notification":
+                                     {"fetchNews": "false"}}
 
 
 def test_a_missing_extra_is_named(monkeypatch, tmp_path, capsys):

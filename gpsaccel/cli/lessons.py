@@ -66,7 +66,7 @@ def _cmd_lab(args: argparse.Namespace) -> int:
     """
     import os
 
-    from gpsaccel.lessons.lab import copy_lessons, lab_command
+    from gpsaccel.lessons.lab import copy_lessons, lab_command, lab_environment
 
     cmd = lab_command(args.folder, port=args.port, browser=not args.no_browser)
     if not any(args.folder.glob("*.ipynb")):
@@ -74,8 +74,8 @@ def _cmd_lab(args: argparse.Namespace) -> int:
         print(f"copied {len(copied)} notebooks into {args.folder}/", file=sys.stderr)
     print(" ".join(cmd), file=sys.stderr, flush=True)
     sys.stdout.flush()
-    os.execv(cmd[0], cmd)
-    return 0  # only where execv is replaced (the tests)
+    os.execve(cmd[0], cmd, lab_environment())  # the news prompt off (lessons.lab.LAB_CONFIG)
+    return 0  # only where execve is replaced (the tests)
 
 
 def add_lessons(sub: argparse._SubParsersAction) -> None:

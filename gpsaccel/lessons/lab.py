@@ -35,6 +35,22 @@ def copy_lessons(target: Path | str, solutions: bool = True) -> tuple[list[Path]
     return copied, kept
 
 
+#: A Jupyter config directory whose ``labconfig/default_setting_overrides.json`` sets the defaults
+#: of the lab gpsaccel starts: ``fetchNews`` "false", so JupyterLab does not open on "Would you like
+#: to get notified about official Jupyter news?" (its setting is "none", ask, by default).
+#: jupyterlab_server reads that file from every directory of the Jupyter config path, which
+#: ``JUPYTER_CONFIG_PATH`` extends (:func:`lab_environment`); a student's own settings still win.
+LAB_CONFIG = Path(__file__).parent / "jupyter-config"
+
+
+def lab_environment(environ: dict[str, str] | None = None) -> dict[str, str]:
+    """``environ`` (this process's) with :data:`LAB_CONFIG` first on ``JUPYTER_CONFIG_PATH``."""
+    env = dict(os.environ if environ is None else environ)
+    rest = env.get("JUPYTER_CONFIG_PATH", "")
+    env["JUPYTER_CONFIG_PATH"] = os.pathsep.join([str(LAB_CONFIG), *([rest] if rest else [])])
+    return env
+
+
 def lab_command(folder: Path | str, port: int | None = None, browser: bool = True) -> list[str]:
     """The command that opens JupyterLab on ``folder`` with this Python (so its kernel has
     gpsaccel); ``--allow-root`` when run as root (Jupyter refuses root otherwise)."""
