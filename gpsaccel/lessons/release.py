@@ -137,15 +137,44 @@ def _notebook(cells, nb):
 #: first line in its placeholder: this line is what shows, not the solution's first step.  A
 #: markdown cell shows its rendered text even when its source is hidden, so a markdown solution is
 #: wrapped in ``<details>``: closed until the student opens it (JupyterLab and the HTML pages).
-SOLUTION_LINE = {"code": "# Solution (open once you have tried)",
-                 "markdown": "<details><summary>Solution (open once you have tried)</summary>"}
+#: Each names its exercise (:func:`exercise_of`); the HTML template's summary of a code solution
+#: reads the same label from the cell's ``gpsaccel.solution`` metadata.
+SOLUTION_LINE = {"code": "# {label}", "markdown": "<details><summary>{label}</summary>"}
 
 
-def _solution_first_line(cell):
+def solution_label(exercise: str | None) -> str:
+    """The one wording of a collapsed solution: "Solution to exercise 03.2 (open once you have
+    tried)", or without the number where the master does not say which exercise it solves."""
+    to = f" to exercise {exercise}" if exercise else ""
+    return f"Solution{to} (open once you have tried)"
+
+
+#: What says which exercise a master's cell belongs to: a markdown cell opening with "*Exercise 2"
+#: or "**Solution 2.", the key of a self-check (``self_check("03.2"``) or an id ``solution-2``.  (An
+#: id like ``ex09s5`` does not: lesson 09's ``ex09q5`` is "*Exercise 3, solution:*".)
+_EXERCISE_ID = re.compile(r"^solution-(\d+)")
+_EXERCISE_TEXT = re.compile(r"^\*{1,2}(?:Exercise|Solution) (\d+)\b")
+_EXERCISE_CHECK = re.compile(r"""self_check\(\s*["'][0-9a-z]+\.(\d+)["']""")
+
+
+def exercise_of(cell, current: int | None) -> int | None:
+    """The exercise number ``cell`` belongs to; ``current`` (the last one seen) when it says none."""
+    source = cell["source"] if isinstance(cell["source"], str) else "".join(cell["source"])
+    for pattern, text in ((_EXERCISE_TEXT, source.lstrip()), (_EXERCISE_CHECK, source),
+                          (_EXERCISE_ID, cell.get("id", ""))):
+        found = pattern.search(text)
+        if found:
+            return int(found.group(1))
+    return current
+
+
+def _solution_first_line(cell, exercise: str | None = None):
+    label = solution_label(exercise)
+    cell.setdefault("metadata", {})["gpsaccel"] = {"solution": label}
     if cell["cell_type"] == "markdown":
-        cell["source"] = f"{SOLUTION_LINE['markdown']}\n\n{cell['source']}\n\n</details>"
+        cell["source"] = f"{SOLUTION_LINE['markdown'].format(label=label)}\n\n{cell['source']}\n\n</details>"
     else:
-        cell["source"] = f"{SOLUTION_LINE['code']}\n{cell['source']}"
+        cell["source"] = f"{SOLUTION_LINE['code'].format(label=label)}\n{cell['source']}"
     return cell
 
 
@@ -159,9 +188,11 @@ def student_version(nb, stem: str, measured: dict | None = None):
 def solutions_version(nb, stem: str, measured: dict | None = None):
     """Every cell but the ``answer`` ones; each ``check`` below the solution cells that follow it
     (so it checks the solution's ``answer_…``); solutions collapsed; outputs cleared."""
-    cells, pending = [], []
+    cells, pending, number = [], [], None
+    lesson = stem.split("-", 1)[0]
     for c in nb.cells:
         tags = _tags(c)
+        number = exercise_of(c, number)
         if ANSWER in tags:
             continue
         if CHECK in tags:
@@ -171,7 +202,8 @@ def solutions_version(nb, stem: str, measured: dict | None = None):
             cells += pending
             pending = []
         cell = _fill_text(_clean(c, hidden=SOLUTION in tags), stem, measured)
-        cells.append(_solution_first_line(cell) if SOLUTION in tags else cell)
+        key = f"{lesson}.{number}" if number is not None else None
+        cells.append(_solution_first_line(cell, key) if SOLUTION in tags else cell)
     return _notebook(cells + pending, nb)
 
 

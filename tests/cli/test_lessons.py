@@ -16,7 +16,7 @@ def test_lessons_html_renders_a_lesson_with_its_figures(lesson_02_html):
     html = (out_dir / "02-error-model.html").read_text(encoding="utf-8")
     assert "image/png" in html and "Deriving" in html
     # the solutions version, as on the docs site: solutions there, collapsed
-    assert "Solution (click to reveal)" in html and "exercise 02.3: right" in html
+    assert "Solution to exercise 02.3 (open once you have tried)" in html and "exercise 02.3: right" in html
     assert "1 lessons executed" in out
 
 

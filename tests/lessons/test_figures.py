@@ -79,7 +79,8 @@ def test_rendered_lesson_and_index_in_a_headless_browser(lesson_02_html):
         pytest.skip("no Chromium/Chrome installed (apt-get install chromium)")
     tmp_path, returncode, _, err = lesson_02_html
     assert returncode == 0, err
-    for page, must in [("02-error-model.html", ["Deriving", "<img", "Solution (click to reveal)"]),
+    solution = "Solution to exercise 02.1 (open once you have tried)"
+    for page, must in [("02-error-model.html", ["Deriving", "<img", solution]),
                        ("index.html", ["02-error-model.html", "Report 004"])]:
         dom = subprocess.run(
             [browser, "--headless", "--no-sandbox", "--disable-gpu", "--dump-dom",

@@ -60,10 +60,39 @@ def test_a_collapsed_solution_shows_a_neutral_first_line():
     text.metadata["tags"] = [L.SOLUTION]
     nb.cells = [sol, text]
     out = L.solutions_version(nb, "99-x").cells
-    assert [c.source.splitlines()[0] for c in out] == [L.SOLUTION_LINE["code"], L.SOLUTION_LINE["markdown"]]
+    label = "Solution (open once you have tried)"       # no exercise said which: no number
+    assert [c.source.splitlines()[0] for c in out] == [f"# {label}", f"<details><summary>{label}</summary>"]
+    assert [c.metadata["gpsaccel"]["solution"] for c in out] == [label, label]  # the HTML's summary
     assert out[0].source.endswith("x = secret_method()")
     assert out[1].source.endswith("Because of the method.\n\n</details>")   # shown only when opened
     assert all(c.metadata["jupyter"]["source_hidden"] for c in out)
+
+
+def test_each_collapsed_solution_names_its_exercise():
+    """Three blocks after exercise 1 read alike ("Solution (click to reveal)", "Solution (open once
+    you have tried)" twice) though the third solved exercise 2: each names its exercise, from the
+    self-check before it, a cell opening "*Exercise 2" or an id ``solution-3``, in one wording."""
+    def cell(kind, source, tags=(), id=None):
+        c = (nbformat.v4.new_code_cell if kind == "code" else nbformat.v4.new_markdown_cell)(source)
+        c.metadata["tags"], c.id = list(tags), id or c.id
+        return c
+
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [cell("code", "answer_1 = None", [L.ANSWER]),
+                cell("code", 'self_check("09b.1", answer_1)', [L.CHECK]),
+                cell("code", "answer_1 = 2.0", [L.SOLUTION]),
+                cell("markdown", "Because.", [L.SOLUTION]),
+                cell("markdown", "*Exercise 2, solution:*", [L.SOLUTION], id="ex09b5"),
+                cell("code", "plot()", [L.SOLUTION], id="ex09s5"),   # an id's digit says nothing
+                cell("markdown", "**Solution 3.** Algebra.", [L.SOLUTION]),
+                cell("code", "more()", [L.SOLUTION], id="solution-4")]
+    out = [c for c in L.solutions_version(nb, "09b-ship").cells if L.SOLUTION in c.metadata["tags"]]
+    labels = [c.metadata["gpsaccel"]["solution"] for c in out]
+    assert labels == [L.solution_label(k) for k in
+                      ("09b.1", "09b.1", "09b.2", "09b.2", "09b.3", "09b.4")]
+    assert labels[0] == "Solution to exercise 09b.1 (open once you have tried)"
+    assert out[0].source.splitlines()[0] == "# " + labels[0]
+    assert out[2].source.splitlines()[0] == f"<details><summary>{labels[2]}</summary>"
 
 
 def test_a_slow_cell_says_so_in_words():
