@@ -187,9 +187,12 @@ def student_version(nb, stem: str, measured: dict | None = None):
 
 def solutions_version(nb, stem: str, measured: dict | None = None):
     """Every cell but the ``answer`` ones; each ``check`` below the solution cells that follow it
-    (so it checks the solution's ``answer_…``); solutions collapsed; outputs cleared."""
+    (so it checks the solution's ``answer_…``); solutions collapsed; outputs cleared.  An exercise
+    whose prompt is only in the lesson's "## Exercises" list gets it above its first solution
+    (:func:`exercise_prompts`), so a reader of the solutions sees what each one answers."""
     cells, pending, number = [], [], None
     lesson = stem.split("-", 1)[0]
+    prompts, shown = exercise_prompts(nb), set()
     for c in nb.cells:
         tags = _tags(c)
         number = exercise_of(c, number)
@@ -202,9 +205,48 @@ def solutions_version(nb, stem: str, measured: dict | None = None):
             cells += pending
             pending = []
         cell = _fill_text(_clean(c, hidden=SOLUTION in tags), stem, measured)
-        key = f"{lesson}.{number}" if number is not None else None
-        cells.append(_solution_first_line(cell, key) if SOLUTION in tags else cell)
+        if SOLUTION not in tags:
+            if cell["cell_type"] == "markdown" and _EXERCISE_TEXT.match(cell["source"].lstrip()):
+                shown.add(number)                  # the master's own prompt cell: shown as it is
+            cells.append(cell)
+            continue
+        if number in prompts and number not in shown:
+            cells.append(_prompt_cell(number, prompts[number], stem, measured))
+            shown.add(number)
+        cells.append(_solution_first_line(cell, f"{lesson}.{number}" if number is not None else None))
     return _notebook(cells + pending, nb)
+
+
+_LIST_ITEM = re.compile(r"^(\d+)\.\s+(.*)$")
+
+
+def exercise_prompts(nb) -> dict[int, str]:
+    """{number: text} of the items of the lesson's "## Exercises" cell (a numbered list, each
+    item's continuation lines indented), as the master writes them."""
+    prompts: dict[int, list[str]] = {}
+    for cell in nb.cells:
+        source = cell["source"] if isinstance(cell["source"], str) else "".join(cell["source"])
+        if cell["cell_type"] != "markdown" or not source.startswith("## Exercises"):
+            continue
+        current = None
+        for line in source.splitlines()[1:]:
+            item = _LIST_ITEM.match(line)
+            if item:
+                current = int(item.group(1))
+                prompts[current] = [item.group(2)]
+            elif current is not None and line.startswith("   "):
+                prompts[current].append(line[3:])
+            elif line.strip():
+                current = None                      # text after the list
+        break
+    return {n: "\n".join(lines).strip() for n, lines in prompts.items()}
+
+
+def _prompt_cell(number: int, text: str, stem: str, measured: dict | None):
+    import nbformat
+
+    cell = nbformat.v4.new_markdown_cell(f"*Exercise {number}:* {text}", id=f"exercise-{number}-prompt")
+    return _fill_text(cell, stem, measured)
 
 
 def lab_text(nb) -> str:

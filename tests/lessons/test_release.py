@@ -95,6 +95,26 @@ def test_each_collapsed_solution_names_its_exercise():
     assert out[2].source.splitlines()[0] == f"<details><summary>{labels[2]}</summary>"
 
 
+def test_an_exercise_listed_only_at_the_top_gets_its_prompt_above_its_solution():
+    """Lesson 03's exercises 2-4 are asked only in its "## Exercises" list: the solutions version
+    repeats each item above the first solution of that exercise; an exercise with a prompt cell
+    of its own (exercise 2 here) is left as it is."""
+    nb = nbformat.v4.new_notebook()
+    listing = nbformat.v4.new_markdown_cell("## Exercises\n\n1. First [[0.687]] question,\n   "
+                                            "continued.\n2. Second question.\n\nAfter the list.")
+    own = nbformat.v4.new_markdown_cell("*Exercise 2:* the second, asked here.")
+    sols = [nbformat.v4.new_markdown_cell(s) for s in ("*Exercise 1, solution:*", "*Exercise 2, solution:*")]
+    for c in sols:
+        c.metadata["tags"] = [L.SOLUTION]
+    nb.cells = [listing, sols[0], own, sols[1]]
+    assert L.exercise_prompts(nb) == {1: "First [[0.687]] question,\ncontinued.", 2: "Second question."}
+    out = L.solutions_version(nb, "03-x").cells
+    assert [c.source.splitlines()[0] for c in out[1:]] == [
+        "*Exercise 1:* First 0.687 question,", f"<details><summary>{L.solution_label('03.1')}</summary>",
+        "*Exercise 2:* the second, asked here.", f"<details><summary>{L.solution_label('03.2')}</summary>"]
+    assert "jupyter" not in out[1].metadata                       # the prompt is not collapsed
+
+
 def test_a_slow_cell_says_so_in_words():
     nb = nbformat.v4.new_notebook()
     nb.cells = [nbformat.v4.new_code_cell("work()", id="c1")]
