@@ -96,6 +96,9 @@ class Roster:
     students: list[Student]
     form: str
     ids: str
+    #: Canvas's assignment columns ("Homework 1 (5501)": a name and Canvas's id in brackets),
+    #: the columns a ``canvas.csv`` can fill (``gpsaccel grade --canvas-column``); () else.
+    assignments: tuple[str, ...] = ()
 
     def describe(self) -> str:
         return f"{FORMS[self.form]} ({len(self.students)} students; ids: {self.ids})"
@@ -223,7 +226,13 @@ def _read_canvas(path: Path, header: list[str], rows) -> Roster:  # noqa: ANN001
         out.append(Student(c["ID"], name=name, first_name=first, last_name=last,
                            sis_id=c.get("SIS User ID", ""), login_id=c.get("SIS Login ID", ""),
                            canvas_id=c["ID"], section=c.get("Section", "")))
-    return Roster(out, "canvas", "Canvas user ids (its ID column)")
+    return Roster(out, "canvas", "Canvas user ids (its ID column)",
+                  tuple(h for h in header if _ASSIGNMENT.search(h)))
+
+
+#: A Canvas assignment column: its name, then the assignment's id in brackets (the score
+#: columns, "Current Score", ..., have none).
+_ASSIGNMENT = re.compile(r"\(\d+\)$")
 
 
 def _id_column(path: Path, header: list[str], form: str) -> str:

@@ -11,8 +11,9 @@ the LMS's identifiers:
 * ``canvas.csv``: Canvas's gradebook CSV (Grades > Import): ``Student, ID, SIS User ID, SIS Login
   ID, Section, <homework>``, then a ``Points Possible`` row, as Canvas exports it.  Canvas matches
   a row by ``ID`` (its user id; the roster's ``canvas_id``), else ``SIS User ID`` / ``SIS Login
-  ID`` (``sis_id``, ``login_id``).  A new column name makes a new assignment; name it as an
-  existing one (with Canvas's "(id)" suffix) to fill that one.
+  ID`` (``sis_id``, ``login_id``).  The grade column is named ``canvas_column`` (an assignment
+  column of Canvas's own gradebook export, "Homework 1 (5501)", which the import fills), else
+  the homework's title, which Canvas imports as a new assignment.
 * ``moodle.csv``: for Moodle's grade import (Grades > Import > CSV file): ``First name, Last name,
   ID number, Email address, <homework>``; map "Email address" (or "ID number") to the user and the
   homework column to a grade item.
@@ -68,10 +69,11 @@ def files(roster: bool, similarity: bool) -> tuple[str, ...]:
 def write(submissions: Path, out: Path, name: str, grades: Sequence[Grade],
           possible: dict[str, float], roster: Sequence[Student] | None,
           similarity: bool = True, outputs: Outputs | None = None,
-          compare_with: Path | None = None) -> list[str]:
+          compare_with: Path | None = None, canvas_column: str | None = None) -> list[str]:
     """Write the gradebook files (with a roster) and the similarity report (with
     ``compare_with``: against earlier submissions too) into ``out``; the lines to show the
-    instructor.  ``outputs``: where a write the file system refuses is recorded (the other files
+    instructor.  ``canvas_column``: the name of ``canvas.csv``'s grade column (module
+    docstring).  ``outputs``: where a write the file system refuses is recorded (the other files
     are still written); without it, the error is raised."""
     def each(names: Sequence[str], writer: Callable[..., Any], *args: Any) -> Any:
         return outputs.write(names, writer, *args) if outputs is not None else writer(*args)
@@ -79,7 +81,7 @@ def write(submissions: Path, out: Path, name: str, grades: Sequence[Grade],
     lines = statuses.unscored_lines(grades) + statuses.scored_zero_lines(grades)
     if roster is not None:
         missing = each(FILES, write_gradebooks, grades, possible, roster,
-                       registry.assignment(name).title or name, out)
+                       registry.assignment(name).title or name, out, canvas_column)
         if missing is not None:
             lines.append("gradebooks: " + ", ".join(str(out / f) for f in FILES))
         if missing:
@@ -164,13 +166,16 @@ def gradescope_rows(grades: dict, possible: dict[str, float], roster: Sequence[S
 
 
 def write_gradebooks(grades: Sequence[Grade], possible: dict[str, float],
-                     roster: Sequence[Student], title: str, out: str | Path) -> list[str]:
-    """Write :data:`FILES` into ``out`` (module docstring); returns the students graded but not
-    on the roster (written nowhere but ``grades.csv``)."""
+                     roster: Sequence[Student], title: str, out: str | Path,
+                     canvas_column: str | None = None) -> list[str]:
+    """Write :data:`FILES` into ``out`` (module docstring; ``canvas.csv``'s grade column named
+    ``canvas_column``, else ``title``); returns the students graded but not on the roster
+    (written nowhere but ``grades.csv``)."""
     out = Path(out)
     by_id = _by_student(grades)
     ids = {_key(s.id) for s in roster}
-    write_text(out / "canvas.csv", csv_text(canvas_rows(by_id, possible, roster, title)))
+    write_text(out / "canvas.csv", csv_text(canvas_rows(by_id, possible, roster,
+                                                            canvas_column or title)))
     write_text(out / "moodle.csv", csv_text(moodle_rows(by_id, roster, title)))
     people, scores = gradescope_rows(by_id, possible, roster)
     write_text(out / "gradescope-roster.csv", csv_text(people))

@@ -295,7 +295,8 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
                 roster: Sequence[Student] | str | os.PathLike | None = None,
                 similarity: bool = True, naming: Naming | None = None,
                 export: str = "auto", regrade: bool = False,
-                compare_with: str | os.PathLike | None = None) -> Graded:
+                compare_with: str | os.PathLike | None = None,
+                canvas_column: str | None = None) -> Graded:
     """Grade every student of ``submissions`` for homework ``name`` and write every file
     (module docstring); :func:`grade` is this with the grades alone.
 
@@ -314,7 +315,8 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
     ``out`` reuses the recorded seed and the recorded grade of every notebook that is unchanged
     (its SHA-256) under the same homework, secret, sandbox, time limit and gpsaccel.
     compare_with : a folder of earlier submissions (an export as graded) the similarity report
-    compares every answer with too.
+    compares every answer with too.  canvas_column : the name of ``canvas.csv``'s grade column
+    (:mod:`gpsaccel.classrun.classwide`; default the homework's title).
     """
     folder = Path(submissions)
     out, jobs = _checked(folder, out, timeout, jobs)
@@ -353,7 +355,7 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
         raise
     rows = record.finish(False, classwide.files(students is not None, similarity))
     lines = classwide.write(folder, out, name, rows, possible, students, similarity,
-                            record.outputs, earlier)
+                            record.outputs, earlier, canvas_column)
     lines += _unmapped(students, layout) + ([f"rerun: {reuse}"] if reuse else [])
     record.save()
     return Graded([g for i, g in enumerate(record.grades) if g is not None
@@ -362,7 +364,7 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
 
 def rewrite_class(submissions: str | os.PathLike, name: str, out: str | os.PathLike | None = None,
                   roster: Sequence[Student] | str | os.PathLike | None = None,
-                  similarity: bool = True) -> Graded:
+                  similarity: bool = True, canvas_column: str | None = None) -> Graded:
     """The class-wide step again from the grades a run recorded, without grading a notebook
     (``gpsaccel grade --from-grades``): ``grades.csv`` and the summary from ``grades.json``,
     then the gradebooks (with a roster) and the similarity report, each as :func:`grade_class`
@@ -396,7 +398,8 @@ def rewrite_class(submissions: str | os.PathLike, name: str, out: str | os.PathL
     outputs.write(["grades.csv"], writing.write_grades, rows, possible, out / "grades.csv")
     outputs.write(SUMMARY, writing.write_summary, summary(rows, possible), rows, out)
     outputs.pending(classwide.files(students is not None, similarity))  # one it declines
-    lines = classwide.write(folder, out, name, rows, possible, students, similarity, outputs)
+    lines = classwide.write(folder, out, name, rows, possible, students, similarity, outputs,
+                            canvas_column=canvas_column)
     info.setdefault("rewrites", []).append({
         "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         "roster": students is not None, "similarity": similarity})

@@ -168,7 +168,6 @@ def _cmd_grade(args: argparse.Namespace) -> int:
     room, and the command exits 2."""
     from gpsaccel.assignments.generate import resolve
     from gpsaccel.assignments.grading import read_secret
-    from gpsaccel.assignments.roster import read_roster
     from gpsaccel.assignments.scoring import TIMEOUT
     from gpsaccel.classrun.grading import default_out, grade_class, rewrite_class
     from gpsaccel.classrun.writing import grade_mistakes, grades_table, terminal
@@ -182,14 +181,15 @@ def _cmd_grade(args: argparse.Namespace) -> int:
                          "only, not to Dask's workers; leave out --dask")
     if args.from_grades:
         _only_class_wide(args)
-    roster = read_roster(args.roster) if args.roster is not None else None
+    roster, hint = _roster(args)
     out = args.out if args.out is not None else default_out(args.submissions)
     if args.secret_file is not None and not args.from_grades:
         _secret_out_of_reach(args.secret_file, args.sandbox)
     with terminal() as term:
         if args.from_grades:
             graded = rewrite_class(args.submissions, name, out, roster,
-                                   similarity=not args.no_similarity)
+                                   similarity=not args.no_similarity,
+                                   canvas_column=args.canvas_column)
         else:
             graded = grade_class(args.submissions, name, out=out, jobs=args.jobs,
                                  timeout=args.timeout or TIMEOUT, seed=args.seed,
@@ -197,13 +197,44 @@ def _cmd_grade(args: argparse.Namespace) -> int:
                                  dask=args.dask, sandbox=args.sandbox, progress=True,
                                  roster=roster, similarity=not args.no_similarity,
                                  export=args.export, regrade=args.regrade,
-                                 compare_with=args.compare_with)
+                                 compare_with=args.compare_with,
+                                 canvas_column=args.canvas_column)
             if graded.grades:  # a rerun that kept every grade has no table (its line says so)
                 term.out(grades_table(graded.grades))
             for line in grade_mistakes(graded.grades):
                 term.out(line)
         _wrote(term, args, out, graded)
+        if hint:
+            term.out(hint)
     return 2 if graded.missing else 0
+
+
+def _roster(args: argparse.Namespace) -> tuple[list | None, str]:
+    """The students of ``--roster`` (None without one), ``--canvas-column`` checked against its
+    assignment columns, and the line that names the column to pass when a Canvas gradebook
+    export has exactly one and none was given ("" else)."""
+    from gpsaccel.assignments.roster import FORMS, read
+
+    if args.roster is None:
+        if args.canvas_column is not None:
+            raise ValueError("--canvas-column names a column of --roster (Canvas's gradebook "
+                             "export): give --roster")
+        return None, ""
+    roster = read(args.roster)
+    column = args.canvas_column
+    if column is not None and column not in roster.assignments:
+        has = (f"its assignment columns are {', '.join(map(repr, roster.assignments))}"
+               if roster.assignments else f"it has no assignment column (read as "
+               f"{FORMS[roster.form]}; Canvas's gradebook export has them: 'Homework 1 (5501)')")
+        raise ValueError(f"--canvas-column: {column!r} is not a column of --roster "
+                         f"{args.roster}: {has}")
+    hint = ""
+    if column is None and len(roster.assignments) == 1:
+        one = roster.assignments[0]
+        hint = (f"canvas.csv: its grade column is the homework's title, which Canvas imports "
+                f"as a new assignment; to fill {one!r} of {args.roster}, add --canvas-column "
+                f"{shlex.quote(one)}")
+    return roster.students, hint
 
 
 def _wrote(term: Terminal, args: argparse.Namespace, out: Path, graded: Graded) -> None:
@@ -221,6 +252,7 @@ def _wrote(term: Terminal, args: argparse.Namespace, out: Path, graded: Graded) 
     again = " ".join(shlex.quote(str(a)) for a in (
         "gpsaccel", "grade", args.submissions, "--assignment", args.assignment, "--out", out,
         *(("--roster", args.roster) if args.roster is not None else ()),
+        *(("--canvas-column", args.canvas_column) if args.canvas_column is not None else ()),
         *(("--no-similarity",) if args.no_similarity else ()), "--from-grades"))
     for line in missing_lines(graded.missing, again):
         term.err(line)
@@ -286,6 +318,10 @@ def add_grade(sub: argparse._SubParsersAction) -> None:
                         "roster), one id a line, or a CSV file with an id column: maps each "
                         "submission to its student and writes canvas.csv, moodle.csv and "
                         "Gradescope's CSV files too (docs/grading.md)")
+    p.add_argument("--canvas-column", default=None, metavar="COLUMN",
+                   help="name canvas.csv's grade column as this assignment column of --roster "
+                        "(Canvas's gradebook export, e.g. 'Homework 1 (5501)'), so Canvas's "
+                        "import fills it (default: the homework's title, a new assignment)")
     p.add_argument("--export", choices=("auto", "plain", "canvas", "moodle", "gradescope"),
                    default="auto",
                    help="how SUBMISSIONS was downloaded (default auto: told from the names; "

@@ -117,3 +117,17 @@ def test_the_ids_no_file_or_folder_can_be_named_are_named(tmp_path):
                     encoding="utf-8")
     students = read_roster(path)
     assert unmatchable(students) == ["a/b", ".hidden", "x" * 256]  # a newline can be a name
+
+
+def test_canvas_gradebook_export_names_its_assignment_columns_not_its_scores(tmp_path):
+    """The columns a canvas.csv can fill (``gpsaccel grade --canvas-column``): an assignment's
+    "Name (id)", never Canvas's read-only score columns; no other form has any."""
+    for text, n in ((CANVAS, 1), (CANVAS_MANUAL, 1)):
+        (tmp_path / "r.csv").write_text(text)
+        assert read(tmp_path / "r.csv").assignments == ("Homework 1 (5501)",), n
+    (tmp_path / "two.csv").write_text(CANVAS.replace(
+        "Homework 1 (5501),", "Homework 1 (5501),Quiz (2) (5502),").replace(
+        "10.00,", "10.00,5.00,"))
+    assert read(tmp_path / "two.csv").assignments == ("Homework 1 (5501)", "Quiz (2) (5502)")
+    (tmp_path / "m.csv").write_text(MOODLE_GRADES)
+    assert read(tmp_path / "m.csv").assignments == ()
