@@ -246,6 +246,12 @@ def _key(student: str) -> str:
     return _untrusted.student_id(student).casefold()
 
 
+class Superseded(str):
+    """The note of an attempt a later one of its student replaced (:func:`_latest`): a note of
+    its own type, so the run prints these (the instructor may expect the earlier file graded)
+    and no file name that reads like one is taken for one."""
+
+
 def _latest(entries: list[Entry], notes: list[str]) -> list[Entry]:
     """Of one student's entries (by id, without case) the highest attempt; the earlier ones are
     noted as superseded.  A naming that reads no attempts changes nothing here."""
@@ -256,8 +262,8 @@ def _latest(entries: list[Entry], notes: list[str]) -> list[Entry]:
     kept = []
     for e in entries:
         if e.problem is None and e.attempt < best[_key(e.student)]:
-            notes.append(f"{_untrusted.shown(e.found)}: superseded by a later attempt of "
-                         f"{e.shown}")
+            notes.append(Superseded(f"{_untrusted.shown(e.found)}: superseded by a later "
+                                    f"attempt of {e.shown}"))
         else:
             kept.append(e)
     return kept

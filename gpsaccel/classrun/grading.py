@@ -60,7 +60,7 @@ from gpsaccel.assignments.roster import Student, read_roster
 from gpsaccel.assignments.scoring import TIMEOUT, Grade
 from gpsaccel.classrun import classwide, running, statuses, writing
 from gpsaccel.classrun.classwide import UNMAPPED
-from gpsaccel.classrun.entries import Entry, Naming, notebooks, walk
+from gpsaccel.classrun.entries import Entry, Naming, Superseded, notebooks, walk
 from gpsaccel.classrun.exports import Export
 
 
@@ -357,6 +357,8 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
     lines = classwide.write(folder, out, name, rows, possible, students, similarity,
                             record.outputs, earlier, canvas_column)
     lines += _unmapped(students, layout) + ([f"rerun: {reuse}"] if reuse else [])
+    lines += [f"not graded: {n} (grading.json's skipped)" for n in notes
+              if isinstance(n, Superseded)]
     record.save()
     return Graded([g for i, g in enumerate(record.grades) if g is not None
                    and i not in record.reused], rows, out, lines, dict(record.outputs.missing))
