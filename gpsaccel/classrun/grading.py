@@ -34,8 +34,9 @@ inside the checker's sandbox, every score computed outside, every file written b
   of every notebook whose SHA-256 is unchanged (same homework, secret, sandbox, time limit and
   gpsaccel; ``regrade=True`` grades every one again); ``student=ID`` (or several ids) regrades
   those students with the recorded seed: each old row stays until its new one is written, and
-  the regrade is appended to ``grading.json``'s ``regrades``; a run that starts a new record
-  keeps the earlier ones in its ``earlier``;
+  the regrade is appended to ``grading.json``'s ``regrades`` (its ``student``: a list of ids);
+  a run that starts a new record keeps the earlier ones in its ``earlier``, but for a run that
+  graded nothing on the same seed (:func:`_idle`);
 * ``dask=...`` sends each notebook to a Dask cluster (same function, same seed: same grades)
   with the same deadline.
 """
@@ -182,7 +183,7 @@ class _Record:
         if self.student is None or not self.previous:
             earlier = self.previous.get("earlier", []) + (
                 [{k: v for k, v in self.previous.items() if k not in ("earlier", "notebooks")}]
-                if self.previous else [])
+                if self.previous and not _idle(self.previous, info["seed"]) else [])
             self.info = {**info, "regrades": [], "earlier": earlier}
         else:  # the class record stays; the regrade is appended to it
             self.info = self.previous
@@ -343,7 +344,7 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
         "variants": "per student (HMAC of the id under the instructor's secret)" if secret
         else "none (no secret given: every student has the public notebook's numbers)",
         "questions": possible, "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-        "student": wanted if wanted is None or len(wanted) > 1 else wanted[0],
+        "student": wanted,
         "export": layout.found, "skipped": notes, "reuse": _fingerprint(settings)})
     todo = [i for i in range(len(entries)) if i not in record.reused]
     try:
@@ -455,6 +456,14 @@ def _resumed(record: _Record, entries: list[Entry], wanted: Sequence[str] | None
         record.notebooks = {e.id: _digest(e.path) for e in entries if e.path is not None}
     settings["seed"], _ = running.seed_of(seed)
     return entries, reuse
+
+
+def _idle(record: dict, seed: int) -> bool:
+    """A recorded run that graded nothing on ``seed`` (every grade kept, no regrade since, not
+    interrupted): the run it kept them from is in ``earlier`` already, so a rerun replaces it
+    rather than keeping it there once more."""
+    return (record.get("graded") == 0 and record.get("seed") == seed
+            and not record.get("regrades") and not record.get("interrupted"))
 
 
 def _digest(path: Path) -> str:

@@ -180,7 +180,7 @@ def _stop_a_regrade(hostile, first_cell: str, running, sig: int):
     assert _rows(out)["alice"] == before
     info = json.loads(record.read_text(encoding="utf-8"))
     assert info["student"] is None and info["seed"] == 7  # the class record is kept
-    assert info["regrades"][-1]["student"] == "alice" and info["regrades"][-1]["interrupted"]
+    assert info["regrades"][-1]["student"] == ["alice"] and info["regrades"][-1]["interrupted"]
     return proc.returncode, stderr, left
 
 
@@ -225,7 +225,7 @@ def test_a_regrade_replaces_its_row_and_is_appended_to_the_record(hostile):
     assert rows["deep"]["status"] == "file-limit" and rows["alice"]["total"] == "10"
     info = json.loads((out / "grading.json").read_text(encoding="utf-8"))
     assert info["student"] is None and [r["student"] for r in info["regrades"]] == \
-        ["alice", "alice", "mallory"]  # two interrupted (Ctrl-C, SIGTERM), then this one
+        [["alice"], ["alice"], ["mallory"]]  # two interrupted (Ctrl-C, SIGTERM), then this one
     assert info["regrades"][-1]["seed"] == 7 and not info["regrades"][-1]["interrupted"]
 
 

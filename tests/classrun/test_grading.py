@@ -149,6 +149,9 @@ def test_a_rerun_keeps_the_grades_of_unchanged_notebooks_and_the_record_every_re
     assert sent[1:] == [] and now == [] and rec2["seed"] == rec1["seed"]
     assert (out / "grades.csv").read_text().replace("0.0", "") == rows1.replace("0.0", "")
     assert rec2["reused"] == 3 and rec2["graded"] == 0
+    for _ in range(2):  # plain reruns that grade nothing on the same seed: no new earlier
+        now, rec = again()
+        assert now == [] and rec["earlier"] == rec2["earlier"] and len(rec["earlier"]) == 1
     (sub / "ben" / "calibration.ipynb").write_text("{  }")  # ben hands in again
     now, rec3 = again()
     assert sent[1:] == [["ben"]] and [g.student for g in now] == ["ben"]
@@ -157,8 +160,12 @@ def test_a_rerun_keeps_the_grades_of_unchanged_notebooks_and_the_record_every_re
     assert sent[2:] == [["ann", "cy"]]
     now, rec5 = again(regrade=True)  # everyone, a new seed; the earlier records kept
     assert sent[3:] == [["ann", "ben", "cy"]] and rec5["seed"] != rec1["seed"]
-    assert [r["seed"] for r in rec5["earlier"]] == [rec1["seed"]] * 3
-    assert [x["student"] for x in rec5["earlier"][-1]["regrades"]] == [["ann", "cy"]]  # one: "ann"
+    # the first run and the one that graded ben; the rerun that graded nothing is not kept
+    assert [(r["seed"], r["graded"]) for r in rec5["earlier"]] == [(rec1["seed"], 3),
+                                                                   (rec1["seed"], 1)]
+    assert [x["student"] for x in rec5["earlier"][-1]["regrades"]] == [["ann", "cy"]]
+    now, rec6 = again(student="ann")  # one student: a list of one id, as several are
+    assert [x["student"] for x in rec6["regrades"]] == [["ann"]]
     with pytest.raises(ValueError, match="'dan'"):
         again(student=["ann", "dan"])
 
