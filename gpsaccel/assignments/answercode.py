@@ -8,7 +8,8 @@ fingerprint tokens (:mod:`gpsaccel.assignments.fingerprint`) and the names the q
 that no visible code defines; and, for the whole notebook, its hidden code
 (:mod:`gpsaccel.assignments.hidden`).  The record is plain JSON (it travels with the student's
 grade, across processes and into ``grades.json``), so the report never parses a student's file
-again; a notebook whose record could not be made is "not compared", with the reason.
+again; a notebook whose record could not be made is "not compared", with the reason, and a cell
+past the code a notebook may hold to be compared is a hidden-code finding.
 
 A question's answer is the code it grades: the ``%%writefile`` file of a file question (its
 definitions the master's file defines and what they use), else the top-level definitions of the
@@ -31,8 +32,9 @@ from functools import lru_cache
 
 from gpsaccel.assignments import fingerprint, hidden
 
-#: Characters of code one notebook may hold to be compared (cells and written files): an
-#: honest notebook holds under 50 000; Python's parser needs about 250 bytes per character.
+#: Characters of code one notebook may hold to be compared (cells and written files, read in
+#: order; what is past it is a finding, :func:`_bounded`): an honest notebook holds under
+#: 50 000; Python's parser needs about 250 bytes per character.
 MAX_CODE = 512 * 1024
 
 #: Characters of an answer's code kept for the report's page.
@@ -64,18 +66,47 @@ def record(cells: Sequence[tuple[int, str]], files: Mapping[str, str],
         already transformed); files : name -> text of each file a ``%%writefile`` cell writes;
     asked : question -> :class:`Asked`.  Returns ``{"questions": {q: {"code", "tokens",
     "undefined"}}, "hidden": [...]}``, or ``{"why": reason}`` when it cannot be compared."""
-    size = sum(len(s) for _, s in cells) + sum(len(t) for t in files.values())
-    if size > MAX_CODE:
-        return {"why": f"its code is {size // 1024} KB long, more than the {MAX_CODE // 1024} "
-                       f"KB compared"}
+    cells, files, over = _bounded(cells, files, asked)
     try:
-        return _record(cells, files, asked)
+        rec = _record(cells, files, asked)
     except RecursionError:
         return {"why": "its code is nested too deeply to compare"}
     except MemoryError:
         return {"why": "comparing its code needed too much memory"}
     except Exception as exc:  # noqa: BLE001 - one notebook's record, never the class's report
         return {"why": f"its code could not be compared ({type(exc).__name__})"}
+    rec["hidden"] = (over + rec["hidden"])[:hidden.MAX_FINDINGS]
+    return rec
+
+
+def _bounded(cells: Sequence[tuple[int, str]], files: Mapping[str, str],
+             asked: Mapping[str, Asked]) -> tuple[list[tuple[int, str]], dict[str, str],
+                                                  list[str]]:
+    """(the cells, the files) read, at most :data:`MAX_CODE` characters in all, in order, and
+    a finding for each left unread: the bound is on what is parsed, so one oversized cell (a
+    megabyte of comment) cannot hide the other cells' answers; what it holds is neither compared
+    nor scanned, and no honest notebook needs it, so it is an integrity signal (like hidden
+    code), named with each question whose name or file it mentions (its answer may be there)."""
+    kept_cells: list[tuple[int, str]] = []
+    kept_files: dict[str, str] = {}
+    over: list[str] = []
+    size = 0
+    for where, name, text in ([(f"cell {n}", n, t) for n, t in cells]
+                              + [(f"file {n}", n, t) for n, t in files.items()]):
+        if size + len(text) <= MAX_CODE:
+            size += len(text)
+            if isinstance(name, str):
+                kept_files[name] = text
+            else:
+                kept_cells.append((name, text))
+            continue
+        qs = [q for q, a in asked.items() if (a.file is not None and (a.file == name
+                                                                       or a.file in text))
+              or any(n in text for n in a.names)] if len(over) < hidden.MAX_FINDINGS else []
+        what = (f"{where} is {len(text) // 1024} KB of code, past the {MAX_CODE // 1024} KB a "
+                f"notebook may hold to be compared: not compared, not scanned")
+        over += [f"{q}: {what} (it mentions the question's answer)" for q in qs] or [what]
+    return kept_cells, kept_files, over
 
 
 #: Limits of the child that makes one notebook's record (:func:`from_notebook`): CPU seconds,

@@ -76,10 +76,32 @@ def test_a_packed_answer_is_undefined_and_hidden():
 def test_a_record_is_json_and_never_raises():
     rec = record([AVG, "def broken(:", BOUNDS])  # a cell Python cannot parse is left out
     assert json.loads(json.dumps(rec)) == rec and answer(rec)["undefined"] == []
-    big = ac.record([(1, "x = 1\n" * (ac.MAX_CODE // 6 + 1))], {}, Q3)
-    assert set(big) == {"why"} and "KB" in big["why"]
     deep = ac.record([(1, "x = " + "-" * 200_000 + "1")], {}, Q3)
     assert set(deep) == {"why"}
+
+
+def test_an_oversized_cell_cannot_hide_the_other_answers():
+    """The bound is on the code parsed, not on the notebook: a huge comment cell is left
+    unread and flagged, the answer beside it is still compared."""
+    junk = "# " + "x" * ac.MAX_CODE
+    rec = record([AVG + HELPER, junk, BOUNDS])
+    assert "def average_nees" in answer(rec)["code"] and answer(rec)["undefined"] == []
+    assert rec["hidden"] == [f"cell 2 is {len(junk) // 1024} KB of code, past the "
+                             f"{ac.MAX_CODE // 1024} KB a notebook may hold to be compared: "
+                             "not compared, not scanned"]
+
+
+def test_an_oversized_answer_is_an_integrity_signal():
+    big = "def average_nees(x_true, x_hat, P):\n    return 0.0\n" + "# pad\n" * ac.MAX_CODE
+    rec = record([big, BOUNDS])
+    assert answer(rec)["undefined"] == ["average_nees"]
+    assert rec["hidden"] == [f"q3: cell 1 is {len(big) // 1024} KB of code, past the "
+                             f"{ac.MAX_CODE // 1024} KB a notebook may hold to be compared: "
+                             "not compared, not scanned (it mentions the question's answer)"]
+    file_q = record(["%%writefile kalman_filter.py\ndef kalman_filter():\n    pass\n"
+                     + "# pad\n" * ac.MAX_CODE], Q2)
+    assert [f.split(":")[0] for f in file_q["hidden"]] == ["q2", "q2"]  # cell, file
+    assert answer(file_q, "q2")["code"] == ""
 
 
 def test_tokens_are_packed_and_checked():
