@@ -239,6 +239,23 @@ class StudentReport:
                       [(str(f), f.see()) for f in self.findings], self.tables)
 
 
+_TB_INTRO = "; the traceback ends with:"
+
+
+def _first_line(message: str) -> str:
+    """A finding's first line for the first look.  One that introduces the traceback below it
+    (which the first look does not show) names the exception's type instead (the traceback's
+    last line up to its message: ``raise NotImplementedError`` has none), or drops the clause."""
+    first, _, rest = message.partition("\n")
+    if not first.endswith(_TB_INTRO):
+        return first
+    last = rest.strip().splitlines()[-1].strip() if rest.strip() else ""
+    kind = last.split(":", 1)[0]
+    if len(kind) <= 80 and kind and all(part.isidentifier() for part in kind.split(".")):
+        return f"{first[:-1]} {kind}."
+    return first[:-len(_TB_INTRO)] + "."
+
+
 def brief(result: Mapping) -> str:
     """The student's first look at one check (``gpsaccel check FILE`` without ``-v``): the verdict
     and each finding's first line — where and what — with the lesson section under each; no
@@ -248,7 +265,7 @@ def brief(result: Mapping) -> str:
     lines: list[str | tuple[str, str]] = []
     for f in result.get("findings", []):
         severity, code = str(f.get("severity", "error")), str(f.get("code", ""))
-        first = str(f.get("message", "")).split("\n")[0]
+        first = _first_line(str(f.get("message", "")))
         lines.append((f"[{severity}] {code}: {first}", see(code)))
     return render(str(result.get("subject", "")), result.get("passed") is True,
                   [str(c) for c in result.get("codes", [])], lines, [])

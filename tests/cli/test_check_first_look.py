@@ -39,13 +39,33 @@ def test_the_first_look_is_each_findings_line_and_where_the_course_teaches_it():
         "  - [error] std-as-variance: V₂₂ = 0.04: a σ where σ² belongs.",
         "    → lesson 06, 'Report 003: variances and standard deviations mixed up'",
         "  - [error] exception: kalman_filter(...) raised an exception on run 2; the traceback "
-        "ends with:",
+        "ends with",
+        "    ZeroDivisionError.",
         "    → lesson 08, 'Step 5: when the check cannot run your code'",
         "  - [warning] inconsistent: Your P does not describe your errors at t = 1.6 s.",
         "    → lesson 08, 'The consistency test: NEES and its bounds' (exercise 2)",
         "  - [note] matches-optimal: Right on 10 runs.",
         "    → lesson 08, 'Step 3: fix and check again'"]
-    assert "0.0016" not in text and "ZeroDivisionError" not in text and "23.1" not in text
+    assert "0.0016" not in text and "boom" not in text and "23.1" not in text
+
+
+def test_the_first_look_names_the_exception_a_traceback_ends_with():
+    """``raise NotImplementedError`` has no message: the first look said "the traceback ends
+    with:" and nothing (red team, from the wheel).  It names the type; with no traceback to
+    read, the clause goes."""
+    intro = "kalman_filter(...) raised an exception on run 0; the traceback ends with:"
+    tb = ('\n      File "/box/alice.py", line 2, in kalman_filter\n        raise '
+          'NotImplementedError\n      NotImplementedError')
+    cases = {tb: f"{intro[:-1]} NotImplementedError.",
+             "\n      numpy.linalg.LinAlgError: Singular matrix":
+                 f"{intro[:-1]} numpy.linalg.LinAlgError.",
+             "": "kalman_filter(...) raised an exception on run 0.",
+             "\n      not an exception line!": "kalman_filter(...) raised an exception on run 0."}
+    for rest, want in cases.items():
+        r = Report("alice.py")
+        r.add("exception", text=intro + rest, where="run 0")
+        lines = brief(batch.student_result(r)).splitlines()[1:-1]  # wrapped; the lesson last
+        assert " ".join(line.strip() for line in lines) == f"- [error] exception: {want}"
 
 
 def test_the_full_report_and_the_json_say_it_too():
@@ -80,7 +100,7 @@ def test_one_file_gets_the_first_look_and_is_told_of_v(tmp_path, capsys):
     out = capsys.readouterr().out
     assert out.startswith(brief(result) + "\n")
     assert "gpsaccel check -v s0.py prints the whole report" in out
-    assert "submission  passed" not in out and "ZeroDivisionError" not in out
+    assert "submission  passed" not in out and "boom" not in out
     assert "1 submission, problem calibration" in out
     assert _report_out(_args(tmp_path, 1, verbose=True), [result]) == 1
     out = capsys.readouterr().out
