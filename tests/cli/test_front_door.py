@@ -170,15 +170,23 @@ def test_help_version_and_argument_errors_come_back_before_numpy_the_sandbox_and
 
 def test_the_help_still_lists_the_registered_choices(front_door):
     """The problems (with their titles) and the homework come from the registry, read without
-    importing a problem or homework module."""
-    from gpsaccel import registry
+    importing a problem or homework module.  The registry is read as a fresh process has it (the
+    command's own view), not as this pytest process has it: other tests register their own
+    problems and homework (an instructor's), which the command never sees."""
+    fresh = ("import json, gpsaccel.check, gpsaccel.assignments; from gpsaccel import registry; "
+             "print(json.dumps("
+             "[[(n, registry.entry(n).title) for n in registry.problems()], "
+             "list(registry.assignments())]))")
+    problems, assignments = json.loads(subprocess.run(
+        [sys.executable, "-c", fresh], capture_output=True, text=True, check=True).stdout)
+    assert [n for n, _ in problems][:4] == ["calibration", "coop", "ship", "tracker"]
 
     out = front_door[("check", "--help")][2]
     flat = " ".join(out.split())
-    for name in registry.problems():
-        assert f"{name}: {' '.join(registry.entry(name).title.split())}" in flat, name
+    for name, title in problems:
+        assert f"{name}: {' '.join(title.split())}" in flat, name
     assert "calibration, coop, ship, tracker" in " ".join(front_door[("--help",)][2].split())
-    for name in registry.assignments():
+    for name in assignments:
         assert name in front_door[("grade", "--help")][2]
         assert name in front_door[("grade", "x", "--assignment", "nope")][3]
     assert "error-model" in front_door[("montecarlo", "--help")][2]
