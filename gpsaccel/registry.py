@@ -16,7 +16,7 @@ figure, the tests).
 
 The registry sits on the ground floor and names no module above it.  The package that owns a kind
 declares, when it is imported, which of its modules register entries of that kind
-(:func:`provide`: ``gpsaccel.check`` its problems, with their titles, ``gpsaccel.assignments`` its
+(:func:`provide`: ``gpsaccel.problems`` the problems, with their titles, ``gpsaccel.assignments`` its
 homework, ``gpsaccel.figures`` its reports); those modules are imported, by name, the first time a
 list of the kind is asked for.  Whatever imports a module of the owning package has run its
 ``__init__`` and so the declaration.  Each kind is loaded on its own, so asking for the problems
@@ -47,7 +47,7 @@ def provide(kind: str, modules: tuple[str, ...], *, titles: Mapping[str, str] | 
             ) -> None:
     """Declare the modules that register entries of ``kind`` (one of :data:`KINDS`) when imported,
     in the order they are listed.  Called when the package that owns the kind is imported (its
-    ``__init__``, or for the problems ``gpsaccel/check/titles.py``, which it imports);
+    ``__init__``, or for the problems ``gpsaccel/problems.py``, which ``gpsaccel.check`` imports);
     ``titles`` (problems only) are the titles of its problems, each named as its module (the last
     part of the dotted name), the one place each title is written."""
     if kind not in KINDS:

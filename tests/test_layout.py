@@ -34,12 +34,14 @@ ALLOWED = {
     "executors": {"_validation"},
     "registry": set(), "_version": set(), "_mathjax": set(), "_feedback": set(), "_lazy": set(),
     "_untrusted": set(), "_taught": set(),
+    # the package's problems declared to the registry, read by the command without the checker
+    "problems": {"registry"},
     "__main__": {"cli"},
     "sandbox": INFRA,
     "boxside": set(),  # runs in the box: nothing of gpsaccel (it may not read the checks)
     "kalman": INFRA,
     **{s: INFRA | {"kalman"} for s in SYSTEMS},
-    "check": INFRA | {"kalman", "sandbox"} | SYSTEMS,
+    "check": INFRA | {"kalman", "sandbox", "problems"} | SYSTEMS,
     "plots": INFRA | {"kalman"} | SYSTEMS,
     "figures": INFRA | {"kalman", "plots"} | SYSTEMS,
     "exercises": INFRA,
@@ -50,8 +52,8 @@ ALLOWED = {
     # check/ and assignments/; only the command (``--example``) imports it
     "homework": INFRA | {"kalman", "sandbox", "check", "assignments"} | SYSTEMS,
     "classrun": INFRA | {"sandbox", "check", "assignments"},
-    "cli": INFRA | {"kalman", "plots", "figures", "lessons", "sandbox", "check", "assignments",
-                    "homework", "classrun"} | SYSTEMS,
+    "cli": INFRA | {"problems", "kalman", "plots", "figures", "lessons", "sandbox", "check",
+                    "assignments", "homework", "classrun"} | SYSTEMS,
     "top": INFRA | {"kalman"} | SYSTEMS,
 }
 

@@ -11,8 +11,8 @@ import pytest
 
 from gpsaccel import figures, registry
 from gpsaccel.assignments.generate import assignments_dir, student_package_dir
-from gpsaccel.check.titles import PROBLEM_TITLES
 from gpsaccel.cli import main
+from gpsaccel.problems import PROBLEM_TITLES
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -28,8 +28,8 @@ declared outputs) every problem uses through :meth:`Problem.check`.
 
 from typing import TYPE_CHECKING
 
+import gpsaccel.problems  # noqa: F401 - declares the problems (not bound here: check.problems)
 from gpsaccel import _lazy
-from gpsaccel.check import titles  # noqa: F401 - declares the package's problems to the registry
 
 if TYPE_CHECKING:  # for mypy and editors; at run time each name loads on first use (_lazy)
     from gpsaccel.calibration.mistakes import codes

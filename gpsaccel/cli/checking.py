@@ -134,7 +134,7 @@ def exit_status(results: list[dict]) -> int:
 def _problem_flag(value: str) -> str:
     """--problem: a registered problem's name, or FILE.py:NAME (the file exists; it is run by
     the command, not by the parser)."""
-    import gpsaccel.check  # noqa: F401 - declares the problems and their titles (imports none)
+    import gpsaccel.problems  # noqa: F401 - declares the problems and their titles (not the checker)
     from gpsaccel import registry
 
     if registry.is_file_spec(value):
@@ -150,7 +150,7 @@ def _problem_flag(value: str) -> str:
 
 
 def add_check(sub: argparse._SubParsersAction) -> None:
-    import gpsaccel.check  # noqa: F401 - declares the problems and their titles (imports none)
+    import gpsaccel.problems  # noqa: F401 - declares the problems and their titles (not the checker)
     from gpsaccel import registry
 
     titles = registry.problem_titles()

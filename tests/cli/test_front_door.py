@@ -102,9 +102,9 @@ def _subcommands() -> list[str]:
 #: benchmarks/startup.py's; a test asserts what ran, never a time.)
 NOT_BEFORE_WORK = ("numpy", "gpsaccel.sandbox", "gpsaccel.check")
 
-#: Modules of those the answers may load: the checker's lazy façade and the titles of its problems
-#: (which import nothing but the registry): the help lists the problems from there.
-LIGHT = ("gpsaccel.check", "gpsaccel.check.titles")
+#: Modules of those the answers may load: none (the help and an argument error read the problems'
+#: names and titles from gpsaccel.problems, outside the checker).
+LIGHT: tuple[str, ...] = ()
 
 #: ``python -m gpsaccel ARGS`` as the command runs it (runpy, __main__), then the loaded modules of
 #: NOT_BEFORE_WORK (a sub-module counts as its package, but those of LIGHT) on the last line of stdout.

@@ -77,7 +77,7 @@ from gpsaccel.check.linear import (  # noqa: F401 - the calibration names of the
 )
 from gpsaccel.check.problem import Argument, Function
 from gpsaccel.check.report import Report
-from gpsaccel.check.titles import PROBLEM_TITLES
+from gpsaccel.problems import PROBLEM_TITLES
 from gpsaccel.sandbox import Output
 
 #: The function a submission defines.

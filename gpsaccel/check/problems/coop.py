@@ -21,9 +21,9 @@ from gpsaccel.check.problems.compare import (
     nearest_within,
 )
 from gpsaccel.check.report import Report
-from gpsaccel.check.titles import PROBLEM_TITLES
 from gpsaccel.check.wording import STUDENT
 from gpsaccel.kalman import consistency
+from gpsaccel.problems import PROBLEM_TITLES
 from gpsaccel.sandbox import Call, Output
 
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from gpsaccel.check.problems import Problem
-from gpsaccel.check.titles import PROBLEM_TITLES
+from gpsaccel.problems import PROBLEM_TITLES
 
 DT = 0.1        # s, one propagation step
 EVERY = 5       # steps per position fix (2 Hz)

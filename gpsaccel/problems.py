@@ -1,10 +1,11 @@
 """The package's own problems and their titles, declared to :mod:`gpsaccel.registry`.
 
-A module of its own, importing nothing heavy: the command's help lists the problems before any is
-imported (it must not wait for numpy), and each problem module takes its title from here
-(a module of ``gpsaccel.check.problems`` that imported the package's ``__init__`` for it would
-close a circle through the façade's names).  ``gpsaccel.check`` imports this module, so whatever
-imports a module of ``check`` has declared the problems.
+A unit of its own, outside ``gpsaccel.check`` and importing only the registry: the command reads
+the problems' names and titles from here for its help and for an argument error without
+importing the checker (its answer must not wait for ``gpsaccel.check``, let alone numpy), and
+each problem module takes its title from here.  ``gpsaccel.check`` imports this module, so
+whatever imports a module of ``check`` has declared the problems.  It names the problem modules
+as strings: a declaration one floor above the registry, not on its ground floor.
 """
 
 from __future__ import annotations
