@@ -19,6 +19,7 @@ from types import SimpleNamespace
 import pytest
 
 from gpsaccel import sandbox as sb
+from gpsaccel.sandbox import zygote
 
 TESTS = Path(__file__).resolve().parent
 SUBMISSIONS = TESTS / "submissions"
@@ -27,11 +28,18 @@ HOSTILE = SUBMISSIONS / "hostile"
 #: The ``comm`` every process of a hostile submission gives itself (see hostile/README.md).
 MARKER = "gpsacc-hostile"
 
+_NO_BWRAP = pytest.mark.skipif(sb.bwrap_path() is None, reason="bubblewrap is not installed or "
+                                                              "cannot create namespaces here")
+_NO_WARM = pytest.mark.skipif(not zygote.usable(), reason="boxes start warm only as root on Linux")
+
+#: Each backend, with its boxes started cold (exec) and warm (forked from a zygote:
+#: gpsaccel.sandbox.zygote).  A test receives the backend's name; for a ``-warm`` case the
+#: zygotes serve its boxes while it runs.
 BACKENDS = [
-    "basic",
-    pytest.param("bwrap", marks=pytest.mark.skipif(
-        sb.bwrap_path() is None, reason="bubblewrap is not installed or cannot create "
-                                        "namespaces here")),
+    pytest.param(("basic", False), id="basic"),
+    pytest.param(("bwrap", False), id="bwrap", marks=_NO_BWRAP),
+    pytest.param(("basic", True), id="basic-warm", marks=_NO_WARM),
+    pytest.param(("bwrap", True), id="bwrap-warm", marks=[_NO_BWRAP, _NO_WARM]),
 ]
 
 
@@ -122,7 +130,45 @@ class Watch:
 
 def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
     if "backend" in metafunc.fixturenames:
-        metafunc.parametrize("backend", BACKENDS)
+        metafunc.parametrize("backend", BACKENDS, indirect=True)
+
+
+@pytest.fixture(scope="session")
+def zygotes():
+    """Two zygotes for the session's warm cases: for boxes that may import gpsaccel and for
+    boxes that may not (killed at the end, by pid, with their folders).  They import numpy only:
+    what a zygote imports does not change how a box is confined, and a zygote with scipy.stats
+    (a third of a GiB of address space) serves no box of these tests' 512 MiB
+    (zygote.MEMORY_SHARE); the grader's own is tried by tests/assignments/test_attacks.py."""
+    started = [zygote.start(("numpy",), allow_gpsaccel=allow) for allow in (False, True)]
+    yield started
+    for z in started:
+        zygote.stop(z)
+
+
+class Backend(str):
+    """A backend's name (what ``sandbox.run`` takes), and whether its boxes start warm; a test
+    whose boxes run in a process of its own says so (``elsewhere``), and starts a zygote there."""
+
+    warm: bool = False
+    elsewhere: bool = False
+
+
+@pytest.fixture
+def backend(request):
+    """The backend's name; its boxes start warm while the test runs in a ``-warm`` case (and
+    one of them must, unless they ran elsewhere, or in a check's forked items)."""
+    name, warm = request.param
+    b = Backend(name)
+    b.warm = warm
+    if not warm:
+        yield b
+        return
+    served = zygote.SERVED[0]
+    with zygote.serve(*request.getfixturevalue("zygotes")):
+        yield b
+    if request.path.parent.name == "sandbox" and not b.elsewhere:
+        assert zygote.SERVED[0] > served, "no box of this warm case started warm"
 
 
 @pytest.fixture

@@ -18,12 +18,11 @@ interface of its own.
   venv in a 0700 home).  In the box's first process, before it drops root, a private mount
   namespace replaces each unreachable ancestor by a small read-only tmpfs holding read-only bind
   mounts of exactly the folders the box needs (the rest of ``/root`` is then not in reach
-  either).
+  either): :func:`gpsaccel.sandbox._enter.reveal` does it from this plan.
 """
 
 from __future__ import annotations
 
-import ctypes
 import fcntl
 import os
 import pwd
@@ -45,10 +44,6 @@ SLOTS = 512
 
 #: Shared writable folders where a box user could leave files (cleaned after each box).
 SHARED_TMP = ("/tmp", "/var/tmp", "/dev/shm")
-
-CLONE_NEWNS = 0x00020000
-MS_RDONLY, MS_NOSUID, MS_NODEV, MS_REMOUNT, MS_BIND = 1, 2, 4, 32, 4096
-MS_REC, MS_PRIVATE = 16384, 1 << 18
 
 
 def box_uid() -> int | None:
@@ -189,29 +184,3 @@ def reveal(paths: list[str]) -> list[tuple[str, list[str]]]:
                     plan[top] = [q for q in plan[top] if not q.startswith(p + "/")] + [p]
                 break
     return sorted(plan.items())
-
-
-def apply_reveal(libc: ctypes.CDLL, plan: list[tuple[str, list[str]]]) -> None:
-    """In the box's first process, as root, before exec: the mounts of :func:`reveal`'s plan in a
-    private mount namespace.  Raises OSError when a step fails (the box then does not start)."""
-
-    def check(rc: int, what: str) -> None:
-        if rc != 0:
-            err = ctypes.get_errno()
-            raise OSError(err, f"{what}: {os.strerror(err)}")
-
-    check(libc.unshare(CLONE_NEWNS), "unshare(CLONE_NEWNS)")
-    check(libc.mount(None, b"/", None, MS_REC | MS_PRIVATE, None), "mount --make-rprivate /")
-    for top, needed in plan:
-        fds = [os.open(p, os.O_PATH | os.O_DIRECTORY) for p in needed]
-        check(libc.mount(b"tmpfs", top.encode(), b"tmpfs", MS_NOSUID | MS_NODEV,
-                         b"mode=0755,size=1m"), f"tmpfs on {top}")
-        for p, fd in zip(needed, fds, strict=True):
-            os.makedirs(p, mode=0o755, exist_ok=True)
-            check(libc.mount(f"/proc/self/fd/{fd}".encode(), p.encode(), None, MS_BIND | MS_REC,
-                             None), f"bind {p}")
-            check(libc.mount(None, p.encode(), None, MS_REMOUNT | MS_BIND | MS_RDONLY, None),
-                  f"read-only {p}")
-            os.close(fd)
-        check(libc.mount(None, top.encode(), None, MS_REMOUNT | MS_RDONLY | MS_NOSUID | MS_NODEV,
-                         None), f"read-only {top}")

@@ -167,6 +167,11 @@ class BoxCgroup:
         """fork()s the kernel refused at the box's process limit."""
         return _count(_read(self.dirs["pids"] / "pids.events"), "max")
 
+    def set_processes(self, processes: int) -> None:
+        """A new ``pids.max`` (a box that starts otherwise than planned: its own processes
+        differ)."""
+        _write(self.dirs["pids"] / "pids.max", str(processes))
+
     def kill(self) -> int:
         """SIGKILL every process of the box once; how many were signalled."""
         if self.kind == "cgroup2":

@@ -224,7 +224,7 @@ def _problem(kind: str, exc: BaseException | None = None, root: Path | None = No
 
 def run(control: Path, root: Path) -> None:
     plan = json.loads((control / "plan.json").read_text(encoding="utf-8"))
-    sys.path.extend(plan["sys_path"])
+    sys.path.extend(p for p in plan["sys_path"] if p not in sys.path)  # a warm box has them
     # one BLAS thread: the sandbox's memory limit counts every thread's stack, and the machine is
     # shared; matplotlib never opens a window
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):

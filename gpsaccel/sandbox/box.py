@@ -4,7 +4,6 @@ clock's (:mod:`.clock`): the box's own time, not its waits on a busy machine."""
 
 from __future__ import annotations
 
-import functools
 import os
 import selectors
 import signal
@@ -17,9 +16,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from gpsaccel._interrupt import stop_after_cleanup
-from gpsaccel.sandbox import _boxuser, fence
+from gpsaccel.sandbox import _boxuser, fence, zygote
 from gpsaccel.sandbox.channel import FrameReader, Refused
-from gpsaccel.sandbox.clock import Clock, clock_detail
+from gpsaccel.sandbox.clock import BACKSTOP_FACTOR, BACKSTOP_MARGIN, Clock, clock_detail
 from gpsaccel.sandbox.confinement import (
     BOX_PREFIX,
     PACKAGE_DIR,
@@ -35,7 +34,14 @@ from gpsaccel.sandbox.confinement import (
     resolve_backend,
     sweep_stale_boxes,
 )
-from gpsaccel.sandbox.limits import _cap_last, _confine, _Confinement, _nproc, _preexec
+from gpsaccel.sandbox.limits import (
+    _cap_last,
+    _confine,
+    _Confinement,
+    _entry_plan,
+    _nproc,
+    _preexec,
+)
 from gpsaccel.sandbox.procs import (
     PR_GET_DUMPABLE,
     PR_SET_DUMPABLE,
@@ -88,14 +94,17 @@ def _run(sub: Submission, calls: list[Call], limits: Limits, backend: str, allow
         sys_path.insert(0, str(PACKAGE_DIR.parent))
     needed = [sys.base_prefix, sys.prefix, sys.exec_prefix, *sys_path, str(tmp),
               os.path.dirname(_python()), os.path.dirname(os.path.realpath(_python()))]
+    hidden = hidden_dirs(allow_gpsaccel, hide)
+    z = zygote.serving(backend, allow_gpsaccel, sys_path, limits.memory, hidden)
     confinement = None
     owned: list[int] = []
     try:
-        _write_control(tmp / "control", sub, calls, sys_path, allow_gpsaccel)
-        confinement = _confine(limits, backend, needed)
+        _write_control(tmp / "control", sub, calls, sys_path, allow_gpsaccel,
+                       reaper=z is not None and backend == "bwrap")
+        confinement = _confine(limits, backend, needed, _extra(backend, z is not None))
         if backend == "basic":
             confinement.fence = fence.choose(
-                hidden_dirs(allow_gpsaccel, hide), confinement.uid is not None,
+                hidden, confinement.uid is not None,
                 str(tmp / "empty"), [p for _, ps in confinement.reveal for p in ps])
         if confinement.uid is not None:
             tmp.chmod(0o711)  # the box's user enters it, lists nothing
@@ -103,41 +112,156 @@ def _run(sub: Submission, calls: list[Call], limits: Limits, backend: str, allow
         out_r, out_w = os.pipe()
         go_r, go_w = os.pipe()
         owned += [res_r, res_w, out_r, out_w, go_r, go_w]  # closed once, here or by _Supervisor
+        box = _Prepared(backend, tmp, sub, limits, allow_gpsaccel, hide, confinement,
+                        [res_w, out_w, go_r], owned)
         try:
-            cmd, cwd, env, drop, fds = _launch(backend, tmp, sub, limits, allow_gpsaccel,
-                                               confinement, res_w, go_r, hide)
+            if z is not None:
+                try:
+                    return _Supervisor(box, calls, t0, z).run(res_r, out_r, go_w)
+                except zygote.NotServed:  # the zygote died, or bwrap's pid 1 did not start
+                    box.cold_again()
+            return _Supervisor(box, calls, t0).run(res_r, out_r, go_w)
         except SubmissionError as exc:  # a file changed into a link since it was loaded
             return BoxResult(backend, failure=exc.code, detail=str(exc),
                              seconds=time.perf_counter() - t0)
-        owned += fds
-        box = _Supervisor(backend, limits, calls, confinement, owned, t0)
-        return box.run(_Launch(cmd, cwd, env, drop, [res_w, out_w, go_r, *fds]), res_r, out_r,
-                       go_w)
     finally:
         _release(owned, confinement)
         _remove_tree(str(tmp))
 
 
-def _launch(backend: str, tmp: Path, sub: Submission, limits: Limits, allow_gpsaccel: bool,
-            confinement: _Confinement, res_w: int, go_r: int, hide: Sequence[str]
-            ) -> tuple[list[str], str, dict, bool, list[int]]:
-    """The box's command, working folder, environment, whether to drop capabilities, and the
-    file descriptors of the submission's files it inherits (bwrap)."""
-    if backend == "bwrap":
+def _extra(backend: str, warm: bool) -> int:
+    """The box's own processes beside the runner, in its cgroup: bwrap's two (its own and the
+    box's pid 1, warm or cold), a basic warm box's keeper."""
+    return 2 if backend == "bwrap" else 1 if warm else 0
+
+
+@dataclass
+class _Prepared:
+    """A box ready to start: its folder, confinement and the ends of its pipes the first process
+    takes (``child_fds``: the result pipe's, the output pipe's, the go pipe's; closed here once
+    it runs).  :meth:`cold` and :meth:`warm` start it."""
+
+    backend: str
+    tmp: Path
+    sub: Submission
+    limits: Limits
+    allow_gpsaccel: bool
+    hide: tuple[str, ...]
+    c: _Confinement
+    child_fds: list[int]
+    owned: list[int]
+
+    def nproc(self, extra: int) -> int:
+        """RLIMIT_NPROC: a box uid runs nothing else, so it counts the box exactly (a basic warm
+        box's keeper is root's, not counted); with a cgroup it is set a little above pids.max,
+        so that the cgroup refuses the fork first and counts it."""
+        if self.c.uid is None:
+            return _nproc(self.limits)
+        extra = extra if self.backend == "bwrap" else 0
+        return self.limits.processes + 1 + extra + (8 if self.c.cgroup is not None else 0)
+
+    def plan(self, extra: int) -> dict:
+        drop = self.c.uid is not None if self.backend == "bwrap" else os.geteuid() == 0
+        return _entry_plan(self.limits, self.nproc(extra), drop, _cap_last(), self.c)
+
+    def _folder(self) -> Path:
+        box = self.tmp / "box"
+        box.mkdir()
+        _copy_submission(self.sub, box, self.c.uid)
+        return box
+
+    def _bwrap(self, warm: bool) -> tuple[list[str], list[int]]:
         exe = bwrap_path()
         if exe is None:
             raise OSError("bwrap was found usable for this check but its trial box no "
                           "longer starts")
-        cmd, fds = _bwrap_command(exe, tmp, sub, limits, allow_gpsaccel, res_w, go_r, hide)
-        # root without a box user: bwrap's user namespace is the box (no capability outside
-        # it); with one, bwrap runs as that user and needs none either
-        return cmd, str(tmp), _environment("/box"), confinement.uid is not None, fds
-    box = tmp / "box"
-    box.mkdir()
-    _copy_submission(sub, box, confinement.uid)
-    cmd = [_python(), "-I", "-S", "-B", str(tmp / "control" / "_runner.py"),
-           str(tmp / "control"), str(box), str(res_w), str(go_r)]
-    return cmd, str(box), _environment(str(box)), os.geteuid() == 0, []
+        res_w, _, go_r = self.child_fds
+        cmd, fds = _bwrap_command(exe, self.tmp, self.sub, self.limits, self.allow_gpsaccel,
+                                  res_w, go_r, self.hide, warm)
+        self.owned += fds
+        return cmd, fds
+
+    def _close_child_fds(self, fds: Sequence[int]) -> None:
+        for fd in fds:  # the parent keeps only the reading ends
+            os.close(fd)
+            self.owned.remove(fd)
+
+    def cold(self, extra: int) -> subprocess.Popen:
+        """The runner (basic) or bwrap around it, started by exec."""
+        res_w, out_w, go_r = self.child_fds
+        if self.backend == "bwrap":
+            # root without a box user: bwrap's user namespace is the box (no capability outside
+            # it); with one, bwrap runs as that user and needs none either
+            cmd, fds = self._bwrap(False)
+            cwd, env = str(self.tmp), _environment("/box")
+        else:
+            box, fds = self._folder(), []
+            control = self.tmp / "control"
+            cmd = [_python(), "-I", "-S", "-B", str(control / "_runner.py"), str(control),
+                   str(box), str(res_w), str(go_r)]
+            cwd, env = str(box), _environment(str(box))
+        proc = subprocess.Popen(
+            cmd, stdin=subprocess.DEVNULL, stdout=out_w, stderr=out_w, cwd=cwd, env=env,
+            pass_fds=(res_w, go_r, *fds), close_fds=True, start_new_session=True,
+            preexec_fn=_preexec(self.plan(extra), self.c))
+        self._close_child_fds([*self.child_fds, *fds])
+        return proc
+
+    def warm(self, z: zygote.Zygote, extra: int, wait: float) -> zygote.WarmBox:
+        """The runner forked from the zygote ``z``: its keeper joins what bwrap made around the
+        box's pid 1 (bwrap), or confines the runner itself (basic)."""
+        res_w, out_w, go_r = self.child_fds
+        fds = {"out": out_w, "res": res_w, "go": go_r}
+        plan = self.plan(extra)
+        req: dict[str, object] = {"backend": self.backend, "plan": plan, "umask": _umask(),
+               "ignored": [int(s) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+                           if signal.getsignal(s) == signal.SIG_IGN]}
+        control = self.tmp / "control"
+        if self.backend == "basic":
+            box = self._folder()
+            if self.c.fence is not None and self.c.fence.ruleset is not None:
+                fds["ruleset"] = self.c.fence.ruleset
+            req.update(cwd=str(box), env=_environment(str(box)),
+                       argv0=str(control / "_runner.py"), argv=[str(control), str(box)])
+            return zygote.request(z, "basic", req, fds, wait)
+        cmd, files = self._bwrap(True)
+        proc, reaper, ns = zygote.start_reaper(cmd, str(self.tmp), _environment("/box"), files,
+                                               _preexec(plan, self.c), wait)
+        self._close_child_fds(files)
+        req.update(cwd="/box", env=_environment("/box"), argv0="/control/_runner.py",
+                   argv=["/control", "/box"])
+        try:
+            return zygote.request(z, "bwrap", req, {**fds, **ns}, wait, proc, reaper,
+                                  self.c.pids)
+        except BaseException:
+            os.close(reaper)
+            proc.kill()
+            proc.wait()
+            raise
+        finally:
+            for fd in ns.values():
+                os.close(fd)
+
+    def cold_again(self) -> None:
+        """After a warm start that did not happen: nothing of it left running, the box folder
+        and cgroup as a cold box's."""
+        if self.c.cgroup is not None:
+            self.c.cgroup.kill()
+        if self.c.uid is not None:
+            _boxuser.kill_uid(self.c.uid)
+        _remove_tree(str(self.tmp / "box"))
+        if self.c.cgroup is not None:
+            self.c.cgroup.set_processes(self.limits.processes + 1 + _extra(self.backend, False))
+
+
+def _umask() -> int:
+    """This process's umask, which a cold box inherits (read, not set: a thread of ours may be
+    making a file)."""
+    with open("/proc/self/status", encoding="ascii") as f:
+        for line in f:
+            if line.startswith("Umask:"):
+                return int(line.split()[1], 8)
+    return 0o022
 
 
 def _release(owned: list[int], confinement: _Confinement | None) -> None:
@@ -168,45 +292,30 @@ def _runner_pid(pids: set[int], table: dict[int, tuple[int, str, str]]) -> int |
     return min(started)[1] if started else None
 
 
-def _left_behind(proc: subprocess.Popen, before: set[int], c: _Confinement) -> int:
-    """Processes of the box besides bwrap's and the runner, while the runner waits to exit."""
-    pids = set(box_processes(proc.pid, before)) | c.pids()
-    table = _proc_table()
-    runner = proc.pid if table.get(proc.pid, (0, "", ""))[2] != "bwrap" else \
-        _runner_pid(pids, table)
-    return sum(1 for p in pids if p != runner and table.get(p, (0, "", "bwrap"))[2] != "bwrap")
-
-
-@dataclass
-class _Launch:
-    """How the box's first process starts; ``child_fds`` are the ends it inherits (the result
-    pipe's, the output pipe's, the go pipe's, the submission's files), closed here once it runs."""
-
-    cmd: list[str]
-    cwd: str
-    env: dict
-    drop_caps: bool
-    child_fds: list[int]
-
-
 class _Supervisor:
     """Supervise one box from its start to its emptying: read both pipes (output tail and limit,
     result frames), watch the deadline and (where nothing else binds them) the process count,
     count what the student left running once the runner has said its last word, then kill
-    everything and drain the pipes.  The checker is a subreaper and not dumpable meanwhile."""
+    everything and drain the pipes.  The checker is a subreaper and not dumpable meanwhile.
+
+    The box's first process is the runner (basic) or bwrap around it, started by exec; or, for a
+    runner forked from the zygote ``z`` (:class:`gpsaccel.sandbox.zygote.WarmBox`), the box's
+    keeper (basic) or bwrap around the box's pid 1 (bwrap)."""
 
     KEEP = 1 << 16  # bytes of the student's output kept
 
-    def __init__(self, backend: str, limits: Limits, calls: list[Call],
-                 confinement: _Confinement | None, owned: list[int], t0: float) -> None:
-        self.c = c = confinement or _Confinement()
-        self.backend, self.limits, self.owned, self.t0 = backend, limits, owned, t0
-        self.result = BoxResult(backend, limit_backend=c.limit_backend, box_user=c.uid)
+    def __init__(self, box: _Prepared, calls: list[Call], t0: float,
+                 z: zygote.Zygote | None = None) -> None:
+        self.box, self.z = box, z
+        self.c = c = box.c
+        self.backend, self.limits, self.owned, self.t0 = box.backend, box.limits, box.owned, t0
+        self.result = BoxResult(self.backend, limit_backend=c.limit_backend, box_user=c.uid,
+                                started="cold" if z is None else "warm")
         self.reader = FrameReader(calls)
         self.tail = bytearray()
         self.hit: str | None = None
         self.refused: str | None = None
-        self.proc: subprocess.Popen | None = None
+        self.proc: subprocess.Popen | zygote.WarmBox | None = None
         self.sel: selectors.BaseSelector | None = None
         self.left: int | None = None
         self.go_w: int | None = None
@@ -214,13 +323,13 @@ class _Supervisor:
         self.exited_at: float | None = None
         self.before: set[int] = set()
         self.clock: Clock | None = None
-        self.extra = 2 if backend == "bwrap" else 0  # bwrap's own two processes
+        self.extra = _extra(self.backend, z is not None)
         # a count of the box's processes is needed only where nothing else binds them: root's
         # processes are not counted by RLIMIT_NPROC, and there is neither a cgroup nor a box uid
         self.count = (os.getuid() == 0 or not sys.platform.startswith("linux")) and \
             c.cgroup is None and c.uid is None
 
-    def run(self, launch: _Launch, res_r: int, out_r: int, go_w: int) -> BoxResult:
+    def run(self, res_r: int, out_r: int, go_w: int) -> BoxResult:
         self.go_w = go_w
         was_dumpable = _prctl(PR_GET_DUMPABLE)
         was_subreaper = _get_subreaper()
@@ -229,7 +338,7 @@ class _Supervisor:
         self.before = _my_children()
         emptied = False
         try:
-            self._start(launch, res_r, out_r)
+            self._start(res_r, out_r)
             self._watch()
             self._empty()
             emptied = True
@@ -237,7 +346,9 @@ class _Supervisor:
             self._cgroup_verdict()
         finally:
             if self.proc is not None and not emptied:  # Ctrl-C or an error of ours: the box too
-                _kill_box(self.proc, self.before, self.c)
+                _kill_box(self.proc, self.before, self.c, self._roots(), self._own())
+            if isinstance(self.proc, zygote.WarmBox):
+                self.proc.close()
             if self.sel is not None:
                 self.sel.close()
             set_subreaper(bool(was_subreaper))
@@ -245,28 +356,30 @@ class _Supervisor:
                 _prctl(PR_SET_DUMPABLE, was_dumpable)
         return self._finish()
 
-    def _nproc(self) -> int:
-        """RLIMIT_NPROC: a box uid runs nothing else, so it counts the box exactly; with a
-        cgroup it is set a little above pids.max, so that the cgroup refuses the fork first and
-        counts it."""
-        if self.c.uid is None:
-            return _nproc(self.limits)
-        return self.limits.processes + 1 + self.extra + (8 if self.c.cgroup is not None else 0)
-
-    def _start(self, launch: _Launch, res_r: int, out_r: int) -> None:
-        res_w, out_w = launch.child_fds[:2]
-        self.proc = subprocess.Popen(
-            launch.cmd, stdin=subprocess.DEVNULL, stdout=out_w, stderr=out_w, cwd=launch.cwd,
-            env=launch.env, pass_fds=(res_w, *launch.child_fds[2:]), close_fds=True,
-            start_new_session=True,
-            preexec_fn=functools.partial(_preexec, self.limits, self._nproc(), launch.drop_caps,
-                                         _cap_last(), self.c))
-        for fd in launch.child_fds:  # the parent keeps only the reading ends
-            os.close(fd)
-            self.owned.remove(fd)
+    def _start(self, res_r: int, out_r: int) -> None:
+        if self.z is None:
+            self.proc = self.box.cold(self.extra)
+        else:  # the keeper's first word within the box's backstop (a busy machine)
+            wait = self.limits.time + min((BACKSTOP_FACTOR - 1) * self.limits.time,
+                                          BACKSTOP_MARGIN)
+            self.proc = self.box.warm(self.z, self.extra, wait)
+            self.box._close_child_fds(self.box.child_fds)
         self.sel = selectors.DefaultSelector()
         self.sel.register(res_r, selectors.EVENT_READ, "res")
         self.sel.register(out_r, selectors.EVENT_READ, "out")
+
+    def _roots(self) -> list[int]:
+        """The process trees of the box (bwrap's holds its namespace's)."""
+        assert self.proc is not None
+        return self.proc.roots if isinstance(self.proc, zygote.WarmBox) else [self.proc.pid]
+
+    def _own(self) -> set[int]:
+        """The box's processes that are not the student's, besides bwrap's."""
+        return self.proc.own if isinstance(self.proc, zygote.WarmBox) else set()
+
+    def _runner_exited(self) -> bool:
+        assert self.proc is not None
+        return self.proc.poll() is not None
 
     def _watch(self) -> None:
         """Until the deadline, a limit, or the runner's end (its pipes closed, or 0.2 s after
@@ -294,17 +407,27 @@ class _Supervisor:
                     return
 
     def _find_runner(self) -> int | None:
-        """The runner's pid: the box's first process (basic), else the first of its processes
-        that is not bwrap's (None until it has started)."""
+        """The runner's pid: the keeper's child (warm), the box's first process (basic), else the
+        first of its processes that is not bwrap's (None until it has started)."""
         assert self.proc is not None
+        if isinstance(self.proc, zygote.WarmBox):
+            return self.proc.runner
         if self.backend != "bwrap":
             return self.proc.pid
         return _runner_pid(set(box_processes(self.proc.pid, self.before)), _proc_table())
 
     def _box_cpu(self) -> float:
         """CPU seconds the box's live processes have used (with the children they waited for)."""
-        assert self.proc is not None
-        return cpu_seconds(set(box_processes(self.proc.pid, self.before)) | self.c.pids())
+        return cpu_seconds(set(box_processes(self._roots(), self.before)) | self.c.pids())
+
+    def _left_behind(self) -> int:
+        """Processes of the box besides the runner and the box's own (bwrap's, a warm box's
+        keeper), while the runner waits to exit."""
+        pids = set(box_processes(self._roots(), self.before)) | self.c.pids()
+        table = _proc_table()
+        runner, own = self._find_runner(), self._own()
+        return sum(1 for p in pids if p != runner and p not in own
+                   and table.get(p, (0, "", "bwrap"))[2] != "bwrap")
 
     def _read(self, timeout: float) -> None:
         assert self.sel is not None
@@ -338,7 +461,7 @@ class _Supervisor:
                 self.reader.done or self.reader.problem is not None):
             return
         assert self.proc is not None
-        self.left = _left_behind(self.proc, self.before, self.c)
+        self.left = self._left_behind()
         os.close(self.go_w)
         self.owned.remove(self.go_w)
         self.go_w = None
@@ -352,22 +475,23 @@ class _Supervisor:
         return self.open_pipes == 0 or now - self.exited_at > 0.2
 
     def _too_many(self) -> bool:
-        assert self.proc is not None
-        n = len(box_processes(self.proc.pid, self.before))
+        n = len(box_processes(self._roots(), self.before))
         return n - self.extra > self.limits.processes  # under bwrap two bwrap processes stand
         # above the student's
 
     def _empty(self) -> None:
         """Kill every process of the box; count what the student left.  The runner is still
-        alive when the box's first process is (basic) or when anything is (bwrap: the PID
-        namespace ends with the runner)."""
+        alive when its end has not been seen (a warm box's keeper reports it), when the box's
+        first process is (basic) or when anything is (bwrap: the PID namespace ends with the
+        runner)."""
         assert self.proc is not None
         runner_alive = self.proc.poll() is None
-        found = _kill_box(self.proc, self.before, self.c)
+        found = _kill_box(self.proc, self.before, self.c, self._roots(), self._own())
         if self.left is not None:
             self.result.killed = self.left
             return
-        runner = runner_alive if self.backend == "basic" else bool(found)
+        warm = isinstance(self.proc, zygote.WarmBox)
+        runner = runner_alive if self.backend == "basic" or warm else bool(found)
         self.result.killed = max(0, found - (1 if runner else 0))
 
     def _drain(self, res_r: int, out_r: int) -> None:

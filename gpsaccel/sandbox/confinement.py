@@ -23,6 +23,8 @@ from gpsaccel.sandbox.submission import Submission, _open_checked
 
 #: The script that runs the student's code in the box.
 RUNNER = Path(__file__).with_name("_runner.py")
+#: The pid 1 of a warm box under bwrap (:mod:`gpsaccel.sandbox._reaper`).
+REAPER = Path(__file__).with_name("_reaper.py")
 
 #: The package a submission may not import (unless allowed): the checker's own.
 PACKAGE_DIR = Path(__file__).resolve().parent.parent
@@ -103,9 +105,13 @@ def _environment(home: str) -> dict[str, str]:
 
 # --------------------------------------------------------------------------- preparing a box
 def _write_control(control: Path, sub: Submission, calls: Sequence[Call], sys_path: list[str],
-                   allow: bool) -> None:
+                   allow: bool, reaper: bool = False) -> None:
+    """The box's control folder: the runner, its plan and inputs (and, for a warm box under
+    bwrap, the box's pid 1: :data:`REAPER`)."""
     control.mkdir()
     shutil.copy2(RUNNER, control / "_runner.py")
+    if reaper:
+        shutil.copy2(REAPER, control / "_reaper.py")
     arrays = {f"c{i}_{j}": np.asarray(a) for i, c in enumerate(calls) for j, a in
               enumerate(c.args)}
     for k, a in arrays.items():
@@ -150,9 +156,11 @@ def _python() -> str:
 
 
 def _bwrap_command(exe: str, tmp: Path, sub: Submission, limits: Limits, allow: bool,
-                   result_fd: int, go_fd: int | None = None, hide: Sequence[str] = ()
-                   ) -> tuple[list[str], list[int]]:
-    """The bwrap command line, and the file descriptors it must inherit (one per copied file)."""
+                   result_fd: int, go_fd: int | None = None, hide: Sequence[str] = (),
+                   warm: bool = False) -> tuple[list[str], list[int]]:
+    """The bwrap command line, and the file descriptors it must inherit (one per copied file).
+    The box runs the runner; a warm box runs :data:`REAPER` as its pid 1 instead (the runner is
+    forked into the box's namespaces from the zygote: :mod:`gpsaccel.sandbox.zygote`)."""
     # /tmp first: the interpreter's folders may live below it (a venv in /tmp), and a bind made
     # before the tmpfs would be hidden by it
     cmd = [exe, *_bwrap_namespaces(), "--disable-userns", "--cap-drop", "ALL",
@@ -206,8 +214,11 @@ def _bwrap_command(exe: str, tmp: Path, sub: Submission, limits: Limits, allow: 
         fds.append(fd)
         cmd.extend(["--perms", "0644", "--file", str(fd), "/box/" + rel])
     cmd.extend(["--remount-ro", "/dev", "--remount-ro", "/"])
-    cmd.extend(["--chdir", "/box", "--", exe_py, "-I", "-S", "-B", "/control/_runner.py",
-                "/control", "/box", str(result_fd)] + ([] if go_fd is None else [str(go_fd)]))
+    cmd.extend(["--chdir", "/box"])
+    if warm:
+        return cmd + ["--as-pid-1", "--", exe_py, "-I", "-S", "-B", "/control/_reaper.py"], fds
+    cmd.extend(["--", exe_py, "-I", "-S", "-B", "/control/_runner.py", "/control", "/box",
+                str(result_fd)] + ([] if go_fd is None else [str(go_fd)]))
     return cmd, fds
 
 
@@ -251,12 +262,15 @@ def _hide_answers(tmp: Path, bound: list[str], hide: Sequence[str]) -> list[str]
 
 
 #: Where box folders are made: a ``gpsaccel-box-<pid>-*`` folder whose process is dead (a worker
-#: killed mid-check) is removed by the next box or by :func:`sweep_stale_boxes`.
+#: killed mid-check) is removed by the next box or by :func:`sweep_stale_boxes`; so is a zygote's
+#: ``gpsaccel-zygote-<pid>-*`` folder (:mod:`gpsaccel.sandbox.zygote`) whose starter is dead.
 BOX_PREFIX = "gpsaccel-box-"
+ZYGOTE_PREFIX = "gpsaccel-zygote-"
 
 
 def sweep_stale_boxes(parent: str | None = None) -> int:
-    """Remove the box folders (and box cgroups) whose supervising process is dead; how many."""
+    """Remove the box and zygote folders whose supervising (starting) process is dead; how
+    many."""
     parent = parent or tempfile.gettempdir()
     n = 0
     try:
@@ -264,9 +278,10 @@ def sweep_stale_boxes(parent: str | None = None) -> int:
     except OSError:
         return 0
     for e in entries:
-        if not e.name.startswith(BOX_PREFIX):
+        prefix = next((p for p in (BOX_PREFIX, ZYGOTE_PREFIX) if e.name.startswith(p)), None)
+        if prefix is None:
             continue
-        owner = e.name[len(BOX_PREFIX):].split("-", 1)[0]
+        owner = e.name[len(prefix):].split("-", 1)[0]
         if owner.isdigit() and not _cgroup._alive(int(owner)):
             _remove_tree(e.path)
             n += 1

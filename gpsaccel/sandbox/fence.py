@@ -41,31 +41,22 @@ import sys
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
+from gpsaccel.sandbox import _enter
 from gpsaccel.sandbox.procs import _libc
 
 # Landlock's system calls: one number on every Linux architecture (added after the tables were
 # unified), and its constants (include/uapi/linux/landlock.h)
-_CREATE_RULESET, _ADD_RULE, _RESTRICT_SELF = 444, 445, 446
+_CREATE_RULESET, _ADD_RULE = 444, 445
 _CREATE_RULESET_VERSION = 1
 _RULE_PATH_BENEATH = 1
 READ_FILE, REFER = 1 << 2, 1 << 13
 
-_CLONE_NEWNS = 0x00020000
-_MS_RDONLY, _MS_NOSUID, _MS_NODEV, _MS_REMOUNT, _MS_BIND = 1, 2, 4, 32, 4096
-_MS_REC, _MS_PRIVATE = 16384, 1 << 18
 
 KINDS = ("landlock", "mount", "permissions")
 
 
 class NoFence(OSError):
     """A basic box run as root must hide folders, and nothing here can fence them."""
-
-
-def _check(rc: int, what: str) -> int:
-    if rc < 0:
-        err = ctypes.get_errno()
-        raise OSError(err, f"{what}: {os.strerror(err)}")
-    return rc
 
 
 @functools.lru_cache(maxsize=1)
@@ -89,7 +80,7 @@ def mounts_allowed() -> bool:
         return False
     pid = os.fork()
     if pid == 0:  # pragma: no cover - the child
-        os._exit(0 if libc.unshare(_CLONE_NEWNS) == 0 else 1)
+        os._exit(0 if libc.unshare(_enter.CLONE_NEWNS) == 0 else 1)
     _, status = os.waitpid(pid, 0)
     return os.waitstatus_to_exitcode(status) == 0
 
@@ -115,24 +106,15 @@ class Fence:
     granted: list[str] = field(default_factory=list)
 
     def apply(self, libc: ctypes.CDLL) -> None:
-        """In the box's first process, before exec (``mount``: while still root; ``landlock``:
-        last, once it cannot gain privileges).  Raises OSError when a step fails (the box then
-        does not start)."""
+        """In the box's first process (``mount``: while still root; ``landlock``: last, once it
+        cannot gain privileges): :func:`gpsaccel.sandbox._enter.enter` does it from the box's
+        plan; this is the same for a test.  Raises OSError when a step fails."""
         if self.kind == "mount":
-            _check(libc.unshare(_CLONE_NEWNS), "unshare(CLONE_NEWNS)")
-            _check(libc.mount(None, b"/", None, _MS_REC | _MS_PRIVATE, None),
-                   "mount --make-rprivate /")
             assert self.empty is not None
-            for h in self.hidden:
-                _check(libc.mount(self.empty.encode(), h.encode(), None, _MS_BIND, None),
-                       f"bind over {h}")
-                _check(libc.mount(None, h.encode(), None,
-                                  _MS_REMOUNT | _MS_BIND | _MS_RDONLY | _MS_NOSUID | _MS_NODEV,
-                                  None), f"read-only {h}")
+            _enter.mount_fence(libc, self.hidden, self.empty)
         elif self.kind == "landlock":
             assert self.ruleset is not None
-            _check(libc.syscall(ctypes.c_long(_RESTRICT_SELF), ctypes.c_int(self.ruleset),
-                                ctypes.c_uint32(0)), "landlock_restrict_self")
+            _enter.landlock(libc, self.ruleset)
 
     def close(self) -> None:
         if self.ruleset is not None:
@@ -179,7 +161,7 @@ def _landlock(hidden: list[str], abi: int, revealed: list[str]) -> Fence:
     assert libc is not None
     handled = READ_FILE | (REFER if abi >= 2 else 0)
     attr = ctypes.create_string_buffer(struct.pack("=Q", handled))
-    fd = _check(libc.syscall(ctypes.c_long(_CREATE_RULESET), attr, ctypes.c_size_t(8),
+    fd = _enter.check(libc, libc.syscall(ctypes.c_long(_CREATE_RULESET), attr, ctypes.c_size_t(8),
                              ctypes.c_uint32(0)), "landlock_create_ruleset")
     os.set_inheritable(fd, False)
     fence = Fence("landlock", hidden, ruleset=fd)

@@ -3,18 +3,19 @@ root) a uid of its own (:mod:`._cgroup`, :mod:`._boxuser`)."""
 
 from __future__ import annotations
 
+import functools
 import os
 import resource
-import signal
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import psutil
 
-from gpsaccel.sandbox import _boxuser, _cgroup
+from gpsaccel.sandbox import _boxuser, _cgroup, _enter
 from gpsaccel.sandbox.fence import Fence
-from gpsaccel.sandbox.procs import PR_CAPBSET_DROP, PR_SET_NO_NEW_PRIVS, PR_SET_PDEATHSIG, _libc, _prctl
+from gpsaccel.sandbox.procs import _libc
 from gpsaccel.sandbox.spec import Limits
 
 
@@ -67,11 +68,11 @@ class _Confinement:
         return out
 
 
-def _confine(limits: Limits, backend: str, needed: list[str]) -> _Confinement:
+def _confine(limits: Limits, backend: str, needed: list[str], extra: int) -> _Confinement:
     """A cgroup and (as root) a uid of its own for a new box; whatever an earlier box of the same
-    uid left running is killed first."""
+    uid left running is killed first.  ``extra``: the box's own processes beside the runner
+    (bwrap's two, a basic warm box's keeper)."""
     c = _Confinement()
-    extra = 2 if backend == "bwrap" else 0  # bwrap's own two processes
     if sys.platform.startswith("linux"):
         c.cgroup = _cgroup.create(limits.memory, limits.processes + 1 + extra)
         got = _boxuser.acquire()
@@ -83,49 +84,29 @@ def _confine(limits: Limits, backend: str, needed: list[str]) -> _Confinement:
     return c
 
 
-def _preexec(limits: Limits, nproc: int, drop_caps: bool, cap_last: int,
-             confinement: _Confinement | None = None) -> None:
-    """In the child, before exec: join the box's cgroup, limits, no core files; as root also the
-    mounts revealing the interpreter, an empty capability bounding set, the box's uid, no new
-    privileges; last the fence of a basic box's hidden folders (runs after fork; everything it
-    calls was looked up before the fork)."""
-    c = confinement or _Confinement()
-    libc = _libc()
-    if c.cgroup is not None:
-        for f in c.cgroup.procs_files:
-            fd = os.open(f, os.O_WRONLY)
-            try:
-                os.write(fd, b"0")
-            finally:
-                os.close(fd)
-    if c.reveal:  # before the rlimits: the parent's descriptors are still open here (close_fds
-        # comes after preexec_fn), so with RLIMIT_NOFILE set first, a grader holding more than
-        # open_files descriptors could not open the folders to reveal and no box would start
-        if libc is None:
-            raise OSError("the box's reveal needs Linux's libc")
-        _boxuser.apply_reveal(libc, c.reveal)
-    landlock = c.fence is not None and c.fence.kind == "landlock"
-    if c.fence is not None and c.fence.kind == "mount":  # as root, over the revealed folders
-        if libc is None:
-            raise OSError("the box's fence needs Linux's libc")
-        c.fence.apply(libc)
+def _entry_plan(limits: Limits, nproc: int, drop_caps: bool, cap_last: int,
+                c: _Confinement) -> dict:
+    """What the box's first process does before the student's code (:mod:`._enter`'s plan):
+    join the box's cgroup, limits, no core files; as root also the mounts revealing the
+    interpreter, an empty capability bounding set, the box's uid, no new privileges; last the
+    fence of a basic box's hidden folders."""
     cpu = int(limits.time) + 2
-    for res, value in ((resource.RLIMIT_AS, limits.memory), (resource.RLIMIT_CPU, cpu),
-                       (resource.RLIMIT_FSIZE, limits.file_size),
-                       (resource.RLIMIT_NPROC, nproc),
-                       (resource.RLIMIT_NOFILE, limits.open_files),
-                       (resource.RLIMIT_CORE, 0)):
-        resource.setrlimit(res, (value, value))
-    if drop_caps:  # root: after exec the permitted set is the bounding set, so empty it
-        for cap in range(cap_last + 1):
-            _prctl(PR_CAPBSET_DROP, cap)
-    if c.uid is not None:
-        os.setgroups([])
-        os.setresgid(c.uid, c.uid, c.uid)
-        os.setresuid(c.uid, c.uid, c.uid)
-    _prctl(PR_SET_PDEATHSIG, signal.SIGKILL)  # after the uid: a change of uid clears it
-    if drop_caps or landlock:  # Landlock restricts only a process that cannot gain privileges
-        _prctl(PR_SET_NO_NEW_PRIVS, 1)
-    if landlock:
-        assert c.fence is not None and libc is not None
-        c.fence.apply(libc)
+    fence = c.fence
+    return {
+        "cgroup": c.cgroup.procs_files if c.cgroup is not None else [],
+        "reveal": [[top, list(paths)] for top, paths in c.reveal],
+        "fence": fence.kind if fence is not None else None,
+        "hidden": list(fence.hidden) if fence is not None else [],
+        "empty": fence.empty if fence is not None else None,
+        "rlimits": [[resource.RLIMIT_AS, limits.memory], [resource.RLIMIT_CPU, cpu],
+                    [resource.RLIMIT_FSIZE, limits.file_size], [resource.RLIMIT_NPROC, nproc],
+                    [resource.RLIMIT_NOFILE, limits.open_files], [resource.RLIMIT_CORE, 0]],
+        "drop_caps": drop_caps, "cap_last": cap_last, "uid": c.uid}
+
+
+def _preexec(plan: dict, confinement: _Confinement) -> Callable[[], None]:
+    """The ``preexec_fn`` of a cold box: :func:`._enter.enter` with this plan (it runs after
+    fork; everything it calls is looked up before)."""
+    fence = confinement.fence
+    ruleset = fence.ruleset if fence is not None else None
+    return functools.partial(_enter.enter, _libc(), plan, ruleset)

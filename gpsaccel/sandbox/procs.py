@@ -11,7 +11,7 @@ import signal
 import subprocess
 import sys
 import time
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from collections.abc import Set as AbstractSet
 from typing import Protocol
 
@@ -173,18 +173,20 @@ def start_time(pid: int) -> float | None:
         return None
 
 
-def box_processes(first: int, adopted_from: set[int] | None) -> list[int]:
-    """Live processes of a box: descendants of ``first`` (itself included) and, when
-    ``adopted_from`` is given, every new child of this process (orphans it adopted as a subreaper)
-    with its descendants.  Zombies are not counted."""
+def box_processes(first: int | Sequence[int], adopted_from: set[int] | None) -> list[int]:
+    """Live processes of a box: descendants of ``first`` (itself included; or of each of several
+    first processes: a warm box's keeper and bwrap) and, when ``adopted_from`` is given, every
+    new child of this process (orphans it adopted as a subreaper) with its descendants.  Zombies
+    are not counted."""
+    firsts = [first] if isinstance(first, int) else list(first)
     table = _proc_table()
     children: dict[int, list[int]] = {}
     for pid, (ppid, _, _) in table.items():
         children.setdefault(ppid, []).append(pid)
-    roots = [first] if first in table else []
+    roots = [p for p in firsts if p in table]
     if adopted_from is not None:
         me = os.getpid()
-        roots += [p for p in children.get(me, []) if p != first and p not in adopted_from]
+        roots += [p for p in children.get(me, []) if p not in firsts and p not in adopted_from]
     out, stack = [], list(roots)
     while stack:
         pid = stack.pop()
@@ -195,19 +197,31 @@ def box_processes(first: int, adopted_from: set[int] | None) -> list[int]:
     return [p for p in out if table.get(p, (0, "Z", ""))[1] not in ("Z", "X")]
 
 
-def _kill_box(proc: subprocess.Popen, before: set[int],
-              confinement: _NamesPids | None = None) -> int:
-    """SIGKILL every process of the box (its process tree, its cgroup, its uid) until none is
-    alive; reap them.  Returns how many processes (bwrap's own not counted) were alive when the
-    kill began."""
+class _FirstProcess(Protocol):
+    """What a kill asks of a box's first process (a ``subprocess.Popen``, or a warm box's
+    keeper: :class:`gpsaccel.sandbox.zygote.WarmBox`)."""
+
+    pid: int
+
+    def poll(self) -> int | None: ...
+
+    def wait(self, timeout: float | None = None) -> int: ...
+
+
+def _kill_box(proc: _FirstProcess, before: set[int], confinement: _NamesPids | None = None,
+              roots: Sequence[int] = (), own: AbstractSet[int] = frozenset()) -> int:
+    """SIGKILL every process of the box (the process trees of ``roots``, or of ``proc``, its
+    cgroup, its uid) until none is alive; reap them.  Returns how many processes were alive
+    when the kill began, besides bwrap's and the box's ``own`` (a basic warm box's keeper)."""
+    roots = list(roots) or [proc.pid]
     found: int | None = None
     for _ in range(200):
-        alive = set(box_processes(proc.pid, before))
+        alive = set(box_processes(roots, before))
         if confinement is not None:
             alive |= confinement.pids()
         if found is None:
             table = _proc_table()
-            found = sum(table.get(p, (0, "", ""))[2] != "bwrap" for p in alive)
+            found = sum(table.get(p, (0, "", ""))[2] != "bwrap" and p not in own for p in alive)
         if not alive:
             break
         for pid in alive:

@@ -118,6 +118,8 @@ class BoxResult:
     memory_peak : the box's peak memory (bytes) when a cgroup measured it.
     waited : seconds the runner waited for a CPU on a busy machine (not counted in the time
         limit), or None where the box's clock is wall-clock.
+    started : ``"cold"`` (the runner started by exec) or ``"warm"`` (forked from a zygote that
+        had imported what the box imports: :mod:`gpsaccel.sandbox.zygote`).
     """
 
     backend: str
@@ -138,3 +140,4 @@ class BoxResult:
     box_user: int | None = None
     memory_peak: int | None = None
     waited: float | None = None
+    started: str = "cold"

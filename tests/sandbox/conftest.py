@@ -3,7 +3,9 @@
 
 from .._hostile import (  # noqa: F401 - a conftest's names are its fixtures and hooks
     _one_hostile_module_at_a_time,
+    backend,
     hostile,
     pytest_generate_tests,
     watch,
+    zygotes,
 )

@@ -112,7 +112,11 @@ def _single_check(tmp_path, backend, hostile, watch, sig, processes):
     code = (f"import signal\nsignal.signal(signal.SIGINT, signal.default_int_handler)\n"
             f"from gpsaccel import check\n"
             f"check.submission({str(spin)!r}, n_runs=2, timeout={2 * hostile.HANG}, "
-            f"sandbox={backend!r})\n")
+            f"sandbox={str(backend)!r})\n")
+    if backend.warm:  # its box forked from a zygote of that process's
+        backend.elsewhere = True
+        code = ("from gpsaccel.sandbox import zygote\nwith zygote.warm_boxes(('numpy',)):\n"
+                + "".join("    " + line + "\n" for line in code.splitlines()))
     proc = subprocess.Popen([sys.executable, "-c", code], env=hostile.env(),
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:

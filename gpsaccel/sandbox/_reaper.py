@@ -1,0 +1,46 @@
+"""pid 1 of a warm box's PID namespace under bwrap: what bwrap's own init is to a cold box.
+
+Usage (by :mod:`gpsaccel.sandbox.zygote`, not by hand)::
+
+    bwrap ... --as-pid-1 -- python -I -S -B /control/_reaper.py
+
+A warm box's runner is forked from the zygote into the namespaces bwrap made (it is re-parented to
+this process once the zygote's keeper has left), so bwrap's init, which would end the box when its
+own child ends, is not there; this process stands in for it.  It names itself ``bwrap`` (the
+sandbox counts a box's own processes by that name, and a box sees ``bwrap`` as its pid 1 either
+way), writes ``ready`` on stdout once it runs (bwrap has made the namespaces and mounts), then
+reaps every process re-parented to it and writes ``PID STATUS`` (in this namespace's numbers, the
+raw wait status) on stdout for each, which is how the supervisor learns how the runner ended.
+
+As the init of its namespace it cannot be killed or stopped from inside it: the kernel delivers it
+only signals it handles, and it handles none (SIGCHLD is blocked and waited for).  It imports
+only ``os`` and ``signal``.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+
+
+def main() -> None:
+    with open("/proc/self/comm", "w", encoding="ascii") as comm:
+        comm.write("bwrap")
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGCHLD})
+    os.write(1, b"ready\n")
+    while True:
+        signal.sigwait({signal.SIGCHLD})
+        while True:
+            try:
+                pid, status = os.waitpid(-1, os.WNOHANG)
+            except ChildProcessError:
+                break
+            if pid == 0:
+                break
+            line = f"{pid} {status}\n".encode()
+            while line:
+                line = line[os.write(1, line):]
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,504 @@
+"""Warm boxes: each box started from a process that has already imported what every box imports.
+
+A box's runner is a fresh Python that imports numpy, then the student's file; a notebook that
+answers imports scipy.stats, whose import is most of a graded notebook's CPU.  A class run starts
+one *zygote* (:func:`warm_boxes`): a clean Python, started by exec with the box's interpreter flags,
+``sys.path`` and environment, that imports the public modules its boxes import (the course's
+:data:`COURSE_IMPORTS`, or what a homework declares) and waits.  Each box of the run is then
+forked from it (:mod:`._zygote`) instead of exec'd, and is confined exactly as a cold box: the same
+cgroup, uid, rlimits, fence, capabilities and, under bwrap, the namespaces and mounts bwrap makes
+for it (``docs/sandbox.md``, "Warm boxes", argues it point by point).
+
+What the zygote may hold: only public code.  It is exec'd (not forked from the grader, which
+holds answers, the secret and the seed), it inherits none of the grader's descriptors, its
+folder is root's alone, and it never reads a request: the child it forks for a box (the box's
+keeper) does.  It imports nothing from a folder a box may not read (checked when it starts and
+for every box), and a zygote that may not import gpsaccel has none of it in ``sys.modules``.
+
+Served warm (:func:`serving`), else the box starts cold as it always did: as root (the box has a
+uid of its own), under ``basic`` or ``bwrap``, for a box that imports what the zygote's ``sys.path``
+gives (``allow_gpsaccel`` the same), whose hidden folders hold none of the zygote's modules, and
+whose memory limit is at least :data:`MEMORY_SHARE` times the zygote's address space (a warm box
+starts with it).  A zygote that has died (killed, out of memory) serves no more boxes: they start
+cold.
+
+    with sb.warm_boxes(("numpy", "scipy.stats")):
+        sb.run(sub, calls, limits)          # forked from the zygote, confined as before
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import json
+import os
+import select
+import shutil
+import signal
+import socket
+import struct
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from gpsaccel.sandbox import _boxuser
+from gpsaccel.sandbox._enter import NAMESPACES
+from gpsaccel.sandbox.confinement import (
+    PACKAGE_DIR,
+    RUNNER,
+    ZYGOTE_PREFIX,
+    _environment,
+    _python,
+    _remove_tree,
+    _site_dirs,
+    hidden_dirs,
+)
+from gpsaccel.sandbox.procs import PR_SET_PDEATHSIG, _prctl, _proc_table
+
+#: What a box of this course imports besides the runner's numpy: a filled notebook's answer
+#: imports scipy.stats, a student's filter filterpy (which imports scipy.stats).
+COURSE_IMPORTS = ("numpy", "scipy.stats", "filterpy.kalman")
+
+#: A box is served warm only when its memory limit is at least this many times the zygote's
+#: address space (RLIMIT_AS counts what the box starts with).
+MEMORY_SHARE = 3
+
+#: The files the zygote runs, copied into its folder.
+FILES = (Path(__file__).with_name("_zygote.py"), RUNNER, Path(__file__).with_name("_enter.py"))
+
+#: Seconds a zygote may take to import its modules before it is given up (a loaded machine).
+START_WAIT = 600.0
+
+NS_GET_USERNS = 0xB701
+
+
+@dataclass
+class Zygote:
+    """A running zygote: its pid, folder and socket, what it serves (``allow_gpsaccel``,
+    ``sys_path``), what it imported (``imports``, and the files of every module it holds) and its
+    address space (bytes)."""
+
+    pid: int
+    folder: str
+    allow_gpsaccel: bool
+    sys_path: tuple[str, ...]
+    imports: tuple[str, ...]
+    modules: tuple[str, ...]
+    vmsize: int
+    proc: subprocess.Popen | None = field(default=None, repr=False)
+
+    @property
+    def socket(self) -> str:
+        return os.path.join(self.folder, "socket")
+
+    def alive(self) -> bool:
+        try:
+            os.kill(self.pid, 0)
+        except ProcessLookupError:
+            return False
+        return True
+
+    def holds_any_of(self, dirs: Sequence[str]) -> list[str]:
+        """The zygote's module files under one of ``dirs`` (none, or it serves no such box)."""
+        heads = tuple(d.rstrip("/") + "/" for d in dirs)
+        return [m for m in self.modules if m.startswith(heads)]
+
+
+def usable() -> bool:
+    """Whether boxes can start warm here: Linux, as root (each box has a uid of its own)."""
+    return sys.platform.startswith("linux") and _boxuser.box_uid() is not None
+
+
+def start(imports: Sequence[str] = COURSE_IMPORTS, allow_gpsaccel: bool = False,
+          hide: Sequence[str] = ()) -> Zygote:
+    """A new zygote that has imported ``imports`` (module names), for boxes that may import
+    gpsaccel or not; ValueError when one of them comes from a folder such a box may not read
+    (``hide``, or the whole package without ``allow_gpsaccel``), OSError when it does not start."""
+    imports = tuple(imports)
+    for name in imports:
+        if not isinstance(name, str) or not all(p.isidentifier() for p in name.split(".")):
+            raise ValueError(f"imports: each must be a module name, got {name!r}")
+    folder = tempfile.mkdtemp(prefix=f"{ZYGOTE_PREFIX}{os.getpid()}-")  # 0700: root's alone
+    sys_path = _site_dirs()
+    if allow_gpsaccel:
+        sys_path.insert(0, str(PACKAGE_DIR.parent))
+    try:
+        for f in FILES:
+            shutil.copy2(f, os.path.join(folder, f.name))
+        config = {"sys_path": sys_path, "imports": list(imports), "parent": os.getpid()}
+        proc = subprocess.Popen(
+            [_python(), "-I", "-S", "-B", os.path.join(folder, "_zygote.py"), folder,
+             json.dumps(config)],
+            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd="/",
+            env=_environment(folder), close_fds=True, start_new_session=True,
+            preexec_fn=_dies_with_us)
+        ready = _ready(proc)
+    except BaseException:
+        _remove_tree(folder)
+        raise
+    z = Zygote(proc.pid, folder, allow_gpsaccel, tuple(sys_path), imports,
+               tuple(ready["modules"]), int(ready["vmsize"]) * 1024, proc)
+    bad = z.holds_any_of(hidden_dirs(allow_gpsaccel, hide))
+    if bad:
+        stop(z)
+        raise ValueError(f"imports: the zygote would hold {bad[0]}, a file its boxes may not "
+                         f"read; import only public libraries ahead of a box")
+    return z
+
+
+def _dies_with_us() -> None:
+    _prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
+
+
+def _ready(proc: subprocess.Popen) -> dict:
+    """The zygote's line saying it is ready (its modules, its address space), or OSError with
+    what it wrote to stderr."""
+    assert proc.stdout is not None and proc.stderr is not None
+    line = b""
+    give_up = time.monotonic() + START_WAIT
+    while not line.endswith(b"\n") and time.monotonic() < give_up:
+        ready, _, _ = select.select([proc.stdout], [], [], 1.0)
+        if ready:
+            chunk = os.read(proc.stdout.fileno(), 1 << 20)
+            if not chunk:
+                break
+            line += chunk
+    try:
+        info = json.loads(line) if line.endswith(b"\n") else None
+    except ValueError:
+        info = None
+    if info is None or info.get("threads") != 1:
+        proc.kill()
+        err = proc.stderr.read().decode(errors="replace")[-2000:]
+        proc.wait()
+        why = f"it runs {info['threads']} threads, not one" if info else (err or "no reply")
+        raise OSError(f"the zygote of warm boxes did not start: {why}")
+    proc.stdout.close()
+    proc.stderr.close()
+    return info
+
+
+def stop(z: Zygote) -> None:
+    """Kill the zygote by its pid (its keepers, then their runners, die with it) and remove its
+    folder."""
+    try:
+        os.kill(z.pid, signal.SIGKILL)
+    except ProcessLookupError:
+        pass
+    if z.proc is not None:
+        z.proc.wait()
+    _remove_tree(z.folder)
+
+
+#: The zygotes this process's boxes may start from (a forked item inherits them).
+_ACTIVE: list[Zygote] = []
+
+
+@contextlib.contextmanager
+def warm_boxes(imports: Sequence[str] = COURSE_IMPORTS, allow_gpsaccel: bool = False,
+               hide: Sequence[str] = ()) -> Iterator[Zygote | None]:
+    """Within the block, boxes of this process (and of the processes it forks) that a new zygote
+    can serve start warm (module docstring); it yields the zygote, or None where boxes cannot
+    start warm here (:func:`usable`): they start cold, as without the block.  The zygote is
+    killed at the end of the block."""
+    if not usable():
+        yield None
+        return
+    z = start(imports, allow_gpsaccel, hide)
+    try:
+        with serve(z):
+            yield z
+    finally:
+        stop(z)
+
+
+@contextlib.contextmanager
+def serve(*zygotes: Zygote) -> Iterator[None]:
+    """Within the block, boxes of this process may start from these running zygotes."""
+    _ACTIVE.extend(zygotes)
+    try:
+        yield
+    finally:
+        for z in zygotes:
+            _ACTIVE.remove(z)
+
+
+def serving(backend: str, allow_gpsaccel: bool, sys_path: Sequence[str], memory: int,
+            hidden: Sequence[str]) -> Zygote | None:
+    """The active zygote that serves this box, or None (it starts cold)."""
+    if backend not in ("basic", "bwrap") or not usable():
+        return None
+    for z in _ACTIVE:
+        if z.allow_gpsaccel == allow_gpsaccel and list(z.sys_path) == list(sys_path) \
+                and memory >= MEMORY_SHARE * z.vmsize and not z.holds_any_of(hidden) \
+                and z.alive():
+            return z
+    return None
+
+
+# ------------------------------------------------------------------------------ one warm box
+class NotServed(Exception):
+    """The zygote cannot start this box (it died; bwrap made no box around its pid 1): the box
+    starts cold."""
+
+
+class WarmBox:
+    """A warm box's first process as the supervisor sees a cold box's ``Popen``: ``pid``,
+    :meth:`poll` and :meth:`wait` (the runner's end), ``returncode`` (the runner's, as a cold box
+    reports it), plus ``runner`` (its pid), ``roots`` (the process trees the box lives in) and
+    ``own`` (the box's processes that are not the student's, besides those named ``bwrap``).
+
+    basic: the first process is the box's keeper, which reports the runner's end over ``conn``
+    (a signal as a negative number, as Popen gives it).  bwrap: it is bwrap, whose pid 1 (the
+    reaper) reports on ``reaper`` the end of every process it reaps (bwrap's numbering: 128 +
+    the signal)."""
+
+    def __init__(self, backend: str, first: dict, conn: socket.socket | None = None,
+                 bwrap: subprocess.Popen | None = None, reaper: int | None = None,
+                 runner: int | None = None) -> None:
+        self.backend, self.conn, self.bwrap, self.reaper = backend, conn, bwrap, reaper
+        self.keeper: int = first["first"]
+        self.pid = bwrap.pid if bwrap is not None else self.keeper
+        # bwrap: the keeper said the runner's pid in the box's numbering (the reaper's)
+        self.inside: int | None = first["runner"] if bwrap is not None else None
+        self.runner: int = first["runner"] if runner is None else runner
+        self.returncode: int | None = None
+        self.exited = False  # the runner's end was seen
+        self.buffer = b""
+        self.gone = False  # the reporting end closed: nothing more will come
+
+    @property
+    def roots(self) -> list[int]:
+        return [self.pid]
+
+    @property
+    def own(self) -> set[int]:
+        return {self.keeper}
+
+    def _fd(self) -> int:
+        if self.bwrap is not None:
+            assert self.reaper is not None
+            return self.reaper
+        assert self.conn is not None
+        return self.conn.fileno()
+
+    def _ended(self, status: int) -> None:
+        code = os.waitstatus_to_exitcode(status)
+        self.returncode = 128 - code if self.backend == "bwrap" and code < 0 else code
+        self.exited = True
+
+    def _read(self, timeout: float | None) -> None:
+        if not self.gone:
+            ready, _, _ = select.select([self._fd()], [], [], timeout)
+            if ready:
+                data = os.read(self._fd(), 1 << 16)
+                self.gone = not data
+                self.buffer += data
+        while b"\n" in self.buffer:
+            line, self.buffer = self.buffer.split(b"\n", 1)
+            self._line(line)
+        if self.exited:
+            return
+        if self.bwrap is not None and self.bwrap.poll() is not None:  # its pid 1 ended
+            self.exited, self.returncode = True, self.bwrap.returncode
+        elif self.gone:  # the keeper was killed before it reported the runner's end
+            self._ended(signal.SIGKILL)
+
+    def _line(self, line: bytes) -> None:
+        if self.exited:
+            return
+        if self.bwrap is not None:
+            pid, _, status = line.partition(b" ")
+            if pid.isdigit() and int(pid) == self.inside and status.strip().isdigit():
+                self._ended(int(status))
+        else:
+            message = json.loads(line)
+            if "exit" in message:
+                self._ended(int(message["exit"]))
+
+    def poll(self) -> int | None:
+        self._read(0)
+        return self.returncode if self.exited else None
+
+    def wait(self, timeout: float | None = None) -> int:
+        """The runner's end; with a timeout, subprocess.TimeoutExpired."""
+        give_up = None if timeout is None else time.monotonic() + timeout
+        while not self.exited:
+            left = None if give_up is None else give_up - time.monotonic()
+            if left is not None and left <= 0:
+                raise subprocess.TimeoutExpired("the warm box", timeout or 0.0)
+            self._read(0.05 if left is None else min(left, 0.05))
+        assert self.returncode is not None
+        return self.returncode
+
+    def close(self) -> None:
+        """The box is empty: the keeper may go (it exits when the connection closes)."""
+        if self.conn is not None:
+            self.conn.close()
+        if self.reaper is not None:
+            os.close(self.reaper)
+        if self.bwrap is not None:
+            self.bwrap.wait()
+
+
+def outside_pid(inside: int, pidns: str, candidates: Iterable[int]) -> int | None:
+    """The pid, in this process's numbering, of the process numbered ``inside`` in the PID
+    namespace ``pidns`` (its /proc/<pid>/ns/pid link), among ``candidates`` (the box's)."""
+    for pid in candidates:
+        try:
+            if os.readlink(f"/proc/{pid}/ns/pid") != pidns:
+                continue
+            with open(f"/proc/{pid}/status", encoding="ascii") as f:
+                for line in f:
+                    if line.startswith("NSpid:") and int(line.split()[-1]) == inside:
+                        return pid
+        except (OSError, ValueError):
+            continue
+    return None
+
+
+#: Boxes this process started warm (for tests and benchmarks: a box's :attr:`BoxResult.started`
+#: says it too).
+SERVED = [0]
+
+
+def request(z: Zygote, backend: str, req: dict, fds: dict[str, int], wait: float,
+            bwrap: subprocess.Popen | None = None, reaper: int | None = None,
+            box_pids: Callable[[], set[int]] | None = None) -> WarmBox:
+    """Ask the zygote for a box: connect, send the request and its descriptors, and read the
+    keeper's first word (its pid and the runner's).  Under bwrap, the runner's pid is found among
+    ``box_pids()`` from its number in the box, and the runner is let go (``fds["start"]``'s
+    other end, made here) once the keeper has left and been reaped.  NotServed when the zygote
+    cannot be reached; subprocess.SubprocessError when the box's setup failed (as Popen raises
+    when its preexec_fn did)."""
+    start_r = start_w = None
+    if bwrap is not None:
+        start_r, start_w = os.pipe()
+        fds = dict(fds, start=start_r)
+    conn = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    try:
+        conn.connect(z.socket)
+        payload = json.dumps(dict(req, fds=list(fds))).encode()
+        socket.send_fds(conn, [struct.pack(">I", len(payload)) + payload], list(fds.values()))
+        if start_r is not None:
+            os.close(start_r)
+            start_r = None
+        first = _first_word(conn, wait)
+        if "error" in first:
+            raise subprocess.SubprocessError(f"the warm box did not start: {first['error']}")
+        SERVED[0] += 1
+        if bwrap is None:
+            return WarmBox(backend, first, conn=conn)
+        conn.close()  # the keeper leaves: the box's pid 1 reports from here on
+        pidns = os.readlink(f"/proc/self/fd/{fds['pid']}")
+        runner = outside_pid(int(first["runner"]), pidns, box_pids() if box_pids else ())
+        if runner is None:
+            raise subprocess.SubprocessError("the warm box's runner is not in its PID namespace")
+        _gone(int(first["first"]), wait)
+        assert start_w is not None
+        os.write(start_w, b"x")
+        return WarmBox(backend, first, bwrap=bwrap, reaper=reaper, runner=runner)
+    except ConnectionError as exc:
+        conn.close()
+        raise NotServed(f"the zygote cannot be reached: {exc}") from None
+    except FileNotFoundError as exc:
+        conn.close()
+        raise NotServed(f"the zygote cannot be reached: {exc}") from None
+    except BaseException:
+        conn.close()
+        raise
+    finally:
+        for fd in (start_r, start_w):
+            if fd is not None:
+                os.close(fd)
+
+
+def _gone(pid: int, wait: float) -> None:
+    """Wait until process ``pid`` is reaped (its number is free), at most ``wait`` s."""
+    give_up = time.monotonic() + wait
+    delay = 0.0005
+    while os.path.exists(f"/proc/{pid}"):
+        if time.monotonic() > give_up:
+            raise OSError(f"the zygote's keeper {pid} did not leave within {wait:g} s")
+        time.sleep(delay)
+        delay = min(2 * delay, 0.02)
+
+
+def _first_word(conn: socket.socket, wait: float) -> dict:
+    data = b""
+    give_up = time.monotonic() + wait
+    while b"\n" not in data:
+        left = give_up - time.monotonic()
+        ready, _, _ = select.select([conn], [], [], max(left, 0.0))
+        if not ready:
+            raise OSError(f"the zygote's box did not start within {wait:g} s")
+        chunk = conn.recv(1 << 16)
+        if not chunk:
+            raise NotServed("the zygote's keeper ended before the box started")
+        data += chunk
+    return json.loads(data.split(b"\n", 1)[0])
+
+
+def start_reaper(cmd: list[str], cwd: str, env: dict, pass_fds: Sequence[int],
+                 preexec: Callable[[], None], wait: float
+                 ) -> tuple[subprocess.Popen, int, dict[str, int]]:
+    """bwrap around the box's pid 1 (``cmd`` runs :mod:`._reaper`): wait until it runs (the
+    namespaces and mounts are made); (bwrap, the reading end of the reaper's reports, the
+    descriptors of its namespaces: ``owner`` (the user namespace that owns them), one per
+    :data:`._enter.NAMESPACES`, and ``user``).  NotServed when bwrap ends first (the cold box
+    then says why)."""
+    ready_r, ready_w = os.pipe()
+    try:
+        proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=ready_w,
+                                stderr=subprocess.DEVNULL, cwd=cwd, env=env, pass_fds=pass_fds,
+                                close_fds=True, start_new_session=True, preexec_fn=preexec)
+    except BaseException:
+        os.close(ready_r)
+        raise
+    finally:
+        os.close(ready_w)
+    said = b""
+    give_up = time.monotonic() + wait
+    while not said.startswith(b"ready\n") and time.monotonic() < give_up:
+        ready, _, _ = select.select([ready_r], [], [], 0.5)
+        chunk = os.read(ready_r, 6 - len(said)) if ready else b""
+        if ready and not chunk:
+            break
+        said += chunk
+    reaper = _child(proc.pid) if said == b"ready\n" else None
+    if reaper is None:
+        os.close(ready_r)
+        proc.kill()
+        proc.wait()
+        raise NotServed("bwrap made no box around its pid 1")
+    try:
+        return proc, ready_r, _namespaces(reaper)
+    except BaseException:
+        os.close(ready_r)
+        proc.kill()
+        proc.wait()
+        raise
+
+
+def _child(parent: int) -> int | None:
+    """The one live child of ``parent``, or None."""
+    kids = [p for p, (pp, st, _) in _proc_table().items() if pp == parent
+            and st not in ("Z", "X")]
+    return kids[0] if len(kids) == 1 else None
+
+
+def _namespaces(pid: int) -> dict[str, int]:
+    fds: dict[str, int] = {}
+    try:
+        for name in (*NAMESPACES, "user"):
+            fds[name] = os.open(f"/proc/{pid}/ns/{name}", os.O_RDONLY | os.O_CLOEXEC)
+        fds["owner"] = fcntl.ioctl(fds["ipc"], NS_GET_USERNS)
+    except BaseException:
+        for fd in fds.values():
+            os.close(fd)
+        raise
+    return fds
