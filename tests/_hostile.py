@@ -203,7 +203,8 @@ def hostile():
 #: machine-wide (paths below tests/): run side by side (two xdist workers, or two test runs on one
 #: machine) each saw the other's processes ("marked processes before the test", "alive after the
 #: command").
-HOSTILE_MODULES = ("check/test_batch.py", "sandbox/test_hostile.py", "sandbox/test_attacks.py")
+HOSTILE_MODULES = ("check/test_batch.py", "sandbox/test_hostile.py", "sandbox/test_attacks.py",
+                   "sandbox/test_zygote.py")
 
 
 @pytest.fixture(scope="module", autouse=True)

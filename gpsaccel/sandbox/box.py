@@ -228,8 +228,9 @@ class _Prepared:
         proc, reaper, ns = zygote.start_reaper(cmd, str(self.tmp), _environment("/box"), files,
                                                _preexec(plan, self.c), wait)
         self._close_child_fds(files)
-        req.update(cwd="/box", env=_environment("/box"), argv0="/control/_runner.py",
-                   argv=["/control", "/box"])
+        # bwrap's --chdir sets PWD for its command
+        req.update(cwd="/box", env=dict(_environment("/box"), PWD="/box"),
+                   argv0="/control/_runner.py", argv=["/control", "/box"])
         try:
             return zygote.request(z, "bwrap", req, {**fds, **ns}, wait, proc, reaper,
                                   self.c.pids)

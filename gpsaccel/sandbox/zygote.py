@@ -119,9 +119,14 @@ def start(imports: Sequence[str] = COURSE_IMPORTS, allow_gpsaccel: bool = False,
     gpsaccel or not; ValueError when one of them comes from a folder such a box may not read
     (``hide``, or the whole package without ``allow_gpsaccel``), OSError when it does not start."""
     imports = tuple(imports)
+    hidden = [PACKAGE_DIR.name] if not allow_gpsaccel else \
+        [f"{PACKAGE_DIR.name}.{rel.replace('/', '.')}" for rel in hide]
     for name in imports:
         if not isinstance(name, str) or not all(p.isidentifier() for p in name.split(".")):
             raise ValueError(f"imports: each must be a module name, got {name!r}")
+        if any(name == h or name.startswith(h + ".") for h in hidden):
+            raise ValueError(f"imports: {name} is a module its boxes may not read; import only "
+                             f"public libraries ahead of a box")
     folder = tempfile.mkdtemp(prefix=f"{ZYGOTE_PREFIX}{os.getpid()}-")  # 0700: root's alone
     sys_path = _site_dirs()
     if allow_gpsaccel:
