@@ -140,7 +140,7 @@ def zygotes():
     what a zygote imports does not change how a box is confined, and a zygote with scipy.stats
     (a third of a GiB of address space) serves no box of these tests' 512 MiB
     (zygote.MEMORY_SHARE); the grader's own is tried by tests/assignments/test_attacks.py."""
-    started = [zygote.start(("numpy",), allow_gpsaccel=allow) for allow in (False, True)]
+    started = [zygote.start(zygote.Warm(("numpy",), allow)) for allow in (False, True)]
     yield started
     for z in started:
         zygote.stop(z)

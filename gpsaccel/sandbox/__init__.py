@@ -123,12 +123,13 @@ from gpsaccel.sandbox.submission import (
                                       defines,
                                       load_submission,
 )
+from gpsaccel.sandbox.zygote import COURSE_IMPORTS, Warm, warm_boxes
 
 __all__ = [
-    "BACKENDS", "BOX_PREFIX", "FRAME_COUNTS", "FRAME_FIELDS", "MAX_BYTES", "MAX_DEPTH",
-    "MAX_ENTRIES", "MAX_FILES", "MAX_HEADER", "MAX_TEXT", "PACKAGE_DIR",
+    "BACKENDS", "BOX_PREFIX", "COURSE_IMPORTS", "FRAME_COUNTS", "FRAME_FIELDS", "MAX_BYTES",
+    "MAX_DEPTH", "MAX_ENTRIES", "MAX_FILES", "MAX_HEADER", "MAX_TEXT", "PACKAGE_DIR",
     "BoxResult", "Call", "ChildResult", "FrameReader", "Limits", "Lost", "NoFence", "Output",
-    "Refused", "Submission", "SubmissionError", "basic_is_safe", "bwrap_path", "defines",
-    "in_child", "load_submission", "refuse_unsafe_basic", "resolve_backend", "run",
-    "run_items", "sweep_stale_boxes",
+    "Refused", "Submission", "SubmissionError", "Warm", "basic_is_safe", "bwrap_path",
+    "defines", "in_child", "load_submission", "refuse_unsafe_basic", "resolve_backend", "run",
+    "run_items", "sweep_stale_boxes", "warm_boxes",
 ]

@@ -85,7 +85,9 @@ def main(argv: list[str]) -> None:
     for name in config["imports"]:
         importlib.import_module(name)
     libc = ctypes.CDLL(None, use_errno=True)
-    enter.prctl(libc, PR_SET_PDEATHSIG, signal.SIGKILL)
+    enter.prctl(libc, PR_SET_PDEATHSIG, signal.SIGKILL)  # dies with its starter
+    if os.getppid() != config["parent"]:
+        return
     sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     sock.bind(os.path.join(zdir, "socket"))
     sock.listen(64)

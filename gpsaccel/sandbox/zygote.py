@@ -22,7 +22,7 @@ whose memory limit is at least :data:`MEMORY_SHARE` times the zygote's address s
 starts with it).  A zygote that has died (killed, out of memory) serves no more boxes: they start
 cold.
 
-    with sb.warm_boxes(("numpy", "scipy.stats")):
+    with sb.warm_boxes(sb.Warm(("numpy", "scipy.stats"))):
         sb.run(sub, calls, limits)          # forked from the zygote, confined as before
 """
 
@@ -55,6 +55,7 @@ from gpsaccel.sandbox.confinement import (
     _python,
     _remove_tree,
     _site_dirs,
+    check_hide,
     hidden_dirs,
 )
 from gpsaccel.sandbox.procs import PR_SET_PDEATHSIG, _prctl, _proc_table
@@ -113,41 +114,69 @@ def usable() -> bool:
     return sys.platform.startswith("linux") and _boxuser.box_uid() is not None
 
 
-def start(imports: Sequence[str] = COURSE_IMPORTS, allow_gpsaccel: bool = False,
-          hide: Sequence[str] = ()) -> Zygote:
-    """A new zygote that has imported ``imports`` (module names), for boxes that may import
-    gpsaccel or not; ValueError when one of them comes from a folder such a box may not read
-    (``hide``, or the whole package without ``allow_gpsaccel``), OSError when it does not start."""
-    imports = tuple(imports)
-    hidden = [PACKAGE_DIR.name] if not allow_gpsaccel else \
-        [f"{PACKAGE_DIR.name}.{rel.replace('/', '.')}" for rel in hide]
-    for name in imports:
-        if not isinstance(name, str) or not all(p.isidentifier() for p in name.split(".")):
-            raise ValueError(f"imports: each must be a module name, got {name!r}")
-        if any(name == h or name.startswith(h + ".") for h in hidden):
-            raise ValueError(f"imports: {name} is a module its boxes may not read; import only "
-                             f"public libraries ahead of a box")
+@dataclass(frozen=True)
+class Warm:
+    """A kind of box a class run starts warm: boxes that may import gpsaccel or not (those of a
+    notebook, those of a student's filter), the folders of the package they may not read
+    (``hide``, as :func:`gpsaccel.sandbox.run` takes it), and the public modules their zygote
+    imports ahead (what every such box imports: a homework's ``BOX_IMPORTS``)."""
+
+    imports: tuple[str, ...] = COURSE_IMPORTS
+    allow_gpsaccel: bool = False
+    hide: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "imports", tuple(self.imports))
+        object.__setattr__(self, "hide", check_hide(self.hide, self.allow_gpsaccel))
+        hidden = [PACKAGE_DIR.name] if not self.allow_gpsaccel else \
+            [f"{PACKAGE_DIR.name}.{rel.replace('/', '.')}" for rel in self.hide]
+        for name in self.imports:
+            if not isinstance(name, str) or not all(p.isidentifier() for p in name.split(".")):
+                raise ValueError(f"imports: each must be a module name, got {name!r}")
+            if any(name == h or name.startswith(h + ".") for h in hidden):
+                raise ValueError(f"imports: {name} is a module its boxes may not read; import "
+                                 f"only public libraries ahead of a box")
+
+
+def start(kind: Warm = Warm()) -> Zygote:
+    """A new zygote for boxes of ``kind``; ValueError when one of its modules comes from a
+    folder such a box may not read, OSError when it does not start."""
+    return _ready(kind, *_launch(kind))
+
+
+def _launch(kind: Warm) -> tuple[subprocess.Popen, str, list[str]]:
+    """The zygote started by exec (it imports meanwhile): (its process, folder, sys.path)."""
     folder = tempfile.mkdtemp(prefix=f"{ZYGOTE_PREFIX}{os.getpid()}-")  # 0700: root's alone
     sys_path = _site_dirs()
-    if allow_gpsaccel:
+    if kind.allow_gpsaccel:
         sys_path.insert(0, str(PACKAGE_DIR.parent))
     try:
         for f in FILES:
             shutil.copy2(f, os.path.join(folder, f.name))
-        config = {"sys_path": sys_path, "imports": list(imports), "parent": os.getpid()}
+        config = {"sys_path": sys_path, "imports": list(kind.imports), "parent": os.getpid()}
         proc = subprocess.Popen(
             [_python(), "-I", "-S", "-B", os.path.join(folder, "_zygote.py"), folder,
              json.dumps(config)],
             stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd="/",
             env=_environment(folder), close_fds=True, start_new_session=True,
             preexec_fn=_dies_with_us)
-        ready = _ready(proc)
     except BaseException:
         _remove_tree(folder)
         raise
-    z = Zygote(proc.pid, folder, allow_gpsaccel, tuple(sys_path), imports,
-               tuple(ready["modules"]), int(ready["vmsize"]) * 1024, proc)
-    bad = z.holds_any_of(hidden_dirs(allow_gpsaccel, hide))
+    return proc, folder, sys_path
+
+
+def _ready(kind: Warm, proc: subprocess.Popen, folder: str, sys_path: list[str]) -> Zygote:
+    """The zygote once it said it is ready (its modules, its address space), checked to hold no
+    module its boxes may not read."""
+    try:
+        info = _ready_line(proc)
+    except BaseException:
+        _remove_tree(folder)
+        raise
+    z = Zygote(proc.pid, folder, kind.allow_gpsaccel, tuple(sys_path), kind.imports,
+               tuple(info["modules"]), int(info["vmsize"]) * 1024, proc)
+    bad = z.holds_any_of(hidden_dirs(kind.allow_gpsaccel, kind.hide))
     if bad:
         stop(z)
         raise ValueError(f"imports: the zygote would hold {bad[0]}, a file its boxes may not "
@@ -159,9 +188,8 @@ def _dies_with_us() -> None:
     _prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
 
 
-def _ready(proc: subprocess.Popen) -> dict:
-    """The zygote's line saying it is ready (its modules, its address space), or OSError with
-    what it wrote to stderr."""
+def _ready_line(proc: subprocess.Popen) -> dict:
+    """The zygote's line saying it is ready, or OSError with what it wrote to stderr."""
     assert proc.stdout is not None and proc.stderr is not None
     line = b""
     give_up = time.monotonic() + START_WAIT
@@ -204,21 +232,32 @@ _ACTIVE: list[Zygote] = []
 
 
 @contextlib.contextmanager
-def warm_boxes(imports: Sequence[str] = COURSE_IMPORTS, allow_gpsaccel: bool = False,
-               hide: Sequence[str] = ()) -> Iterator[Zygote | None]:
-    """Within the block, boxes of this process (and of the processes it forks) that a new zygote
-    can serve start warm (module docstring); it yields the zygote, or None where boxes cannot
-    start warm here (:func:`usable`): they start cold, as without the block.  The zygote is
-    killed at the end of the block."""
+def warm_boxes(*kinds: Warm) -> Iterator[list[Zygote]]:
+    """Within the block, boxes of this process (and of the processes it forks) of these kinds
+    (default: one :class:`Warm`) start warm, each from a zygote of its kind started here (all at
+    once) and killed at the end of the block, by pid, with its folder (module docstring).  It
+    yields the zygotes: none where boxes cannot start warm here (:func:`usable`), and then they
+    start cold, as without the block."""
+    kinds = kinds or (Warm(),)
     if not usable():
-        yield None
+        yield []
         return
-    z = start(imports, allow_gpsaccel, hide)
+    started: list[Zygote] = []
+    launched = []
     try:
-        with serve(z):
-            yield z
+        for kind in kinds:
+            launched.append((kind, *_launch(kind)))
+        while launched:
+            started.append(_ready(*launched.pop(0)))
+        with serve(*started):
+            yield started
     finally:
-        stop(z)
+        for _, proc, folder, _ in launched:
+            proc.kill()
+            proc.wait()
+            _remove_tree(folder)
+        for z in started:
+            stop(z)
 
 
 @contextlib.contextmanager

@@ -115,7 +115,8 @@ def _single_check(tmp_path, backend, hostile, watch, sig, processes):
             f"sandbox={str(backend)!r})\n")
     if backend.warm:  # its box forked from a zygote of that process's
         backend.elsewhere = True
-        code = ("from gpsaccel.sandbox import zygote\nwith zygote.warm_boxes(('numpy',)):\n"
+        code = ("from gpsaccel import sandbox as sb\n"
+                "with sb.warm_boxes(sb.Warm(('numpy',))):\n"
                 + "".join("    " + line + "\n" for line in code.splitlines()))
     proc = subprocess.Popen([sys.executable, "-c", code], env=hostile.env(),
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)

@@ -13,6 +13,7 @@ import secrets
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -158,7 +159,7 @@ def test_the_zygote_holds_no_descriptor_nor_byte_of_its_starter(tmp_path):
     held = open(secret, encoding="ascii")  # noqa: SIM115 - open while the zygote starts
     in_memory = ("gpsacc" + token[::-1]).encode()  # a byte string this process holds
     try:
-        z = zygote.start(("numpy",))
+        z = zygote.start(zygote.Warm(("numpy",)))
     finally:
         held.close()
     try:
@@ -225,7 +226,7 @@ def test_a_box_the_zygote_cannot_serve_starts_cold(tmp_path, zygotes):
                                          if m.endswith("numpy/__init__.py")))
         assert zygote.serving("basic", False, list(no_gpsaccel.sys_path), 1 << 30,
                               [numpy_dir]) is None
-    dead = zygote.start(("numpy",))
+    dead = zygote.start(zygote.Warm(("numpy",)))
     os.kill(dead.pid, signal.SIGKILL)
     dead.proc.wait()
     with zygote.serve(dead):
@@ -234,12 +235,24 @@ def test_a_box_the_zygote_cannot_serve_starts_cold(tmp_path, zygotes):
 
 
 def test_a_zygote_imports_nothing_its_boxes_may_not_read():
+    """By name before it starts, and by the files of every module it holds once it has: here a
+    module that imports one of a folder to hide (the calibration model imports gpsaccel.kalman,
+    named here as hidden)."""
     with pytest.raises(ValueError, match="may not read"):
-        zygote.start(("gpsaccel.check",), allow_gpsaccel=True, hide=("check",))
+        zygote.Warm(("gpsaccel.check",), allow_gpsaccel=True, hide=("check",))
     with pytest.raises(ValueError, match="may not read"):
-        zygote.start(("gpsaccel",), allow_gpsaccel=False)
+        zygote.Warm(("gpsaccel",), allow_gpsaccel=False)
     with pytest.raises(ValueError, match="module name"):
-        zygote.start(("numpy; import os",))
+        zygote.Warm(("numpy; import os",))
+    def ours() -> set[str]:
+        return {p for p in os.listdir(tempfile.gettempdir())
+                if p.startswith(f"{zygote.ZYGOTE_PREFIX}{os.getpid()}-")}
+
+    before = ours()  # other tests' zygotes (the session's) may be running
+    with pytest.raises(ValueError, match="would hold .*/kalman/"):
+        zygote.start(zygote.Warm(("gpsaccel.calibration.model",), allow_gpsaccel=True,
+                                 hide=("kalman",)))
+    assert ours() == before  # the refused zygote's folder is gone with it
     assert hidden_dirs(False, ())  # the package is hidden from a box that may not import it
 
 
@@ -255,7 +268,7 @@ def test_a_warm_box_dies_with_its_supervisor(tmp_path, kind, hostile, watch):
     code = ("import numpy as np\nfrom gpsaccel import sandbox as sb\n"
             "from gpsaccel.sandbox import zygote\n"
             f"sub = sb.load_submission({str(spin)!r}, 'kalman_filter')\n"
-            "with zygote.warm_boxes(('numpy',)) as z:\n"
+            "with zygote.warm_boxes(zygote.Warm(('numpy',))) as (z,):\n"
             "    print(z.pid, flush=True)\n"
             "    sb.run(sub, [sb.Call('kalman_filter', (np.zeros((3, 2)),), "
             f"(sb.Output('x', (3, 3)),))], sb.Limits(time=600), {kind!r})\n")
