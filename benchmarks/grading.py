@@ -22,8 +22,16 @@ the runner imports numpy), one that imports scipy.stats, one gpsaccel; the noteb
 with and without the module's audit hook; the box of the file question (q2); and the grader's
 own CPU for the notebook, cold and warm.
 
+``--warm-boxes`` instead grades the same class with every box started cold (exec'd, as by
+default) and warm (``grade(..., warm_boxes=True)``: forked from a zygote that has imported numpy,
+scipy.stats and filterpy), alternated ``--repeats`` R times in one run: CPU seconds of this process
+and its children (the zygotes are this process's children, reaped when the class ends, so their
+start and every warm box count), wall seconds, the load average before and after each row, and
+whether both gave the same grades.
+
 Usage: python benchmarks/grading.py [--notebooks N] [--otter M] [--cold]
        python benchmarks/grading.py --profile [--repeats R]
+       python benchmarks/grading.py --warm-boxes [--notebooks N] [--repeats R]
 """
 
 from __future__ import annotations
@@ -247,10 +255,47 @@ def otter(notebooks: list[Path], zip_path: Path, work: Path) -> tuple[float, flo
     return time.perf_counter() - t0, total_cpu() - c0, codes
 
 
+def warm_vs_cold(n: int, repeats: int) -> None:
+    """The class graded with cold and with warm boxes, alternated (module docstring)."""
+    with tempfile.TemporaryDirectory(prefix="gpsaccel-bench-warm-") as tmp:
+        tmp = Path(tmp)
+        make_class(tmp / "class", n)
+        grading.warm("calibration")  # the parent's own warm-up, outside both rows
+        print(f"{os.cpu_count()} CPUs, sandbox {sb.resolve_backend('auto')}; {n} filled "
+              f"calibration notebooks ({len(KINDS)} kinds, q2 with filterpy), 2 at once")
+        print(f"{'boxes':<7}{'run':>4}{'wall s':>9}{'CPU s':>9}{'CPU s/nb':>10}{'load':>14}"
+              f"   totals")
+        rows: dict[bool, list[tuple[float, float]]] = {False: [], True: []}
+        seen: dict[bool, list] = {}
+        for r in range(repeats):
+            for warm in (False, True):
+                load0 = os.getloadavg()[0]
+                c0, t0 = total_cpu(), time.perf_counter()
+                grades = grade(tmp / "class", "calibration", out=tmp / f"g{r}{warm}", jobs=2,
+                               seed=1, secret=b"benchmark-secret-16b", warm_boxes=warm)
+                wall, spent = time.perf_counter() - t0, total_cpu() - c0
+                rows[warm].append((wall, spent))
+                seen[warm] = [(g.student, g.total, g.status, g.codes) for g in grades]
+                print(f"{'warm' if warm else 'cold':<7}{r + 1:>4}{wall:>9.1f}{spent:>9.1f}"
+                      f"{spent / n:>10.2f}{load0:>7.1f} ->{os.getloadavg()[0]:>4.1f}   "
+                      f"{sorted({g.total for g in grades})}")
+        cold = statistics.median(c for _, c in rows[False])
+        warm_cpu = statistics.median(c for _, c in rows[True])
+        print(f"median CPU s per notebook: cold {cold / n:.2f}, warm {warm_cpu / n:.2f} "
+              f"({warm_cpu / cold:.2f} of cold); median wall s: cold "
+              f"{statistics.median(w for w, _ in rows[False]):.1f}, warm "
+              f"{statistics.median(w for w, _ in rows[True]):.1f}; same grades, codes and "
+              f"statuses: {seen[False] == seen[True]}")
+
+
 def main(argv: list[str]) -> int:
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # a timeout still removes the class
     if "--profile" in argv:
         profile(int(argv[argv.index("--repeats") + 1]) if "--repeats" in argv else 3)
+        return 0
+    if "--warm-boxes" in argv:
+        warm_vs_cold(int(argv[argv.index("--notebooks") + 1]) if "--notebooks" in argv else 8,
+                     int(argv[argv.index("--repeats") + 1]) if "--repeats" in argv else 2)
         return 0
     n = int(argv[argv.index("--notebooks") + 1]) if "--notebooks" in argv else 20
     m = int(argv[argv.index("--otter") + 1]) if "--otter" in argv else 3

@@ -220,3 +220,37 @@ def _one_hostile_module_at_a_time(request):
     with open(os.path.join(tempfile.gettempdir(), "gpsaccel-hostile-tests.lock"), "a") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes, or the process dies
         yield
+
+
+class Started:
+    """How the boxes of a run started, counted across the processes it forks (each item of a
+    class run is forked from the run's process: a counter in shared memory): ``cold`` and
+    ``warm`` (:attr:`gpsaccel.sandbox.BoxResult.started`) while :meth:`counting` is active."""
+
+    def __init__(self) -> None:
+        import multiprocessing as mp
+
+        ctx = mp.get_context("fork")
+        self._cold, self._warm = ctx.Value("i", 0), ctx.Value("i", 0)
+
+    @property
+    def cold(self) -> int:
+        return self._cold.value
+
+    @property
+    def warm(self) -> int:
+        return self._warm.value
+
+    def counting(self, monkeypatch: pytest.MonkeyPatch) -> None:
+        """From now on (until ``monkeypatch`` undoes it) every ``gpsaccel.sandbox.run`` of this
+        process and of those it forks counts its box."""
+        real = sb.run
+
+        def run(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202 - sandbox.run's own
+            box = real(*args, **kwargs)
+            counter = self._warm if box.started == "warm" else self._cold
+            with counter.get_lock():
+                counter.value += 1
+            return box
+
+        monkeypatch.setattr(sb, "run", run)

@@ -38,7 +38,7 @@ from gpsaccel import registry
 from gpsaccel import sandbox as sb
 from gpsaccel._untrusted import json_safe
 from gpsaccel.check import batch
-from gpsaccel.check.problem import arguments
+from gpsaccel.check.problem import BOX_HIDES, arguments
 from gpsaccel.classrun import running
 from gpsaccel.classrun.entries import PYTHON, Entry, Naming, walk
 
@@ -59,6 +59,11 @@ class _Check(running.Task):
 
     def warm(self) -> None:
         batch.warm(self.problem)
+
+    def boxes(self) -> tuple[sb.Warm, ...]:
+        """The file's box: it may import gpsaccel (not the checker's folders) or not at all."""
+        allow = bool(self.options["allow_gpsaccel"])
+        return (sb.Warm(allow_gpsaccel=allow, hide=BOX_HIDES if allow else ()),)
 
     def item(self, entry: Entry) -> dict:
         assert entry.path is not None  # the run sends only entries with a path
@@ -98,12 +103,15 @@ class CheckPlan:
                 "limits": None if self.limits is None else dict(vars(self.limits))}
 
     def run(self, executor: object = "processes", max_workers: int | None = None,
-            on_result: Callable[[dict], None] | None = None) -> list[dict]:
+            on_result: Callable[[dict], None] | None = None,
+            warm_boxes: bool = False) -> list[dict]:
         """Check every entry (module docstring); one dict per entry, in order.  ``on_result``
-        is called with each as it finishes (e.g. to append it to a log)."""
+        is called with each as it finishes (e.g. to append it to a log); ``warm_boxes``: each
+        box starts from a zygote (:func:`gpsaccel.classrun.running.run`)."""
         jobs = running.jobs_of(max_workers, running.cpus(), "max_workers")
         results = running.run(_Check(self), self.entries, jobs, executor,
-                              None if on_result is None else lambda i, r: on_result(r))
+                              None if on_result is None else lambda i, r: on_result(r),
+                              warm_boxes)
         return [r for r in results if r is not None]
 
 
@@ -133,7 +141,8 @@ def check_many(paths: Sequence[str | os.PathLike], n_runs: int | None = None,
                max_workers: int | None = None, sandbox: str = "auto",
                limits: sb.Limits | None = None, allow_gpsaccel: bool = False,
                on_result: Callable[[dict], None] | None = None,
-               problem: str = "calibration", allow_unsafe_basic: bool = False) -> list[dict]:
+               problem: str = "calibration", allow_unsafe_basic: bool = False,
+               warm_boxes: bool = False) -> list[dict]:
     """Check every submission of ``paths``: :func:`plan_check`, then :meth:`CheckPlan.run`.
 
     ``problem`` is a name of :func:`gpsaccel.registry.problems` ("calibration", "coop", "ship",
@@ -142,7 +151,9 @@ def check_many(paths: Sequence[str | os.PathLike], n_runs: int | None = None,
     (a process per check), None (in this process) or anything
     :func:`gpsaccel.executors.resolve_executor` accepts.  The basic sandbox is refused where it
     is unsafe (:func:`gpsaccel.sandbox.refuse_unsafe_basic`) unless ``allow_unsafe_basic``.
+    ``warm_boxes``: each box starts from a zygote that has imported numpy, scipy.stats and
+    filterpy (:mod:`gpsaccel.sandbox.zygote`; as root on Linux, with this machine's executor).
     Raises :class:`~gpsaccel.classrun.running.Interrupted` on Ctrl-C."""
     plan = plan_check(paths, problem, n_runs, seed, timeout, sandbox, limits, allow_gpsaccel,
                       allow_unsafe_basic)
-    return plan.run(executor, max_workers, on_result)
+    return plan.run(executor, max_workers, on_result, warm_boxes)

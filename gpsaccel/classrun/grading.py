@@ -83,6 +83,14 @@ class _Grade(running.Task):
     def warm(self) -> None:
         item.warm(self.name)
 
+    def boxes(self) -> tuple:
+        """A notebook's box (it may import the course's models, not the grader's folders) and
+        a file question's (a student's filter: no gpsaccel)."""
+        from gpsaccel import sandbox as sb
+        from gpsaccel.assignments.notebook import BOX_HIDES
+
+        return (sb.Warm(allow_gpsaccel=True, hide=BOX_HIDES), sb.Warm())
+
     def item(self, entry: Entry) -> dict:
         assert entry.path is not None  # the run sends only entries with a notebook
         return item.grade_item(entry.path, entry.student, self._file(entry), entry.id,
@@ -297,7 +305,8 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
                 similarity: bool = True, naming: Naming | None = None,
                 export: str = "auto", regrade: bool = False,
                 compare_with: str | os.PathLike | None = None,
-                canvas_column: str | None = None) -> Graded:
+                canvas_column: str | None = None,
+                warm_boxes: bool = False) -> Graded:
     """Grade every student of ``submissions`` for homework ``name`` and write every file
     (module docstring); :func:`grade` is this with the grades alone.
 
@@ -318,9 +327,12 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
     compare_with : a folder of earlier submissions (an export as graded) the similarity report
     compares every answer with too.  canvas_column : the name of ``canvas.csv``'s grade column
     (:mod:`gpsaccel.classrun.classwide`; default the homework's title).
+    warm_boxes : start each box from a zygote that has imported numpy, scipy.stats and filterpy
+    (:mod:`gpsaccel.sandbox.zygote`; as root on Linux, without ``dask``), confined as a cold box
+    (the same grades: a rerun reuses them either way).
     """
     folder = Path(submissions)
-    out, jobs = _checked(folder, out, timeout, jobs)
+    out, jobs = _checked(folder, out, timeout, jobs, warm_boxes, dask)
     earlier = _earlier(compare_with, similarity)
     students = read_roster(roster) if isinstance(roster, (str, os.PathLike)) else roster
     possible = item.possible_of(name)
@@ -343,14 +355,16 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
         "assignment": name, "seed": seed, "sandbox": backend, "timeout": timeout,
         "variants": "per student (HMAC of the id under the instructor's secret)" if secret
         else "none (no secret given: every student has the public notebook's numbers)",
-        "questions": possible, "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        "boxes": "warm" if warm_boxes else "cold", "questions": possible,
+        "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         "student": wanted,
         "export": layout.found, "skipped": notes, "reuse": _fingerprint(settings)})
     todo = [i for i in range(len(entries)) if i not in record.reused]
     try:
         if todo:
             running.run(_Grade(folder, settings), [entries[i] for i in todo], jobs,
-                        dask or "processes", lambda k, data: record.done(todo[k], data))
+                        dask or "processes", lambda k, data: record.done(todo[k], data),
+                        warm_boxes)
     except BaseException:  # Ctrl-C, a lost cluster: what is done stays, the rest not-graded
         record.finish(interrupted=True)
         raise
@@ -417,13 +431,14 @@ def grade(submissions: str | os.PathLike, name: str, out: str | os.PathLike | No
           dask: str | None = None, sandbox: str = "auto", progress: bool = False,
           roster: Sequence[Student] | str | os.PathLike | None = None,
           similarity: bool = True, naming: Naming | None = None, export: str = "auto",
-          regrade: bool = False) -> list[Grade]:
+          regrade: bool = False, warm_boxes: bool = False) -> list[Grade]:
     """Grade a class (:func:`grade_class`: the same files as ``gpsaccel grade`` writes); this
     run's grades, one per student graded, in the class's order.  OSError when a file could not
     be written (every other one is; ``grading.json`` names them, :func:`rewrite_class` writes
     the class-wide ones once there is room)."""
     graded = grade_class(submissions, name, out, jobs, timeout, seed, secret, student, dask,
-                         sandbox, progress, roster, similarity, naming, export, regrade)
+                         sandbox, progress, roster, similarity, naming, export, regrade,
+                         warm_boxes=warm_boxes)
     if graded.missing:
         raise OSError(f"not written in {graded.out}: " + ", ".join(
             f"{f} ({why})" for f, why in graded.missing.items()))
@@ -539,9 +554,11 @@ def _unmapped(students: Sequence[Student] | None, layout: Export) -> list[str]:
     return lines
 
 
-def _checked(folder: Path, out: str | os.PathLike | None, timeout: float, jobs: int | None
-             ) -> tuple[Path, int]:
-    """The output folder and the jobs of :func:`grade_class`, its arguments checked."""
+def _checked(folder: Path, out: str | os.PathLike | None, timeout: float, jobs: int | None,
+             warm_boxes: bool = False, dask: str | None = None) -> tuple[Path, int]:
+    """The output folder and the jobs of :func:`grade_class`, its arguments checked (and
+    ``warm_boxes`` where it can be honoured: :func:`gpsaccel.classrun.running.warm_of`)."""
+    running.warm_of(warm_boxes, dask or "processes")
     if not folder.is_dir():
         raise ValueError(f"submissions must be a folder (a student's folder or notebook per "
                          f"student), got {folder}")

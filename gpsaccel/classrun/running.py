@@ -21,6 +21,7 @@ signal) holding what finished.
 
 from __future__ import annotations
 
+import contextlib
 import os
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -30,6 +31,7 @@ from gpsaccel import _validation as _v
 from gpsaccel import sandbox as sb
 from gpsaccel._interrupt import Stopped
 from gpsaccel.classrun.entries import Entry
+from gpsaccel.sandbox import zygote
 from gpsaccel.sandbox.outcomes import OUTCOMES
 
 
@@ -88,6 +90,11 @@ class Task:
         """Import what every item imports on first use, before the pool forks (only modules:
         no answer exists before a box is empty)."""
 
+    def boxes(self) -> tuple[sb.Warm, ...]:
+        """The kinds of box the items start, for a run whose boxes start warm (``warm_boxes``:
+        a zygote per kind, :func:`gpsaccel.sandbox.warm_boxes`); none: every box starts cold."""
+        return ()
+
     def item(self, entry: Entry) -> dict:
         """The entry's result, computed in the item's process (its box runs from there)."""
         raise NotImplementedError
@@ -115,13 +122,34 @@ def lost_text(lost: sb.Lost, task: Task) -> str:
 LOCAL = ("processes", "local", None, "inprocess")
 
 
+def warm_of(warm_boxes: bool, executor: object) -> bool:
+    """``warm_boxes`` checked: a run whose boxes start warm needs this machine's items (they
+    inherit the zygotes) and root on Linux (each box a uid of its own); asked where it cannot
+    be honoured, a ValueError says why."""
+    if not isinstance(warm_boxes, bool):
+        raise ValueError(f"warm_boxes must be True or False, got {warm_boxes!r}")
+    if warm_boxes and executor not in LOCAL:
+        raise ValueError(f"warm_boxes: boxes start warm only from this machine's items "
+                         f"(executor 'processes' or None), not from {executor!r}")
+    if warm_boxes and not zygote.usable():
+        raise ValueError("warm_boxes: boxes start warm only as root on Linux (each box runs "
+                         "under a uid of its own); run without it")
+    return warm_boxes
+
+
 def run(task: Task, entries: Sequence[Entry], jobs: int, executor: object = "processes",
-        on_result: Callable[[int, dict], None] | None = None) -> list[dict | None]:
+        on_result: Callable[[int, dict], None] | None = None,
+        warm_boxes: bool = False) -> list[dict | None]:
     """Every entry's result, in order (module docstring); ``on_result(i, result)`` as each ends.
 
     ``executor``: ``"processes"`` (a process forked per item), None (here, one after the other)
     or anything :func:`gpsaccel.executors.resolve_executor` accepts (``"dask-local"``,
-    ``"tcp://..."``, an Executor).  Raises :class:`Interrupted` on Ctrl-C, SIGTERM or SIGHUP."""
+    ``"tcp://..."``, an Executor).  ``warm_boxes``: the items' boxes start from a zygote per
+    kind of box (:meth:`Task.boxes`), started before the items and killed when they end; a box
+    a zygote cannot serve starts cold (:mod:`gpsaccel.sandbox.zygote`); a ValueError where it
+    cannot be honoured (:func:`warm_of`).  Raises :class:`Interrupted` on Ctrl-C, SIGTERM or
+    SIGHUP."""
+    warm_of(warm_boxes, executor)
     results: list[dict | None] = [None] * len(entries)
 
     def done(i: int, out: Any) -> None:
@@ -145,8 +173,10 @@ def run(task: Task, entries: Sequence[Entry], jobs: int, executor: object = "pro
 
         spec = None if executor in ("processes", "local") else \
             "inprocess" if executor is None else executor
-        sb.run_items(task.item, [entries[i] for i in runnable], jobs, task.deadline, finished,
-                     spec)
+        kinds = task.boxes() if warm_boxes and runnable else ()
+        with sb.warm_boxes(*kinds) if kinds else contextlib.nullcontext():
+            sb.run_items(task.item, [entries[i] for i in runnable], jobs, task.deadline,
+                         finished, spec)
     except KeyboardInterrupt as exc:
         raise Interrupted(results, exc) from exc
     return results

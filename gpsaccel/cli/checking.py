@@ -18,7 +18,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
     from gpsaccel._interrupt import exit_status as stopped_status
     from gpsaccel.check.own import is_file_spec, load_problem
     from gpsaccel.classrun.checking import plan_check
-    from gpsaccel.classrun.running import Interrupted
+    from gpsaccel.classrun.running import Interrupted, warm_of
     from gpsaccel.classrun.writing import appender, log_path, table, terminal, write_json
 
     if is_file_spec(args.problem) and args.dask is not None:
@@ -31,6 +31,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
                       timeout=args.timeout, sandbox=args.sandbox, limits=_limits(args),
                       allow_gpsaccel=args.allow_gpsaccel,
                       allow_unsafe_basic=args.allow_unsafe_basic)
+    warm_of(args.warm_boxes, spec)  # a flag it cannot honour: an error before anything runs
     with terminal() as term:
         for note in plan.notes:
             term.err(note)
@@ -53,7 +54,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
         t0 = time.perf_counter()
         try:
             with bar:
-                results = plan.run(spec, args.workers, on_result)
+                results = plan.run(spec, args.workers, on_result, args.warm_boxes)
         except Interrupted as exc:
             done = [r for r in exc.results if r is not None]
             if args.json is not None:  # first: the terminal may be gone
@@ -186,6 +187,10 @@ def add_check(sub: argparse._SubParsersAction) -> None:
                    help="isolation of each submission: bwrap (bubblewrap namespaces), basic "
                         "(limits, scrubbed environment, private folder) or auto (bwrap when it "
                         "works; default)")
+    p.add_argument("--warm-boxes", action="store_true",
+                   help="start each box from a process that has imported numpy, scipy.stats "
+                        "and filterpy, confined as a cold one (as root on Linux, without "
+                        "--dask; docs/sandbox.md)")
     p.add_argument("--memory", type=_v.flag_float(256.0), default=1024, metavar="MIB",
                    help="address space per student process, MiB (default 1024)")
     p.add_argument("--max-output", type=_v.flag_float(0.0, open_min=True), default=16,

@@ -2,10 +2,10 @@
 content earns, changes no file outside its box, leaves no process and cannot stop the run.
 
 All of them are graded in one class run (module fixture, two at a time; once under bwrap and once
-under basic as root) next to two honest classmates whose grades must not move.  Every process an
-attack starts carries the marker :data:`MARK` in its command line; after the run a scan of
-``/proc`` must find none (and kills by PID whatever it finds, so a failing test leaves nothing on
-the shared machine).  Floods are
+under basic as root, each with its boxes started cold and warm) next to two honest classmates
+whose grades must not move.  Every process an attack starts carries the marker
+:data:`MARK` in its command line; after the run a scan of ``/proc`` must find none (and kills by
+PID whatever it finds, so a failing test leaves nothing on the shared machine).  Floods are
 bounded by the attack itself as well as by the sandbox.
 """
 
@@ -21,7 +21,9 @@ import pytest
 
 from gpsaccel.assignments.grading import SECRET_ENV
 from gpsaccel.classrun import grade
+from gpsaccel.sandbox.confinement import ZYGOTE_PREFIX
 
+from .._hostile import Started
 from .conftest import kill_pids, read_grades
 
 MARK = f"gpsaccel-attack-{uuid.uuid4().hex[:12]}"
@@ -41,10 +43,15 @@ def _basic_as_root() -> bool:
 # the "kill the grader" attack signals every process it can see: inside bwrap's PID namespace that
 # is nobody but itself, and under basic as root only the box's own uid (not as root it would be
 # every process of this user: never run there)
-BACKENDS = [pytest.param("bwrap", marks=pytest.mark.skipif(
-                not _bwrap(), reason="needs Linux with a working bubblewrap")),
-            pytest.param("basic", marks=pytest.mark.skipif(
-                not _basic_as_root(), reason="basic isolates a student only as root"))]
+# and each with the grader's boxes started warm (forked from its zygotes: gpsaccel.sandbox.zygote,
+# as root on Linux), which must hold every attack as the cold boxes do
+_NO_BWRAP = pytest.mark.skipif(not _bwrap(), reason="needs Linux with a working bubblewrap")
+_NO_BASIC = pytest.mark.skipif(not _basic_as_root(),
+                               reason="basic isolates a student only as root")
+BACKENDS = [pytest.param(("bwrap", False), id="bwrap", marks=_NO_BWRAP),
+            pytest.param(("basic", False), id="basic", marks=_NO_BASIC),
+            pytest.param(("bwrap", True), id="bwrap-warm", marks=_NO_BWRAP),
+            pytest.param(("basic", True), id="basic-warm", marks=_NO_BASIC)]
 
 SECRET = b"instructor-secret-for-the-attack-tests"
 
@@ -336,14 +343,27 @@ def attacked(tmp_path_factory, request):
         nbformat.write(nb, str(target))
     os.environ[SECRET_ENV] = SECRET.decode()
     try:
-        grades = grade(sub, "ship", out=out, jobs=2, timeout=60, seed=7, secret=SECRET,
-                       sandbox=request.param)
+        backend, warm = request.param
+        started = Started()
+        with pytest.MonkeyPatch.context() as patch:
+            started.counting(patch)
+            grades = grade(sub, "ship", out=out, jobs=2, timeout=60, seed=7, secret=SECRET,
+                           sandbox=backend, warm_boxes=warm)
     finally:
         del os.environ[SECRET_ENV]
-        left = _procs_with(MARK)
+        # every attack's process, and this run's zygotes (their folder names this process)
+        left = _procs_with(MARK) + _procs_with(f"{ZYGOTE_PREFIX}{os.getpid()}-")
         kill_pids(left)
     return {"grades": {g.student: g for g in grades}, "csv": read_grades(out / "grades.csv"),
-            "left": left, "victim": (victim, before), "out": out}
+            "left": left, "victim": (victim, before), "out": out, "warm": warm,
+            "started": (started.cold, started.warm)}
+
+
+def test_every_box_started_as_the_run_asked(attacked):
+    """A warm run's boxes all start from its zygotes (the attacks are tried on warm boxes, not
+    on cold ones a zygote could not serve); a cold run starts none warm."""
+    cold, warm = attacked["started"]
+    assert (cold, warm > 0) == (0, True) if attacked["warm"] else (cold > 0, warm) == (True, 0)
 
 
 def test_no_process_outlives_the_run(attacked):

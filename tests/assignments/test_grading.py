@@ -17,7 +17,9 @@ from gpsaccel.assignments import notebook as nbm
 from gpsaccel.assignments.questions import question_seed, variant_number
 from gpsaccel.classrun import default_out, grade, notebooks, walk
 from gpsaccel.cli import main
+from gpsaccel.sandbox import zygote
 
+from .._hostile import Started
 from .conftest import CHI2_SPECIAL, read_grades, tracker_with_numpy_filter, write_variant
 
 PHI = 'dt = 1 / VARIANT["rate_hz"]\nPhi = np.array([[1.0, dt, -dt**2 / 2],'
@@ -152,6 +154,33 @@ def test_dask_gives_the_same_grades(graded, tmp_path):
     want = graded["grades"][s]
     assert [(g.student, g.status, g.scores, g.codes) for g in grades] == [
         (s, "graded", want.scores, want.codes)]
+
+
+@pytest.mark.skipif(not zygote.usable(), reason="boxes start warm only as root on Linux")
+def test_warm_boxes_give_the_same_grades(graded, tmp_path, monkeypatch):
+    """The class again with every box forked from the run's zygotes (its notebooks' and its
+    filters'): each student's status, scores, codes and feedback as the cold run gave them (the
+    crash, the blank and the hostile notebook included), every box started warm."""
+    started = Started()
+    started.counting(monkeypatch)
+    grades = grade(graded["sub"], "calibration", out=tmp_path / "warm", jobs=2, timeout=120,
+                   seed=2027, secret=SECRET, warm_boxes=True)
+    assert (started.cold, started.warm > 0) == (0, True)
+    assert [(g.student, g.status, g.scores, g.codes, g.feedback) for g in grades] == [
+        (g.student, g.status, g.scores, g.codes, g.feedback)
+        for g in (graded["grades"][x.student] for x in grades)]
+    assert len(grades) == len(graded["grades"])
+    record = json.loads((tmp_path / "warm" / "grading.json").read_text(encoding="utf-8"))
+    assert record["boxes"] == "warm"
+
+
+def test_warm_boxes_where_they_cannot_start_warm_are_an_error(graded, tmp_path):
+    with pytest.raises(ValueError, match="warm_boxes: .*this machine's items"):
+        grade(graded["sub"], "calibration", out=tmp_path / "o", dask="dask-local",
+              warm_boxes=True)
+    with pytest.raises(ValueError, match="warm_boxes must be True or False"):
+        grade(graded["sub"], "calibration", out=tmp_path / "o", warm_boxes="yes")
+    assert not (tmp_path / "o").exists()  # refused before anything was written
 
 
 # ------------------------------------------------------------------------ the parts alone

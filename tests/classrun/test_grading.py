@@ -19,7 +19,7 @@ from .test_entries import canvas_like
 def _fake_run(seen: list):
     """The class run with every runnable entry "graded" at 1 point per question and its
     student key recorded (what the item would key the variant and the data on)."""
-    def fake(task, entries, jobs, executor, on_result):
+    def fake(task, entries, jobs, executor, on_result, warm_boxes=False):
         for i, e in enumerate(entries):
             seen.append((e.student, e.late, e.attempt))
             if e.problem is not None:

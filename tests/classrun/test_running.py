@@ -13,7 +13,7 @@ import pytest
 
 from gpsaccel.classrun import Entry, Interrupted, Task, run
 from gpsaccel.classrun.running import backend_of, jobs_of, lost_text, seed_of
-from gpsaccel.sandbox import Lost
+from gpsaccel.sandbox import Lost, Warm, zygote
 from gpsaccel.sandbox.outcomes import OUTCOMES
 
 WARMED: list[int] = []
@@ -71,6 +71,44 @@ def test_in_this_process_one_after_the_other():
     assert results[0] == {"student": "ok", "pid": os.getpid(), "warmed": [os.getpid()]}
     assert results[1]["lost"] == "the run failed: ValueError: boom"
     assert results[2]["refused"] == "no-notebook"
+
+
+class _Boxes(_Toy):
+    """Items that say which zygotes their boxes would start from (and whether they run)."""
+
+    def boxes(self) -> tuple[Warm, ...]:
+        return (Warm(("numpy",)), Warm(("numpy",), allow_gpsaccel=True))
+
+    def item(self, entry: Entry) -> dict:
+        return {"zygotes": sorted((z.pid, z.folder, z.allow_gpsaccel, z.alive())
+                                  for z in zygote._ACTIVE)}
+
+
+@pytest.mark.skipif(not zygote.usable(), reason="boxes start warm only as root on Linux")
+def test_a_warm_run_serves_its_items_from_a_zygote_per_kind_gone_when_it_ends():
+    warm = run(_Boxes(), _entries("a", "b", "nothing"), 2, warm_boxes=True)
+    assert warm[0] == warm[1] and warm[2] == {"student": "nothing", "refused": "no-notebook"}
+    served = warm[0]["zygotes"]
+    assert sorted((allow, alive) for _, _, allow, alive in served) == [(False, True),
+                                                                        (True, True)]
+    for pid, folder, _, _ in served:  # killed by pid and reaped, their folders removed
+        try:
+            assert folder.encode() not in Path(f"/proc/{pid}/cmdline").read_bytes()
+        except FileNotFoundError:
+            pass
+        assert not os.path.exists(folder)
+    assert not zygote._ACTIVE
+    assert run(_Boxes(), _entries("a"), 1, warm_boxes=False)[0] == {"zygotes": []}
+
+
+def test_warm_boxes_only_where_they_can_start_warm():
+    with pytest.raises(ValueError, match="warm_boxes: .*not from 'dask-local'"):
+        run(_Boxes(), _entries("a"), 1, executor="dask-local", warm_boxes=True)
+    with pytest.raises(ValueError, match="warm_boxes must be True or False"):
+        run(_Boxes(), _entries("a"), 1, warm_boxes=1)
+    if not zygote.usable():
+        with pytest.raises(ValueError, match="only as root on Linux"):
+            run(_Boxes(), _entries("a"), 1, warm_boxes=True)
 
 
 def test_the_lost_wording_states_the_deadline_and_its_slack():
