@@ -7,13 +7,22 @@ Prints the wall time of the whole class at the checker's default n_runs, and, si
 the same run, a 10-file slice at the default and at the former default of 200 runs (the ratio is
 what fewer runs buys).
 
+``--warm-boxes`` instead checks N files (default 10) with every box started cold and warm
+(``check_many(..., warm_boxes=True)``: forked from a zygote that has imported numpy, scipy.stats
+and filterpy), alternated ``--repeats`` R times (default 2) in one run: CPU seconds of this process
+and its children (the zygote's start and every warm box included), wall seconds, the load average
+before and after each row, and whether both gave the same results.
+
 Usage: python benchmarks/check_class.py [--files N]
+       python benchmarks/check_class.py --warm-boxes [--files N] [--repeats R]
 """
 
 from __future__ import annotations
 
 import os
+import resource
 import shutil
+import statistics
 import sys
 import tempfile
 import time
@@ -45,7 +54,45 @@ def timed(paths: list[Path], n_runs: int) -> tuple[float, int]:
     return time.perf_counter() - t0, sum(r["passed"] for r in results)
 
 
+def cpu() -> float:
+    """CPU seconds of this process and its reaped children."""
+    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(
+        resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def warm_vs_cold(n: int, repeats: int) -> None:
+    """The class checked with cold and with warm boxes, alternated (module docstring)."""
+    with tempfile.TemporaryDirectory(prefix="gpsaccel-class-") as tmp:
+        paths = make_class(Path(tmp), n)
+        check_many(paths[:1], n_runs=2, seed=0, timeout=120)  # this process's imports, once
+        print(f"{os.cpu_count()} CPUs; {n} by-hand 200 Hz filters ({len(BY_HAND_200HZ)} kinds), "
+              f"n_runs = {DEFAULT_RUNS}, one process per CPU")
+        print(f"{'boxes':<7}{'run':>4}{'wall s':>9}{'CPU s':>9}{'CPU s/file':>12}{'load':>14}")
+        rows: dict[bool, list[float]] = {False: [], True: []}
+        seen: dict[bool, list] = {}
+        for r in range(repeats):
+            for warm in (False, True):
+                load0 = os.getloadavg()[0]
+                c0, t0 = cpu(), time.perf_counter()
+                results = check_many(paths, n_runs=DEFAULT_RUNS, seed=0, timeout=120,
+                                     warm_boxes=warm)
+                wall, spent = time.perf_counter() - t0, cpu() - c0
+                rows[warm].append(spent)
+                seen[warm] = [(x["passed"], x["codes"]) for x in results]
+                print(f"{'warm' if warm else 'cold':<7}{r + 1:>4}{wall:>9.1f}{spent:>9.1f}"
+                      f"{spent / n:>12.2f}{load0:>7.1f} ->{os.getloadavg()[0]:>4.1f}")
+        cold, warm_cpu = statistics.median(rows[False]), statistics.median(rows[True])
+        print(f"median CPU s per file: cold {cold / n:.2f}, warm {warm_cpu / n:.2f} "
+              f"({warm_cpu / cold:.2f} of cold); same verdicts and codes: "
+              f"{seen[False] == seen[True]}")
+
+
 def main(argv: list[str]) -> int:
+    if "--warm-boxes" in argv:
+        warm_vs_cold(int(argv[argv.index("--files") + 1]) if "--files" in argv else 10,
+                     int(argv[argv.index("--repeats") + 1]) if "--repeats" in argv else 2)
+        return 0
     n = int(argv[argv.index("--files") + 1]) if "--files" in argv else 100
     with tempfile.TemporaryDirectory(prefix="gpsaccel-class-") as tmp:
         paths = make_class(Path(tmp), n)
