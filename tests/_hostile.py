@@ -19,7 +19,7 @@ from types import SimpleNamespace
 import pytest
 
 from gpsaccel import sandbox as sb
-from gpsaccel.sandbox import zygote
+from gpsaccel.sandbox import warmbox, zygote
 
 TESTS = Path(__file__).resolve().parent
 SUBMISSIONS = TESTS / "submissions"
@@ -164,11 +164,11 @@ def backend(request):
     if not warm:
         yield b
         return
-    served = zygote.SERVED[0]
+    served = warmbox.SERVED[0]
     with zygote.serve(*request.getfixturevalue("zygotes")):
         yield b
     if request.path.parent.name == "sandbox" and not b.elsewhere:
-        assert zygote.SERVED[0] > served, "no box of this warm case started warm"
+        assert warmbox.SERVED[0] > served, "no box of this warm case started warm"
 
 
 @pytest.fixture

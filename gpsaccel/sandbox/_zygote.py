@@ -91,12 +91,19 @@ def main(argv: list[str]) -> None:
     sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     sock.bind(os.path.join(zdir, "socket"))
     sock.listen(64)
-    print(json.dumps({"pid": os.getpid(), "modules": _module_files(),
-                      "vmsize": _status("VmSize"), "threads": _status("Threads")}), flush=True)
+    line = json.dumps({"pid": os.getpid(), "modules": _module_files(),
+                       "vmsize": _status("VmSize"), "threads": _status("Threads")}) + "\n"
+    sys.stdout.flush()
+    sys.stderr.flush()
+    ready = os.dup(1)  # the starter's pipe: said ready only once stdout and stderr are /dev/null
     null = os.open(os.devnull, os.O_RDWR)
     for fd in (1, 2):
         os.dup2(null, fd)
     os.close(null)
+    data = line.encode()
+    while data:
+        data = data[os.write(ready, data):]
+    os.close(ready)
     _serve(sock, _Box(runner, enter, libc))
 
 

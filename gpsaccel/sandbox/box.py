@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from gpsaccel._interrupt import stop_after_cleanup
-from gpsaccel.sandbox import _boxuser, fence, zygote
+from gpsaccel.sandbox import _boxuser, fence, warmbox, zygote
 from gpsaccel.sandbox.channel import FrameReader, Refused
 from gpsaccel.sandbox.clock import BACKSTOP_FACTOR, BACKSTOP_MARGIN, Clock, clock_detail
 from gpsaccel.sandbox.confinement import (
@@ -118,7 +118,7 @@ def _run(sub: Submission, calls: list[Call], limits: Limits, backend: str, allow
             if z is not None:
                 try:
                     return _Supervisor(box, calls, t0, z).run(res_r, out_r, go_w)
-                except zygote.NotServed:  # the zygote died, or bwrap's pid 1 did not start
+                except warmbox.NotServed:  # the zygote died, or bwrap's pid 1 did not start
                     box.cold_again()
             return _Supervisor(box, calls, t0).run(res_r, out_r, go_w)
         except SubmissionError as exc:  # a file changed into a link since it was loaded
@@ -207,7 +207,7 @@ class _Prepared:
         self._close_child_fds([*self.child_fds, *fds])
         return proc
 
-    def warm(self, z: zygote.Zygote, extra: int, wait: float) -> zygote.WarmBox:
+    def warm(self, z: zygote.Zygote, extra: int, wait: float) -> warmbox.WarmBox:
         """The runner forked from the zygote ``z``: its keeper joins what bwrap made around the
         box's pid 1 (bwrap), or confines the runner itself (basic)."""
         res_w, out_w, go_r = self.child_fds
@@ -223,16 +223,16 @@ class _Prepared:
                 fds["ruleset"] = self.c.fence.ruleset
             req.update(cwd=str(box), env=_environment(str(box)),
                        argv0=str(control / "_runner.py"), argv=[str(control), str(box)])
-            return zygote.request(z, "basic", req, fds, wait)
+            return warmbox.request(z, "basic", req, fds, wait)
         cmd, files = self._bwrap(True)
-        proc, reaper, ns = zygote.start_reaper(cmd, str(self.tmp), _environment("/box"), files,
+        proc, reaper, ns = warmbox.start_reaper(cmd, str(self.tmp), _environment("/box"), files,
                                                _preexec(plan, self.c), wait)
         self._close_child_fds(files)
         # bwrap's --chdir sets PWD for its command
         req.update(cwd="/box", env=dict(_environment("/box"), PWD="/box"),
                    argv0="/control/_runner.py", argv=["/control", "/box"])
         try:
-            return zygote.request(z, "bwrap", req, {**fds, **ns}, wait, proc, reaper,
+            return warmbox.request(z, "bwrap", req, {**fds, **ns}, wait, proc, reaper,
                                   self.c.pids)
         except BaseException:
             os.close(reaper)
@@ -300,7 +300,7 @@ class _Supervisor:
     everything and drain the pipes.  The checker is a subreaper and not dumpable meanwhile.
 
     The box's first process is the runner (basic) or bwrap around it, started by exec; or, for a
-    runner forked from the zygote ``z`` (:class:`gpsaccel.sandbox.zygote.WarmBox`), the box's
+    runner forked from the zygote ``z`` (:class:`gpsaccel.sandbox.warmbox.WarmBox`), the box's
     keeper (basic) or bwrap around the box's pid 1 (bwrap)."""
 
     KEEP = 1 << 16  # bytes of the student's output kept
@@ -316,7 +316,7 @@ class _Supervisor:
         self.tail = bytearray()
         self.hit: str | None = None
         self.refused: str | None = None
-        self.proc: subprocess.Popen | zygote.WarmBox | None = None
+        self.proc: subprocess.Popen | warmbox.WarmBox | None = None
         self.sel: selectors.BaseSelector | None = None
         self.left: int | None = None
         self.go_w: int | None = None
@@ -348,7 +348,7 @@ class _Supervisor:
         finally:
             if self.proc is not None and not emptied:  # Ctrl-C or an error of ours: the box too
                 _kill_box(self.proc, self.before, self.c, self._roots(), self._own())
-            if isinstance(self.proc, zygote.WarmBox):
+            if isinstance(self.proc, warmbox.WarmBox):
                 self.proc.close()
             if self.sel is not None:
                 self.sel.close()
@@ -372,11 +372,11 @@ class _Supervisor:
     def _roots(self) -> list[int]:
         """The process trees of the box (bwrap's holds its namespace's)."""
         assert self.proc is not None
-        return self.proc.roots if isinstance(self.proc, zygote.WarmBox) else [self.proc.pid]
+        return self.proc.roots if isinstance(self.proc, warmbox.WarmBox) else [self.proc.pid]
 
     def _own(self) -> set[int]:
         """The box's processes that are not the student's, besides bwrap's."""
-        return self.proc.own if isinstance(self.proc, zygote.WarmBox) else set()
+        return self.proc.own if isinstance(self.proc, warmbox.WarmBox) else set()
 
     def _runner_exited(self) -> bool:
         assert self.proc is not None
@@ -411,7 +411,7 @@ class _Supervisor:
         """The runner's pid: the keeper's child (warm), the box's first process (basic), else the
         first of its processes that is not bwrap's (None until it has started)."""
         assert self.proc is not None
-        if isinstance(self.proc, zygote.WarmBox):
+        if isinstance(self.proc, warmbox.WarmBox):
             return self.proc.runner
         if self.backend != "bwrap":
             return self.proc.pid
@@ -491,7 +491,7 @@ class _Supervisor:
         if self.left is not None:
             self.result.killed = self.left
             return
-        warm = isinstance(self.proc, zygote.WarmBox)
+        warm = isinstance(self.proc, warmbox.WarmBox)
         runner = runner_alive if self.backend == "basic" or warm else bool(found)
         self.result.killed = max(0, found - (1 if runner else 0))
 

@@ -199,7 +199,7 @@ def box_processes(first: int | Sequence[int], adopted_from: set[int] | None) -> 
 
 class _FirstProcess(Protocol):
     """What a kill asks of a box's first process (a ``subprocess.Popen``, or a warm box's
-    keeper: :class:`gpsaccel.sandbox.zygote.WarmBox`)."""
+    keeper: :class:`gpsaccel.sandbox.warmbox.WarmBox`)."""
 
     pid: int
 
