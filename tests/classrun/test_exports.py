@@ -174,7 +174,7 @@ def test_a_plain_class_matches_roster_ids_whatever_their_characters(tmp_path):
 SECRET = b"an instructor's secret for the test"
 
 
-def _fake_run(task, entries, jobs, executor, on_result):
+def _fake_run(task, entries, jobs, executor, on_result, warm_boxes=False):
     """The class run with each notebook "graded" from what a real grade depends on: the
     student's variant under the secret (keyed by the entry's student) and the notebook's
     bytes."""

@@ -124,7 +124,7 @@ def test_a_rerun_keeps_the_grades_of_unchanged_notebooks_and_the_record_every_re
 
     sent: list = []
 
-    def fake(task, entries, jobs, executor, on_result):
+    def fake(task, entries, jobs, executor, on_result, warm_boxes=False):
         sent.append(sorted(e.student for e in entries))
         for i, e in enumerate(entries):
             g = item.unusable(task.name, e.student, e.found, "graded", "", e.id)
@@ -175,7 +175,7 @@ def test_a_rerun_that_keeps_every_grade_prints_no_empty_table(tmp_path, monkeypa
     the table of no grades. Its first line is now what the run wrote."""
     from gpsaccel.cli import main
 
-    def fake(task, entries, jobs, executor, on_result):
+    def fake(task, entries, jobs, executor, on_result, warm_boxes=False):
         for i, e in enumerate(entries):
             g = item.unusable(task.name, e.student, e.found, "graded", "", e.id)
             on_result(i, asdict(g))

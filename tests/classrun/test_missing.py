@@ -103,7 +103,7 @@ def test_a_file_refused_then_written_by_a_later_flush_is_not_missing(tmp_path, m
     sub = _class(tmp_path, monkeypatch)
     real = _fake_run([])
 
-    def fills_then_frees(task, entries, jobs, executor, on_result):
+    def fills_then_frees(task, entries, jobs, executor, on_result, warm_boxes=False):
         full.add("grades.csv")
         real(task, entries[:1], jobs, executor, on_result)
         full.discard("grades.csv")
