@@ -157,9 +157,6 @@ def test_dask_gives_the_same_grades(graded, tmp_path):
 
 
 @pytest.mark.skipif(not zygote.usable(), reason="boxes start warm only as root on Linux")
-@pytest.mark.xfail(strict=True, reason="open: on main 97f6fc7 the hostile student's q2 (a filter "
-                   "that imports gpsaccel) scores 4/4 warm against 0/4 'uses-checker' cold; a "
-                   "warm file box alone still reports uses-checker (docs/sandbox.md, Warm boxes)")
 def test_warm_boxes_give_the_same_grades(graded, tmp_path, monkeypatch):
     """The class again with every box forked from the run's zygotes (its notebooks' and its
     filters'): each student's status, scores, codes and feedback as the cold run gave them (the
