@@ -5,8 +5,10 @@ notebook's box: test_scoring.py)."""
 from __future__ import annotations
 
 import csv
+import hashlib
 import json
 import os
+import shutil
 
 import nbformat
 import pytest
@@ -59,7 +61,15 @@ def graded(tmp_path_factory):
     (out / "feedback" / "dropped the course.txt").write_text("stale", encoding="utf-8")
     grades = grade(sub, "calibration", jobs=2, timeout=120, seed=2027, secret=SECRET)
     return {"sub": sub, "out": out, "grades": {g.student: g for g in grades},
-            "csv": read_grades(out / "grades.csv")}
+            "csv": read_grades(out / "grades.csv"), "handed_in": _handed_in(sub)}
+
+
+def _handed_in(sub):
+    """Each file of the class and its SHA-256: a test that grades the class again and compares
+    with the fixture's grades must grade these very notebooks (a test that hands one in again
+    works on its own copy)."""
+    return {str(p.relative_to(sub)): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(sub.rglob("*")) if p.is_file()}
 
 
 def test_output_is_beside_the_submissions_not_inside(graded):
@@ -130,8 +140,11 @@ def test_summary_table_and_figure(graded):
     assert record["seed"] == 2027 and any("notes.txt" in n for n in record["skipped"])
 
 
-def test_regrade_one_student_with_the_recorded_seed(graded):
-    sub, out = graded["sub"], graded["out"]
+def test_regrade_one_student_with_the_recorded_seed(graded, tmp_path):
+    # on a copy of the class and its grades: the module's class stays as it was graded
+    root = tmp_path / "lms"
+    shutil.copytree(graded["sub"].parent, root)
+    sub, out = root / graded["sub"].name, root / graded["out"].name
     write_variant("calibration", sub / STUDENTS[4] / "calibration.ipynb",  # handed in again
                   [CHI2_SPECIAL])
     again = grade(sub, "calibration", student=STUDENTS[4], secret=SECRET, timeout=120)
@@ -161,6 +174,7 @@ def test_warm_boxes_give_the_same_grades(graded, tmp_path, monkeypatch):
     """The class again with every box forked from the run's zygotes (its notebooks' and its
     filters'): each student's status, scores, codes and feedback as the cold run gave them (the
     crash, the blank and the hostile notebook included), every box started warm."""
+    assert _handed_in(graded["sub"]) == graded["handed_in"]  # the class the cold run graded
     started = Started()
     started.counting(monkeypatch)
     grades = grade(graded["sub"], "calibration", out=tmp_path / "warm", jobs=2, timeout=120,
