@@ -234,6 +234,27 @@ def test_a_box_the_zygote_cannot_serve_starts_cold(tmp_path, zygotes):
     zygote.stop(dead)
 
 
+@pytest.mark.parametrize("kind", _backends())
+def test_a_box_that_may_not_import_gpsaccel_is_never_served_by_one_that_may(tmp_path, kind,
+                                                                           zygotes):
+    """The leak a wrong match would be: a student's filter forked from the zygote of notebook
+    boxes (allow_gpsaccel) would import the package.  Offered only that zygote, the filter's box
+    starts cold; offered both (that one first), it starts from its own kind; either way its
+    import of gpsaccel is refused and reported (uses-checker), as in a cold box."""
+    f = tmp_path / "uses.py"
+    f.write_text("import numpy as np\n\n\ndef f(x):\n    import gpsaccel\n"
+                 "    return np.asarray(x, dtype=float)\n")
+    sub = sb.load_submission(f, "f")
+    call = sb.Call("f", (np.zeros(3),), (sb.Output("y", (3,)),))
+    no_gpsaccel, allowed = zygotes
+    got = []
+    for offered in ((allowed,), (allowed, no_gpsaccel)):
+        with zygote.serve(*offered):
+            box = sb.run(sub, [call], LIMITS, backend=kind)
+        got.append((box.started, box.failure, box.uses_checker))
+    assert got == [("cold", "uses-checker", True), ("warm", "uses-checker", True)]
+
+
 def test_a_zygote_imports_nothing_its_boxes_may_not_read():
     """By name before it starts, and by the files of every module it holds once it has: here a
     module that imports one of a folder to hide (the calibration model imports gpsaccel.kalman,
