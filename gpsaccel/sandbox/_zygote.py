@@ -18,9 +18,11 @@ process), reads the request and the descriptors that come with it (the box's out
 pipes; the Landlock ruleset, or bwrap's namespaces), then forks the runner:
 
 basic
-    The keeper joins the box's cgroup and becomes the box's subreaper (what the student's code
-    orphans is re-parented to it, not to init); the runner child does what a cold box's first
-    process does between fork and exec (:func:`_enter.enter`: the mounts that reveal the
+    The keeper becomes the box's subreaper (what the student's code orphans is re-parented to
+    it, not to init) and stays out of the box's cgroup, as a cold box's supervisor does (the
+    box's memory, CPU and process limits are the student's alone, and an out-of-memory kill in
+    the box never picks the keeper); the runner child does what a cold box's first process does
+    between fork and exec (:func:`_enter.enter`: the cgroup, the mounts that reveal the
     interpreter, the fence, the rlimits, the box's uid, no capability, no new privileges, the
     Landlock fence last), in its working folder, session and environment.
 bwrap
@@ -40,8 +42,11 @@ runner's pid in the box's own numbering), or why it did not start (``{"error": t
 bwrap it then leaves (the box's pid 1 reports how the runner ended).  Under basic it stays, the
 runner's parent: it reports the runner's wait status (``{"exit": status}``), reaps what the box
 leaves it, and when the connection closes (the supervisor emptied the box, or died) kills what
-is left under it and exits.  The keeper dies with the zygote (``PR_SET_PDEATHSIG``); the zygote
-dies with the process that started it.
+is left under it and exits.  The zygote dies with the process that started it
+(``PR_SET_PDEATHSIG``); a keeper does not die with the zygote but lives as long as its
+connection: the supervisor's death, which closes the connection and kills the zygote at once,
+must leave the keeper alive to kill its box (with a death signal it died first, and what the
+box had forked went to init, spinning on).
 """
 
 from __future__ import annotations
@@ -125,8 +130,8 @@ def _status(key: str) -> int:
 
 
 def _serve(sock: socket.socket, box: _Box) -> None:
-    """Fork a keeper per connection; reap the keepers as they end (at once: a keeper counts in
-    its box's cgroup until it is reaped)."""
+    """Fork a keeper per connection; reap the keepers as they end (at once: a bwrap box's keeper
+    counts in its box's cgroup until it is reaped)."""
     wake_r, wake_w = os.pipe()
     os.set_blocking(wake_w, False)
     signal.signal(signal.SIGCHLD, lambda *_: None)
@@ -193,13 +198,9 @@ class _Box:
 
     def __init__(self, runner, enter, libc: ctypes.CDLL) -> None:  # noqa: ANN001 - modules
         self.runner, self.enter, self.libc = runner, enter, libc
-        self.zygote = os.getpid()
 
     def keep(self, conn: socket.socket) -> None:
         try:
-            self.enter.prctl(self.libc, PR_SET_PDEATHSIG, signal.SIGKILL)
-            if os.getppid() != self.zygote:
-                os._exit(1)
             _close_all_but({0, 1, 2, conn.fileno()})
             creds = conn.getsockopt(socket.SOL_SOCKET, socket.SO_PEERCRED,
                                     struct.calcsize("3i"))
@@ -223,8 +224,8 @@ class _Box:
         not."""
         plan, enter, libc = req["plan"], self.enter, self.libc
         bwrap = req["backend"] == "bwrap"
-        enter.join_cgroup(plan["cgroup"])
-        if bwrap:  # the box's limits and uid as bwrap took them, then its namespaces
+        if bwrap:  # the box's cgroup, limits and uid as bwrap took them, then its namespaces
+            enter.join_cgroup(plan["cgroup"])
             enter.enter(libc, dict(plan, reveal=[], fence=None), cgroup=False)
             enter.join_namespaces(libc, fds["owner"], [fds[n] for n in enter.NAMESPACES],
                                   fds["user"])
@@ -288,7 +289,7 @@ class _Box:
             _signals(req["ignored"])
             os.setsid()
             if not bwrap:
-                enter.enter(libc, req["plan"], fds.get("ruleset"), cgroup=False)
+                enter.enter(libc, req["plan"], fds.get("ruleset"))
             _close_all_but({0, 1, 2, fds["res"], fds["go"], err_w, *_start_fd(fds)})
             os.environ.clear()
             os.environ.update(req["env"])

@@ -101,7 +101,7 @@ def _run(sub: Submission, calls: list[Call], limits: Limits, backend: str, allow
     try:
         _write_control(tmp / "control", sub, calls, sys_path, allow_gpsaccel,
                        reaper=z is not None and backend == "bwrap")
-        confinement = _confine(limits, backend, needed, _extra(backend, z is not None))
+        confinement = _confine(limits, backend, needed, _extra(backend))
         if backend == "basic":
             confinement.fence = fence.choose(
                 hidden, confinement.uid is not None,
@@ -129,10 +129,10 @@ def _run(sub: Submission, calls: list[Call], limits: Limits, backend: str, allow
         _remove_tree(str(tmp))
 
 
-def _extra(backend: str, warm: bool) -> int:
+def _extra(backend: str) -> int:
     """The box's own processes beside the runner, in its cgroup: bwrap's two (its own and the
-    box's pid 1, warm or cold), a basic warm box's keeper."""
-    return 2 if backend == "bwrap" else 1 if warm else 0
+    box's pid 1, warm or cold); a basic warm box's keeper is outside it, as a supervisor is."""
+    return 2 if backend == "bwrap" else 0
 
 
 @dataclass
@@ -252,7 +252,7 @@ class _Prepared:
             _boxuser.kill_uid(self.c.uid)
         _remove_tree(str(self.tmp / "box"))
         if self.c.cgroup is not None:
-            self.c.cgroup.set_processes(self.limits.processes + 1 + _extra(self.backend, False))
+            self.c.cgroup.set_processes(self.limits.processes + 1 + _extra(self.backend))
 
 
 def _umask() -> int:
@@ -324,7 +324,7 @@ class _Supervisor:
         self.exited_at: float | None = None
         self.before: set[int] = set()
         self.clock: Clock | None = None
-        self.extra = _extra(self.backend, z is not None)
+        self.extra = _extra(self.backend)
         # a count of the box's processes is needed only where nothing else binds them: root's
         # processes are not counted by RLIMIT_NPROC, and there is neither a cgroup nor a box uid
         self.count = (os.getuid() == 0 or not sys.platform.startswith("linux")) and \

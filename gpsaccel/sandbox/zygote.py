@@ -211,8 +211,8 @@ def _ready_line(proc: subprocess.Popen) -> dict:
 
 
 def stop(z: Zygote) -> None:
-    """Kill the zygote by its pid (its keepers, then their runners, die with it) and remove its
-    folder."""
+    """Kill the zygote by its pid and remove its folder (a keeper lives until its box's
+    connection closes: its supervisor emptied the box, or died)."""
     try:
         os.kill(z.pid, signal.SIGKILL)
     except ProcessLookupError:
