@@ -12,6 +12,7 @@ command line; after the run a scan of ``/proc`` must find none (and kills by PID
 from __future__ import annotations
 
 import json
+import os
 import uuid
 from pathlib import Path
 
@@ -20,6 +21,8 @@ import pytest
 
 from gpsaccel.assignments import gradescope, scoring
 from gpsaccel.classrun import grade, writing
+
+from gpsaccel.sandbox.confinement import ZYGOTE_PREFIX
 
 from .conftest import CHI2_SPECIAL, kill_pids, read_grades, write_variant
 from .test_attacks import BACKENDS, _procs_with
@@ -80,14 +83,15 @@ def stopped_cell(path: Path, text: str) -> int:
 
 @pytest.fixture(scope="module", params=BACKENDS)
 def kept(request, tmp_path_factory):
-    root = tmp_path_factory.mktemp(f"keep-{request.param}")
+    backend, warm = request.param
+    root = tmp_path_factory.mktemp(f"keep-{backend}{'-warm' if warm else ''}")
     sub, out = root / "class", root / "out"
     paths = {name: write_case(name, sub / name / "calibration.ipynb") for name in CASES}
     try:
         grades = grade(sub, "calibration", out=out, jobs=2, timeout=TIMEOUT, seed=5,
-                       sandbox=request.param)
-    finally:
-        left = _procs_with(MARK)
+                       sandbox=backend, warm_boxes=warm)
+    finally:  # every case's process, and this run's zygotes (their folder names this process)
+        left = _procs_with(MARK) + _procs_with(f"{ZYGOTE_PREFIX}{os.getpid()}-")
         kill_pids(left)
     return {"grades": {g.student: g for g in grades}, "paths": paths, "left": left,
             "csv": read_grades(out / "grades.csv")}
