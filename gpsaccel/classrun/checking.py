@@ -104,10 +104,11 @@ class CheckPlan:
 
     def run(self, executor: object = "processes", max_workers: int | None = None,
             on_result: Callable[[dict], None] | None = None,
-            warm_boxes: bool = False) -> list[dict]:
+            warm_boxes: bool | None = None) -> list[dict]:
         """Check every entry (module docstring); one dict per entry, in order.  ``on_result``
         is called with each as it finishes (e.g. to append it to a log); ``warm_boxes``: each
-        box starts from a zygote (:func:`gpsaccel.classrun.running.run`)."""
+        box starts from a zygote (:func:`gpsaccel.classrun.running.run`; None: where boxes can
+        start warm)."""
         jobs = running.jobs_of(max_workers, running.cpus(), "max_workers")
         results = running.run(_Check(self), self.entries, jobs, executor,
                               None if on_result is None else lambda i, r: on_result(r),
@@ -142,7 +143,7 @@ def check_many(paths: Sequence[str | os.PathLike], n_runs: int | None = None,
                limits: sb.Limits | None = None, allow_gpsaccel: bool = False,
                on_result: Callable[[dict], None] | None = None,
                problem: str = "calibration", allow_unsafe_basic: bool = False,
-               warm_boxes: bool = False) -> list[dict]:
+               warm_boxes: bool | None = None) -> list[dict]:
     """Check every submission of ``paths``: :func:`plan_check`, then :meth:`CheckPlan.run`.
 
     ``problem`` is a name of :func:`gpsaccel.registry.problems` ("calibration", "coop", "ship",
@@ -152,7 +153,8 @@ def check_many(paths: Sequence[str | os.PathLike], n_runs: int | None = None,
     :func:`gpsaccel.executors.resolve_executor` accepts.  The basic sandbox is refused where it
     is unsafe (:func:`gpsaccel.sandbox.refuse_unsafe_basic`) unless ``allow_unsafe_basic``.
     ``warm_boxes``: each box starts from a zygote that has imported numpy, scipy.stats and
-    filterpy (:mod:`gpsaccel.sandbox.zygote`; as root on Linux, with this machine's executor).
+    filterpy (:mod:`gpsaccel.sandbox.zygote`; as root on Linux, with this machine's executor);
+    None (the default) where boxes can start warm, False every box cold.
     Raises :class:`~gpsaccel.classrun.running.Interrupted` on Ctrl-C."""
     plan = plan_check(paths, problem, n_runs, seed, timeout, sandbox, limits, allow_gpsaccel,
                       allow_unsafe_basic)

@@ -306,7 +306,7 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
                 export: str = "auto", regrade: bool = False,
                 compare_with: str | os.PathLike | None = None,
                 canvas_column: str | None = None,
-                warm_boxes: bool = False) -> Graded:
+                warm_boxes: bool | None = None) -> Graded:
     """Grade every student of ``submissions`` for homework ``name`` and write every file
     (module docstring); :func:`grade` is this with the grades alone.
 
@@ -329,10 +329,12 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
     (:mod:`gpsaccel.classrun.classwide`; default the homework's title).
     warm_boxes : start each box from a zygote that has imported numpy, scipy.stats and filterpy
     (:mod:`gpsaccel.sandbox.zygote`; as root on Linux, without ``dask``), confined as a cold box
-    (the same grades: a rerun reuses them either way).
+    (the same grades: a rerun reuses them either way); None (the default) where boxes can start
+    warm, False every box cold, True an error where they cannot.
     """
     folder = Path(submissions)
-    out, jobs = _checked(folder, out, timeout, jobs, warm_boxes, dask)
+    out, jobs = _checked(folder, out, timeout, jobs)
+    warm = running.warm_of(warm_boxes, dask or "processes")
     earlier = _earlier(compare_with, similarity)
     students = read_roster(roster) if isinstance(roster, (str, os.PathLike)) else roster
     possible = item.possible_of(name)
@@ -355,7 +357,7 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
         "assignment": name, "seed": seed, "sandbox": backend, "timeout": timeout,
         "variants": "per student (HMAC of the id under the instructor's secret)" if secret
         else "none (no secret given: every student has the public notebook's numbers)",
-        "boxes": "warm" if warm_boxes else "cold", "questions": possible,
+        "boxes": "warm" if warm else "cold", "questions": possible,
         "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         "student": wanted,
         "export": layout.found, "skipped": notes, "reuse": _fingerprint(settings)})
@@ -364,7 +366,7 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
         if todo:
             running.run(_Grade(folder, settings), [entries[i] for i in todo], jobs,
                         dask or "processes", lambda k, data: record.done(todo[k], data),
-                        warm_boxes)
+                        warm)
     except BaseException:  # Ctrl-C, a lost cluster: what is done stays, the rest not-graded
         record.finish(interrupted=True)
         raise
@@ -431,7 +433,7 @@ def grade(submissions: str | os.PathLike, name: str, out: str | os.PathLike | No
           dask: str | None = None, sandbox: str = "auto", progress: bool = False,
           roster: Sequence[Student] | str | os.PathLike | None = None,
           similarity: bool = True, naming: Naming | None = None, export: str = "auto",
-          regrade: bool = False, warm_boxes: bool = False) -> list[Grade]:
+          regrade: bool = False, warm_boxes: bool | None = None) -> list[Grade]:
     """Grade a class (:func:`grade_class`: the same files as ``gpsaccel grade`` writes); this
     run's grades, one per student graded, in the class's order.  OSError when a file could not
     be written (every other one is; ``grading.json`` names them, :func:`rewrite_class` writes
@@ -554,11 +556,9 @@ def _unmapped(students: Sequence[Student] | None, layout: Export) -> list[str]:
     return lines
 
 
-def _checked(folder: Path, out: str | os.PathLike | None, timeout: float, jobs: int | None,
-             warm_boxes: bool = False, dask: str | None = None) -> tuple[Path, int]:
-    """The output folder and the jobs of :func:`grade_class`, its arguments checked (and
-    ``warm_boxes`` where it can be honoured: :func:`gpsaccel.classrun.running.warm_of`)."""
-    running.warm_of(warm_boxes, dask or "processes")
+def _checked(folder: Path, out: str | os.PathLike | None, timeout: float,
+             jobs: int | None) -> tuple[Path, int]:
+    """The output folder and the jobs of :func:`grade_class`, its arguments checked."""
     if not folder.is_dir():
         raise ValueError(f"submissions must be a folder (a student's folder or notebook per "
                          f"student), got {folder}")

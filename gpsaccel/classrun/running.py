@@ -122,12 +122,16 @@ def lost_text(lost: sb.Lost, task: Task) -> str:
 LOCAL = ("processes", "local", None, "inprocess")
 
 
-def warm_of(warm_boxes: bool, executor: object) -> bool:
-    """``warm_boxes`` checked: a run whose boxes start warm needs this machine's items (they
-    inherit the zygotes) and root on Linux (each box a uid of its own); asked where it cannot
-    be honoured, a ValueError says why."""
+def warm_of(warm_boxes: bool | None, executor: object) -> bool:
+    """Whether the run's boxes start warm.  Warm boxes need this machine's items (they inherit
+    the zygotes) and root on Linux (each box a uid of its own): None (the default) starts them
+    warm where they can, True asks for them (a ValueError says why where they cannot start),
+    False starts every box cold."""
+    if warm_boxes is None:
+        return executor in LOCAL and zygote.usable()
     if not isinstance(warm_boxes, bool):
-        raise ValueError(f"warm_boxes must be True or False, got {warm_boxes!r}")
+        raise ValueError(f"warm_boxes must be True, False or None (warm where boxes can "
+                         f"start warm), got {warm_boxes!r}")
     if warm_boxes and executor not in LOCAL:
         raise ValueError(f"warm_boxes: boxes start warm only from this machine's items "
                          f"(executor 'processes' or None), not from {executor!r}")
@@ -139,17 +143,17 @@ def warm_of(warm_boxes: bool, executor: object) -> bool:
 
 def run(task: Task, entries: Sequence[Entry], jobs: int, executor: object = "processes",
         on_result: Callable[[int, dict], None] | None = None,
-        warm_boxes: bool = False) -> list[dict | None]:
+        warm_boxes: bool | None = None) -> list[dict | None]:
     """Every entry's result, in order (module docstring); ``on_result(i, result)`` as each ends.
 
     ``executor``: ``"processes"`` (a process forked per item), None (here, one after the other)
     or anything :func:`gpsaccel.executors.resolve_executor` accepts (``"dask-local"``,
     ``"tcp://..."``, an Executor).  ``warm_boxes``: the items' boxes start from a zygote per
     kind of box (:meth:`Task.boxes`), started before the items and killed when they end; a box
-    a zygote cannot serve starts cold (:mod:`gpsaccel.sandbox.zygote`); a ValueError where it
-    cannot be honoured (:func:`warm_of`).  Raises :class:`Interrupted` on Ctrl-C, SIGTERM or
+    a zygote cannot serve starts cold (:mod:`gpsaccel.sandbox.zygote`); None: warm where they
+    can, True: a ValueError where they cannot (:func:`warm_of`).  Raises :class:`Interrupted` on Ctrl-C, SIGTERM or
     SIGHUP."""
-    warm_of(warm_boxes, executor)
+    warm = warm_of(warm_boxes, executor)
     results: list[dict | None] = [None] * len(entries)
 
     def done(i: int, out: Any) -> None:
@@ -173,7 +177,7 @@ def run(task: Task, entries: Sequence[Entry], jobs: int, executor: object = "pro
 
         spec = None if executor in ("processes", "local") else \
             "inprocess" if executor is None else executor
-        kinds = task.boxes() if warm_boxes and runnable else ()
+        kinds = task.boxes() if warm and runnable else ()
         with sb.warm_boxes(*kinds) if kinds else contextlib.nullcontext():
             sb.run_items(task.item, [entries[i] for i in runnable], jobs, task.deadline,
                          finished, spec)

@@ -1,9 +1,23 @@
-"""What more than one sub-command's flags share: ``--dask``, and choices read from the registry."""
+"""What more than one sub-command's flags share: ``--dask``, ``--boxes``, and choices read from
+the registry."""
 
 from __future__ import annotations
 
+import argparse
 from collections.abc import Callable, Iterator
 from pathlib import Path
+
+#: ``--boxes`` as :func:`gpsaccel.classrun.running.warm_of` takes it.
+BOXES = {"auto": None, "warm": True, "cold": False}
+
+
+def add_boxes(p: argparse.ArgumentParser) -> None:
+    """``--boxes auto|warm|cold`` of ``gpsaccel grade`` and ``gpsaccel check``."""
+    p.add_argument("--boxes", choices=tuple(BOXES), default="auto",
+                   help="warm: start each box from a process that has imported numpy, "
+                        "scipy.stats and filterpy, confined as a cold one (as root on Linux, "
+                        "without --dask; an error elsewhere); cold: a fresh Python per box; "
+                        "auto (default): warm where boxes can start warm (docs/sandbox.md)")
 
 
 def dask_spec(value: str | None) -> str | None:

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from gpsaccel import _validation as _v
-from gpsaccel.cli._flags import dask_spec
+from gpsaccel.cli._flags import BOXES, add_boxes, dask_spec
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
@@ -31,7 +31,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
                       timeout=args.timeout, sandbox=args.sandbox, limits=_limits(args),
                       allow_gpsaccel=args.allow_gpsaccel,
                       allow_unsafe_basic=args.allow_unsafe_basic)
-    warm_of(args.warm_boxes, spec)  # a flag it cannot honour: an error before anything runs
+    warm = warm_of(BOXES[args.boxes], spec)  # a flag it cannot honour: an error before any box
     with terminal() as term:
         for note in plan.notes:
             term.err(note)
@@ -39,7 +39,8 @@ def _cmd_check(args: argparse.Namespace) -> int:
             raise ValueError("paths: no .py file or submission folder was found")
         term.err(f"sandbox: {plan.backend}" + (
             " (bubblewrap not available: apt-get install bubblewrap)"
-            if plan.backend != "bwrap" and args.sandbox == "auto" else ""))
+            if plan.backend != "bwrap" and args.sandbox == "auto" else "")
+            + f", boxes {'warm' if warm else 'cold'}")
         log = appender(log_path(args.json)) if args.json is not None else None
         from tqdm.auto import tqdm
 
@@ -54,7 +55,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
         t0 = time.perf_counter()
         try:
             with bar:
-                results = plan.run(spec, args.workers, on_result, args.warm_boxes)
+                results = plan.run(spec, args.workers, on_result, warm)
         except Interrupted as exc:
             done = [r for r in exc.results if r is not None]
             if args.json is not None:  # first: the terminal may be gone
@@ -187,10 +188,7 @@ def add_check(sub: argparse._SubParsersAction) -> None:
                    help="isolation of each submission: bwrap (bubblewrap namespaces), basic "
                         "(limits, scrubbed environment, private folder) or auto (bwrap when it "
                         "works; default)")
-    p.add_argument("--warm-boxes", action="store_true",
-                   help="start each box from a process that has imported numpy, scipy.stats "
-                        "and filterpy, confined as a cold one (as root on Linux, without "
-                        "--dask; docs/sandbox.md)")
+    add_boxes(p)
     p.add_argument("--memory", type=_v.flag_float(256.0), default=1024, metavar="MIB",
                    help="address space per student process, MiB (default 1024)")
     p.add_argument("--max-output", type=_v.flag_float(0.0, open_min=True), default=16,

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from gpsaccel import _validation as _v
-from gpsaccel.cli._flags import Registered, registered_assignments
+from gpsaccel.cli._flags import BOXES, Registered, add_boxes, registered_assignments
 
 if TYPE_CHECKING:  # the command loads them when it runs
     from gpsaccel.classrun.grading import Graded
@@ -199,7 +199,7 @@ def _cmd_grade(args: argparse.Namespace) -> int:
                                  export=args.export, regrade=args.regrade,
                                  compare_with=args.compare_with,
                                  canvas_column=args.canvas_column,
-                                 warm_boxes=args.warm_boxes)
+                                 warm_boxes=BOXES[args.boxes])
             if graded.grades:  # a rerun that kept every grade has no table (its line says so)
                 term.out(grades_table(graded.grades))
             for line in grade_mistakes(graded.grades):
@@ -263,7 +263,7 @@ def _wrote(term: Terminal, args: argparse.Namespace, out: Path, graded: Graded) 
 #: defaults.
 _GRADING_ONLY = {"student": None, "seed": None, "jobs": None, "timeout": None,
                  "secret_file": None, "dask": None, "sandbox": "auto", "export": "auto",
-                 "regrade": False, "compare_with": None, "warm_boxes": False}
+                 "regrade": False, "compare_with": None, "boxes": "auto"}
 
 
 def _only_class_wide(args: argparse.Namespace) -> None:
@@ -357,8 +357,5 @@ def add_grade(sub: argparse._SubParsersAction) -> None:
                    help="grade nothing: write grades.csv, the summary, the gradebooks (with "
                         "--roster) and the similarity report again from --out's grades.json "
                         "(after a run that could not write them: a full disk)")
-    p.add_argument("--warm-boxes", action="store_true",
-                   help="start each box from a process that has imported numpy, scipy.stats "
-                        "and filterpy, confined as a cold one (as root on Linux, without "
-                        "--dask; docs/sandbox.md)")
+    add_boxes(p)
     p.set_defaults(func=_cmd_grade)

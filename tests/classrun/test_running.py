@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from gpsaccel.classrun import Entry, Interrupted, Task, run
-from gpsaccel.classrun.running import backend_of, jobs_of, lost_text, seed_of
+from gpsaccel.classrun.running import backend_of, jobs_of, lost_text, seed_of, warm_of
 from gpsaccel.sandbox import Lost, Warm, zygote
 from gpsaccel.sandbox.outcomes import OUTCOMES
 
@@ -104,11 +104,21 @@ def test_a_warm_run_serves_its_items_from_a_zygote_per_kind_gone_when_it_ends():
 def test_warm_boxes_only_where_they_can_start_warm():
     with pytest.raises(ValueError, match="warm_boxes: .*not from 'dask-local'"):
         run(_Boxes(), _entries("a"), 1, executor="dask-local", warm_boxes=True)
-    with pytest.raises(ValueError, match="warm_boxes must be True or False"):
+    with pytest.raises(ValueError, match="warm_boxes must be True, False or None"):
         run(_Boxes(), _entries("a"), 1, warm_boxes=1)
     if not zygote.usable():
         with pytest.raises(ValueError, match="only as root on Linux"):
             run(_Boxes(), _entries("a"), 1, warm_boxes=True)
+
+
+def test_boxes_start_warm_by_default_where_they_can_and_cold_elsewhere():
+    """The default (None): warm as root on Linux with this machine's items, cold with Dask's
+    or where boxes cannot start warm, never an error."""
+    assert warm_of(None, "processes") is warm_of(None, None) is zygote.usable()
+    assert warm_of(None, "dask-local") is False and warm_of(None, "tcp://h:1") is False
+    assert warm_of(False, "processes") is False
+    ran = run(_Boxes(), _entries("a"), 1)[0]["zygotes"]
+    assert len(ran) == (2 if zygote.usable() else 0)
 
 
 def test_the_lost_wording_states_the_deadline_and_its_slack():

@@ -472,9 +472,10 @@ def test_check_many_refuses_bad_numbers_before_running_anyone(tmp_path):
 
 def _student_pids(folder: Path) -> dict[int, str]:
     """PID -> file name of every sandboxed runner of a file in ``folder`` (its working folder, the
-    box, holds the copy of the file).  The scan is machine-wide, so the callers name their files
-    uniquely: another test (or another checkout's run) checking an ``alice.py`` at the same time
-    would otherwise be counted as ours."""
+    box, holds the copy of the file; a warm box's runner is a fork of the zygote and keeps its
+    command line).  The scan is machine-wide, so the callers name their files uniquely: another
+    test (or another checkout's run) checking an ``alice.py`` at the same time would otherwise be
+    counted as ours."""
     names = {p.name for p in folder.iterdir()}
     found = {}
     for proc in Path("/proc").iterdir():
@@ -482,7 +483,7 @@ def _student_pids(folder: Path) -> dict[int, str]:
             continue
         try:
             cmd = (proc / "cmdline").read_bytes().split(b"\0")
-            if not any(part.endswith(b"_runner.py") for part in cmd):
+            if not any(part.endswith((b"_runner.py", b"_zygote.py")) for part in cmd):
                 continue
             for name in names & set(os.listdir(proc / "cwd")):
                 found[int(proc.name)] = name
