@@ -94,7 +94,9 @@ def main(argv: list[str]) -> None:
     if os.getppid() != config["parent"]:
         return
     sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-    sock.bind(os.path.join(zdir, "socket"))
+    folder = os.open(zdir, os.O_PATH | os.O_DIRECTORY)  # a short path to it: AF_UNIX takes
+    sock.bind(f"/proc/self/fd/{folder}/socket")  # 108 bytes, a long TMPDIR more
+    os.close(folder)
     sock.listen(64)
     line = json.dumps({"pid": os.getpid(), "modules": _module_files(),
                        "vmsize": _status("VmSize"), "threads": _status("Threads")}) + "\n"

@@ -293,6 +293,7 @@ def _remove_tree(path: str) -> None:
     changed only inside ``path``: the folder that holds it (``/tmp``) is never touched (a failed
     removal of the box itself once made ``/tmp`` 0700, which locked every other user out)."""
     root = os.path.abspath(path)
+    entered: set[str] = set()
 
     def retry(func, p, _exc):  # noqa: ANN001
         for q in (os.path.dirname(p), p):
@@ -301,6 +302,11 @@ def _remove_tree(path: str) -> None:
                     os.chmod(q, 0o700)
                 except OSError:
                     pass
+        if func in (os.open, os.scandir, os.listdir):  # a folder it could not enter: once
+            if p not in entered:  # its mode is changed, remove it whole (os.open needs flags)
+                entered.add(p)
+                shutil.rmtree(p, onerror=retry)
+            return
         try:
             func(p)
         except OSError:

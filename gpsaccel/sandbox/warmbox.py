@@ -166,7 +166,11 @@ def request(z: Zygote, backend: str, req: dict, fds: dict[str, int], wait: float
         fds = dict(fds, start=start_r)
     conn = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     try:
-        conn.connect(z.socket)
+        folder = os.open(z.folder, os.O_PATH | os.O_DIRECTORY)  # a short path to the socket
+        try:  # (AF_UNIX takes 108 bytes; the folder is in TMPDIR, which may be longer)
+            conn.connect(f"/proc/self/fd/{folder}/socket")
+        finally:
+            os.close(folder)
         payload = json.dumps(dict(req, fds=list(fds))).encode()
         socket.send_fds(conn, [struct.pack(">I", len(payload)) + payload], list(fds.values()))
         if start_r is not None:

@@ -87,10 +87,6 @@ class Zygote:
     vmsize: int
     proc: subprocess.Popen | None = field(default=None, repr=False)
 
-    @property
-    def socket(self) -> str:
-        return os.path.join(self.folder, "socket")
-
     def alive(self) -> bool:
         try:
             os.kill(self.pid, 0)
