@@ -13,7 +13,10 @@ Each runs on a class of 1 and of 3; the "one more file" rows are the difference 
 class pays per student, the command's start-up and the summary paid once).
 
 ``--before DIR`` runs the same commands on the checkout in DIR (its ``gpsaccel/`` first on
-``PYTHONPATH``, this environment's packages; e.g. ``git worktree add --detach DIR main``).  Both
+``PYTHONPATH``, this environment's packages; e.g. ``git worktree add --detach DIR main``).
+Where boxes start warm by default (as root on Linux: docs/sandbox.md), a column of the same
+commands with ``--boxes cold`` (a fresh Python per box) runs side by side with the default, so
+the table shows what warm boxes save; ``--no-cold`` leaves it out.  Both
 versions use this environment's jsonschema: where it is >= 4.25, every box that imports otter pays
 about 2 CPU s more (benchmarks/startup.py's rfc3987_syntax row).  ``make bench`` publishes the
 medians (benchmarks/_figures.py): ``cpu_s/KIND/N`` for a class of N, ``cpu_s/KIND/one_more``.
@@ -89,16 +92,26 @@ def _cases(tmp: Path) -> list[tuple[str, str, int, list[str]]]:
     return cases
 
 
+def _warm_by_default() -> bool:
+    from gpsaccel.sandbox import zygote
+
+    return zygote.usable()
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--before", metavar="DIR", default=None,
                         help="a checkout of an earlier version (its gpsaccel/ is imported)")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--only", default="", help="only the cases whose kind contains this")
+    parser.add_argument("--no-cold", action="store_true",
+                        help="leave out the column of every command with --boxes cold")
     args = parser.parse_args(argv)
-    roots = {"now": ROOT}
+    roots: dict[str, tuple[Path, list[str]]] = {"now": (ROOT, [])}
     if args.before:
-        roots = {"before": Path(args.before).resolve(), "now": ROOT}
+        roots = {"before": (Path(args.before).resolve(), []), **roots}
+    if not args.no_cold and _warm_by_default():
+        roots = {"now, --boxes cold": (ROOT, ["--boxes", "cold"]), **roots}
     print(f"start: {_cpu.load()}")
     rows: list[tuple[str, dict[str, tuple[float, float]]]] = []
     medians: dict[tuple[str, int], dict[str, tuple[float, float]]] = {}
@@ -110,9 +123,10 @@ def main(argv: list[str] | None = None) -> None:
             keys[kind] = key
             samples: dict[str, list[_cpu.Sample]] = {v: [] for v in roots}
             for _ in range(args.repeats):
-                for version, root in roots.items():
+                for version, (root, extra) in roots.items():
                     env = dict(os.environ, PYTHONPATH=str(root), MPLBACKEND="Agg")
-                    s = _cpu.run([sys.executable, "-m", "gpsaccel.cli", *cmd], env=env, cwd=tmp)
+                    s = _cpu.run([sys.executable, "-m", "gpsaccel.cli", *cmd, *extra], env=env,
+                                 cwd=tmp)
                     if s.returncode not in (0, 1):  # 1: check's "not all passed"
                         raise SystemExit(f"{version}: {kind} failed ({s.returncode}):\n{s.stdout}")
                     samples[version].append(s)

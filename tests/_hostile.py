@@ -9,8 +9,11 @@ hook, so the two folders share one watcher and one lock, not two copies.
 
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
 import signal
+import tempfile
 import threading
 import time
 from pathlib import Path
@@ -23,10 +26,31 @@ from gpsaccel.sandbox import warmbox, zygote
 
 TESTS = Path(__file__).resolve().parent
 SUBMISSIONS = TESTS / "submissions"
-HOSTILE = SUBMISSIONS / "hostile"
 
-#: The ``comm`` every process of a hostile submission gives itself (see hostile/README.md).
-MARKER = "gpsacc-hostile"
+#: The ``comm`` every process of a hostile submission gives itself, as the files spell it
+#: (hostile/README.md), and as this test process's copy of them spells it (:data:`HOSTILE`): one
+#: of its own (at most 15 bytes, a comm's room; a pid is unique among live processes), so that
+#: two suites on one machine, or two pytest-xdist workers, never take each other's hostile
+#: processes for theirs (a watcher that sees them fails, a test that kills them kills another's).
+FILE_MARKER = "gpsacc-hostile"
+MARKER = f"gpsh-{os.getpid()}"
+
+
+def _own_copy() -> Path:
+    """tests/submissions/hostile copied with :data:`FILE_MARKER` made :data:`MARKER` (removed
+    when this process exits)."""
+    top = Path(tempfile.mkdtemp(prefix=f"gpsaccel-{MARKER}-"))
+    atexit.register(shutil.rmtree, top, True)
+    copy = top / "hostile"
+    shutil.copytree(SUBMISSIONS / "hostile", copy)
+    for f in copy.rglob("*"):
+        if f.is_file():
+            f.write_text(f.read_text(encoding="utf-8").replace(FILE_MARKER, MARKER),
+                         encoding="utf-8")
+    return copy
+
+
+HOSTILE = _own_copy()
 
 _NO_BWRAP = pytest.mark.skipif(sb.bwrap_path() is None, reason="bubblewrap is not installed or "
                                                               "cannot create namespaces here")

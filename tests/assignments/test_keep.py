@@ -21,7 +21,6 @@ import pytest
 
 from gpsaccel.assignments import gradescope, scoring
 from gpsaccel.classrun import grade, writing
-
 from gpsaccel.sandbox.confinement import ZYGOTE_PREFIX
 
 from .conftest import CHI2_SPECIAL, kill_pids, read_grades, write_variant

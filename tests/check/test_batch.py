@@ -21,6 +21,8 @@ from gpsaccel import sandbox as sb
 from gpsaccel.classrun import PYTHON, check_many, log_path, walk, write_json
 from gpsaccel.sandbox import _boxuser
 
+from .._hostile import MARKER
+
 
 def _class(tmp_path, hostile, hostile_files):
     """A class folder: three honest files, the given hostile ones, a classmate copier."""
@@ -94,7 +96,7 @@ def test_ctrl_c_kills_every_student_process_and_writes_what_is_done(tmp_path, ba
     folder.mkdir()
     shutil.copy(hostile.SUBMISSIONS / "correct_gps_rate.py", folder / "a_correct.py")
     (folder / "b_spins.py").write_text(
-        "import ctypes\n\nctypes.CDLL(None).prctl(15, b'gpsacc-hostile', 0, 0, 0)\n\n\n"
+        "import ctypes\n\nctypes.CDLL(None).prctl(15, b'" + MARKER + "', 0, 0, 0)\n\n\n"
         "def kalman_filter(z):\n    while True:\n        pass\n")
     shutil.copy(folder / "b_spins.py", folder / "c_spins.py")
     out = tmp_path / "results.json"
@@ -119,7 +121,7 @@ def test_sigterm_and_sighup_stop_a_class_check_as_ctrl_c_does(tmp_path, backend,
     shutil.copy(hostile.SUBMISSIONS / "correct_gps_rate.py", folder / "a_correct.py")
     for name in ("b_spins.py", "c_spins.py"):
         (folder / name).write_text(
-            "import ctypes\n\nctypes.CDLL(None).prctl(15, b'gpsacc-hostile', 0, 0, 0)\n\n\n"
+            "import ctypes\n\nctypes.CDLL(None).prctl(15, b'" + MARKER + "', 0, 0, 0)\n\n\n"
             "def kalman_filter(z):\n    while True:\n        pass\n")
     out = tmp_path / "results.json"
     proc = _cli([folder, "--runs", "2", "--workers", 2, "--sandbox", backend,

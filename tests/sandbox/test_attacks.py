@@ -30,6 +30,8 @@ from gpsaccel import sandbox as sb
 from gpsaccel.sandbox import _boxuser, _cgroup
 from gpsaccel.sandbox.confinement import _blocked_dirs, _site_dirs
 
+from .._hostile import MARKER
+
 LIMITS = sb.Limits(memory=512 << 20, file_size=16 << 20, output=1 << 20, time=20, processes=16)
 
 #: Whole-box limits need a cgroup (root here, or a delegated cgroup2); a box user needs root.
@@ -45,7 +47,7 @@ def _forged_files() -> list[str]:
     for d in _site_dirs() + _blocked_dirs():
         found += glob.glob(os.path.join(d, "gpsacc_hostile_forged*"))
     for d in _boxuser.SHARED_TMP:
-        found += glob.glob(os.path.join(d, "gpsacc-hostile-file"))
+        found += glob.glob(os.path.join(d, f"{MARKER}-file"))
     return found
 
 
@@ -105,7 +107,7 @@ def test_a_process_started_through_a_tmux_server_dies_with_the_box(backend, host
         assert _windows() == before  # nothing was started in the instructor's server
         assert watch.seen and not hostile.alive(watch.seen)
     finally:
-        subprocess.run(["tmux", "-L", "gpsacc-hostile", "kill-server"],
+        subprocess.run(["tmux", "-L", MARKER, "kill-server"],
                        env={"PATH": "/usr/bin:/bin", "TMUX_TMPDIR": "/tmp"}, timeout=10)
 
 
@@ -115,16 +117,16 @@ def _start_tmux_server(limit: float) -> None:
     loaded machine the new session failed there.  At most ``limit`` s."""
     env = {"PATH": "/usr/bin:/bin", "TMUX_TMPDIR": "/tmp"}
     give_up = time.monotonic() + limit
-    while subprocess.run(["tmux", "-L", "gpsacc-hostile", "new-session", "-d", "sleep 60"],
+    while subprocess.run(["tmux", "-L", MARKER, "new-session", "-d", "sleep 60"],
                          env=env, capture_output=True, timeout=10).returncode != 0:
         assert time.monotonic() < give_up, "the instructor's tmux server never started"
-        subprocess.run(["tmux", "-L", "gpsacc-hostile", "kill-server"], env=env,
+        subprocess.run(["tmux", "-L", MARKER, "kill-server"], env=env,
                        capture_output=True, timeout=10)
         time.sleep(0.1)
 
 
 def _windows() -> str:
-    return subprocess.run(["tmux", "-L", "gpsacc-hostile", "list-windows", "-a"],
+    return subprocess.run(["tmux", "-L", MARKER, "list-windows", "-a"],
                           env={"PATH": "/usr/bin:/bin", "TMUX_TMPDIR": "/tmp"},
                           capture_output=True, text=True, timeout=10).stdout
 

@@ -16,6 +16,8 @@ import pytest
 from gpsaccel import check
 from gpsaccel import sandbox as sb
 
+from .._hostile import MARKER
+
 LIMITS = sb.Limits(memory=512 << 20, file_size=16 << 20, output=1 << 20, time=20)
 
 
@@ -104,7 +106,7 @@ def _single_check(tmp_path, backend, hostile, watch, sig, processes):
     import time
 
     spin = tmp_path / "spin.py"
-    spin.write_text("import ctypes, os\n\nctypes.CDLL(None).prctl(15, b'gpsacc-hostile', 0, 0, 0)"
+    spin.write_text("import ctypes, os\n\nctypes.CDLL(None).prctl(15, b'" + MARKER + "', 0, 0, 0)"
                     "\n\n\ndef kalman_filter(z):\n" + "    os.fork()\n" * (processes - 1) +
                     "    while True:\n        pass\n")
     # SIGINT's handler put back: a suite started as a script's background job has it ignored,

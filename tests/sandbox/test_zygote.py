@@ -24,6 +24,8 @@ from gpsaccel import sandbox as sb
 from gpsaccel.sandbox import _cgroup, zygote
 from gpsaccel.sandbox.confinement import hidden_dirs
 
+from .._hostile import MARKER
+
 pytestmark = pytest.mark.skipif(not zygote.usable(), reason="boxes start warm only as root on "
                                                             "Linux")
 
@@ -283,7 +285,7 @@ def test_a_warm_box_dies_with_its_supervisor(tmp_path, kind, hostile, watch):
     the keeper sees its connection close and kills the box; bwrap: the box dies with bwrap, which
     dies with its parent); then the zygote is stopped and nothing of it is left."""
     spin = tmp_path / "spin.py"
-    spin.write_text("import ctypes, os\n\nctypes.CDLL(None).prctl(15, b'gpsacc-hostile', 0, 0, 0)"
+    spin.write_text("import ctypes, os\n\nctypes.CDLL(None).prctl(15, b'" + MARKER + "', 0, 0, 0)"
                     "\n\n\ndef kalman_filter(z):\n    if os.fork() == 0:\n        os.setsid()\n"
                     "    while True:\n        pass\n")
     code = ("import numpy as np\nfrom gpsaccel import sandbox as sb\n"
