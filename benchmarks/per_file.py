@@ -14,12 +14,13 @@ class pays per student, the command's start-up and the summary paid once).
 
 ``--before DIR`` runs the same commands on the checkout in DIR (its ``gpsaccel/`` first on
 ``PYTHONPATH``, this environment's packages; e.g. ``git worktree add --detach DIR main``).
-Where boxes start warm by default (as root on Linux: docs/sandbox.md), a column of the same
-commands with ``--boxes cold`` (a fresh Python per box) runs side by side with the default, so
-the table shows what warm boxes save; ``--no-cold`` leaves it out.  Both
+Where boxes can start warm (as root on Linux: docs/sandbox.md), every command runs with
+``--boxes cold`` (a fresh Python per box) and ``--boxes warm`` side by side, so the table shows
+what warm boxes save and what their zygotes cost a class (``--no-cold``: the default alone).  Both
 versions use this environment's jsonschema: where it is >= 4.25, every box that imports otter pays
 about 2 CPU s more (benchmarks/startup.py's rfc3987_syntax row).  ``make bench`` publishes the
-medians (benchmarks/_figures.py): ``cpu_s/KIND/N`` for a class of N, ``cpu_s/KIND/one_more``.
+medians (benchmarks/_figures.py): ``cpu_s/V/KIND/N`` for a class of N, ``cpu_s/V/KIND/one_more``
+(V: cold, warm, or now where boxes cannot start warm).
 """
 
 from __future__ import annotations
@@ -92,7 +93,7 @@ def _cases(tmp: Path) -> list[tuple[str, str, int, list[str]]]:
     return cases
 
 
-def _warm_by_default() -> bool:
+def _warm_possible() -> bool:
     from gpsaccel.sandbox import zygote
 
     return zygote.usable()
@@ -108,10 +109,10 @@ def main(argv: list[str] | None = None) -> None:
                         help="leave out the column of every command with --boxes cold")
     args = parser.parse_args(argv)
     roots: dict[str, tuple[Path, list[str]]] = {"now": (ROOT, [])}
+    if not args.no_cold and _warm_possible():
+        roots = {"cold": (ROOT, ["--boxes", "cold"]), "warm": (ROOT, ["--boxes", "warm"])}
     if args.before:
         roots = {"before": (Path(args.before).resolve(), []), **roots}
-    if not args.no_cold and _warm_by_default():
-        roots = {"now, --boxes cold": (ROOT, ["--boxes", "cold"]), **roots}
     print(f"start: {_cpu.load()}")
     rows: list[tuple[str, dict[str, tuple[float, float]]]] = []
     medians: dict[tuple[str, int], dict[str, tuple[float, float]]] = {}
@@ -134,14 +135,17 @@ def main(argv: list[str] | None = None) -> None:
             rows.append((f"{kind}, class of {n}", medians[kind, n]))
     small, large = SIZES
     figures: dict[str, float] = {}
+    mine = [v for v in roots if v != "before"]
     for (kind, n), by_version in medians.items():
-        figures[f"cpu_s/{keys[kind]}/{n}"] = by_version["now"][0]
+        for v in mine:
+            figures[f"cpu_s/{v}/{keys[kind]}/{n}"] = by_version[v][0]
     for kind in dict.fromkeys(k for k, _ in medians):
         a, b = medians[kind, small], medians[kind, large]
         rows.append((f"{kind}: one more file", {
             v: ((b[v][0] - a[v][0]) / (large - small), (b[v][1] - a[v][1]) / (large - small))
             for v in roots}))
-        figures[f"cpu_s/{keys[kind]}/one_more"] = rows[-1][1]["now"][0]
+        for v in mine:
+            figures[f"cpu_s/{v}/{keys[kind]}/one_more"] = rows[-1][1][v][0]
     print(f"end: {_cpu.load()}; medians of {args.repeats}, CPU = user + system, children "
           f"included\n")
     print(_cpu.table(rows, list(roots)))

@@ -334,7 +334,7 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
     """
     folder = Path(submissions)
     out, jobs = _checked(folder, out, timeout, jobs)
-    warm = running.warm_of(warm_boxes, dask or "processes")
+    running.warm_of(warm_boxes, dask or "processes")  # asked where it cannot be: refused here
     earlier = _earlier(compare_with, similarity)
     students = read_roster(roster) if isinstance(roster, (str, os.PathLike)) else roster
     possible = item.possible_of(name)
@@ -353,15 +353,15 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
                                 "sandbox": backend, "timeout": float(timeout)}
     entries, reuse = _resumed(record, entries, wanted, folder, settings, regrade)
     seed = settings["seed"]  # drawn by running.seed_of where none was given or recorded
+    todo = [i for i in range(len(entries)) if i not in record.reused]
+    warm = running.warm_of(warm_boxes, dask or "processes",
+                           sum(entries[i].path is not None for i in todo))
     record.start(entries, {
         "assignment": name, "seed": seed, "sandbox": backend, "timeout": timeout,
-        "variants": "per student (HMAC of the id under the instructor's secret)" if secret
-        else "none (no secret given: every student has the public notebook's numbers)",
-        "boxes": "warm" if warm else "cold", "questions": possible,
+        "variants": _variants(secret), "boxes": "warm" if warm else "cold", "questions": possible,
         "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         "student": wanted,
         "export": layout.found, "skipped": notes, "reuse": _fingerprint(settings)})
-    todo = [i for i in range(len(entries)) if i not in record.reused]
     try:
         if todo:
             running.run(_Grade(folder, settings), [entries[i] for i in todo], jobs,
@@ -373,12 +373,24 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
     rows = record.finish(False, classwide.files(students is not None, similarity))
     lines = classwide.write(folder, out, name, rows, possible, students, similarity,
                             record.outputs, earlier, canvas_column)
-    lines += _unmapped(students, layout) + ([f"rerun: {reuse}"] if reuse else [])
-    lines += [f"not graded: {n} (grading.json's skipped)" for n in notes
-              if isinstance(n, Superseded)]
+    lines += _closing(students, layout, reuse, notes)
     record.save()
     return Graded([g for i, g in enumerate(record.grades) if g is not None
                    and i not in record.reused], rows, out, lines, dict(record.outputs.missing))
+
+
+def _variants(secret: bytes | None) -> str:
+    return ("per student (HMAC of the id under the instructor's secret)" if secret
+            else "none (no secret given: every student has the public notebook's numbers)")
+
+
+def _closing(students: Sequence[Student] | None, layout: Export, reuse: str,
+             notes: Sequence[object]) -> list[str]:
+    """The run's last lines: roster rows no submission matched, what a rerun reused, the
+    superseded submissions left out."""
+    return (_unmapped(students, layout) + ([f"rerun: {reuse}"] if reuse else [])
+            + [f"not graded: {n} (grading.json's skipped)" for n in notes
+               if isinstance(n, Superseded)])
 
 
 def rewrite_class(submissions: str | os.PathLike, name: str, out: str | os.PathLike | None = None,

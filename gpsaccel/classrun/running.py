@@ -122,13 +122,21 @@ def lost_text(lost: sb.Lost, task: Task) -> str:
 LOCAL = ("processes", "local", None, "inprocess")
 
 
-def warm_of(warm_boxes: bool | None, executor: object) -> bool:
+#: The fewest items a run starts warm by default: a run pays its zygotes' imports once (about
+#: 1.4 CPU s for a class run's two), a warm box saves from 0.2 (a student's filter) to 0.7 CPU s
+#: (a filled calibration notebook): docs/benchmarks/per_file.txt.
+WARM_FROM = 8
+
+
+def warm_of(warm_boxes: bool | None, executor: object, items: int | None = None) -> bool:
     """Whether the run's boxes start warm.  Warm boxes need this machine's items (they inherit
     the zygotes) and root on Linux (each box a uid of its own): None (the default) starts them
-    warm where they can, True asks for them (a ValueError says why where they cannot start),
-    False starts every box cold."""
+    warm where they can and the run has at least :data:`WARM_FROM` ``items`` to run (unknown:
+    enough), True asks for them (a ValueError says why where they cannot start), False starts
+    every box cold."""
     if warm_boxes is None:
-        return executor in LOCAL and zygote.usable()
+        return (executor in LOCAL and zygote.usable()
+                and (items is None or items >= WARM_FROM))
     if not isinstance(warm_boxes, bool):
         raise ValueError(f"warm_boxes must be True, False or None (warm where boxes can "
                          f"start warm), got {warm_boxes!r}")
@@ -151,9 +159,8 @@ def run(task: Task, entries: Sequence[Entry], jobs: int, executor: object = "pro
     ``"tcp://..."``, an Executor).  ``warm_boxes``: the items' boxes start from a zygote per
     kind of box (:meth:`Task.boxes`), started before the items and killed when they end; a box
     a zygote cannot serve starts cold (:mod:`gpsaccel.sandbox.zygote`); None: warm where they
-    can, True: a ValueError where they cannot (:func:`warm_of`).  Raises :class:`Interrupted` on Ctrl-C, SIGTERM or
-    SIGHUP."""
-    warm = warm_of(warm_boxes, executor)
+    can, True: a ValueError where they cannot (:func:`warm_of`).  Raises :class:`Interrupted`
+    on Ctrl-C, SIGTERM or SIGHUP."""
     results: list[dict | None] = [None] * len(entries)
 
     def done(i: int, out: Any) -> None:
@@ -162,6 +169,7 @@ def run(task: Task, entries: Sequence[Entry], jobs: int, executor: object = "pro
             on_result(i, out)
 
     runnable = [i for i, e in enumerate(entries) if e.problem is None and e.path is not None]
+    warm = warm_of(warm_boxes, executor, len(runnable))
     try:
         for i in sorted(set(range(len(entries))) - set(runnable)):
             done(i, task.refused(entries[i]))

@@ -31,7 +31,8 @@ def _cmd_check(args: argparse.Namespace) -> int:
                       timeout=args.timeout, sandbox=args.sandbox, limits=_limits(args),
                       allow_gpsaccel=args.allow_gpsaccel,
                       allow_unsafe_basic=args.allow_unsafe_basic)
-    warm = warm_of(BOXES[args.boxes], spec)  # a flag it cannot honour: an error before any box
+    # a flag it cannot honour: an error before any box
+    warm = warm_of(BOXES[args.boxes], spec, len(plan.entries))
     with terminal() as term:
         for note in plan.notes:
             term.err(note)

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from gpsaccel.classrun import Entry, Interrupted, Task, run
-from gpsaccel.classrun.running import backend_of, jobs_of, lost_text, seed_of, warm_of
+from gpsaccel.classrun.running import WARM_FROM, backend_of, jobs_of, lost_text, seed_of, warm_of
 from gpsaccel.sandbox import Lost, Warm, zygote
 from gpsaccel.sandbox.outcomes import OUTCOMES
 
@@ -112,12 +112,16 @@ def test_warm_boxes_only_where_they_can_start_warm():
 
 
 def test_boxes_start_warm_by_default_where_they_can_and_cold_elsewhere():
-    """The default (None): warm as root on Linux with this machine's items, cold with Dask's
-    or where boxes cannot start warm, never an error."""
+    """The default (None): warm as root on Linux with this machine's items and a class of at
+    least WARM_FROM items (its zygotes' imports are paid once), cold with Dask's, for fewer
+    items or where boxes cannot start warm, never an error."""
     assert warm_of(None, "processes") is warm_of(None, None) is zygote.usable()
+    assert warm_of(None, "processes", WARM_FROM) is zygote.usable()
+    assert warm_of(None, "processes", WARM_FROM - 1) is False
     assert warm_of(None, "dask-local") is False and warm_of(None, "tcp://h:1") is False
     assert warm_of(False, "processes") is False
-    ran = run(_Boxes(), _entries("a"), 1)[0]["zygotes"]
+    assert run(_Boxes(), _entries(*"abcdefg"), 2)[0]["zygotes"] == []
+    ran = run(_Boxes(), _entries(*"abcdefgh"), 2)[0]["zygotes"]
     assert len(ran) == (2 if zygote.usable() else 0)
 
 
