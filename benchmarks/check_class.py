@@ -13,12 +13,23 @@ and filterpy), alternated ``--repeats`` R times (default 2) in one run: CPU seco
 and its children (the zygote's start and every warm box included), wall seconds, the load average
 before and after each row, and whether both gave the same results.
 
+``--shared`` checks N files (default 10) of each kind, the correct ones and the mistaken ones
+(whose diagnosis builds the catalogue's 1867 candidate filters), with the part every file shares
+(report 000's catalogue and its candidate filters, built and not run) built once before the
+boxes (:meth:`gpsaccel.check.problem.Problem.prepare`, as ``gpsaccel check`` does) and, as
+before it was shared, again in every file's process (:func:`rebuilt_per_file`), alternated
+``--repeats`` R times in one run: CPU seconds of this process and its children per file, wall
+seconds, the load average before and after each row, and whether both gave byte-identical
+results (every field but the seconds).
+
 Usage: python benchmarks/check_class.py [--files N]
        python benchmarks/check_class.py --warm-boxes [--files N] [--repeats R]
+       python benchmarks/check_class.py --shared [--files N] [--repeats R]
 """
 
 from __future__ import annotations
 
+import json
 import os
 import resource
 import shutil
@@ -26,6 +37,8 @@ import statistics
 import sys
 import tempfile
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
 from gpsaccel.check.problems.calibration import DEFAULT_RUNS
@@ -88,7 +101,95 @@ def warm_vs_cold(n: int, repeats: int) -> None:
               f"{seen[False] == seen[True]}")
 
 
+CORRECT = BY_HAND_200HZ[:3]
+WRONG = BY_HAND_200HZ[3:]
+
+
+@contextmanager
+def rebuilt_per_file() -> Iterator[None]:
+    """The checker as it was before a class shared its part: nothing prepared before the boxes,
+    report 000's catalogue made again at each use and its candidate filters built again by
+    every diagnosis (every file's process forks from this one, so it inherits the change)."""
+    from gpsaccel.calibration import mistakes as cat
+    from gpsaccel.calibration.model import CalibrationModel
+    from gpsaccel.check import linear
+    from gpsaccel.check.problems import calibration as wf
+
+    saved = wf._default_catalogue, wf._default_candidate_filters, linear.LinearProblem.prepare
+    wf._default_catalogue = lambda: cat.CalibrationCatalogue(CalibrationModel())  # type: ignore
+    wf._default_candidate_filters = lambda m: linear.candidate_filters(  # type: ignore
+        wf._default_catalogue(), m)
+    linear.LinearProblem.prepare = lambda self: None  # type: ignore[method-assign]
+    try:
+        yield
+    finally:
+        wf._default_catalogue, wf._default_candidate_filters = saved[:2]
+        linear.LinearProblem.prepare = saved[2]  # type: ignore[method-assign]
+
+
+def _clear_shared() -> None:
+    """This process holds no shared part: each row's class builds its own (or none)."""
+    from gpsaccel.check.problems import calibration as wf
+
+    wf._default_catalogue.cache_clear()
+    wf._default_candidate_filters.cache_clear()
+
+
+def _verdicts(results: list[dict]) -> str:
+    """The results as JSON, every field but the seconds (the comparison of the two rows)."""
+    def strip(r: dict) -> dict:
+        r = {k: v for k, v in r.items() if k != "seconds"}
+        r["details"] = {k: v for k, v in r.get("details", {}).items() if "seconds" not in k}
+        r["text"] = "\n".join(line for line in r["text"].splitlines() if "seconds" not in line)
+        return r
+    return json.dumps([strip(r) for r in results], sort_keys=True)
+
+
+def shared_vs_per_file(n: int, repeats: int) -> None:
+    """The class checked with its shared part built once and per file, alternated (module
+    docstring)."""
+    with tempfile.TemporaryDirectory(prefix="gpsaccel-class-") as tmp:
+        classes = {}
+        for kind, names in (("correct", CORRECT), ("mistaken", WRONG)):
+            (Path(tmp) / kind).mkdir()
+            classes[kind] = [shutil.copyfile(HERE / names[i % len(names)],
+                                             Path(tmp) / kind / f"student{i:03d}_{names[i % len(names)]}")
+                             for i in range(n)]
+        check_many(classes["correct"][:1], n_runs=2, seed=0, timeout=120)  # imports, once
+        print(f"{os.cpu_count()} CPUs; {n} by-hand 200 Hz filters per class (correct: "
+              f"{len(CORRECT)} kinds; mistaken: {len(WRONG)} kinds), n_runs = {DEFAULT_RUNS}, "
+              f"one process per CPU, a process per file")
+        print(f"{'class':<10}{'shared part':<13}{'run':>4}{'wall s':>9}{'CPU s':>9}"
+              f"{'CPU s/file':>12}{'load':>14}")
+        rows: dict[tuple[str, bool], list[float]] = {}
+        seen: dict[tuple[str, bool], str] = {}
+        for r in range(repeats):
+            for kind, paths in classes.items():
+                for shared in (False, True):
+                    _clear_shared()
+                    load0 = os.getloadavg()[0]
+                    with nullcontext() if shared else rebuilt_per_file():
+                        c0, t0 = cpu(), time.perf_counter()
+                        results = check_many(paths, n_runs=DEFAULT_RUNS, seed=0, timeout=120)
+                        wall, spent = time.perf_counter() - t0, cpu() - c0
+                    rows.setdefault((kind, shared), []).append(spent)
+                    seen[kind, shared] = _verdicts(results)
+                    print(f"{kind:<10}{'once' if shared else 'per file':<13}{r + 1:>4}"
+                          f"{wall:>9.1f}{spent:>9.1f}{spent / n:>12.3f}{load0:>7.1f} ->"
+                          f"{os.getloadavg()[0]:>4.1f}")
+        for kind in classes:
+            before = statistics.median(rows[kind, False]) / n
+            after = statistics.median(rows[kind, True]) / n
+            print(f"{kind}: median CPU s per file: per file {before:.3f}, once {after:.3f} "
+                  f"({after / before:.2f} of before); byte-identical results: "
+                  f"{seen[kind, False] == seen[kind, True]}")
+
+
 def main(argv: list[str]) -> int:
+    if "--shared" in argv:
+        shared_vs_per_file(int(argv[argv.index("--files") + 1]) if "--files" in argv else 10,
+                           int(argv[argv.index("--repeats") + 1]) if "--repeats" in argv else 2)
+        return 0
     if "--warm-boxes" in argv:
         warm_vs_cold(int(argv[argv.index("--files") + 1]) if "--files" in argv else 10,
                      int(argv[argv.index("--repeats") + 1]) if "--repeats" in argv else 2)

@@ -386,14 +386,24 @@ def mutant(code: str, model: CalibrationModel | None = None, variant: str | None
 @dataclass(frozen=True, eq=False)
 class CalibrationCatalogue:
     """This catalogue in the interface every linear diagnosis reads
-    (:class:`gpsaccel.kalman.epochs.Catalogue`), on ``model``'s numbers."""
+    (:class:`gpsaccel.kalman.epochs.Catalogue`), on ``model``'s numbers.  Its mistakes are made
+    once per object (the model's numbers and wording, no data): a checker shares one object
+    between the files of a class."""
 
     model: CalibrationModel
 
     def covariance_mistakes(self) -> tuple[Mistake, ...]:
-        return covariance_mistakes(self.model)
+        return self._covariance
 
     def mean_mistakes(self) -> tuple[Mistake, ...]:
+        return self._mean
+
+    @cached_property
+    def _covariance(self) -> tuple[Mistake, ...]:
+        return covariance_mistakes(self.model)
+
+    @cached_property
+    def _mean(self) -> tuple[Mistake, ...]:
         return mean_mistakes(self.model)
 
     def build(self, mistakes: tuple[Mistake, ...] = ()) -> EpochFilter:
@@ -410,7 +420,7 @@ class CalibrationCatalogue:
         return reference(self.model)
 
     def catalogue(self) -> tuple[Mistake, ...]:
-        return catalogue(self.model)
+        return self._covariance + self._mean
 
     def codes(self) -> tuple[str, ...]:
-        return codes(self.model)
+        return tuple(dict.fromkeys(m.code for m in self.catalogue()))

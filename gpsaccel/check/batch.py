@@ -5,7 +5,8 @@ table) is :mod:`gpsaccel.classrun`; this module is what it asks of the checker f
 check (:func:`check_file`, in the item's own process, which runs the student's box and then
 computes the answers), what the instructor's table and JSON keep of its report
 (:func:`student_result`), the result of a check that did not complete (:func:`unchecked`), and
-the imports every check needs (:func:`warm`), made once before the pool forks.
+the imports and the data-free part every check needs (:func:`warm`), made once before the pool
+forks.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from gpsaccel import registry
-from gpsaccel.check.problems import submission
+from gpsaccel.check.problems import get, submission
 from gpsaccel.check.report import Report
 
 #: Seconds a check's process may take beyond the student's time limit (simulating the data,
@@ -57,14 +58,16 @@ def checker_error(path: Path | str, message: str) -> dict:
 def warm(problem: str) -> None:
     """Import here what checking a file of ``problem`` imports on first use (scipy.special for
     the χ² bounds, the system's catalogue of mistakes), so each check's forked process inherits it
-    instead of importing it again (``python benchmarks/per_file.py``).  No check imports
-    filterpy or scipy.stats (their price: ``benchmarks/imports.py``), so neither is imported
-    here.  Only modules: nothing is computed, so no answer exists here before a file's box is
-    empty."""
+    instead of importing it again (``python benchmarks/per_file.py``), and build what every
+    file's check shares (:meth:`~gpsaccel.check.problem.Problem.prepare`: a linear problem's
+    catalogue and candidate filters, built and never run; ``python benchmarks/check_class.py
+    --shared``).  No check imports filterpy or scipy.stats (their price:
+    ``benchmarks/imports.py``), so neither is imported here.  Nothing is run on data, so no
+    answer exists here before a file's box is empty (docs/sandbox.md)."""
     import importlib
     import importlib.util
 
-    registry.problem(problem)
+    get(problem).prepare()
     system = registry.entry(problem).system
     names = ["scipy.special"]
     if system and system.isidentifier() and importlib.util.find_spec(f"gpsaccel.{system}") \

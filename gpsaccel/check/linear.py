@@ -45,10 +45,12 @@ from gpsaccel.check.findings import mistake_finding
 from gpsaccel.check.linear_diagnosis import (  # noqa: F401 - the diagnosis's names, re-exported
     TOLERANCE,
     Answer,
+    CandidateFilters,
     Candidates,
     Cases,
     Diagnosis,
     answer,
+    candidate_filters,
     candidates,
     diagnose,
 )
@@ -73,6 +75,9 @@ from gpsaccel.sandbox import Call, Output
 
 #: The nearest catalogued mistake is shown as a hint only within this factor of the tolerance.
 HINT_FACTOR = 10.0
+
+#: Covariance entries a diagnosis combines at most (report 003's filter makes three at once).
+COMBINED = 3
 
 #: Largest error or covariance element the consistency statistics are formed from: they square
 #: and sum them over runs and times (1e150² is still finite); a filter that ran away further is
@@ -145,6 +150,7 @@ class LinearProblem(Problem):
         self.alpha = _v.probability("alpha", alpha)
         self.tol = _v.positive_float("tol", tol)
         self._candidates: dict[int, tuple[list[tuple[Mistake, ...]], np.ndarray]] = {}
+        self._built: dict[int, CandidateFilters] = {}
 
     # ------------------------------------------------------------------------- the hooks
     def catalogue(self) -> Catalogue:
@@ -161,6 +167,17 @@ class LinearProblem(Problem):
         if max_combined not in self._candidates:
             self._candidates[max_combined] = candidates(self.catalogue(), max_combined)
         return self._candidates[max_combined]
+
+    def candidate_filters(self, max_combined: int = COMBINED) -> CandidateFilters:
+        """The catalogue's candidate filters, built (never run) once for this problem: what
+        every file's diagnosis shares (:class:`~gpsaccel.check.linear_diagnosis
+        .CandidateFilters`), kept across :meth:`forget` since it holds no answer."""
+        if max_combined not in self._built:
+            self._built[max_combined] = candidate_filters(self.catalogue(), max_combined)
+        return self._built[max_combined]
+
+    def prepare(self) -> None:
+        self.candidate_filters(COMBINED)
 
     def forget(self) -> None:
         self._candidates.clear()
@@ -389,9 +406,10 @@ class LinearProblem(Problem):
     def _diagnosis(self, report: Report, cases: Cases, ans: Answer, x: np.ndarray,
                    P: np.ndarray) -> None:
         tol, t = self.tol, self.t
-        # only what the match reads (linear_diagnosis): the answers are computed again after
-        # every box, none is kept while a student's code runs
-        pool = Candidates(self.catalogue(), 3)
+        # only what the match reads (linear_diagnosis): the candidates' covariances are
+        # computed again after every box, none is kept while a student's code runs; their
+        # filters, built and never run, are the class's (candidate_filters)
+        pool = Candidates(self.catalogue(), COMBINED, self.candidate_filters(COMBINED))
         diag = diagnose(P, x, cases.z, ans.sd, self.catalogue(), pool.combos, pool, tol)
         names = lambda ms: ", ".join(str(m) for m in ms)  # noqa: E731
         if diag.covariance is not None and diag.mean is not None:

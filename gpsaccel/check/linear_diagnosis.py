@@ -131,14 +131,38 @@ def candidates(catalogue: Catalogue, max_combined: int
     return c.combos, _returned(c.filters)
 
 
+@dataclass(frozen=True, eq=False)
+class CandidateFilters:
+    """Every candidate of :func:`candidates` (``combos``, the first ``()``) and its filter, built
+    and never run: the model's matrices changed by each combination (Φⁿ, Q_e, H, V, M0, x0 and
+    the recursion's switches), no gain, covariance or estimate.  What every file's diagnosis
+    shares, so a class builds it once (:meth:`gpsaccel.check.problem.Problem.prepare`) before
+    its boxes; running a candidate makes a :class:`Candidates` of its own, and
+    :func:`gpsaccel.kalman.epochs.batch_gains` caches nothing on a filter it runs."""
+
+    combos: tuple[tuple[Mistake, ...], ...]
+    filters: tuple[EpochFilter, ...]
+
+
+def candidate_filters(catalogue: Catalogue, max_combined: int) -> CandidateFilters:
+    """The :class:`CandidateFilters` of ``catalogue``: its covariance entries and every
+    combination of up to ``max_combined`` of them, each built (not run)."""
+    combos = tuple(_combinations(catalogue, max_combined))
+    with shared_transitions():
+        return CandidateFilters(combos, tuple(catalogue.build(c) for c in combos))
+
+
 class Candidates:
     """The candidates of :func:`candidates`, their covariances computed as the diagnosis needs
-    them (module docstring): :meth:`head` for all, :meth:`rows` for some."""
+    them (module docstring): :meth:`head` for all, :meth:`rows` for some.  ``built``: the
+    catalogue's :class:`CandidateFilters` built before (a class's, shared by its files); none
+    builds them here.  The covariances are this object's alone: it lives for one diagnosis."""
 
-    def __init__(self, catalogue: Catalogue, max_combined: int) -> None:
-        self.combos = _combinations(catalogue, max_combined)
-        with shared_transitions():
-            self.filters = [catalogue.build(c) for c in self.combos]
+    def __init__(self, catalogue: Catalogue, max_combined: int,
+                 built: CandidateFilters | None = None) -> None:
+        built = candidate_filters(catalogue, max_combined) if built is None else built
+        self.combos = list(built.combos)
+        self.filters = built.filters
         self._rows: dict[int, np.ndarray] = {}
 
     def head(self, n_epochs: int) -> np.ndarray:

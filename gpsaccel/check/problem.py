@@ -84,6 +84,7 @@ class Problem:
 
     The hooks: :meth:`cases` (the data, from a seed), :meth:`calls` (the sandbox calls of one
     contract function on them), :meth:`evaluate` (compare, diagnose, add statistics),
+    :meth:`prepare` (build what every file shares, once, before the boxes),
     :meth:`forget` (drop every cached answer before the student runs), :meth:`labels` (a name per
     call, for messages); the wording: :attr:`messages` (code -> template, over
     :data:`gpsaccel.check.findings.MESSAGES`), :attr:`renames` (a box failure reported under
@@ -129,6 +130,12 @@ class Problem:
     def codes(self) -> tuple[str, ...]:
         """The codes of this problem's catalogue of mistakes."""
         raise NotImplementedError
+
+    def prepare(self) -> None:
+        """Build what checking every file shares and no data decides, once (a class's check
+        calls it before its boxes start: :func:`gpsaccel.check.batch.warm`): the model's
+        matrices, the catalogue's mistakes, candidate filters built and not run.  Never a result
+        on data, nor a covariance a filter computes: those are answers (:meth:`forget`)."""
 
     def forget(self) -> None:
         """Drop every cached reference answer (called before a student's code runs)."""

@@ -193,7 +193,8 @@ def batch_gains(filters: Sequence[EpochFilter], n_epochs: int | None = None
     (:func:`gpsaccel.kalman.update.joseph_update`) keeps P symmetric and positive definite even
     for badly scaled mistakes.  ``n_epochs``: only the first epochs (bit for bit those rows of the
     whole run; the diagnosis bounds a candidate's distance by them).  Each filter's rows are its
-    own: the same whichever filters share the stack.
+    own: the same whichever filters share the stack.  Nothing is cached on the filters: filters
+    built once and run for many callers hold no covariance between them.
     """
     n_gps = filters[0].n_gps
     n_epochs = n_gps if n_epochs is None else n_epochs
@@ -209,8 +210,7 @@ def batch_gains(filters: Sequence[EpochFilter], n_epochs: int | None = None
                                 forms=forms if (forms != "joseph").any() else None)
     for c, f in enumerate(filters):
         if f.fast is not None:                        # updates between the epochs: its own loop
-            K[c], M[c], P[c] = (f.fast_gains if n_epochs == n_gps
-                                else f.fast_recursion(n_epochs))[:3]
+            K[c], M[c], P[c] = f.fast_recursion(n_epochs)[:3]  # not f.fast_gains: cache none
     return K, M, P
 
 

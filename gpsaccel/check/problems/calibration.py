@@ -65,14 +65,17 @@ from gpsaccel.calibration import mistakes as cat
 from gpsaccel.calibration.model import STATE_NAMES, CalibrationModel
 from gpsaccel.calibration.simulation import simulate
 from gpsaccel.check.linear import (  # noqa: F401 - the calibration names of the linear pipeline
+    COMBINED,
     HINT_FACTOR,
     LOW_PRECISION,
     TOLERANCE,
     Answer,
+    CandidateFilters,
     Cases,
     LinearProblem,
     Mistake,
     answer,
+    candidate_filters,
     candidates,
 )
 from gpsaccel.check.problem import Argument, Function
@@ -126,6 +129,20 @@ def _candidates(model: CalibrationModel, max_combined: int
     return candidates(cat.CalibrationCatalogue(model), max_combined)
 
 
+@lru_cache(maxsize=1)
+def _default_catalogue() -> cat.CalibrationCatalogue:
+    """Report 000's catalogue on the default model, one per process: its mistakes are the
+    model's numbers (no data), built once and shared by every check of the default model."""
+    return cat.CalibrationCatalogue(CalibrationModel())
+
+
+@lru_cache(maxsize=2)
+def _default_candidate_filters(max_combined: int) -> CandidateFilters:
+    """The default catalogue's candidate filters, built (never run) once per process
+    (:meth:`CalibrationProblem.prepare`); kept by :func:`forget_answers`: they hold no answer."""
+    return candidate_filters(_default_catalogue(), max_combined)
+
+
 def forget_answers() -> None:
     """Drop every cached answer (the catalogue's covariances, the optimal P among them), so none
     is in this process's memory while a student's code runs."""
@@ -164,6 +181,7 @@ class CalibrationProblem(LinearProblem):
         if model is not None and not isinstance(model, CalibrationModel):
             raise ValueError(f"model must be a CalibrationModel, got {type(model).__name__}")
         self._model_given = model is not None
+        self._catalogue: cat.CalibrationCatalogue | None = None
         self.model = model if model is not None else CalibrationModel()
         m = self.model
         self.t, self.states, self.every, self.n_steps = m.t_gps, STATE_NAMES, m.gps_every, \
@@ -175,10 +193,19 @@ class CalibrationProblem(LinearProblem):
                                    "the a posteriori [δp, δv, b] and P at every GPS time"),)
 
     def catalogue(self) -> cat.CalibrationCatalogue:
-        return cat.CalibrationCatalogue(self.model)
+        if not self._model_given:
+            return _default_catalogue()
+        if self._catalogue is None:
+            self._catalogue = cat.CalibrationCatalogue(self.model)
+        return self._catalogue
 
     def codes(self) -> tuple[str, ...]:
-        return cat.codes(self.model)
+        return self.catalogue().codes()
+
+    def candidate_filters(self, max_combined: int = COMBINED) -> CandidateFilters:
+        if self._model_given:
+            return super().candidate_filters(max_combined)
+        return _default_candidate_filters(max_combined)
 
     def simulate(self, n_runs: int, seed: int) -> Data:
         if self._model_given:

@@ -85,6 +85,7 @@ class ShipProblem(Problem):
 
     def forget(self) -> None:
         _VARIANT_CACHE.clear()
+        _mono.cache_clear()  # the monorate filter's gains: a filter's result, though on no data
 
     def run_variant(self, cases: ShipCases, variant, steps: int | None = None
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
