@@ -88,6 +88,13 @@ class CoopProblem(Problem):
         self._Q = Q or {}
         self._cache: dict = {}
 
+    def prepare(self) -> None:
+        """The model's nominal trajectory (x* from x0 under u0, solve_ivp: the LKF's and some
+        catalogue entries' linearization point), integrated once per process
+        (:meth:`gpsaccel.coop.model.CoopModel.nominal` keeps it): the model's, no data, no
+        filter run.  Every filter run on the cases is an answer, computed after the box."""
+        self.model.nominal()
+
     def forget(self) -> None:
         self._cache.clear()
 
