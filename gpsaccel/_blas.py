@@ -3,7 +3,7 @@
 The Monte Carlo engine multiplies many small matrices (3x3 by 3 x 1000) and one medium one
 (302 x 1000 by its transpose) per block.  OpenBLAS threads the larger products, and its worker
 threads then spin between calls; on a machine with 2 cores that are also busy, that makes the
-whole block 3-4 times slower than one thread (measured: 0.73 s against 0.19 s for 10,000 runs).
+whole block several times slower than one thread.
 Parallelism belongs to the executor's workers instead.
 
 :func:`single_threaded_blas` finds the OpenBLAS libraries loaded in this process (numpy's and

@@ -110,8 +110,9 @@ def _bounded(cells: Sequence[tuple[int, str]], files: Mapping[str, str],
 
 
 #: Limits of the child that makes one notebook's record (:func:`from_notebook`): CPU seconds,
-#: added address space, wall-clock seconds (an honest notebook needs a few hundredths of a
-#: second; 512 KB of hostile code about 3 s and under 128 MB).
+#: added address space, wall-clock seconds: far above what an honest notebook needs; a notebook
+#: past them is "not compared" with that reason, never the grader's error
+#: (tests/assignments/test_answercode.py).
 RECORD_CPU = 10
 RECORD_MEMORY = 256 << 20
 RECORD_WALL = 120

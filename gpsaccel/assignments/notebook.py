@@ -1,8 +1,9 @@
 r"""A student's notebook as a module the checker's sandbox can load (never executed here).
 
 Grading runs a notebook only inside :mod:`gpsaccel.sandbox`.  Instead of a Jupyter kernel in
-the box (a kernel costs 1-2 s to start, a ZeroMQ session and a second process), the notebook is
-turned into one Python file, ``notebook.py``, that the sandbox's runner imports like any ``.py``
+the box (a kernel's start-up, a ZeroMQ session and a second process, each notebook;
+benchmarks/grading.py runs ``otter run`` beside the grader), the notebook is turned into one
+Python file, ``notebook.py``, that the sandbox's runner imports like any ``.py``
 submission (:func:`module_source`).  It holds data and calls of :mod:`gpsaccel.boxside.notebook`
 only: the box-side code (the import guard, a stand-in ``get_ipython`` and ``otter``, the cell
 runner and the reads), which lives where the box can import it and holds no secret.  It carries
@@ -16,8 +17,9 @@ runner and the reads), which lives where the box can import it and holds no secr
   ``!shell``, ``x?``).  The notebook is parsed and transformed by :func:`load` in a child process
   under hard limits (:func:`gpsaccel.sandbox.in_child`: :data:`LOAD_CPU` seconds of CPU,
   :data:`LOAD_MEMORY` more bytes of address space, :data:`LOAD_WALL` s of wall-clock time; the
-  file at most :data:`MAX_NOTEBOOK_BYTES`): the transformer is quadratic on some input (a 9 KB
-  cell of line magics took 31 CPU s, a 0.8 MB cell 356 MB) and raises on other input, and
+  file at most :data:`MAX_NOTEBOOK_BYTES`): the transformer is quadratic in time and memory on
+  some input (a cell of line magics: tests/assignments/test_hostile_class.py) and raises on
+  other input, and
   ``json`` recurses on nested lists, so what cannot be read within them is the student's
   ``unreadable``, never the grader's error.  Whatever else parses a student's notebook (the
   similarity report) does it under the same limits;
@@ -52,7 +54,7 @@ __all__ = ["BOX_HIDES", "LOAD_CPU", "LOAD_MEMORY", "LOAD_WALL", "MAX_NDIM", "MAX
 MAX_NOTEBOOK_BYTES = 16 << 20
 
 #: CPU seconds and extra address space (bytes) of the child that parses and transforms one
-#: notebook (:func:`load`): an honest notebook needs well under 0.1 s and 50 MB.
+#: notebook (:func:`load`): an honest notebook needs a small fraction of both.
 LOAD_CPU = 5
 LOAD_MEMORY = 256 << 20
 #: Wall-clock seconds after which that child is killed whatever its CPU time: only a guard

@@ -244,7 +244,7 @@ def _box_calls(p: snapshots.Plan, reads: list[nbm.Read]) -> tuple[list, list[ran
     """The box's calls for plan ``p``: ``_gpsaccel_cell(i)`` per cell and, for each run of the
     plan's reads of one name and shapes in a group (at most :data:`BATCH`),
     ``_gpsaccel_reads(ks, nargs, *args)``: one frame for them all, each output stacked (a frame
-    costs more than a small function's read: 1100 reads of Jacobians were 0.4 CPU s in frames).
+    costs more than a small function's read; benchmarks/snapshots.py measures the batching).
     Returns the calls and, for each, the range of the plan's calls it makes."""
     from gpsaccel.sandbox import Call, Output
 

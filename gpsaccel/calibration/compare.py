@@ -192,9 +192,9 @@ def sweep(kind: str, factors: Sequence[float] | None = None, forms: Sequence[str
     seed : one seed for every point (the same noise draws, scaled).
     executor : where the points run (:func:`gpsaccel.executors.resolve_executor`: None in this
         process, ``"processes"``, an Executor, ...).  Each point is computed whole by one worker
-        with the same code, so the numbers do not depend on it; only the wall time does (a point
-        is ~½ s of CPU, most of it the forms' 6000 predictions, one by one, as the lesson measures
-        their rounding).
+        with the same code, so the numbers do not depend on it; only the wall time does (a
+        point's CPU is mostly the forms' 6000 predictions, one by one, as the lesson measures
+        their rounding; benchmarks/lessons.py times the lesson).
     progress : a tqdm.auto bar over the points (a lesson's long cell shows progress).
     """
     kind = _v.choice("kind", kind, SWEEPS)

@@ -412,8 +412,9 @@ class CoopModel:
         Integrated by ``scipy.integrate.solve_ivp`` (DOP853, the given tolerances) with the
         input held at u0, evaluated at :attr:`t`; angles wrapped.  The integration is
         deterministic, so each distinct problem is integrated once per process and every call
-        gets its own copy (:data:`_NOMINALS`: a graded coop notebook asked for the same
-        trajectory about nine times, 3 of its 4 CPU s outside the box).
+        gets its own copy (:data:`_NOMINALS`: a graded coop notebook asks for the same
+        trajectory about nine times, and integrating it was most of the grader's own CPU for the
+        notebook; benchmarks/per_file.py measures a coop notebook's grade).
         """
         x_start = self.x0 if x_start is None else _v.finite_array("x_start", x_start,
                                                                    (N_STATES,))

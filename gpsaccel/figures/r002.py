@@ -172,7 +172,8 @@ def monte_carlo(model: CoopModel, runs: int, seed: int) -> dict[str, Consistency
 
 class _MonteCarlo(dict):
     """:func:`monte_carlo`'s filters, each run when first asked for: a lesson that stops after
-    figure 09 (10b) runs the LKF alone, not the EKFs and the UKF (6 of its 8 CPU s).  Every
+    figure 09 (10b) runs the LKF alone, not the EKFs and the UKF (most of its Run All;
+    benchmarks/lessons.py measures it).  Every
     filter sees the given truth, so the order they run in changes no number.
 
     With an ``executor`` the four filters are submitted to it at once (one task each) and each
@@ -275,7 +276,8 @@ def figures(runs: int, seed: int, executor: object = None,
     figure 14c leaves out the UKF, which costs five EKFs); any other runs here if a figure asks.
     ``numbers``: only these figures ("10", "15b", ...; None: all), and only what they need is
     computed: lesson 11b shows 16-19c, which need no Monte Carlo set at all (it drew and filtered
-    all of them, 6 of its 9 CPU s).  Each figure is the one the whole report draws.
+    all of them, most of its Run All; benchmarks/lessons.py).  Each figure is the one the whole
+    report draws.
     ``done``: Monte Carlo filters (keys as ``filters``) the caller has run already on this
     ``runs`` and ``seed``'s truth set, ``consistency_test(..., truth=truth, keep=True)``; they
     are used, not run again (lesson 11 passes its two EKFs on its own set); anything else raises

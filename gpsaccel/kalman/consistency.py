@@ -80,8 +80,9 @@ def _by_pattern(v: np.ndarray, C: np.ndarray, finite: np.ndarray) -> np.ndarray:
     this replaced and from which the lessons' tagged NIS fractions were printed: the stacked solve
     is the same LAPACK call (LU) per matrix, and ``(1, p) @ (p, 1)`` on contiguous rows the same
     dot (tests/kalman/test_consistency.py holds it to that).  Why: a filter's residual log has a
-    NaN row 0, so every step of every run took that loop; for a 50-run coop EKF it cost 1.7 CPU s
-    against 0.1 stacked.
+    NaN row 0, so every step of every run took that loop, one small solve and its Python call per
+    vector; stacked, it is one call per pattern (a coop consistency test's CPU:
+    benchmarks/coop_montecarlo.py).
     """
     out = np.zeros(v.shape[:-1])                  # a vector with nothing finite: 0 with 0 dof
     flat_v, flat_C = v.reshape(-1, v.shape[-1]), C.reshape(-1, *C.shape[-2:])

@@ -17,8 +17,8 @@ The filters compared (:data:`FILTERS`), all on the same ``n_runs`` simulated voy
 How it runs.  The gains of a linear filter do not depend on the data, so each filter runs once
 on run 0 (through :func:`~gpsaccel.kalman.multirate.run_multirate` or
 :func:`~gpsaccel.ship.zeroed_gain.run_zeroed_gain`) and the whole ensemble is then moved by
-:func:`~gpsaccel.kalman.gain_sequence.apply_gains` as arrays (about 0.1 s for 200 runs, against
-about 10 s for 200 separate filter runs).
+:func:`~gpsaccel.kalman.gain_sequence.apply_gains` as arrays, far cheaper than a filter run per
+realization (benchmarks/ship_ensemble.py measures the two side by side).
 
 Statistics, over runs r = 1..R and epochs k = 1..N−1 (every step carries some measurement)::
 

@@ -60,8 +60,8 @@ def monte_carlo(model: CalibrationModel, n_runs: int, seed: int = 0, truth: str 
         :func:`gpsaccel.simulate`.
     chunk_size : runs per task submitted to the executor (default :data:`BLOCK_RUNS`), rounded
         up to a whole number of random blocks (:data:`BLOCK_RUNS` runs): a block's normals are
-        drawn together, so a task of part of a block would pay for drawing all of it (10,000 runs
-        in chunks of 1 took 70 s instead of 0.2 s).  Results do not depend on it beyond rounding.
+        drawn together, so a task of part of a block would pay for drawing all of it (chunks of
+        1 draw the block once per run).  Results do not depend on it beyond rounding.
         At most 2 × workers tasks are in flight.
     executor : None (in this process), any :class:`concurrent.futures.Executor` (a process pool,
         ``dask.distributed.Client(...).get_executor()``), a ``dask.distributed.Client`` (left

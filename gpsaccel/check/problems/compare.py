@@ -5,7 +5,7 @@ have their own pipeline (:mod:`gpsaccel.check.linear`).
 
 The checker runs the catalogue after each box (no answer is kept while a student's code runs),
 and a failing check used to run every catalogue filter in full: 13 coop EKFs of 1000 steps, 11
-ship filters, 4-7 CPU s.  :func:`nearest_within` runs every candidate's first :data:`HEAD` rows,
+ship filters.  :func:`nearest_within` runs every candidate's first :data:`HEAD` rows,
 whose distance to the student's is a lower bound of its whole distance (the filters are causal:
 a row depends only on the rows before it), then whole runs only of the candidates that bound
 leaves in play, as the calibration checker does (:mod:`gpsaccel.check.linear_diagnosis`).  Its

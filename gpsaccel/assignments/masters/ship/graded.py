@@ -63,7 +63,7 @@ def _q2_grade(draw, answers) -> Report:
 def warm() -> None:
     """Done once in the class's parent (:func:`gpsaccel.assignments.grading.warm`), not in every
     notebook's process: the modules q2's reference imports (the package's multirate filter,
-    which is filterpy's, and filterpy pulls in scipy.stats: 1-2 CPU s a notebook) and the ship's
+    which is filterpy's, and filterpy pulls in scipy.stats: benchmarks/imports.py) and the ship's
     covariances q1's cases start from (a voyage filtered; inputs of the student's update, the same
     for every student, not an answer)."""
     import filterpy.kalman  # noqa: F401
