@@ -55,7 +55,7 @@ import nbformat  # noqa: E402
 import numpy as np  # noqa: E402
 
 from gpsaccel import sandbox as sb  # noqa: E402
-from gpsaccel.assignments import generate, grading, scoring  # noqa: E402
+from gpsaccel.assignments import boxcalls, generate, grading, scoring  # noqa: E402
 from gpsaccel.assignments import notebook as nbm  # noqa: E402
 from gpsaccel.classrun import grade  # noqa: E402
 from tests.assignments.conftest import write_variant  # noqa: E402
@@ -191,10 +191,10 @@ def profile(repeats: int) -> None:
         grading.warm("calibration")
         qs = grading.questions_of("calibration")
         variant = grading.student_variant("calibration", "s", b"benchmark-secret-16b")
-        run = scoring._prepare(nbm.read(nb_path), variant)
+        run = boxcalls.prepare(nbm.read(nb_path), variant)
         reads = [r for q in qs for r in q.reads(scoring.Draw(
             scoring.question_seed(1, "calibration", q.name, "s"), variant))]
-        calls = scoring._calls(len(run.cells), reads)
+        calls = boxcalls.calls(len(run.cells), reads)
         source = nbm.module_source(run, reads)
         # the module's one call of its audit hook, a line of its own (notebook.py's prelude)
         lines = source.split("\n")

@@ -3,10 +3,10 @@
 alternated, the median of ``--repeats`` R:
 
 * "before": the reads after the last cell only, one call of the box each (as the grader made
-  them before issue 42: every question's answer cell unknown, ``scoring.BATCH`` = 1);
+  them before issue 42: every question's answer cell unknown, ``boxcalls.BATCH`` = 1);
 * "early": the reads after each answer cell too, one call each;
 * "now": the reads after each answer cell too, the reads of one function in a group stacked in
-  one call (``scoring.BATCH``).
+  one call (``boxcalls.BATCH``).
 
 "box CPU" is the notebook's box (every cell, every read): the children's CPU around
 ``sandbox.run``; "grade CPU" is the whole :func:`~gpsaccel.assignments.scoring.grade_notebook`
@@ -33,7 +33,7 @@ sys.path.insert(0, str(ROOT))
 
 from gpsaccel import registry  # noqa: E402
 from gpsaccel import sandbox as sb  # noqa: E402
-from gpsaccel.assignments import grading, scoring, snapshots  # noqa: E402
+from gpsaccel.assignments import boxcalls, grading, scoring, snapshots  # noqa: E402
 from tests.assignments.conftest import write_variant  # noqa: E402
 
 
@@ -65,16 +65,16 @@ class _Measured:
 
 
 #: The ways of grading compared: (early reads, reads per call).
-WAYS = {"before": (False, 1), "early": (True, 1), "now": (True, scoring.BATCH)}
+WAYS = {"before": (False, 1), "early": (True, 1), "now": (True, boxcalls.BATCH)}
 
 
 def _once(path: Path, name: str, way: str) -> tuple[float, float, int]:
     """(grade CPU, box CPU, the box's calls) of one grading, one of :data:`WAYS`."""
     early, batch = WAYS[way]
     measured = _Measured()
-    real_answer_cells, real_batch = snapshots.answer_cells, scoring.BATCH
+    real_answer_cells, real_batch = snapshots.answer_cells, boxcalls.BATCH
     sb.run = measured  # type: ignore[assignment]  # restored below
-    scoring.BATCH = batch
+    boxcalls.BATCH = batch
     if not early:
         snapshots.answer_cells = lambda run, checks, questions: dict.fromkeys(questions)
     try:
@@ -83,7 +83,7 @@ def _once(path: Path, name: str, way: str) -> tuple[float, float, int]:
         return _all_cpu() - c0, measured.box, measured.calls
     finally:
         sb.run = measured.real
-        snapshots.answer_cells, scoring.BATCH = real_answer_cells, real_batch
+        snapshots.answer_cells, boxcalls.BATCH = real_answer_cells, real_batch
 
 
 def main(argv: list[str]) -> int:

@@ -125,7 +125,8 @@ def personalize(name: str, student_notebook: Path | str, students: list[str], se
     student.  Returns ``out``."""
     import nbformat
 
-    from gpsaccel.assignments.scoring import VARIANT_MARK, student_variant
+    from gpsaccel.assignments.boxcalls import VARIANT_MARK
+    from gpsaccel.assignments.scoring import student_variant
 
     out = Path(out)
     nb0 = nbformat.read(str(student_notebook), as_version=4)

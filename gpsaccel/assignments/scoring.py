@@ -2,7 +2,8 @@ r"""Grading one homework notebook: its cells run in the sandbox, every score com
 
 :func:`grade_notebook` turns the student's code cells into one module
 (:mod:`gpsaccel.assignments.notebook`), runs it in a box (:func:`gpsaccel.sandbox.run`) that calls
-the cells in order and the *reads* every question declares, after the last cell and after each
+the cells in order and the *reads* every question declares (which cells and how the reads are
+called: :mod:`gpsaccel.assignments.boxcalls`), after the last cell and after each
 question's answer cell (:mod:`gpsaccel.assignments.snapshots`: a notebook that stops is graded
 from the last group of reads it reached), and only once the box is empty draws the reference
 answers and scores each question; a question graded from a file the notebook writes is checked
@@ -13,7 +14,6 @@ finding.  A class's run grades each notebook through :mod:`gpsaccel.assignments.
 
 from __future__ import annotations
 
-import ast
 import os
 import tempfile
 import time
@@ -21,11 +21,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
-
 from gpsaccel import _untrusted
 from gpsaccel.assignments import notebook as nbm
 from gpsaccel.assignments import snapshots
+from gpsaccel.assignments.boxcalls import SKIP_MARK as SKIP_MARK
+from gpsaccel.assignments.boxcalls import VARIANT_MARK as VARIANT_MARK
+from gpsaccel.assignments.boxcalls import box_calls, checked_question, per_call, prepare
+from gpsaccel.assignments.boxcalls import calls as _calls  # noqa: F401 - the tests' name for it
+from gpsaccel.assignments.boxcalls import is_otter_cell as is_otter_cell
 from gpsaccel.assignments.questions import (
     Answer,
     Draw,
@@ -51,14 +54,7 @@ BOX_MEMORY = 2 << 30
 #: Processes a notebook's box may hold at once.
 BOX_PROCESSES = 32
 
-#: The first line of a master's cell that only makes data to look at: not run when graded.
-SKIP_MARK = "# not run when graded"
 
-#: The first line of the master's variant cell; grading replaces the cell with the student's.
-VARIANT_MARK = "# your variant"
-
-
-_CELL_STATUS = nbm.STATUS_LENGTH
 
 
 def assignment_module(name: str):
@@ -147,146 +143,6 @@ def unusable(name: str, student: str, file: str, status: str, message: str, sid:
               id=sid or _untrusted.student_id(student))
     g.feedback = _feedback_text(g, [message], {}, {})
     return g
-
-
-#: The longest cell read as a candidate otter cell (its init, ``grader.check``: one line each).
-_OTTER_CELL_CHARS = 2000
-
-
-def _otter_call(node: ast.stmt) -> bool:
-    """``import otter``, ``grader = otter.Notebook(...)`` or ``grader.<method>(...)`` with
-    constant arguments (check, check_all, export, ...)."""
-    if isinstance(node, ast.Import):
-        return all(a.name == "otter" and a.asname is None for a in node.names)
-    value = node.value if isinstance(node, (ast.Assign, ast.Expr)) else None
-    if isinstance(node, ast.Assign) and not (
-            len(node.targets) == 1 and isinstance(node.targets[0], ast.Name)
-            and node.targets[0].id == "grader"):
-        return False
-    if not isinstance(value, ast.Call) or not isinstance(value.func, ast.Attribute):
-        return False
-    owner = value.func.value
-    args = [*value.args, *(k.value for k in value.keywords)]
-    return (isinstance(owner, ast.Name) and owner.id == ("otter" if isinstance(node, ast.Assign)
-                                                         else "grader")
-            and all(isinstance(a, ast.Constant) for a in args))
-
-
-def is_otter_cell(source: str) -> bool:
-    """True for a cell of otter's own (its init cell, a ``grader.check("q1")`` cell): every
-    statement is one of :func:`_otter_call`'s.  The grader checks the answers itself, so these
-    cells are not run (they would only fail: no otter, no ``grader``, no tests in the box)."""
-    if len(source) > _OTTER_CELL_CHARS or "otter" not in source and "grader" not in source:
-        return False
-    try:
-        tree = ast.parse(source)
-    except (SyntaxError, ValueError, RecursionError, MemoryError):
-        return False
-    return bool(tree.body) and all(_otter_call(node) for node in tree.body)
-
-
-def checked_question(source: str) -> str | None:
-    """The question of an otter ``grader.check("qN")`` cell (None for any other cell): where
-    the student's notebook says that answer is complete (:mod:`.snapshots`)."""
-    if not is_otter_cell(source):  # short and made only of otter's calls: parsed here
-        return None
-    for node in ast.parse(source).body:
-        call = node.value if isinstance(node, ast.Expr) else None
-        if isinstance(call, ast.Call) and isinstance(call.func, ast.Attribute) \
-                and call.func.attr == "check" and call.args \
-                and isinstance(call.args[0], ast.Constant) and isinstance(call.args[0].value, str):
-            return call.args[0].value
-    return None
-
-
-def _prepare(nb: nbm.Notebook, variant: dict) -> nbm.Notebook:
-    """The cells to run: the variant cell replaced by the student's, data-only cells and otter's
-    own cells (:func:`is_otter_cell`) left out."""
-    cells = [nbm.Cell(0, f"VARIANT = {variant!r}")]
-    for cell in nb.cells:
-        first = cell.source.lstrip().split("\n", 1)[0].strip().lower()
-        if first.startswith(SKIP_MARK) or is_otter_cell(cell.source):
-            continue
-        if first.startswith(VARIANT_MARK):
-            cells.append(nbm.Cell(cell.number, f"VARIANT = {variant!r}"))
-            continue
-        cells.append(cell)
-    return nbm.Notebook(cells, nb.notes)
-
-
-def _calls(n_cells: int, reads: list[nbm.Read]):
-    """Every cell, then every read once, one call each (``_gpsaccel_cell(i)``,
-    ``_gpsaccel_probe(k, *args)``): the plain order of a box, for tests and benchmarks; a
-    notebook is graded with :func:`_box_calls`."""
-    from gpsaccel.sandbox import Call, Output
-
-    head = _head()
-    calls = [Call("_gpsaccel_cell", (np.array(i),), head) for i in range(n_cells)]
-    for k, r in enumerate(reads):
-        outs = tuple(Output(f"out{j}", tuple(s)) for j, s in enumerate(r.shapes))
-        calls.append(Call("_gpsaccel_probe", (np.array(k), *(np.asarray(a, dtype=float)
-                                                             for a in r.args)), head + outs))
-    return calls
-
-
-def _head() -> tuple:
-    """The status and message every call of a notebook's box returns first."""
-    from gpsaccel.sandbox import Output
-
-    return (Output("status", (_CELL_STATUS,), "int64"),
-            Output("message", (nbm.MESSAGE_BYTES,), "uint8"))
-
-#: The most reads one call makes at once (:func:`_box_calls`).
-BATCH = 256
-
-
-def _box_calls(p: snapshots.Plan, reads: list[nbm.Read]) -> tuple[list, list[range]]:
-    """The box's calls for plan ``p``: ``_gpsaccel_cell(i)`` per cell and, for each run of the
-    plan's reads of one name and shapes in a group (at most :data:`BATCH`),
-    ``_gpsaccel_reads(ks, nargs, *args)``: one frame for them all, each output stacked (a frame
-    costs more than a small function's read; benchmarks/snapshots.py measures the batching).
-    Returns the calls and, for each, the range of the plan's calls it makes."""
-    from gpsaccel.sandbox import Call, Output
-
-    head = _head()
-    calls, covers = [], []
-    i = 0
-    while i < len(p.calls):
-        group, k = p.calls[i]
-        if group == -1:
-            calls.append(Call("_gpsaccel_cell", (np.array(k),), head))
-            covers.append(range(i, i + 1))
-            i += 1
-            continue
-        r = reads[k]
-        j = i + 1
-        while j < len(p.calls) and j - i < BATCH and p.calls[j][0] == group and \
-                (reads[p.calls[j][1]].name, reads[p.calls[j][1]].value,
-                 reads[p.calls[j][1]].shapes) == (r.name, r.value, r.shapes):
-            j += 1
-        ks = [p.calls[m][1] for m in range(i, j)]
-        n = len(ks)
-        outs = tuple(Output(o.name, (n, *o.shape), o.dtype) for o in head) + tuple(
-            Output(f"out{m}", (n, *s)) for m, s in enumerate(r.shapes))
-        args = [np.asarray(a, dtype=float) for k2 in ks for a in reads[k2].args]
-        calls.append(Call("_gpsaccel_reads", (np.array(ks), np.array([len(reads[k2].args)
-                                                                     for k2 in ks]), *args),
-                          outs))
-        covers.append(range(i, j))
-        i = j
-    return calls, covers
-
-
-def _per_call(p: snapshots.Plan, results: list, covers: list[range]) -> list:
-    """The results of the box's calls (:func:`_box_calls`) as one per call of the plan: a
-    cell's as it came, each read of a stacked call its row."""
-    out: list = []
-    for res, cover in zip(results, covers, strict=False):
-        if p.calls[cover[0]][0] == -1:
-            out.append(res)
-        else:
-            out += [{name: a[j] for name, a in res.items()} for j in range(len(cover))]
-    return out
 
 
 #: failure -> what the notebook's stop says (the sandbox's one table of outcomes)
@@ -388,11 +244,11 @@ def _plan(run: nbm.Notebook, nb: nbm.Notebook, qs: Sequence[Question],
 def _returned(p: snapshots.Plan, box, covers: list[range], cells: Sequence,
               reads: list[nbm.Read], limits
               ) -> tuple[dict[str, list[Answer]], dict[str, str], list[str], list[str]]:
-    """What the box returned (its calls made ``covers`` of the plan's, :func:`_box_calls`),
+    """What the box returned (its calls made ``covers`` of the plan's, :func:`~.boxcalls.box_calls`),
     read as the one group that grades (:func:`.snapshots.kept`): the answers of each question
     in it, the failure of the question whose read stopped, the note on where the notebook
     stopped and what counts, the notes on its cells."""
-    results = _per_call(p, box.results, covers)
+    results = per_call(p, box.results, covers)
     received = len(results)
     results += [None] * (len(p.calls) - received)
     kept = snapshots.kept(p, received)
@@ -427,7 +283,7 @@ def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
         return unusable(name, student, file, "unreadable", str(exc), sid)
     variant = student_variant(name, student, secret)
     draws = {q.name: Draw(question_seed(seed, name, q.name, student), variant) for q in qs}
-    run = _prepare(nb, variant)
+    run = prepare(nb, variant)
     reads, p = _plan(run, nb, qs, draws)
     compared = _similarity_record(name, qs, run, reads, p.spans)
     limits = sb.Limits(memory=BOX_MEMORY, time=float(timeout), processes=BOX_PROCESSES)
@@ -436,7 +292,7 @@ def grade_notebook(path: str | os.PathLike, name: str, student: str, seed: int,
         folder.mkdir()
         (folder / "notebook.py").write_text(nbm.module_source(run, reads), encoding="utf-8")
         sub = sb.load_submission(folder / "notebook.py", "_gpsaccel_cell")
-        calls, covers = _box_calls(p, reads)
+        calls, covers = box_calls(p, reads)
         box = sb.run(sub, calls, limits, backend=sandbox, allow_gpsaccel=True, hide=nbm.BOX_HIDES)
     # ---- the box is empty from here on: nothing of the student's runs while answers exist
     answers, stops, notes, cell_notes = _returned(p, box, covers, run.cells, reads, limits)

@@ -12,7 +12,7 @@ reads also run earlier, as *snapshots* (:func:`plan`):
   name, for a cell that rebinds names the parser cannot see: ``exec``, ``globals()``,
   ``setattr``, a star import), or, if later, the last cell before its otter
   ``grader.check("qN")`` cell (:func:`answer_cells`, given what
-  :func:`~gpsaccel.assignments.scoring.checked_question` finds).  A cell that only uses an
+  :func:`~gpsaccel.assignments.boxcalls.checked_question` finds).  A cell that only uses an
   answer (a slow exploratory loop calling the student's filter) is not its answer cell;
 * after each answer cell, and after the last cell, one *group* of reads runs: every question
   whose answer cell has run (a question with none is read in every group), in the questions'
@@ -40,7 +40,7 @@ notebook; the grader places the groups and chooses the one that grades.
 
 What it costs.  Each question is read once more per group from its answer cell on (the box's
 time, counted in its limit: ``benchmarks/snapshots.py``; the reads of one function in a group
-are one call of the box, :func:`gpsaccel.assignments.scoring._box_calls`), and an early read
+are one call of the box, :func:`gpsaccel.assignments.boxcalls.box_calls`), and an early read
 calls the student's functions before the later cells run, in the notebook's process: a function
 that changes the notebook's state when called (a global, numpy's global random generator) can
 change what a later cell computes.
