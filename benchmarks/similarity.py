@@ -166,7 +166,7 @@ def cost(hw: Homework) -> str:
     t0 = _cpu()
     records = {s: answercode.from_notebook(nb, hw.asked) for s, nb in parsed.items()}
     t1 = _cpu()
-    published._package_documents.cache_clear()
+    published.package_documents.cache_clear()
     rep = sim.report(records, "calibration",
                      published.boilerplate(sc_master(), hw.asked),
                      published.references("calibration", sc_master(), hw.asked))
@@ -223,7 +223,7 @@ def sweep(hw: Homework, ks: Sequence[int] = (8, 10, 12, 16, 20),
             prints = [p for p in prints if len(p) >= sim.MIN_PRINTS]
             counts = []
             if len(prints) > 1:
-                shared = sim._shared(prints, prints)
+                shared = sim.shared_prints(prints, prints)
                 size = np.array([len(p) for p in prints], dtype=float)
                 cont = shared / np.minimum.outer(size, size)
                 iu = np.triu_indices(len(prints), 1)

@@ -133,8 +133,10 @@ def _label(path: Path) -> str:
 
 
 @lru_cache(maxsize=4)
-def _package_documents(k: int) -> tuple[Reference, ...]:
-    """Every packaged master and lesson solution as a whole document (computed once)."""
+def package_documents(k: int) -> tuple[Reference, ...]:
+    """Every packaged master and lesson solution as a whole document (computed once per process
+    and ``k``; public so that benchmarks/similarity.py can time a report cold with
+    ``package_documents.cache_clear()``)."""
     from gpsaccel.assignments.homework import packaged_masters
 
     package = Path(__file__).resolve().parents[1]
@@ -156,5 +158,5 @@ def references(name: str, master: Path, asked: Mapping[str, answercode.Asked],
            else f"your master's solution of {{q}} ({master.parent.name}, not published)")
     mine = [Reference(own.format(q=q), _prints(rec, q, k), q) for q in asked]
     # published first: an answer that matches both is named as the published solution's
-    docs = list(_package_documents(k))
+    docs = list(package_documents(k))
     return mine + docs if packaged else docs + mine

@@ -97,8 +97,9 @@ class Report:
 
 
 # ------------------------------------------------------------------------------ comparing
-def _shared(rows: Sequence[frozenset[int]], cols: Sequence[frozenset[int]]):
-    """The matrix of |rows[i] ∩ cols[j]| (sparse products: a class of 200 in milliseconds)."""
+def shared_prints(rows: Sequence[frozenset[int]], cols: Sequence[frozenset[int]]):
+    """The matrix of |rows[i] ∩ cols[j]| (sparse products).  Public for benchmarks/similarity.py,
+    which sweeps the k-gram length over the same matrix the report computes."""
     import numpy as np
     from scipy import sparse
 
@@ -123,7 +124,7 @@ def _groups(question: str, names: Sequence[str], prints: Sequence[frozenset[int]
     import numpy as np
 
     size = np.array([len(p) for p in prints], dtype=float)
-    share = _shared(prints, prints) / np.minimum.outer(size, size)
+    share = shared_prints(prints, prints) / np.minimum.outer(size, size)
     parent = list(range(len(names)))
 
     def root(i: int) -> int:
@@ -156,7 +157,7 @@ def _matches(question: str, names: Sequence[str], prints: Sequence[frozenset[int
     refs = [r for r in refs if r.question in (None, question) and r.prints]
     if not names or not refs:
         return []
-    shared = _shared(prints, [r.prints for r in refs])
+    shared = shared_prints(prints, [r.prints for r in refs])
     out = []
     for i, name in enumerate(names):
         best = (0.0, "")
