@@ -185,11 +185,36 @@ def student_version(nb, stem: str, measured: dict | None = None):
     return _notebook(cells, nb)
 
 
+#: What a master's "How the exercises work" cell says of the solutions (true of the student
+#: version), and what the solutions version, which holds them, says instead.
+SOLUTIONS_ELSEWHERE = ("The solutions are not in this notebook: they are in the `solutions/` "
+                       "folder next to it (and, collapsed, on the rendered site), to open once you "
+                       "have tried.")
+SOLUTIONS_HERE = ("This is the solutions version: each exercise's solution is in this notebook, "
+                  "collapsed under it, to open once you have tried (the student version, one "
+                  "folder up, leaves them out).")
+
+
+def _solutions_here(cell, stem: str):
+    """``cell`` with :data:`SOLUTIONS_ELSEWHERE` replaced by :data:`SOLUTIONS_HERE`; a cell that
+    still says the solutions are "not in this notebook" is a master whose wording changed: an
+    error naming the lesson, never a solutions version that denies holding them."""
+    if cell["cell_type"] == "markdown":
+        cell["source"] = cell["source"].replace(SOLUTIONS_ELSEWHERE, SOLUTIONS_HERE)
+        if "not in this notebook" in cell["source"]:
+            raise ValueError(f"{stem}: a markdown cell says the solutions are not in this notebook"
+                             f" in other words than release.SOLUTIONS_ELSEWHERE; the solutions "
+                             f"version holds them (write the master's sentence as that one)")
+    return cell
+
+
 def solutions_version(nb, stem: str, measured: dict | None = None):
     """Every cell but the ``answer`` ones; each ``check`` below the solution cells that follow it
     (so it checks the solution's ``answer_…``); solutions collapsed; outputs cleared.  An exercise
     whose prompt is only in the lesson's "## Exercises" list gets it above its first solution
-    (:func:`exercise_prompts`), so a reader of the solutions sees what each one answers."""
+    (:func:`exercise_prompts`), so a reader of the solutions sees what each one answers; where
+    the master says the solutions are elsewhere, this version says it holds them
+    (:data:`SOLUTIONS_HERE`)."""
     cells, pending, number = [], [], None
     lesson = stem.split("-", 1)[0]
     prompts, shown = exercise_prompts(nb), set()
@@ -206,6 +231,7 @@ def solutions_version(nb, stem: str, measured: dict | None = None):
             pending = []
         cell = _fill_text(_clean(c, hidden=SOLUTION in tags), stem, measured)
         if SOLUTION not in tags:
+            cell = _solutions_here(cell, stem)
             if cell["cell_type"] == "markdown" and _EXERCISE_TEXT.match(cell["source"].lstrip()):
                 shown.add(number)                  # the master's own prompt cell: shown as it is
             cells.append(cell)

@@ -115,6 +115,34 @@ def test_an_exercise_listed_only_at_the_top_gets_its_prompt_above_its_solution()
     assert "jupyter" not in out[1].metadata                       # the prompt is not collapsed
 
 
+def test_the_solutions_version_says_it_holds_the_solutions():
+    """Every master's "How the exercises work" cell sends the student to `solutions/`; the
+    solutions version (lessons/solutions/, `gpsaccel lessons --copy`'s and the site's) said the
+    same while holding them.  It says what it is; the student version keeps the master's words."""
+    from gpsaccel.lessons.release import SOLUTIONS_ELSEWHERE, SOLUTIONS_HERE, masters
+
+    said = 0
+    for master in masters():
+        nb = nbformat.read(master, as_version=4)
+        student = "\n".join(c.source for c in L.student_version(nb, master.stem).cells)
+        solutions = "\n".join(c.source for c in L.solutions_version(nb, master.stem).cells)
+        assert "not in this notebook" not in solutions, master.stem
+        if SOLUTIONS_ELSEWHERE in student:
+            said += 1
+            assert SOLUTIONS_HERE in solutions, master.stem
+    assert said >= 17                       # every lesson with exercises has the sentence
+
+
+def test_a_master_denying_its_solutions_in_other_words_stops_the_release():
+    """A reworded sentence would pass into the solutions version unreplaced: an error naming the
+    lesson instead."""
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [nbformat.v4.new_markdown_cell("The answers are not in this notebook: see below.")]
+    with pytest.raises(ValueError, match="^99-x: .*not in this notebook"):
+        L.solutions_version(nb, "99-x")
+    assert "not in this notebook" in L.student_version(nb, "99-x").cells[0].source
+
+
 def test_a_slow_cell_says_so_in_words():
     nb = nbformat.v4.new_notebook()
     nb.cells = [nbformat.v4.new_code_cell("work()", id="c1")]
