@@ -9,7 +9,8 @@ text with ``{fields}``); a problem changes its wording by giving its own templat
 ``label`` the case of the failing call ("run 3", "the course log"), ``done`` / ``n_calls`` the
 calls completed and made, ``time`` the time limit (s), ``mib`` the memory limit (MiB),
 ``output_limit`` / ``file_size`` (bytes), ``processes``, ``tb`` "; the traceback ends with: ..."
-(or "."), ``traceback``, ``last`` the tail of what was printed, ``detail`` the sandbox's account,
+(or "." when there is none, a limit that killed the box), ``traceback`` (never empty:
+:data:`NO_TRACEBACK`), ``last`` the tail of what was printed, ``detail`` the sandbox's account,
 and the runner's own (``type``, ``shape``, ``length``, ``name``, ``error``, ``callables``,
 ``found``).  A problem adds fields of its own (``Problem.message_fields``).
 """
@@ -75,6 +76,13 @@ def _indent(text: str, n: int = 6) -> str:
     return "\n".join(" " * n + line for line in text.splitlines())
 
 
+#: What a finding's "the traceback ends with:" is followed by when the box sent none: the
+#: runner always sends one, but the student's code runs in its process and may empty it (patch
+#: the traceback module, forge the frame), and "ends with:" above nothing reads as the
+#: checker's bug.
+NO_TRACEBACK = "(none came back: your code's process sent an empty traceback)"
+
+
 def _tail(text: str, lines: int, n: int) -> str:
     return _indent("\n".join(text[-OUTPUT_KEEP:].rstrip().splitlines()[-lines:]) or "(nothing)",
                    n)
@@ -109,6 +117,7 @@ def _box_fields(box: sb.BoxResult, calls: Sequence[sb.Call], limits: sb.Limits,
     """The outputs of the call the box stopped at, and the fields of the box's templates: the
     student's own output, traceback and counts, and the check's limits, never an answer."""
     problem = box.problem or {}
+    tb = str(problem.get("traceback") or "")
     i = problem.get("call")
     call = calls[i] if isinstance(i, int) and 0 <= i < len(calls) else (calls[0] if calls else None)
     outputs = call.outputs if call else ()
@@ -123,9 +132,8 @@ def _box_fields(box: sb.BoxResult, calls: Sequence[sb.Call], limits: sb.Limits,
         "last6": _tail(box.output, 6, 6), "last8": _tail(box.output, 8, 8),
         "label": (labels[i] if labels and isinstance(i, int) and i < len(labels)
                   else f"call {i + 1} of {len(calls)}" if isinstance(i, int) else "a call"),
-        "traceback": _indent(problem.get("traceback", "")),
-        "tb": ("; the traceback ends with:\n" + _indent(problem["traceback"])
-               if problem.get("traceback") else "."),
+        "traceback": _indent(tb if tb.strip() else NO_TRACEBACK),
+        "tb": "; the traceback ends with:\n" + _indent(tb) if tb.strip() else ".",
         "outputs": ", ".join(o.name for o in outputs), "work": "it should take well under a "
                                                                "second per call",
         **fields,

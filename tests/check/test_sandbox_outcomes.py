@@ -54,3 +54,36 @@ def test_a_lost_check_and_a_lost_notebook_are_worded_by_the_table():
             assert not any(w in why.lower() for w in other), why
             assert out["status" if task is notebook else "codes"] in ("grader-error",
                                                                       ["checker-error"])
+
+
+def test_an_emptied_traceback_is_said_to_be_empty_never_left_blank(tmp_path):
+    """The student's code shares the runner's interpreter: a file that empties the traceback
+    module's output made "the traceback ends with:" end the finding above nothing.  It says none
+    came back, the first look drops the clause, and a box killed at a limit (no traceback)
+    still ends its sentence with "." before the advice."""
+    import dataclasses
+
+    import numpy as np
+
+    from gpsaccel.check.report import Report, _first_line
+
+    (tmp_path / "s.py").write_text(
+        "import traceback\n"
+        "traceback.format_list = lambda *a, **k: []\n"
+        "traceback.format_exception_only = lambda *a, **k: []\n"
+        "def f(z):\n    raise ValueError('hidden')\n", encoding="utf-8")
+    calls = [sb.Call("f", (np.zeros(2),), (sb.Output("y", (2,)),))]
+    limits = sb.Limits(time=60)
+    box = sb.run(sb.load_submission(tmp_path / "s.py", "f"), calls, limits, backend="basic")
+    assert box.failure == "exception" and not (box.problem or {}).get("traceback", "").strip()
+    report = Report("p")
+    findings.box_findings(report, box, calls, limits)
+    text = report.findings[-1].for_student().message
+    assert text.endswith("the traceback ends with:\n      " + findings.NO_TRACEBACK), text
+    assert _first_line(text) == "f(...) raised an exception on call 1 of 1.", _first_line(text)
+
+    report = Report("p")
+    findings.box_findings(report, dataclasses.replace(box, failure="memory-limit", problem=None),
+                          calls, limits)
+    text = report.findings[-1].message
+    assert "traceback" not in text and "(after 0 of 1 calls). A filter needs" in text, text
