@@ -6,6 +6,9 @@ Figures 1-5 are the linearization study of part 1c (the report's perturbation
 100-second log.  Sub-figures with letters go beyond the report: 8b how far the truth wanders from
 the nominal (why the LKF fails), 14b/15b the EKF with Q = Qtrue, 14c/15c the UKF, 18b/19b the UKF
 on the log, 19c the NIS of the three filters on the log.
+
+One module past 500 lines, as each report's figures are one module (r000-r004): the nineteen
+figures share one Monte Carlo set, filtered on demand (:class:`_MonteCarlo`), and the log's runs.
 """
 
 from __future__ import annotations
