@@ -13,19 +13,29 @@ reaps every process re-parented to it and writes ``PID STATUS`` (in this namespa
 raw wait status) on stdout for each, which is how the supervisor learns how the runner ended.
 
 As the init of its namespace it cannot be killed or stopped from inside it: the kernel delivers it
-only signals it handles, and it handles none (SIGCHLD is blocked and waited for).  It imports
-only ``os`` and ``signal``.
+only signals it handles, and it handles none (SIGCHLD is blocked and waited for).  It runs as the
+box's uid, so it makes itself non-dumpable before any of the box's processes exists: a dumpable
+process of the student's own uid can be traced (``PTRACE_ATTACH``, ``/proc/1/mem``), and a traced
+pid 1 writes what the student wants down the supervisor's report pipe (a runner's forged end, or
+an endless line the supervisor buffers outside the box's limits).  bwrap's own init, a cold box's
+pid 1, holds only the box's output and bwrap's event descriptor.  It imports only ``os``,
+``signal`` and ``ctypes``.
 """
 
 from __future__ import annotations
 
+import ctypes
 import os
 import signal
+
+PR_SET_DUMPABLE = 4
 
 
 def main() -> None:
     with open("/proc/self/comm", "w", encoding="ascii") as comm:
         comm.write("bwrap")
+    if ctypes.CDLL(None).prctl(PR_SET_DUMPABLE, 0, 0, 0, 0) != 0:
+        raise OSError("prctl(PR_SET_DUMPABLE, 0) failed")
     signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGCHLD})
     os.write(1, b"ready\n")
     while True:

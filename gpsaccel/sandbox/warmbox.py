@@ -25,6 +25,10 @@ if TYPE_CHECKING:
 
 NS_GET_USERNS = 0xB701
 
+#: The longest report line of a keeper or of a box's pid 1 (``{"exit": status}``, ``PID STATUS``):
+#: anything longer is no report of ours, and the box ends as killed.
+MAX_LINE = 256
+
 
 class NotServed(Exception):
     """The zygote cannot start this box (it died; bwrap made no box around its pid 1): the box
@@ -83,9 +87,11 @@ class WarmBox:
                 data = os.read(self._fd(), 1 << 16)
                 self.gone = not data
                 self.buffer += data
-        while b"\n" in self.buffer:
-            line, self.buffer = self.buffer.split(b"\n", 1)
+        *lines, self.buffer = self.buffer.split(b"\n")  # one pass: linear in what came
+        for line in lines:
             self._line(line)
+        if len(self.buffer) > MAX_LINE:  # not our reporter's: the box's pid 1 runs as its uid
+            self.buffer, self.gone = b"", True
         if self.exited:
             return
         if self.bwrap is not None and self.bwrap.poll() is not None:  # its pid 1 ended

@@ -313,3 +313,49 @@ def test_a_warm_box_dies_with_its_supervisor(tmp_path, kind, hostile, watch):
     while os.path.exists(f"/proc/{zpid}") and time.monotonic() < give_up:
         time.sleep(0.05)
     assert not os.path.exists(f"/proc/{zpid}"), "the zygote outlived the process that started it"
+
+
+#: A submission that tries to trace its box's pid 1 (then lets it go at once) and to open its
+#: memory: (ptrace's return, its errno, the errno of opening /proc/1/mem or 0).
+TRACE_PID1 = '''
+import ctypes, os
+
+import numpy as np
+
+
+def trace(args):
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.ptrace.restype = ctypes.c_long
+    libc.ptrace.argtypes = [ctypes.c_long, ctypes.c_long, ctypes.c_void_p, ctypes.c_void_p]
+    got = libc.ptrace(16, 1, None, None)  # PTRACE_ATTACH
+    err = ctypes.get_errno() if got else 0
+    if got == 0:
+        os.waitpid(1, 0x40000000)  # __WALL: its stop
+        libc.ptrace(17, 1, None, None)  # PTRACE_DETACH
+    try:
+        os.close(os.open("/proc/1/mem", os.O_RDWR))
+        mem = 0
+    except OSError as exc:
+        mem = exc.errno
+    return np.array([got, err, mem], dtype=float)
+'''
+
+
+@pytest.mark.skipif(sb.bwrap_path() is None, reason="bubblewrap does not work here")
+def test_a_warm_bwrap_box_cannot_trace_its_pid_1(tmp_path, zygotes):
+    """A warm bwrap box's pid 1 (_reaper.py) runs as the box's uid and writes the runner's end
+    down a pipe the supervisor reads: traced, it wrote whatever the student wanted there (an
+    endless line the supervisor buffered, outside the box's limits, with quadratic CPU; a forged
+    end of the runner).  It is not dumpable, so the box can neither attach to it nor open its
+    memory.  (A cold box can trace bwrap's own init, which holds only the box's output and bwrap's
+    event descriptor.)"""
+    f = tmp_path / "trace.py"
+    f.write_text(TRACE_PID1)
+    sub = sb.load_submission(f, "trace")
+    call = sb.Call("trace", (np.zeros(1),), (sb.Output("r", (3,)),))
+    with zygote.serve(*zygotes):
+        box = sb.run(sub, [call], LIMITS, backend="bwrap")
+    assert box.started == "warm" and box.failure is None, (box.failure, box.output[-2000:])
+    got, err, mem = box.results[0]["r"]
+    assert (got, err) == (-1, 1), "the box attached to its pid 1"  # EPERM
+    assert mem in (1, 13), "the box opened its pid 1's memory"  # EPERM, EACCES
