@@ -9,6 +9,7 @@ import json
 import os
 import shutil
 import site
+import stat
 import subprocess
 import sys
 import tempfile
@@ -270,7 +271,10 @@ ZYGOTE_PREFIX = "gpsaccel-zygote-"
 
 def sweep_stale_boxes(parent: str | None = None) -> int:
     """Remove the box and zygote folders whose supervising (starting) process is dead; how
-    many."""
+    many.  Only real folders of this process's user: under basic a box's ``/tmp`` is the
+    machine's, and a name planted there by a student (a symbolic link to any path, a folder of
+    the box's uid) is not ours to follow or remove (removing a link's target as root once
+    changed it to mode 0700)."""
     parent = parent or tempfile.gettempdir()
     n = 0
     try:
@@ -279,13 +283,22 @@ def sweep_stale_boxes(parent: str | None = None) -> int:
         return 0
     for e in entries:
         prefix = next((p for p in (BOX_PREFIX, ZYGOTE_PREFIX) if e.name.startswith(p)), None)
-        if prefix is None:
+        if prefix is None or not _ours(e):
             continue
         owner = e.name[len(prefix):].split("-", 1)[0]
         if owner.isdigit() and not _cgroup._alive(int(owner)):
             _remove_tree(e.path)
             n += 1
     return n
+
+
+def _ours(entry: os.DirEntry) -> bool:
+    """Whether ``entry`` is a folder (not a link to one) of this process's user."""
+    try:
+        st = entry.stat(follow_symlinks=False)
+    except OSError:
+        return False
+    return stat.S_ISDIR(st.st_mode) and st.st_uid == os.geteuid()
 
 
 def _remove_tree(path: str) -> None:
@@ -297,6 +310,8 @@ def _remove_tree(path: str) -> None:
 
     def retry(func, p, _exc):  # noqa: ANN001
         for q in (os.path.dirname(p), p):
+            if os.path.islink(q):  # rmtree refuses a link; chmod would follow it
+                continue
             if os.path.abspath(q) == root or os.path.abspath(q).startswith(root + os.sep):
                 try:
                     os.chmod(q, 0o700)

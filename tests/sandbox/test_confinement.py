@@ -4,9 +4,11 @@ the removal of a box that leaves the folder holding it as it was."""
 from __future__ import annotations
 
 import os
+import stat
 import sys
 
 from gpsaccel import sandbox as sb
+from gpsaccel.sandbox import confinement
 from gpsaccel.sandbox.confinement import _bwrap_command
 
 
@@ -43,3 +45,54 @@ def test_removing_a_box_never_changes_the_mode_of_the_folder_that_holds_it(tmp_p
     confinement._remove_tree(str(box))
     assert not box.exists()
     assert parent.stat().st_mode & 0o7777 == 0o1777
+
+
+#: No process has this pid (Linux's PID_MAX_LIMIT is 2**22): a box folder named with it is stale.
+DEAD = (1 << 22) + 1
+
+
+def test_the_sweep_never_follows_nor_removes_what_a_student_planted(tmp_path):
+    """Under basic a box's /tmp is the machine's, where box and zygote folders are made, and the
+    sweep runs as root at every box's start (a classmate's box starts while this one runs).  A
+    student planted a stale box's name (a dead pid) as a symbolic link to any folder or file:
+    rmtree refused the link, and its error handler changed the link's target to mode 0700 (the
+    grader's site-packages, the interpreter's folder: every later box of the class fails).  The
+    sweep takes only real folders of its own user: a link and a folder of another user are
+    left as they are (the box's uid's files are removed with the box), a stale box folder of
+    ours is removed as before."""
+    parent = tmp_path / "tmp"
+    parent.mkdir()
+    target = tmp_path / "site-packages"
+    target.mkdir()
+    target.chmod(0o755)
+    answers = tmp_path / "answers.txt"
+    answers.write_text("secret")
+    answers.chmod(0o644)
+    (parent / f"{sb.BOX_PREFIX}{DEAD}-link").symlink_to(target)
+    (parent / f"{confinement.ZYGOTE_PREFIX}{DEAD}-link").symlink_to(answers)
+    stale = parent / f"{sb.BOX_PREFIX}{DEAD}-stale"
+    (stale / "box").mkdir(parents=True)
+    (stale / "box" / "x").write_text("")
+    theirs = parent / f"{confinement.ZYGOTE_PREFIX}{DEAD}-theirs"
+    theirs.mkdir()
+    if os.geteuid() == 0:  # a folder the student's uid made
+        os.chown(theirs, 2013265920 + DEAD, 2013265920 + DEAD)
+    swept = sb.sweep_stale_boxes(str(parent))
+    assert stat.S_IMODE(target.stat().st_mode) == 0o755
+    assert stat.S_IMODE(answers.stat().st_mode) == 0o644
+    assert swept == (1 if os.geteuid() == 0 else 2)
+    assert answers.read_text() == "secret"
+    assert not stale.exists()
+    assert theirs.exists() == (os.geteuid() == 0)
+
+
+def test_removing_a_link_never_changes_its_target(tmp_path):
+    """_remove_tree given a symbolic link (rmtree refuses it) leaves its target's mode alone:
+    its error handler chmod-ed the path, which follows the link."""
+    target = tmp_path / "public"
+    target.mkdir()
+    target.chmod(0o755)
+    link = tmp_path / "link"
+    link.symlink_to(target)
+    confinement._remove_tree(str(link))
+    assert stat.S_IMODE(target.stat().st_mode) == 0o755
