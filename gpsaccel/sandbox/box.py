@@ -213,7 +213,8 @@ class _Prepared:
         res_w, out_w, go_r = self.child_fds
         fds = {"out": out_w, "res": res_w, "go": go_r}
         plan = self.plan(extra)
-        req: dict[str, object] = {"backend": self.backend, "plan": plan, "umask": _umask(),
+        req: dict[str, object] = {"backend": self.backend, "plan": zygote.with_room(plan, z),
+               "umask": _umask(),
                "ignored": [int(s) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
                            if signal.getsignal(s) == signal.SIG_IGN]}
         control = self.tmp / "control"

@@ -33,6 +33,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import resource
 import select
 import shutil
 import signal
@@ -76,7 +77,9 @@ START_WAIT = 600.0
 class Zygote:
     """A running zygote: its pid, folder and socket, what it serves (``allow_gpsaccel``,
     ``sys_path``), what it imported (``imports``, and the files of every module it holds) and its
-    address space (bytes)."""
+    address space (bytes): ``extra`` of it past what a cold runner holds when the student's code
+    starts (its imports past numpy), which a warm box's address-space limit adds
+    (:func:`with_room`)."""
 
     pid: int
     folder: str
@@ -86,6 +89,7 @@ class Zygote:
     modules: tuple[str, ...]
     vmsize: int
     proc: subprocess.Popen | None = field(default=None, repr=False)
+    extra: int = 0
 
     def alive(self) -> bool:
         try:
@@ -166,7 +170,8 @@ def _ready(kind: Warm, proc: subprocess.Popen, folder: str, sys_path: list[str])
         _remove_tree(folder)
         raise
     z = Zygote(proc.pid, folder, kind.allow_gpsaccel, tuple(sys_path), kind.imports,
-               tuple(info["modules"]), int(info["vmsize"]) * 1024, proc)
+               tuple(info["modules"]), int(info["vmsize"]) * 1024, proc,
+               max(0, int(info["vmsize"]) - int(info["base_vmsize"])) * 1024)
     bad = z.holds_any_of(hidden_dirs(kind.allow_gpsaccel, kind.hide))
     if bad:
         stop(z)
@@ -260,6 +265,16 @@ def serve(*zygotes: Zygote) -> Iterator[None]:
     finally:
         for z in zygotes:
             _ACTIVE.remove(z)
+
+
+def with_room(plan: dict, z: Zygote) -> dict:
+    """The plan of a box forked from ``z``: its address-space limit raised by what ``z`` holds
+    past a cold runner's numpy (RLIMIT_AS counts the address space a box starts with), so that a
+    student whose code imports numpy alone has the room a cold box gives; one who imports what
+    the zygote holds has that much more address space than cold, where that import counted, and
+    its memory is still bounded by the box's cgroup where it has one."""
+    rlimits = [[r, v + z.extra if r == resource.RLIMIT_AS else v] for r, v in plan["rlimits"]]
+    return dict(plan, rlimits=rlimits)
 
 
 def serving(backend: str, allow_gpsaccel: bool, sys_path: Sequence[str], memory: int,

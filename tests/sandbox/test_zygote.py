@@ -381,10 +381,6 @@ def largest(args):
 '''
 
 
-@pytest.mark.xfail(strict=True, reason="a warm box starts with the zygote's address space "
-                   "(scipy.stats, filterpy) counted against RLIMIT_AS, so a student who imports "
-                   "numpy alone has that much less room warm than cold (150-160 MiB of a 1 GiB "
-                   "limit, measured); open, see docs/sandbox.md")
 @pytest.mark.parametrize("kind", _backends())
 def test_a_numpy_only_box_has_the_same_room_warm_as_cold(tmp_path, kind):
     """The course's zygote (COURSE_IMPORTS) and a 1 GiB box: the largest array a box that
