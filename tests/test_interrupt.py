@@ -130,7 +130,11 @@ print("went on")
 
 @pytest.mark.parametrize("sig", ["SIGTERM", "SIGHUP"])
 def test_after_cleanup_the_process_ends_by_the_signal_it_got(sig):
-    out = subprocess.run([sys.executable, "-c", _AFTER_CLEANUP.format(sig=sig)],
+    # the signal's default disposition, as a command started from a shell has it: a suite run
+    # under nohup hands its children SIGHUP ignored, which stop_after_cleanup leaves alone
+    code = (f"import signal\nsignal.signal(signal.{sig}, signal.SIG_DFL)\n"
+            + _AFTER_CLEANUP.format(sig=sig))
+    out = subprocess.run([sys.executable, "-c", code],
                          capture_output=True, text=True, timeout=120)
     assert out.stdout == "cleaned up\n" and out.returncode == -getattr(signal, sig), out
 

@@ -186,7 +186,7 @@ def test_an_interrupted_run_leaves_not_graded_rows_and_raises(tmp_path, monkeypa
         (sub / name).mkdir(parents=True)
     (sub / "alice" / "calibration.ipynb").write_text("{}")
 
-    def interrupted(task, entries, jobs, executor, on_result):  # one result, then Ctrl-C
+    def interrupted(task, entries, jobs, executor, on_result, warm_boxes=None):  # one, then ^C
         on_result(0, asdict(grading.unusable("calibration", "alice", "", "unreadable", "x")))
         raise running.Interrupted([None] * len(entries))
 
