@@ -92,6 +92,7 @@ class CheckPlan:
     backend: str
     limits: sb.Limits | None = None
     allow_gpsaccel: bool = False
+    paths: tuple[str, ...] = ()
 
     @property
     def settings(self) -> dict:
@@ -102,6 +103,21 @@ class CheckPlan:
                 "allow_gpsaccel": self.allow_gpsaccel,
                 "limits": None if self.limits is None else dict(vars(self.limits))}
 
+    def hidden(self) -> tuple[dict[str, str | os.PathLike | None], list[str]]:
+        """The folders no box may read under basic (every classmate's files): each folder of
+        ``paths``, and the folder of each file given (left visible where it holds the
+        interpreter, as a file given from the working folder of a repository)."""
+        folders: dict[str, str | os.PathLike | None] = {}
+        optional: list[str] = []
+        for k, p in enumerate(self.paths):
+            name = f"paths[{k}]"
+            if os.path.isdir(p):
+                folders[name] = p
+            else:
+                folders[name] = os.path.dirname(os.path.abspath(p))
+                optional.append(name)
+        return folders, optional
+
     def run(self, executor: object = "processes", max_workers: int | None = None,
             on_result: Callable[[dict], None] | None = None,
             warm_boxes: bool | None = None) -> list[dict]:
@@ -110,9 +126,10 @@ class CheckPlan:
         box starts from a zygote (:func:`gpsaccel.classrun.running.run`; None: where boxes can
         start warm)."""
         jobs = running.jobs_of(max_workers, running.cpus(), "max_workers")
-        results = running.run(_Check(self), self.entries, jobs, executor,
-                              None if on_result is None else lambda i, r: on_result(r),
-                              warm_boxes)
+        with running.hidden_from_boxes(self.backend, *self.hidden()):
+            results = running.run(_Check(self), self.entries, jobs, executor,
+                                  None if on_result is None else lambda i, r: on_result(r),
+                                  warm_boxes)
         return [r for r in results if r is not None]
 
 
@@ -134,7 +151,7 @@ def plan_check(paths: Sequence[str | os.PathLike], problem: str = "calibration",
     entries, notes = walk(paths, PYTHON, naming)
     backend = running.backend_of(sandbox, allow_unsafe_basic)
     return CheckPlan(tuple(entries), tuple(notes), problem, n_runs, seed, drawn, timeout,
-                     backend, limits, allow_gpsaccel)
+                     backend, limits, allow_gpsaccel, tuple(os.fspath(p) for p in paths))
 
 
 def check_many(paths: Sequence[str | os.PathLike], n_runs: int | None = None,

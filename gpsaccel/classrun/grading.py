@@ -306,7 +306,8 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
                 export: str = "auto", regrade: bool = False,
                 compare_with: str | os.PathLike | None = None,
                 canvas_column: str | None = None,
-                warm_boxes: bool | None = None) -> Graded:
+                warm_boxes: bool | None = None,
+                secret_file: str | os.PathLike | None = None) -> Graded:
     """Grade every student of ``submissions`` for homework ``name`` and write every file
     (module docstring); :func:`grade` is this with the grades alone.
 
@@ -349,6 +350,7 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
     wanted = _wanted(student)
     record = _Record(out, possible, wanted, progress)
     backend = running.backend_of(sandbox)  # a class is not graded where basic cannot isolate it
+    secret = running.secret_of(secret, secret_file, backend)
     settings: dict[str, Any] = {"name": name, "seed": seed, "secret": secret,
                                 "sandbox": backend, "timeout": float(timeout)}
     entries, reuse = _resumed(record, entries, wanted, folder, settings, regrade)
@@ -364,9 +366,11 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
         "export": layout.found, "skipped": notes, "reuse": _fingerprint(settings)})
     try:
         if todo:
-            running.run(_Grade(folder, settings), [entries[i] for i in todo], jobs,
-                        dask or "processes", lambda k, data: record.done(todo[k], data),
-                        warm)
+            with running.hidden_from_boxes(backend, _class_folders(
+                    folder, out, earlier, name, secret_file)):
+                running.run(_Grade(folder, settings), [entries[i] for i in todo], jobs,
+                            dask or "processes", lambda k, data: record.done(todo[k], data),
+                            warm)
     except BaseException:  # Ctrl-C, a lost cluster: what is done stays, the rest not-graded
         record.finish(interrupted=True)
         raise
@@ -439,20 +443,32 @@ def rewrite_class(submissions: str | os.PathLike, name: str, out: str | os.PathL
     return Graded([], rows, out, lines, dict(outputs.missing))
 
 
+def _class_folders(folder: Path, out: Path, earlier: Path | None, name: str,
+                   secret_file: str | os.PathLike | None) -> dict:
+    """What no box may read, by argument: every classmate's notebook, the grades and feedback,
+    the earlier submissions, the instructor's homework (its solutions), the secret's folder."""
+    from gpsaccel.assignments.homework import own_folder
+
+    return {"submissions": folder, "out": out, "compare_with": earlier,
+            "the homework's folder": own_folder(name),
+            "secret_file": None if secret_file is None else Path(secret_file).resolve().parent}
+
+
 def grade(submissions: str | os.PathLike, name: str, out: str | os.PathLike | None = None,
           jobs: int | None = None, timeout: float = TIMEOUT, seed: int | None = None,
           secret: bytes | None = None, student: str | Sequence[str] | None = None,
           dask: str | None = None, sandbox: str = "auto", progress: bool = False,
           roster: Sequence[Student] | str | os.PathLike | None = None,
           similarity: bool = True, naming: Naming | None = None, export: str = "auto",
-          regrade: bool = False, warm_boxes: bool | None = None) -> list[Grade]:
+          regrade: bool = False, warm_boxes: bool | None = None,
+          secret_file: str | os.PathLike | None = None) -> list[Grade]:
     """Grade a class (:func:`grade_class`: the same files as ``gpsaccel grade`` writes); this
     run's grades, one per student graded, in the class's order.  OSError when a file could not
     be written (every other one is; ``grading.json`` names them, :func:`rewrite_class` writes
     the class-wide ones once there is room)."""
     graded = grade_class(submissions, name, out, jobs, timeout, seed, secret, student, dask,
                          sandbox, progress, roster, similarity, naming, export, regrade,
-                         warm_boxes=warm_boxes)
+                         warm_boxes=warm_boxes, secret_file=secret_file)
     if graded.missing:
         raise OSError(f"not written in {graded.out}: " + ", ".join(
             f"{f} ({why})" for f, why in graded.missing.items()))

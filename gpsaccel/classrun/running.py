@@ -72,6 +72,48 @@ def backend_of(sandbox: str, allow_unsafe_basic: bool = False) -> str:
     return backend
 
 
+def hidden_from_boxes(backend: str, folders: dict[str, str | os.PathLike | None],
+                      optional: Sequence[str] = ("secret_file",)
+                      ) -> contextlib.AbstractContextManager:
+    """The class's own folders (argument name -> folder) hidden from every box the run starts,
+    under ``basic`` (:func:`gpsaccel.sandbox.hiding`: a basic box reads what other users may,
+    and an LMS export is world-readable); a ``bwrap`` box sees none of them anyway.
+    ``optional``: those left visible where they hold what every box reads (the interpreter)."""
+    return (sb.hiding(folders, optional=optional) if backend == "basic"
+            else contextlib.nullcontext())
+
+
+def open_to_others(path: str | os.PathLike) -> bool:
+    """Whether a user with no claim on ``path`` (neither its owner nor in its group, as a basic
+    box's uid) can read it: the file readable by others and every folder above it enterable."""
+    import stat
+    from pathlib import Path
+
+    p = Path(path).resolve()
+    if not p.stat().st_mode & stat.S_IROTH:
+        return False
+    return all(d.stat().st_mode & stat.S_IXOTH for d in p.parents)
+
+
+def secret_of(secret: bytes | None, secret_file: str | os.PathLike | None, backend: str
+              ) -> bytes | None:
+    """The instructor's secret: ``secret``, or ``secret_file``'s
+    (:func:`gpsaccel.assignments.grading.read_secret`).  A file a
+    basic box could read is refused: the box runs as another user, and a notebook that read it
+    would carry it back in its feedback (a redteam box did, from the wheel)."""
+    from gpsaccel.assignments.grading import read_secret
+
+    if secret_file is None:
+        return secret
+    if secret is not None:
+        raise ValueError("secret_file: give the secret or its file, not both")
+    if backend == "basic" and open_to_others(secret_file):
+        raise ValueError(f"secret_file (--secret-file): {secret_file} can be read by other "
+                         f"users, and a basic box runs as another user: `chmod 600 {secret_file}` "
+                         f"(or keep it in a folder others cannot enter), or grade with sandbox 'bwrap'")
+    return read_secret(secret_file)
+
+
 class Task:
     """What a class run does with each entry: the hooks a kind of run overrides.
 

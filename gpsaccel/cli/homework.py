@@ -134,31 +134,6 @@ def _copy(args: argparse.Namespace) -> int:
     return 0
 
 
-def open_to_others(path: str | Path) -> bool:
-    """Whether a user with no claim on ``path`` (neither its owner nor in its group, as a basic
-    box's uid) can read it: the file readable by others and every folder above it enterable."""
-    import stat
-
-    p = Path(path).resolve()
-    if not p.stat().st_mode & stat.S_IROTH:
-        return False
-    return all(d.stat().st_mode & stat.S_IXOTH for d in p.parents)
-
-
-def _secret_out_of_reach(secret_file: str, sandbox: str) -> None:
-    """Refuse a secret a basic box could read: it runs as another user and sees every file other
-    users may read (docs/sandbox.md), and a notebook that raised it would carry it back in its
-    feedback (a redteam box did, from the wheel).  bwrap's box sees none of the instructor's
-    files."""
-    from gpsaccel.classrun.running import backend_of
-
-    if backend_of(sandbox) == "basic" and open_to_others(secret_file):
-        raise ValueError(f"--secret-file: {secret_file} can be read by other users, and a basic "
-                         f"box runs as another user: `chmod 600 {shlex.quote(str(secret_file))}` "
-                         f"(or keep it in a folder others cannot enter), or grade with --sandbox "
-                         f"bwrap")
-
-
 def _cmd_grade(args: argparse.Namespace) -> int:
     """Grade a class in the sandbox: grades.csv, feedback/, summary.csv/png in --out; with
     --roster the LMS gradebook files; the similarity report.  :func:`gpsaccel.classrun.grade`
@@ -183,8 +158,6 @@ def _cmd_grade(args: argparse.Namespace) -> int:
         _only_class_wide(args)
     roster, hint = _roster(args)
     out = args.out if args.out is not None else default_out(args.submissions)
-    if args.secret_file is not None and not args.from_grades:
-        _secret_out_of_reach(args.secret_file, args.sandbox)
     with terminal() as term:
         if args.from_grades:
             graded = rewrite_class(args.submissions, name, out, roster,
@@ -193,7 +166,8 @@ def _cmd_grade(args: argparse.Namespace) -> int:
         else:
             graded = grade_class(args.submissions, name, out=out, jobs=args.jobs,
                                  timeout=args.timeout or TIMEOUT, seed=args.seed,
-                                 secret=read_secret(args.secret_file), student=args.student,
+                                 secret=read_secret(None) if args.secret_file is None else None,
+                                 secret_file=args.secret_file, student=args.student,
                                  dask=args.dask, sandbox=args.sandbox, progress=True,
                                  roster=roster, similarity=not args.no_similarity,
                                  export=args.export, regrade=args.regrade,

@@ -111,6 +111,7 @@ from gpsaccel.sandbox.confinement import (
                                       sweep_stale_boxes,
 )
 from gpsaccel.sandbox.fence import NoFence
+from gpsaccel.sandbox.outside import hiding
 from gpsaccel.sandbox.pool import Lost, run_items
 from gpsaccel.sandbox.spec import BoxResult, Call, Limits, Output
 from gpsaccel.sandbox.submission import (
@@ -130,6 +131,6 @@ __all__ = [
     "MAX_DEPTH", "MAX_ENTRIES", "MAX_FILES", "MAX_HEADER", "MAX_TEXT", "PACKAGE_DIR",
     "BoxResult", "Call", "ChildResult", "FrameReader", "Limits", "Lost", "NoFence", "Output",
     "Refused", "Submission", "SubmissionError", "Warm", "basic_is_safe", "bwrap_path",
-    "defines", "in_child", "load_submission", "refuse_unsafe_basic", "resolve_backend", "run",
+    "defines", "hiding", "in_child", "load_submission", "refuse_unsafe_basic", "resolve_backend", "run",
     "run_items", "sweep_stale_boxes", "warm_boxes",
 ]

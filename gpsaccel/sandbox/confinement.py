@@ -239,12 +239,27 @@ def check_hide(hide: Sequence[str], allow: bool) -> tuple[str, ...]:
     return hide
 
 
+#: The folders outside the package hidden from every box (:func:`gpsaccel.sandbox.hiding`).
+HIDDEN_ENV = "GPSACCEL_SANDBOX_HIDDEN"
+
+
+def class_dirs() -> list[str]:
+    """The folders :func:`gpsaccel.sandbox.hiding` hides now, those that exist (real paths)."""
+    try:
+        dirs = json.loads(os.environ.get(HIDDEN_ENV) or "[]")
+    except ValueError:
+        dirs = []
+    return [os.path.realpath(d) for d in dirs if isinstance(d, str) and os.path.isdir(d)]
+
+
 def hidden_dirs(allow: bool, hide: Sequence[str]) -> list[str]:
     """The folders no process of a box may read: every copy of the package (this one, an
     installed or editable one the interpreter would find) when the box may not import it, else
-    the folders ``hide`` of each copy that exist (real paths)."""
+    the folders ``hide`` of each copy that exist; and the class's own folders
+    (:func:`class_dirs`); real paths."""
     copies = list(dict.fromkeys([str(PACKAGE_DIR), *_blocked_dirs()]))
     dirs = copies if not allow else [os.path.join(pkg, rel) for pkg in copies for rel in hide]
+    dirs = dirs + class_dirs()
     return list(dict.fromkeys(os.path.realpath(d) for d in dirs if os.path.isdir(d)))
 
 

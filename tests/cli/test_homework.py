@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from gpsaccel.cli import main
-from gpsaccel.cli.homework import open_to_others
+from gpsaccel.classrun.running import open_to_others
 
 
 @pytest.fixture
