@@ -335,6 +335,8 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
     """
     folder = Path(submissions)
     out, jobs = _checked(folder, out, timeout, jobs)
+    backend = running.backend_of(sandbox)  # a class is not graded where basic cannot isolate it
+    secret = running.secret_of(secret, secret_file, backend)
     running.warm_of(warm_boxes, dask or "processes")  # asked where it cannot be: refused here
     earlier = _earlier(compare_with, similarity)
     students = read_roster(roster) if isinstance(roster, (str, os.PathLike)) else roster
@@ -349,8 +351,6 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
     out.mkdir(parents=True, exist_ok=True)
     wanted = _wanted(student)
     record = _Record(out, possible, wanted, progress)
-    backend = running.backend_of(sandbox)  # a class is not graded where basic cannot isolate it
-    secret = running.secret_of(secret, secret_file, backend)
     settings: dict[str, Any] = {"name": name, "seed": seed, "secret": secret,
                                 "sandbox": backend, "timeout": float(timeout)}
     entries, reuse = _resumed(record, entries, wanted, folder, settings, regrade)
