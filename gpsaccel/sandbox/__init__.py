@@ -41,9 +41,11 @@ Backends (the threat model, what each isolates and what not: ``docs/sandbox.md``
     ``LANG`` only; a private temporary working directory holding a copy of the submission only;
     the checker made non-dumpable while the student runs.  The package (or the folders its
     caller hides) fenced by the kernel: Landlock, else (root) a mount namespace, else (root)
-    folders closed to other users, else, as root, no box (:mod:`gpsaccel.sandbox.fence`);
-    everything else the student reads as other users may.  Not run as root it is not safe for
-    grading (the student is the checker's user: :func:`refuse_unsafe_basic`).
+    folders closed to other users, else, as root, no box (:mod:`gpsaccel.sandbox.fence`); so
+    are the folders of a class its caller hides, ``with hiding({"submissions": ...}):``
+    (:mod:`gpsaccel.sandbox.outside`); everything else the student reads as other users may.
+    Not run as root it is not safe for grading (the student is the checker's user:
+    :func:`refuse_unsafe_basic`).
 ``auto`` is ``bwrap`` when a trial box starts on this machine, else ``basic``.
 
 As root, under both backends, the student runs as a uid of its own that owns nothing and that
@@ -80,12 +82,13 @@ limits in a forked child: :func:`in_child` (:mod:`.child`), the one way to do so
 Layout (each module under 500 lines): :mod:`.spec` (what to run, what comes back),
 :mod:`.submission` (a student's files, walked and checked), :mod:`.channel` (the result channel),
 :mod:`.confinement` (the backends, what a box sees, box folders), :mod:`.fence` (what a basic box
-may not read), :mod:`.limits` (rlimits, the box's
-cgroup and uid: :mod:`._cgroup`, :mod:`._boxuser`), :mod:`.procs` (prctl, the process table: /proc
-on Linux, psutil elsewhere; the checked kill), :mod:`.box` (one box run and supervised),
-:mod:`.clock` (its fair deadline), :mod:`.pool` (a class's items), :mod:`.child` (host-side work
-under limits).  The layer imports nothing of gpsaccel above it and names none of it: it knows
-neither the checks nor the homework, and its callers say what their boxes may not read.
+may not read), :mod:`.outside` (a class's own folders hidden from every box), :mod:`.limits`
+(rlimits, the box's cgroup and uid: :mod:`._cgroup`, :mod:`._boxuser`), :mod:`.procs` (prctl,
+the process table: /proc on Linux, psutil elsewhere; the checked kill), :mod:`.box` (one box
+run and supervised), :mod:`.clock` (its fair deadline), :mod:`.pool` (a class's items),
+:mod:`.child` (host-side work under limits).  The layer imports nothing of gpsaccel above it
+and names none of it: it knows neither the checks nor the homework, and its callers say what
+their boxes may not read.
 """
 
 from __future__ import annotations

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from gpsaccel.cli import main
 from gpsaccel.classrun.running import open_to_others
+from gpsaccel.cli import main
 
 
 @pytest.fixture
