@@ -98,9 +98,4 @@ def hiding(folders: Mapping[str, str | os.PathLike | None], optional: Collection
             os.environ[ENV] = before
 
 
-def hidden() -> list[str]:
-    """The folders hidden now (:func:`hiding`), those that exist."""
-    return confinement.class_dirs()
-
-
-__all__ = ["ENV", "checked", "close_to_others", "hidden", "hiding"]
+__all__ = ["ENV", "checked", "close_to_others", "hiding"]

@@ -31,6 +31,7 @@ from gpsaccel.classrun import grade, running
 from gpsaccel.classrun.grading import grade_class
 from gpsaccel.sandbox.confinement import ZYGOTE_PREFIX
 
+from .._hostile import Started
 from .conftest import kill_pids, read_grades
 from .test_attacks import HONEST_Q1, _basic_as_root, _bwrap, _procs_with
 
@@ -129,7 +130,9 @@ def graded(homework, request):
     top.chmod(0o755)  # mkdtemp's 0700 would hide the class from every other user
     try:
         c = _class(top / "class", homework)
+        started = Started()
         with pytest.MonkeyPatch.context() as patch:
+            started.counting(patch)
             patch.chdir(c["sub"])  # the grader's /proc/<pid>/cwd
             if not hidden:
                 patch.setattr(running, "hidden_from_boxes",
@@ -143,7 +146,15 @@ def graded(homework, request):
         kill_pids(_procs_with(MARK) + _procs_with(f"{ZYGOTE_PREFIX}{os.getpid()}-"))
         shutil.rmtree(top, ignore_errors=True)
     return {"grades": {g.student: g for g in grades}, "rows": rows, "hidden": hidden,
-            "backend": backend, "modes": modes}
+            "backend": backend, "modes": modes, "warm": warm,
+            "started": (started.cold, started.warm)}
+
+
+def test_every_box_started_as_the_run_asked(graded):
+    """A warm run's boxes all start from its zygotes, whose key holds the hidden folders (the
+    attack is tried on warm boxes, not on cold ones a zygote could not serve)."""
+    cold, warm = graded["started"]
+    assert (cold, warm > 0) == (0, True) if graded["warm"] else (cold > 0, warm) == (True, 0)
 
 
 def test_the_attacker_reads_nothing_of_the_class(graded):
