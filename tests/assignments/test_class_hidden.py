@@ -29,6 +29,7 @@ import pytest
 
 from gpsaccel.classrun import grade, running
 from gpsaccel.classrun.grading import grade_class
+from gpsaccel.sandbox import fence
 from gpsaccel.sandbox.confinement import ZYGOTE_PREFIX
 
 from .._hostile import Started
@@ -114,18 +115,23 @@ def _class(root: Path, homework: Path) -> dict:
     return {"sub": sub, "out": out, "earlier": earlier, "secret": secret}
 
 
-CASES = [pytest.param(("basic", False, True), id="basic"),
-         pytest.param(("basic", True, True), id="basic-warm"),
-         pytest.param(("bwrap", False, True), id="bwrap-control",
+#: (backend, warm boxes, hidden, the basic fence: Landlock where this kernel has it, or the mount
+#: namespace with Landlock taken away)
+CASES = [pytest.param(("basic", False, True, "host"), id="basic"),
+         pytest.param(("basic", True, True, "host"), id="basic-warm"),
+         pytest.param(("basic", False, True, "mount"), id="basic-mount-fence"),
+         pytest.param(("bwrap", False, True, "host"), id="bwrap-control",
                       marks=pytest.mark.skipif(not _bwrap(), reason="needs a working bubblewrap")),
-         pytest.param(("basic", False, False), id="basic-unhidden-must-leak")]
+         pytest.param(("basic", False, False, "host"), id="basic-unhidden-must-leak")]
 
 
 @pytest.fixture(scope="module", params=CASES)
 def graded(homework, request):
     if not _basic_as_root():
         pytest.skip("basic isolates a student only as root")
-    backend, warm, hidden = request.param
+    backend, warm, hidden, kind = request.param
+    if kind == "mount" and not fence.mounts_allowed():
+        pytest.skip("this process may not make a mount namespace")
     top = Path(tempfile.mkdtemp(prefix="gpsaccel-hideclass-"))
     top.chmod(0o755)  # mkdtemp's 0700 would hide the class from every other user
     try:
@@ -133,6 +139,17 @@ def graded(homework, request):
         started = Started()
         with pytest.MonkeyPatch.context() as patch:
             started.counting(patch)
+            if kind == "mount":
+                patch.setattr(fence, "landlock_abi", lambda: 0)
+            real_choose, chosen = fence.choose, top / "fences.txt"
+
+            def choose(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202 - fence.choose's own
+                f = real_choose(*args, **kwargs)  # in each item's process: noted in a file
+                with open(chosen, "a", encoding="utf-8") as log:
+                    log.write(f"{None if f is None else f.kind}\n")
+                return f
+
+            patch.setattr(fence, "choose", choose)
             patch.chdir(c["sub"])  # the grader's /proc/<pid>/cwd
             if not hidden:
                 patch.setattr(running, "hidden_from_boxes",
@@ -142,12 +159,23 @@ def graded(homework, request):
                                  compare_with=c["earlier"]).grades
         rows = read_grades(c["out"] / "grades.csv")
         modes = {k: os.stat(c[k]).st_mode & 0o777 for k in ("sub", "out", "earlier")}
+        fences = set(chosen.read_text().split()) if chosen.exists() else set()
     finally:
         kill_pids(_procs_with(MARK) + _procs_with(f"{ZYGOTE_PREFIX}{os.getpid()}-"))
         shutil.rmtree(top, ignore_errors=True)
     return {"grades": {g.student: g for g in grades}, "rows": rows, "hidden": hidden,
-            "backend": backend, "modes": modes, "warm": warm,
+            "backend": backend, "modes": modes, "warm": warm, "kind": kind, "fences": fences,
             "started": (started.cold, started.warm)}
+
+
+def test_each_basic_box_had_the_fence_asked(graded):
+    """Each basic box hid the folders with this host's kernel fence (Landlock here), or with the
+    mount namespace where Landlock was taken away; bwrap's boxes need none."""
+    if graded["backend"] == "bwrap":
+        assert graded["fences"] == set()
+    else:
+        assert graded["fences"] == {"mount" if graded["kind"] == "mount"
+                                    else fence.supported().split()[0]}
 
 
 def test_every_box_started_as_the_run_asked(graded):
@@ -182,8 +210,6 @@ def test_the_classmate_keeps_the_grade(graded):
 def test_the_folders_modes_are_left_alone_where_a_kernel_fence_works(graded):
     """Landlock or a mount namespace fences them: the instructor's folders keep their modes
     (only the permissions fence closes them, :func:`gpsaccel.sandbox.outside.close_to_others`)."""
-    from gpsaccel.sandbox import fence
-
     if fence.supported() in ("permissions", "none"):
         pytest.skip("this host fences by permissions")
     assert set(graded["modes"].values()) == {0o755}
