@@ -69,17 +69,27 @@ if leaked:
 
 @pytest.fixture(scope="module")
 def homework():
-    """The instructor's own copy of the ship homework, registered once for this process."""
-    from gpsaccel.assignments.homework import copy_homework, use_folder
+    """The instructor's own copy of the ship homework, registered for this module and
+    unregistered after it (a later test that walks every homework must not find its folder
+    gone)."""
+    import sys
+
+    from gpsaccel import registry
+    from gpsaccel.assignments import homework as hw
 
     top = Path(tempfile.mkdtemp(prefix="gpsaccel-hidehw-"))
-    top.chmod(0o755)
-    master = copy_homework("ship", top / HOMEWORK)
-    for p in [top / HOMEWORK, *(top / HOMEWORK).rglob("*")]:
-        p.chmod(0o755 if p.is_dir() else 0o644)
-    assert use_folder(master.parent) == HOMEWORK
-    yield master.parent
-    shutil.rmtree(top, ignore_errors=True)
+    try:
+        top.chmod(0o755)
+        master = hw.copy_homework("ship", top / HOMEWORK)
+        for p in [top / HOMEWORK, *(top / HOMEWORK).rglob("*")]:
+            p.chmod(0o755 if p.is_dir() else 0o644)
+        assert hw.use_folder(master.parent) == HOMEWORK
+        yield master.parent
+    finally:
+        hw._FOLDERS.pop(HOMEWORK, None)
+        registry._ASSIGNMENTS.entries.pop(HOMEWORK, None)
+        sys.modules.pop(f"gpsaccel_graded_{HOMEWORK}", None)
+        shutil.rmtree(top, ignore_errors=True)
 
 
 def _notebook(target: Path, *cells: str) -> None:
