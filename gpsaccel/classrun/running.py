@@ -183,11 +183,12 @@ def warm_of(warm_boxes: bool | None, executor: object, items: int | None = None)
         raise ValueError(f"warm_boxes must be True, False or None (warm where boxes can "
                          f"start warm), got {warm_boxes!r}")
     if warm_boxes and executor not in LOCAL:
-        raise ValueError(f"warm_boxes: boxes start warm only from this machine's items "
-                         f"(executor 'processes' or None), not from {executor!r}")
+        raise ValueError(f"warm_boxes (--boxes warm): boxes start warm only from this "
+                         f"machine's items (executor 'processes' or None, no --dask), not from "
+                         f"{executor!r}")
     if warm_boxes and not zygote.usable():
-        raise ValueError("warm_boxes: boxes start warm only as root on Linux (each box runs "
-                         "under a uid of its own); run without it")
+        raise ValueError("warm_boxes (--boxes warm): boxes start warm only as root on Linux "
+                         "(each box runs under a uid of its own); run without it")
     return warm_boxes
 
 

@@ -190,7 +190,7 @@ def test_warm_boxes_give_the_same_grades(graded, tmp_path, monkeypatch):
 
 
 def test_warm_boxes_where_they_cannot_start_warm_are_an_error(graded, tmp_path):
-    with pytest.raises(ValueError, match="warm_boxes: .*this machine's items"):
+    with pytest.raises(ValueError, match=r"warm_boxes \(--boxes warm\): .*this machine's items"):
         grade(graded["sub"], "calibration", out=tmp_path / "o", dask="dask-local",
               warm_boxes=True)
     with pytest.raises(ValueError, match="warm_boxes must be True, False or None"):

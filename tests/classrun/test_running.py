@@ -102,7 +102,7 @@ def test_a_warm_run_serves_its_items_from_a_zygote_per_kind_gone_when_it_ends():
 
 
 def test_warm_boxes_only_where_they_can_start_warm():
-    with pytest.raises(ValueError, match="warm_boxes: .*not from 'dask-local'"):
+    with pytest.raises(ValueError, match=r"warm_boxes \(--boxes warm\): .*not from 'dask-local'"):
         run(_Boxes(), _entries("a"), 1, executor="dask-local", warm_boxes=True)
     with pytest.raises(ValueError, match="warm_boxes must be True, False or None"):
         run(_Boxes(), _entries("a"), 1, warm_boxes=1)
