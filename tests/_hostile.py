@@ -58,12 +58,14 @@ _NO_WARM = pytest.mark.skipif(not zygote.usable(), reason="boxes start warm only
 
 #: Each backend, with its boxes started cold (exec) and warm (forked from a zygote:
 #: gpsaccel.sandbox.zygote).  A test receives the backend's name; for a ``-warm`` case the
-#: zygotes serve its boxes while it runs.
+#: zygotes serve its boxes while it runs.  The warm cases are slow (``make test`` runs them,
+#: ``make test-quick`` not): they double every hostile test, and the quick run keeps of the kind
+#: tests/sandbox/test_zygote.py, which compares a warm box with a cold one field by field.
 BACKENDS = [
     pytest.param(("basic", False), id="basic"),
     pytest.param(("bwrap", False), id="bwrap", marks=_NO_BWRAP),
-    pytest.param(("basic", True), id="basic-warm", marks=_NO_WARM),
-    pytest.param(("bwrap", True), id="bwrap-warm", marks=[_NO_BWRAP, _NO_WARM]),
+    pytest.param(("basic", True), id="basic-warm", marks=[_NO_WARM, pytest.mark.slow]),
+    pytest.param(("bwrap", True), id="bwrap-warm", marks=[_NO_BWRAP, _NO_WARM, pytest.mark.slow]),
 ]
 
 
