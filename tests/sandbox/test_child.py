@@ -92,10 +92,16 @@ def test_a_child_never_outlives_its_call():
 
     r, w = os.pipe()
     timer = threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT))
-    timer.start()
-    with pytest.raises(KeyboardInterrupt):
-        sb.in_child(report_pid, w, cpu=5, memory=64 << 20, wall=60)
-    timer.join()
+    # Ctrl-C as a terminal's command has it: a suite started as a background job (`... &` in a
+    # script) inherits SIGINT ignored, and Python then leaves it ignored
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        timer.start()
+        with pytest.raises(KeyboardInterrupt):
+            sb.in_child(report_pid, w, cpu=5, memory=64 << 20, wall=60)
+        timer.join()
+    finally:
+        signal.signal(signal.SIGINT, before)
     os.close(w)
     pid = int(os.read(r, 64))
     os.close(r)
