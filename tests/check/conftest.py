@@ -1,13 +1,17 @@
 """The hostile fixtures of tests/_hostile.py for the checker's tests: ``backend`` (test_batch.py,
 test_student_filter.py), ``hostile`` and ``watch``, and the machine-wide lock test_batch.py holds
-with the sandbox's hostile modules (tests/sandbox/); and :func:`keeping_answers`, a problem that
-computes its reference answers once for a whole test module."""
+with the sandbox's hostile modules (tests/sandbox/); :func:`keeping_answers`, a problem that
+computes its reference answers once for a whole test module; and ``warm_boxes``, the course's
+zygote serving a module's boxes."""
 
 from __future__ import annotations
 
 import copy
 
+import pytest
+
 from gpsaccel.check import problems
+from gpsaccel.sandbox import zygote
 from gpsaccel.check.problem import Problem
 
 from .._hostile import (  # noqa: F401 - a conftest's names are its fixtures and hooks
@@ -39,3 +43,32 @@ def keeping_answers(problem: str | Problem) -> Problem:
     kept = copy.copy(problems.get(problem))
     kept.forget = lambda: None  # type: ignore[method-assign]
     return kept
+
+
+@pytest.fixture(scope="session")
+def course_zygote():
+    """One zygote of the course's imports (numpy, scipy.stats, filterpy) for the session's
+    catalogue modules, as a class's check starts one (None where boxes cannot start warm)."""
+    if not zygote.usable():
+        yield None
+        return
+    z = zygote.start(zygote.Warm())
+    yield z
+    zygote.stop(z)
+
+
+@pytest.fixture(scope="module")
+def warm_boxes(course_zygote):
+    """The module's boxes start warm (``pytestmark = pytest.mark.usefixtures("warm_boxes")``).
+
+    For the modules that check one fixture after another for its catalogue code (each file still
+    in a box of its own, confined as a cold one, and given the same report: tests/sandbox's
+    test_zygote compares a warm box with a cold one field by field): the box's start, a Python
+    with numpy, filterpy and scipy.stats imported, is paid once for the session instead of once
+    per check.  Every test that checks a class or a file through the command, or a hostile file, starts its
+    boxes cold, as before (test_batch.py, test_folders.py, test_problem.py)."""
+    if course_zygote is None:
+        yield None
+        return
+    with zygote.serve(course_zygote):
+        yield course_zygote

@@ -21,6 +21,8 @@ from gpsaccel.check.linear import FINDINGS, LinearProblem
 from gpsaccel.check.report import Finding, Report, StudentFinding, brief
 from gpsaccel.check.wording import STUDENT, UNWORDED
 
+pytestmark = pytest.mark.usefixtures("warm_boxes")  # conftest.py: the course's zygote
+
 CANARY = 987654.321
 CANARY_TEXT = "CANARY-ANSWER-7Q"
 SEEN = ("987654", "9.87654e", "987,654", CANARY_TEXT)

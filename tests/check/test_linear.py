@@ -24,6 +24,8 @@ from gpsaccel.kalman.linear_model import LinearModel
 from .conftest import keeping_answers
 from .heldout.confusion import named
 
+pytestmark = pytest.mark.usefixtures("warm_boxes")  # conftest.py: the course's zygote
+
 STUDENT = Path(__file__).resolve().parents[1] / "submissions" / "tracker" / "student.py"
 
 #: MISTAKE switch of the student file -> the codes the check must report

@@ -28,6 +28,8 @@ from gpsaccel.cli import main
 from ..conftest import keeping_answers
 from ..heldout.confusion import named
 
+pytestmark = pytest.mark.usefixtures("warm_boxes")  # conftest.py: the course's zygote
+
 HERE = Path(__file__).parents[2] / "submissions"
 N_RUNS = 20
 MUTANT_RUNS = 2

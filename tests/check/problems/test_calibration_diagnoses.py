@@ -18,6 +18,8 @@ from gpsaccel import check
 
 from ..conftest import keeping_answers
 
+pytestmark = pytest.mark.usefixtures("warm_boxes")  # conftest.py: the course's zygote
+
 HERE = Path(__file__).parents[2] / "submissions"
 N_RUNS = 2
 

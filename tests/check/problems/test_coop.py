@@ -21,6 +21,8 @@ from gpsaccel.check import problems
 from ..conftest import keeping_answers
 from ..heldout.confusion import named
 
+pytestmark = pytest.mark.usefixtures("warm_boxes")  # conftest.py: the course's zygote
+
 COOP = Path(__file__).resolve().parents[2] / "submissions" / "coop"
 
 COOP_CORRECT = ["correct_ekf_closed_form.py", "correct_ekf_filterpy.py", "correct_ekf_solve_ivp.py",

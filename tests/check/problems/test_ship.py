@@ -21,6 +21,8 @@ from gpsaccel.check import problems
 from ..conftest import keeping_answers
 from ..heldout.confusion import named
 
+pytestmark = pytest.mark.usefixtures("warm_boxes")  # conftest.py: the course's zygote
+
 SHIP = Path(__file__).resolve().parents[2] / "submissions" / "ship"
 
 SHIP_CORRECT = ["correct_covariance.py", "correct_filterpy.py", "correct_sequential.py",
