@@ -31,6 +31,16 @@ SLOW: tuple[str, ...] = (
     "tests/cli/test_lessons.py::test_lessons_html",
     "tests/cli/test_lessons.py::test_lessons_kernel",
     "tests/assignments/",
+    # the checker's command on a hostile class, its Ctrl-C, its SIGTERM and SIGHUP: each kind
+    # once in the quick run, under the basic backend, the one with more of its own code (the box
+    # user, rlimits, the fence; tests/sandbox tries every attack under both backends); a hostile
+    # class with one worker and under bwrap only in the whole run (5-6 CPU s each)
+    "tests/check/test_batch.py::test_a_class_with_hostile_files_keeps_every_honest_verdict[bwrap-",
+    "tests/check/test_batch.py::test_a_class_with_hostile_files_keeps_every_honest_verdict[basic-1]",
+    "tests/check/test_batch.py::test_ctrl_c_kills_every_student_process_and_writes_what_is_done[bwrap-",
+    "tests/check/test_batch.py::test_sigterm_and_sighup_stop_a_class_check_as_ctrl_c_does[bwrap-",
+    # each coop mistake's code on its second seed (the first is in the quick run)
+    "tests/check/problems/test_coop.py::test_coop_mistakes_get_their_code[1-",
 )
 
 #: Module fixtures that draw every figure of a report ("file::fixture"): every test that uses one,

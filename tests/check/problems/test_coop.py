@@ -50,8 +50,8 @@ def test_coop_correct_styles_pass(coop, name):
     assert "nees-nis" in {f.code for f in report.findings}  # information, never an error
 
 
-@pytest.mark.parametrize("seed", [0, 1])
 @pytest.mark.parametrize("name, code", sorted(COOP_MUTANTS.items()))
+@pytest.mark.parametrize("seed", [0, 1])  # the id starts with it: seed 1 is slow (conftest.py)
 def test_coop_mistakes_get_their_code(coop, name, code, seed):
     report = check.submission(COOP / name, problem=coop, n_runs=2, seed=seed)
     assert report.codes == [code], report
