@@ -1,6 +1,6 @@
-# Two entry points (see README): `make run` and `make test`. Each creates .venv when missing and
-# installs what it needs: `run` the core (numpy, scipy, filterpy, matplotlib), `test` the extras
-# the suite exercises. uv installs when it is on PATH, pip otherwise (USE_PIP=1 forces pip); both
+# Two entry points (see README): `make run` and `make test-all`. Each creates .venv when missing and
+# installs what it needs: `run` the core (numpy, scipy, filterpy, matplotlib), `test-all` the
+# extras the suite exercises. uv installs when it is on PATH, pip otherwise (USE_PIP=1 forces pip); both
 # show their progress. `make lab` opens the lessons in JupyterLab with the project's kernel.
 PYTHON ?= python3
 VENV   ?= .venv
@@ -23,7 +23,7 @@ endif
 
 .PRECIOUS: $(VENV)/.installed-%
 
-.PHONY: run test test-quick test-fast lab lint bench docs lessons-html wheel clean
+.PHONY: run test test-all test-fast lab lint bench docs lessons-html wheel clean
 
 $(BIN)/python:
 	$(MKVENV)
@@ -49,13 +49,14 @@ PYTEST_ARGS ?=
 # workers end together
 XDIST = $(if $(filter-out 0,$(JOBS)),-n $(JOBS) --dist loadscope)
 PYTEST = MPLBACKEND=Agg $(BIN)/python -m pytest -q $(XDIST)
-# `make test` (the README's): the whole suite.  `make test-quick`: every test but the slow ones
-# (notebooks executed, wheels, browsers, the docs site, whole reports drawn, big Monte Carlo), and
-# of each slow kind one (tests/conftest.py KEPT), for development and CI's second Python (.ci/run)
-test: $(VENV)/.installed-test
+# `make test-all` (the README's): the whole suite.  `make test`, the default while developing and
+# CI's second Python (.ci/run): every test but the slow ones (notebooks executed, wheels, browsers,
+# the docs site, whole reports drawn, big Monte Carlo, a hostile class's second backend), and of
+# each slow kind one (tests/conftest.py KEPT)
+test-all: $(VENV)/.installed-test
 	$(PYTEST) $(PYTEST_ARGS)
 
-test-quick: $(VENV)/.installed-test
+test: $(VENV)/.installed-test
 	$(PYTEST) -m "not slow" $(PYTEST_ARGS)
 
 # the core's tests (the Kalman core, the calibration system, the package's shape) without the

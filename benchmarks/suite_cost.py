@@ -5,16 +5,16 @@ One pytest per folder of ``tests/`` (the top-level test files together as ``test
 the other, so a folder's figure is its own.  Not part of ``make bench``: it runs the suite, which
 the machine may share (benchmarks/run.py leaves it out).  Examples::
 
-    python benchmarks/suite_cost.py                       # every folder, as `make test` would
-    python benchmarks/suite_cost.py -m "not slow"         # as `make test-quick` would
+    python benchmarks/suite_cost.py                       # every folder, as `make test-all` would
+    python benchmarks/suite_cost.py -m "not slow"         # as `make test` would
     python benchmarks/suite_cost.py tests/kalman -m "not slow"
     python benchmarks/suite_cost.py -n 2 --out docs/benchmarks/suite_cost.txt
     python benchmarks/suite_cost.py -n 2 --root /tmp/main --root /tmp/branch  # before, after
 
 As on a fresh clone, the suite's disk cache (tests/conftest.py ``disk_cache``: executed lessons,
 ``otter assign``) starts empty: a new folder per checkout for the whole run, shared by its folders
-as one ``make test`` shares it (``--keep-cache`` uses the checkout's own).  The sum over folders
-is a little more than one ``make test``: each folder's pytest starts and collects on its own.
+as one ``make test-all`` shares it (``--keep-cache`` uses the checkout's own).  The sum over folders
+is a little more than one ``make test-all``: each folder's pytest starts and collects on its own.
 With ``-n``, the workers share the work as the checkout's ``make test`` does (its Makefile's
 ``--dist``).
 ``--durations N`` keeps pytest's N slowest items per folder in ``--log``.

@@ -1,4 +1,4 @@
-"""What each test costs in one whole ``make test`` run: a pytest plugin that records the CPU of
+"""What each test costs in one whole ``make test-all`` run: a pytest plugin that records the CPU of
 every test item, and a table of two such runs side by side, per folder and per file.
 
 Where ``benchmarks/suite_cost.py`` runs one pytest per folder (each folder's figure its own, but
@@ -6,7 +6,7 @@ each paying its own start-up and without the other folders' shared disk cache), 
 one run CI makes, with its two workers and its schedule, and splits it by test::
 
     cd CLONE && PYTHONPATH=/path/to/benchmarks CPU_PER_TEST=/tmp/after/cpu \\
-        make test PYTEST_ARGS="-p suite_per_test"                  # or make test-quick
+        make test-all PYTEST_ARGS="-p suite_per_test"              # or make test
     python benchmarks/suite_per_test.py /tmp/before /tmp/after      # the Markdown table
 
 A test item's CPU is user + system of its worker process and of the children the worker waited

@@ -58,8 +58,8 @@ _NO_WARM = pytest.mark.skipif(not zygote.usable(), reason="boxes start warm only
 
 #: Each backend, with its boxes started cold (exec) and warm (forked from a zygote:
 #: gpsaccel.sandbox.zygote).  A test receives the backend's name; for a ``-warm`` case the
-#: zygotes serve its boxes while it runs.  The warm cases are slow (``make test`` runs them,
-#: ``make test-quick`` not): they double every hostile test, and the quick run keeps of the kind
+#: zygotes serve its boxes while it runs.  The warm cases are slow (``make test-all`` runs them,
+#: ``make test`` not): they double every hostile test, and the quick run keeps of the kind
 #: tests/sandbox/test_zygote.py, which compares a warm box with a cold one field by field.
 BACKENDS = [
     pytest.param(("basic", False), id="basic"),

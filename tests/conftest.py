@@ -1,7 +1,7 @@
 """The whole suite's markers: ``slow`` for the tests that take more than a few seconds.
 
-``make test`` (the README's) runs every test; ``make test-quick`` all but the slow ones, and of each
-slow kind one test (:data:`KEPT`); CI runs ``make test`` on one Python and ``make test-quick`` on
+``make test-all`` (the README's) runs every test; ``make test`` all but the slow ones, and of each
+slow kind one test (:data:`KEPT`); CI runs ``make test-all`` on one Python and ``make test`` on
 the other (``.ci/run``).  A test may carry
 ``@pytest.mark.slow`` itself; the ones below are marked here from measured durations
 (``pytest --durations=40``, serial, a shared 2-core machine, and benchmarks/suite_per_test.py),
@@ -54,7 +54,7 @@ SLOW_FIXTURES: tuple[str, ...] = (
 )
 
 #: Of each slow kind, the one test the quick run keeps (never marked, though a SLOW entry
-#: covers it), so ``make test-quick`` still executes a lesson and grades a homework in its boxes:
+#: covers it), so ``make test`` still executes a lesson and grades a homework in its boxes:
 #: the cheapest lesson (02, 1.4 CPU s at 20 runs; its student version reads the same execution) and
 #: the tracker's homework (3.7 CPU s for its class).  The others of these kinds keep themselves:
 #: the docs site's links (tests/test_docs.py, on the site CI builds, else built once per content)
@@ -67,15 +67,15 @@ KEPT: tuple[str, ...] = (
 )
 
 
-#: The costliest work units (node id prefixes), costliest first: ``make test`` (``--dist loadscope``)
+#: The costliest work units (node id prefixes), costliest first: ``make test-all`` (``--dist loadscope``)
 #: hands them out first, so the two workers end together instead of one running a long unit alone
 #: at the end.  From ``--durations`` (2 workers, load 10 and more).
 FIRST: tuple[str, ...] = (
-    "tests/assignments/test_attacks.py",  # the whole run's (make test)
+    "tests/assignments/test_attacks.py",  # the whole run's (make test-all)
     "tests/assignments/test_coop.py",
     "tests/assignments/test_hostile_class.py",
     "tests/assignments/test_grading.py",
-    "tests/check/test_batch.py",  # the quick run's too (make test-quick)
+    "tests/check/test_batch.py",  # the quick run's too (make test)
     "tests/test_docs.py",
     "tests/test_packaging.py",
     "tests/lessons/test_lessons.py",

@@ -1,6 +1,7 @@
-"""The README opens with exactly two set-up commands, the main job and the whole test suite, and CI
-(.ci/run) runs that test command: a subset under the README's name would leave tests no one runs
-by the book (``make test-quick`` is the subset, under "Developing")."""
+"""The README opens with exactly two set-up commands, the main job and the whole test suite
+(``make test-all``), and CI (.ci/run) runs that test command: a subset under the README's name
+would leave tests no one runs by the book (``make test``, the default while developing, is the
+subset, under "Developing")."""
 
 from __future__ import annotations
 
@@ -38,12 +39,12 @@ def _pytest_argv(target: str) -> list[str]:
 
 def test_the_readme_opens_with_the_main_job_and_the_test_command():
     assert _first_block((ROOT / "README.md").read_text(encoding="utf-8")) == \
-        ["make run", "make test"]
+        ["make run", "make test-all"]
 
 
 @pytest.mark.skipif(shutil.which("make") is None, reason="make is not installed")
-def test_make_test_selects_every_test_and_test_quick_leaves_the_slow_ones_out():
-    whole, quick = _pytest_argv("test"), _pytest_argv("test-quick")
+def test_make_test_all_selects_every_test_and_test_leaves_the_slow_ones_out():
+    whole, quick = _pytest_argv("test-all"), _pytest_argv("test")
     # no marker, keyword, file or folder narrows the whole run; only its workers
     assert not {"-m", "-k"} & set(whole) and not [a for a in whole if a.startswith("tests")], whole
     assert quick[-2:] == ["-m", "not slow"] and quick[:-2] == whole, quick
@@ -51,4 +52,5 @@ def test_make_test_selects_every_test_and_test_quick_leaves_the_slow_ones_out():
 
 def test_ci_runs_the_readmes_test_command():
     ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
-    assert re.search(r"^\s*make test PYTHON=", ci, re.M), "CI does not run `make test`"
+    command = _first_block((ROOT / "README.md").read_text(encoding="utf-8"))[1]
+    assert re.search(rf"^\s*{re.escape(command)} PYTHON=", ci, re.M), f"CI does not run `{command}`"

@@ -136,7 +136,7 @@ def test_an_entry_of_a_file_not_collected_is_not_judged(pytest_in, tmp_path):
 
 def test_a_kept_test_of_a_slow_kind_runs_in_the_quick_run_and_a_stale_one_stops_it(pytest_in,
                                                                                      tmp_path):
-    """KEPT: the one test of a slow kind the quick run keeps (``make test-quick``, ``-m "not
+    """KEPT: the one test of a slow kind the quick run keeps (``make test``, ``-m "not
     slow"``), though a SLOW entry covers it; a kept entry naming no test stops the run, or the
     kind would silently leave the quick run."""
     slow = ("test_a.py::test_sweep_one",)

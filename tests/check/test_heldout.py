@@ -4,7 +4,7 @@ file declares (or, where it says so, one of the generic codes it accepts), each 
 Written as students write them, not as the tests' mutants, before the catalogues grew: at 779d581
 7 of its 68 wrong filters were named, 55 got a generic code, 6 a wrong one (the table of
 ``python tests/check/heldout/confusion.py``).  The checks of one problem share its answers
-(:func:`~.heldout.confusion.problem`); 79 boxes, so they are marked slow (``make test`` runs
+(:func:`~.heldout.confusion.problem`); 79 boxes, so they are marked slow (``make test-all`` runs
 them, ``make test-fast`` leaves them out).
 """
 
