@@ -17,16 +17,18 @@ from pathlib import Path
 
 
 @contextmanager
-def replacing(path: str | os.PathLike) -> Iterator[Path]:
+def replacing(path: str | os.PathLike, mode: int | None = None) -> Iterator[Path]:
     """Yield a temporary path next to ``path`` (same suffix, so writers that infer the format from
-    it still work); on success rename it onto ``path``, on any exception remove it and re-raise."""
+    it still work); on success rename it onto ``path``, on any exception remove it and re-raise.
+    ``mode``: the file's permissions (default an ordinary file's, under the umask); 0o600 keeps a
+    file that holds a secret (a class's seed) from other users, a box's among them."""
     path = Path(path)
     fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=f".part{path.suffix}")
     os.close(fd)
     tmp = Path(name)
     try:
         yield tmp
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp made it 0600; give it an ordinary file's mode
+        os.chmod(tmp, 0o666 & ~_umask() if mode is None else mode)  # mkstemp made it 0600
         os.replace(tmp, path)
     except BaseException:
         tmp.unlink(missing_ok=True)
@@ -39,9 +41,11 @@ def _umask() -> int:
     return mask
 
 
-def write_text(path: str | os.PathLike, text: str, encoding: str = "utf-8") -> Path:
-    """``Path(path).write_text(text)``, written whole (see the module docstring)."""
-    with replacing(path) as tmp:
+def write_text(path: str | os.PathLike, text: str, encoding: str = "utf-8",
+               mode: int | None = None) -> Path:
+    """``Path(path).write_text(text)``, written whole (see the module docstring); ``mode`` as
+    :func:`replacing` takes it."""
+    with replacing(path, mode) as tmp:
         tmp.write_text(text, encoding=encoding)
     return Path(path)
 

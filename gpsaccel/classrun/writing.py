@@ -50,22 +50,29 @@ def csv_text(rows: Sequence[Sequence[object]]) -> str:
 
 
 def dump_json(path: str | os.PathLike, data: Any, indent: int | None = None,
-              ascii: bool = True) -> Path:
+              ascii: bool = True, mode: int | None = None) -> Path:
     """``data`` as JSON in ``path``, whole or not at all.  ``ascii`` (the default) escapes every
     character that is not ASCII: a name that was not UTF-8 (a lone surrogate of
     :func:`os.fsdecode`) is kept as it was found and read back the same (``grades.json`` names
     the notebooks the similarity report opens again), and no raw U+2028 or U+0085 splits a
-    line.  Without it, pass :func:`~gpsaccel._untrusted.json_safe` data."""
-    return write_text(path, json.dumps(data, indent=indent, ensure_ascii=ascii))
+    line.  Without it, pass :func:`~gpsaccel._untrusted.json_safe` data.  ``mode``: the file's
+    permissions (:func:`gpsaccel._atomic.replacing`)."""
+    return write_text(path, json.dumps(data, indent=indent, ensure_ascii=ascii), mode=mode)
+
+
+#: The permissions of ``check --json``'s file and its log: the owner's alone.  Both hold the
+#: class's seed (drawn secret unless given) and every classmate's findings, and a box of
+#: ``--sandbox basic`` reads what other users may (the CLI also hides their folder).
+PRIVATE = 0o600
 
 
 def write_json(results: Sequence[dict], path: str | os.PathLike, **settings: object) -> Path:
     """``gpsaccel check --json``: ``{"settings": ..., "results": [...]}`` in ``path`` (UTF-8,
-    indented), atomically."""
+    indented), atomically, readable by its owner alone (:data:`PRIVATE`)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     return dump_json(path, _untrusted.json_safe({"settings": settings, "results": list(results)}),
-                     indent=2, ascii=False)
+                     indent=2, ascii=False, mode=PRIVATE)
 
 
 def log_path(json_path: str | os.PathLike) -> Path:
@@ -75,10 +82,15 @@ def log_path(json_path: str | os.PathLike) -> Path:
 
 
 def appender(path: str | os.PathLike) -> Callable[[dict], None]:
-    """``on_result`` that appends each result as one JSON line to ``path`` (started empty)."""
+    """``on_result`` that appends each result as one JSON line to ``path`` (started empty,
+    readable by its owner alone: :data:`PRIVATE`)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text("", encoding="utf-8")
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, PRIVATE)
+    try:
+        os.fchmod(fd, PRIVATE)  # a log left by an earlier run keeps its mode through O_CREAT
+    finally:
+        os.close(fd)
 
     def append(result: dict) -> None:
         with open(path, "a", encoding="utf-8") as f:

@@ -18,7 +18,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
     from gpsaccel._interrupt import exit_status as stopped_status
     from gpsaccel.check.own import is_file_spec, load_problem
     from gpsaccel.classrun.checking import plan_check
-    from gpsaccel.classrun.running import Interrupted, warm_of
+    from gpsaccel.classrun.running import Interrupted, hidden_from_boxes, warm_of
     from gpsaccel.classrun.writing import appender, log_path, table, terminal, write_json
 
     if is_file_spec(args.problem) and args.dask is not None:
@@ -54,8 +54,12 @@ def _cmd_check(args: argparse.Namespace) -> int:
                 log(result)
 
         t0 = time.perf_counter()
+        # the --json file and its log hold the seed and every classmate's findings: their folder
+        # is hidden from the boxes as the class's are (left visible where it holds the
+        # interpreter: the files are the owner's alone all the same, writing.PRIVATE)
+        out = {"--json": None if args.json is None else Path(args.json).resolve().parent}
         try:
-            with bar:
+            with bar, hidden_from_boxes(plan.backend, out, optional=("--json",)):
                 results = plan.run(spec, args.workers, on_result, warm)
         except Interrupted as exc:
             done = [r for r in exc.results if r is not None]

@@ -12,6 +12,7 @@ away the same file must fail so, which shows the attack reaches what it aims at.
 from __future__ import annotations
 
 import contextlib
+import json
 import shutil
 import tempfile
 from pathlib import Path
@@ -92,3 +93,52 @@ def test_the_repositorys_own_submissions_are_checked_when_auto_falls_back_to_bas
                          n_runs=2, seed=1, sandbox="auto", max_workers=2)
     assert [r["passed"] for r in results] == [True, False]
     assert results[1]["codes"], results[1]
+
+
+def _reads_the_log(folder: Path, log: Path) -> None:
+    """Mallory of ``folder`` (checked after Alice) reads ``log`` at import: a read, even of an
+    empty log, and her import stops (``import-error``); else she is Alice."""
+    alice = (folder / "alice.py").read_text(encoding="utf-8")
+    (folder / "mallory.py").write_text(
+        f"try:\n    open({str(log)!r}, 'rb').read()\nexcept OSError:\n    pass\nelse:\n"
+        f"    raise SystemExit\n\n{alice}", encoding="utf-8")
+
+
+@pytest.mark.parametrize("hidden", [True, False], ids=["hidden", "open"])
+def test_the_check_s_json_and_its_log_are_out_of_a_basic_box_reach(klass, hidden, monkeypatch):
+    """``check --json`` writes the class's seed and every classmate's findings as the run goes
+    (the ``.jsonl`` log): the files are their owner's alone (writing.PRIVATE) and their folder,
+    world-readable beside the class as an instructor makes it, is hidden from the boxes.  With
+    both taken away (``open``), the same student reads the log: the attack reaches it."""
+    from gpsaccel.classrun import writing
+    from gpsaccel.cli import main
+
+    out = klass.parent / "results"
+    out.mkdir(mode=0o755)
+    _reads_the_log(klass, out / "results.jsonl")
+    if not hidden:
+        monkeypatch.setattr(running, "hidden_from_boxes", lambda *a, **k: contextlib.nullcontext())
+        monkeypatch.setattr(writing, "PRIVATE", 0o644)
+    status = main(["check", str(klass), "--runs", "2", "--sandbox", "basic", "--workers", "1",
+                   "--boxes", "cold", "--json", str(out / "results.json")])
+    results = {r["subject"]: r for r in json.loads((out / "results.json").read_text())["results"]}
+    assert results["alice.py"]["passed"], results["alice.py"]
+    if hidden:
+        assert status == 0 and results["mallory.py"]["passed"], results["mallory.py"]
+        for name in ("results.json", "results.jsonl"):
+            assert (out / name).stat().st_mode & 0o777 == 0o600, name
+    else:
+        assert results["mallory.py"]["codes"] == ["import-error"], results["mallory.py"]
+
+
+def test_a_log_left_readable_by_an_earlier_run_is_the_owners_alone_again(tmp_path):
+    from gpsaccel.classrun.writing import appender, write_json
+
+    log, out = tmp_path / "r.jsonl", tmp_path / "r.json"
+    for p in (log, out):
+        p.write_text("old", encoding="utf-8")
+        p.chmod(0o644)
+    appender(log)({"subject": "a.py"})
+    write_json([], out, seed=1)
+    assert log.stat().st_mode & 0o777 == 0o600 and out.stat().st_mode & 0o777 == 0o600
+    assert json.loads(log.read_text(encoding="utf-8")) == {"subject": "a.py"}

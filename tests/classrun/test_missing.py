@@ -35,12 +35,12 @@ def full(monkeypatch):
     names: set[str] = set()
     real = _atomic.replacing
 
-    def replacing(path):
+    def replacing(path, mode=None):
         p = os.fspath(path)
         if os.path.basename(p) in names or \
                 f"feedback/{os.path.basename(p)}" in names and "feedback" in p:
             raise OSError(errno.ENOSPC, ENOSPC, p)
-        return real(path)
+        return real(path, mode)
 
     monkeypatch.setattr(_atomic, "replacing", replacing)
     return names
