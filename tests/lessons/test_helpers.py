@@ -7,6 +7,18 @@ import pytest
 from gpsaccel.lessons import HEADLESS_VARIABLE, sliders
 
 
+@pytest.fixture(autouse=True)
+def _closed_widgets():
+    """Every widget a test made is closed after it: one left to the interpreter's shutdown
+    closes its comm then, and printed an ImportError per widget at the end of the suite's run."""
+    yield
+    try:
+        import ipywidgets
+    except ImportError:  # the tests that need it skipped
+        return
+    ipywidgets.Widget.close_all()
+
+
 def test_sliders_draw_the_default_once_without_a_front_end(monkeypatch, capsys):
     widgets = pytest.importorskip("ipywidgets")
     monkeypatch.setenv(HEADLESS_VARIABLE, "1")
