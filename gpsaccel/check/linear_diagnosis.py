@@ -10,8 +10,8 @@ entries.  Nothing here words a finding: :class:`gpsaccel.check.linear.LinearProb
 The checker computes them after each box (no answer is kept while a student's code runs), so
 :class:`Candidates` computes only what the diagnosis reads: every candidate's first
 :data:`HEAD` epochs, whose distance to run 0's P is a lower bound of its whole distance, then
-whole runs only of the candidates that bound leaves in play (for report 000 a dozen of 1867:
-2 CPU s -> 0.2).  The result is the diagnosis of the whole stack, bit for bit: a candidate's
+whole runs only of the candidates that bound leaves in play (for report 000 a few of its
+thousands).  The result is the diagnosis of the whole stack, bit for bit: a candidate's
 rows are the same whichever candidates share its stack, and the maximum of some of the same
 numbers is the maximum of all of them or below it.
 """

@@ -33,8 +33,9 @@ _TRANSITIONS = threading.local()
 @contextmanager
 def shared_transitions() -> Iterator[None]:
     """Within the block, :meth:`LinearIngredients.epoch_filter` computes the transition of each
-    (Φ, Q, n) once and hands the same arrays to every filter that has it: report 000's 1867
-    candidate filters (:func:`gpsaccel.check.linear_diagnosis.candidates`) have 72 transitions.
+    (Φ, Q, n) once and hands the same arrays to every filter that has it: report 000's candidate
+    filters (:func:`gpsaccel.check.linear_diagnosis.candidates`), thousands of them, have a
+    transition per distinct (Φ, Q, n), a few hundred.
     The same recursion on the same numbers, so bit for bit what each filter computes alone;
     nothing is kept after the block (per thread)."""
     outer = getattr(_TRANSITIONS, "memo", None)
