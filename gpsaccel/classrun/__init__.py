@@ -24,9 +24,10 @@ Below the command line and above the items it runs (:mod:`gpsaccel.check` checks
 * :mod:`~gpsaccel.classrun.statuses`: every status a grade can have, who caused it and its
   gradebook cell (a status the student did not cause is never a score);
 * :mod:`~gpsaccel.classrun.checking` (:func:`check_many`), :mod:`~gpsaccel.classrun.grading`
-  (:func:`grade`) and :mod:`~gpsaccel.classrun.classwide` (the gradebooks and the similarity
-  report, written by :func:`grade` itself, or again from the recorded grades by
-  :func:`rewrite_class` when a full disk kept a run from writing them).
+  (:func:`grade`; its record, what a run writes after every notebook and what a rerun keeps:
+  :mod:`~gpsaccel.classrun.record`) and :mod:`~gpsaccel.classrun.classwide` (the gradebooks
+  and the similarity report, written by :func:`grade` itself, or again from the recorded grades
+  by :func:`rewrite_class` when a full disk kept a run from writing them).
 """
 
 from typing import TYPE_CHECKING
