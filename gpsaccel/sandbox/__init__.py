@@ -85,7 +85,8 @@ Layout (each module under 500 lines): :mod:`.spec` (what to run, what comes back
 may not read), :mod:`.outside` (a class's own folders hidden from every box), :mod:`.limits`
 (rlimits, the box's cgroup and uid: :mod:`._cgroup`, :mod:`._boxuser`), :mod:`.procs` (prctl,
 the process table: /proc on Linux, psutil elsewhere; the checked kill), :mod:`.box` (one box
-run and supervised), :mod:`.clock` (its fair deadline), :mod:`.pool` (a class's items),
+run and supervised), :mod:`.launch` (its first process started, cold or warm), :mod:`.clock`
+(its fair deadline), :mod:`.pool` (a class's items),
 :mod:`.child` (host-side work under limits).  The layer imports nothing of gpsaccel above it
 and names none of it: it knows neither the checks nor the homework, and its callers say what
 their boxes may not read.
