@@ -38,8 +38,8 @@ std-as-variance), see :func:`combinations`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from functools import cached_property
+from dataclasses import dataclass, replace
+from functools import cache, cached_property
 
 import numpy as np
 
@@ -363,13 +363,16 @@ def reference(model: CalibrationModel | None = None) -> EpochFilter:
 
 
 def catalogue(model: CalibrationModel | None = None) -> tuple[Mistake, ...]:
-    """Every mistake, covariance mistakes first."""
-    return covariance_mistakes(model) + mean_mistakes(model)
+    """Every mistake, covariance mistakes first, each array it changes read-only: the default
+    model's entries made once per process (:func:`default_catalogue`), a given model's anew (a
+    CalibrationModel's arrays are its caller's to change, and a cache by model would keep every
+    model a loop makes)."""
+    return _of(model).catalogue()
 
 
 def codes(model: CalibrationModel | None = None) -> tuple[str, ...]:
-    """Every code of the catalogue, in catalogue order."""
-    return tuple(dict.fromkeys(m.code for m in catalogue(model)))
+    """Every code of the catalogue, in catalogue order (:func:`catalogue`)."""
+    return _of(model).codes()
 
 
 def mutant(code: str, model: CalibrationModel | None = None, variant: str | None = None
@@ -388,7 +391,8 @@ class CalibrationCatalogue:
     """This catalogue in the interface every linear diagnosis reads
     (:class:`gpsaccel.kalman.epochs.Catalogue`), on ``model``'s numbers.  Its mistakes are made
     once per object (the model's numbers and wording, no data): a checker shares one object
-    between the files of a class."""
+    between the files of a class, so every array an entry changes is a read-only copy (a filter
+    that writes into an ingredient in place raises instead of changing every later filter)."""
 
     model: CalibrationModel
 
@@ -400,11 +404,11 @@ class CalibrationCatalogue:
 
     @cached_property
     def _covariance(self) -> tuple[Mistake, ...]:
-        return covariance_mistakes(self.model)
+        return _read_only(covariance_mistakes(self.model))
 
     @cached_property
     def _mean(self) -> tuple[Mistake, ...]:
-        return mean_mistakes(self.model)
+        return _read_only(mean_mistakes(self.model))
 
     def build(self, mistakes: tuple[Mistake, ...] = ()) -> EpochFilter:
         g = self._ingredients
@@ -424,3 +428,28 @@ class CalibrationCatalogue:
 
     def codes(self) -> tuple[str, ...]:
         return tuple(dict.fromkeys(m.code for m in self.catalogue()))
+
+
+def _read_only(mistakes: tuple[Mistake, ...]) -> tuple[Mistake, ...]:
+    """The entries with every array they change replaced by a read-only copy of it."""
+    def frozen(value: object) -> object:
+        if not isinstance(value, np.ndarray):
+            return value
+        value = np.array(value)
+        value.setflags(write=False)
+        return value
+
+    return tuple(replace(m, changes=tuple((*c[:-1], frozen(c[-1])) for c in m.changes))
+                 for m in mistakes)
+
+
+@cache
+def default_catalogue() -> CalibrationCatalogue:
+    """Report 000's catalogue on the default :class:`CalibrationModel`, one per process: its
+    entries are the model's numbers and wording (no data), so every caller shares them
+    (:func:`catalogue`, :func:`codes`, the checker's calibration problem)."""
+    return CalibrationCatalogue(CalibrationModel())
+
+
+def _of(model: CalibrationModel | None) -> CalibrationCatalogue:
+    return default_catalogue() if model is None else CalibrationCatalogue(model)

@@ -112,3 +112,39 @@ def test_codes_cover_the_issue():
     assert need <= set(cat.codes(MODEL))
     with pytest.raises(ValueError, match="code must be one of"):
         cat.mutant("no-such-code", MODEL)
+
+
+def _same_entries(a, b):
+    assert [(m.code, m.variant, m.message) for m in a] == [(m.code, m.variant, m.message)
+                                                            for m in b]
+    for m, n in zip(a, b, strict=True):
+        assert len(m.changes) == len(n.changes)
+        for c, d in zip(m.changes, n.changes, strict=True):
+            assert c[:-1] == d[:-1] and np.array_equal(c[-1], d[-1])
+
+
+def test_the_default_catalogue_is_made_once_and_read_only():
+    """catalogue() and codes() of the default model share one set of entries per process (the
+    checker's too), each array an entry changes read-only: a write raises, and the entries stay
+    those a fresh build makes."""
+    first, again = cat.catalogue(), cat.catalogue()
+    assert all(m is n for m, n in zip(first, again, strict=True))
+    assert cat.default_catalogue().catalogue() == first
+    _same_entries(first, cat.covariance_mistakes() + cat.mean_mistakes())
+    assert cat.codes() == tuple(dict.fromkeys(m.code for m in first))
+    arrays = [c[-1] for m in first for c in m.changes if isinstance(c[-1], np.ndarray)]
+    assert arrays and not any(a.flags.writeable for a in arrays)
+    w = next(m for m in first if m.code == "w-value").changes[0][-1]
+    with pytest.raises(ValueError, match="read-only"):
+        w[0, 0] = 1.0
+    _same_entries(cat.catalogue(), cat.covariance_mistakes() + cat.mean_mistakes())
+
+
+def test_a_given_models_catalogue_is_made_from_its_numbers_at_each_call():
+    """Not cached by model: a CalibrationModel's arrays are its caller's to change."""
+    model = CalibrationModel()
+    before = next(m for m in cat.catalogue(model) if m.code == "w-value").changes[0][-1]
+    model.V[1, 1] = 0.09  # W = V₂₂ is the w-value mistake
+    after = next(m for m in cat.catalogue(model) if m.code == "w-value").changes[0][-1]
+    assert before[0, 0] == 0.04**2 and after[0, 0] == 0.09
+    assert cat.catalogue()[0] is not cat.catalogue(CalibrationModel())[0]

@@ -129,11 +129,10 @@ def _candidates(model: CalibrationModel, max_combined: int
     return candidates(cat.CalibrationCatalogue(model), max_combined)
 
 
-@lru_cache(maxsize=1)
-def _default_catalogue() -> cat.CalibrationCatalogue:
-    """Report 000's catalogue on the default model, one per process: its mistakes are the
-    model's numbers (no data), built once and shared by every check of the default model."""
-    return cat.CalibrationCatalogue(CalibrationModel())
+#: Report 000's catalogue on the default model, one per process, shared by every check of the
+#: default model (and by :func:`gpsaccel.calibration.mistakes.catalogue`): its mistakes are the
+#: model's numbers (no data).
+_default_catalogue = cat.default_catalogue
 
 
 @lru_cache(maxsize=2)
