@@ -11,8 +11,8 @@ import copy
 import pytest
 
 from gpsaccel.check import problems
-from gpsaccel.sandbox import zygote
 from gpsaccel.check.problem import Problem
+from gpsaccel.sandbox import zygote
 
 from .._hostile import (  # noqa: F401 - a conftest's names are its fixtures and hooks
     _one_hostile_module_at_a_time,
