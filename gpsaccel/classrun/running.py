@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import contextlib
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from gpsaccel import _untrusted
@@ -72,7 +72,7 @@ def backend_of(sandbox: str, allow_unsafe_basic: bool = False) -> str:
     return backend
 
 
-def hidden_from_boxes(backend: str, folders: dict[str, str | os.PathLike | None],
+def hidden_from_boxes(backend: str, folders: Mapping[str, str | os.PathLike | None],
                       optional: Sequence[str] = ("secret_file",)
                       ) -> contextlib.AbstractContextManager:
     """The class's own folders (argument name -> folder) hidden from every box the run starts,
