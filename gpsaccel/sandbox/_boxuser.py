@@ -26,13 +26,13 @@ from __future__ import annotations
 import fcntl
 import os
 import pwd
-import shutil
 import signal
 import stat
 import tempfile
 import time
 from pathlib import Path
 
+from gpsaccel.sandbox._removal import remove_tree
 from gpsaccel.sandbox.procs import proc_files
 
 #: First uid of the boxes' range (2^31 - 2^27: above every distribution's allocation ranges,
@@ -150,8 +150,8 @@ def remove_files(uid: int) -> list[str]:
             if st.st_uid != uid:
                 continue
             try:
-                if stat.S_ISDIR(st.st_mode):
-                    shutil.rmtree(e.path, ignore_errors=True)
+                if stat.S_ISDIR(st.st_mode):  # any depth (rmtree's recursion stops at 1000)
+                    remove_tree(e.path)
                 else:
                     os.unlink(e.path)
                 gone.append(e.path)

@@ -17,13 +17,13 @@ from pathlib import Path
 
 from gpsaccel._interrupt import stop_after_cleanup
 from gpsaccel.sandbox import _boxuser, fence, warmbox, zygote
+from gpsaccel.sandbox._removal import remove_tree
 from gpsaccel.sandbox.channel import FrameReader, Refused
 from gpsaccel.sandbox.clock import BACKSTOP_FACTOR, BACKSTOP_MARGIN, Clock, clock_detail
 from gpsaccel.sandbox.confinement import (
     BOX_PREFIX,
     PACKAGE_DIR,
     _python,
-    _remove_tree,
     _site_dirs,
     _write_control,
     check_hide,
@@ -117,7 +117,7 @@ def _run(sub: Submission, calls: list[Call], limits: Limits, backend: str, allow
                              seconds=time.perf_counter() - t0)
     finally:
         _release(owned, confinement)
-        _remove_tree(str(tmp))
+        remove_tree(str(tmp))
 
 
 def _release(owned: list[int], confinement: _Confinement | None) -> None:

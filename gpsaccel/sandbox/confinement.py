@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from gpsaccel.sandbox import _boxuser, _cgroup
+from gpsaccel.sandbox._removal import remove_tree
 from gpsaccel.sandbox.spec import Call, Limits
 from gpsaccel.sandbox.submission import Submission, _open_checked
 
@@ -302,7 +303,7 @@ def sweep_stale_boxes(parent: str | None = None) -> int:
             continue
         owner = e.name[len(prefix):].split("-", 1)[0]
         if owner.isdigit() and not _cgroup._alive(int(owner)):
-            _remove_tree(e.path)
+            remove_tree(e.path)
             n += 1
     return n
 
@@ -314,32 +315,3 @@ def _ours(entry: os.DirEntry) -> bool:
     except OSError:
         return False
     return stat.S_ISDIR(st.st_mode) and st.st_uid == os.geteuid()
-
-
-def _remove_tree(path: str) -> None:
-    """rmtree that also removes what a student made unreadable (chmod 000 folders).  Modes are
-    changed only inside ``path``: the folder that holds it (``/tmp``) is never touched (a failed
-    removal of the box itself once made ``/tmp`` 0700, which locked every other user out)."""
-    root = os.path.abspath(path)
-    entered: set[str] = set()
-
-    def retry(func, p, _exc):  # noqa: ANN001
-        for q in (os.path.dirname(p), p):
-            if os.path.islink(q):  # rmtree refuses a link; chmod would follow it
-                continue
-            if os.path.abspath(q) == root or os.path.abspath(q).startswith(root + os.sep):
-                try:
-                    os.chmod(q, 0o700)
-                except OSError:
-                    pass
-        if func in (os.open, os.scandir, os.listdir):  # a folder it could not enter: once
-            if p not in entered:  # its mode is changed, remove it whole (os.open needs flags)
-                entered.add(p)
-                shutil.rmtree(p, onerror=retry)
-            return
-        try:
-            func(p)
-        except OSError:
-            pass
-
-    shutil.rmtree(path, onerror=retry)

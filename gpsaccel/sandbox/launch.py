@@ -14,11 +14,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from gpsaccel.sandbox import _boxuser, warmbox, zygote
+from gpsaccel.sandbox._removal import remove_tree
 from gpsaccel.sandbox.confinement import (
     _bwrap_command,
     _environment,
     _python,
-    _remove_tree,
     bwrap_path,
 )
 from gpsaccel.sandbox.limits import _cap_last, _Confinement, _entry_plan, _nproc, _preexec
@@ -148,7 +148,7 @@ class Prepared:
             self.c.cgroup.kill()
         if self.c.uid is not None:
             _boxuser.kill_uid(self.c.uid)
-        _remove_tree(str(self.tmp / "box"))
+        remove_tree(str(self.tmp / "box"))
         if self.c.cgroup is not None:
             self.c.cgroup.set_processes(self.limits.processes + 1 + extra_processes(self.backend))
 

@@ -46,13 +46,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from gpsaccel.sandbox import _boxuser
+from gpsaccel.sandbox._removal import remove_tree
 from gpsaccel.sandbox.confinement import (
     PACKAGE_DIR,
     RUNNER,
     ZYGOTE_PREFIX,
     _environment,
     _python,
-    _remove_tree,
     _site_dirs,
     check_hide,
     hidden_dirs,
@@ -156,7 +156,7 @@ def _launch(kind: Warm) -> tuple[subprocess.Popen, str, list[str]]:
             env=_environment(folder), close_fds=True, start_new_session=True,
             preexec_fn=_dies_with_us)
     except BaseException:
-        _remove_tree(folder)
+        remove_tree(folder)
         raise
     return proc, folder, sys_path
 
@@ -167,7 +167,7 @@ def _ready(kind: Warm, proc: subprocess.Popen, folder: str, sys_path: list[str])
     try:
         info = _ready_line(proc)
     except BaseException:
-        _remove_tree(folder)
+        remove_tree(folder)
         raise
     z = Zygote(proc.pid, folder, kind.allow_gpsaccel, tuple(sys_path), kind.imports,
                tuple(info["modules"]), int(info["vmsize"]) * 1024, proc,
@@ -220,7 +220,7 @@ def stop(z: Zygote) -> None:
         pass
     if z.proc is not None:
         z.proc.wait()
-    _remove_tree(z.folder)
+    remove_tree(z.folder)
 
 
 #: The zygotes this process's boxes may start from (a forked item inherits them).
@@ -251,7 +251,7 @@ def warm_boxes(*kinds: Warm) -> Iterator[list[Zygote]]:
         for _, proc, folder, _ in launched:
             proc.kill()
             proc.wait()
-            _remove_tree(folder)
+            remove_tree(folder)
         for z in started:
             stop(z)
 
