@@ -6,11 +6,12 @@ Usage (by :mod:`gpsaccel.sandbox.zygote`, not by hand)::
 
 A warm box's runner is forked from the zygote into the namespaces bwrap made (it is re-parented to
 this process once the zygote's keeper has left), so bwrap's init, which would end the box when its
-own child ends, is not there; this process stands in for it.  It names itself ``bwrap`` (the
-sandbox counts a box's own processes by that name, and a box sees ``bwrap`` as its pid 1 either
-way), writes ``ready`` on stdout once it runs (bwrap has made the namespaces and mounts), then
-reaps every process re-parented to it and writes ``PID STATUS`` (in this namespace's numbers, the
-raw wait status) on stdout for each, which is how the supervisor learns how the runner ended.
+own child ends, is not there; this process stands in for it.  It names itself ``bwrap`` (a box sees
+``bwrap`` as its pid 1 either way; the sandbox knows it by its pid, as bwrap's child, not by a
+name any process may take), writes ``ready`` on stdout once it runs (bwrap has made the
+namespaces and mounts), then reaps every process re-parented to it and writes ``PID STATUS`` (in
+this namespace's numbers, the raw wait status) on stdout for each, which is how the supervisor
+learns how the runner ended.
 
 As the init of its namespace it cannot be killed or stopped from inside it: the kernel delivers it
 only signals it handles, and it handles none (SIGCHLD is blocked and waited for).  It runs as the

@@ -42,6 +42,7 @@ from gpsaccel.sandbox.procs import (
     _prctl,
     _proc_table,
     box_processes,
+    bwrap_own,
     cpu_seconds,
     set_subreaper,
     start_time,
@@ -141,10 +142,9 @@ def _release(owned: list[int], confinement: _Confinement | None) -> None:
         _boxuser.release(confinement.lock)
 
 
-def _runner_pid(pids: set[int], table: dict[int, tuple[int, str, str]]) -> int | None:
-    """The runner among a box's processes: the first started that is not bwrap's own."""
-    started = [(t, pid) for pid in pids if table.get(pid, (0, "", "bwrap"))[2] != "bwrap"
-               for t in [start_time(pid)] if t is not None]
+def _runner_pid(pids: set[int]) -> int | None:
+    """The runner among a box's processes besides bwrap's own: the first started."""
+    started = [(t, pid) for pid in pids for t in [start_time(pid)] if t is not None]
     return min(started)[1] if started else None
 
 
@@ -202,7 +202,8 @@ class _Supervisor:
             self._cgroup_verdict()
         finally:
             if self.proc is not None and not emptied:  # Ctrl-C or an error of ours: the box too
-                _kill_box(self.proc, self.before, self.c, self._roots(), self._own())
+                _kill_box(self.proc, self.before, self.c, self._roots(), self._own(),
+                          self.backend == "bwrap")
             if isinstance(self.proc, warmbox.WarmBox):
                 self.proc.close()
             if self.sel is not None:
@@ -230,8 +231,16 @@ class _Supervisor:
         return self.proc.roots if isinstance(self.proc, warmbox.WarmBox) else [self.proc.pid]
 
     def _own(self) -> set[int]:
-        """The box's processes that are not the student's, besides bwrap's."""
+        """The box's processes that are not the student's, besides bwrap's (a basic warm box's
+        keeper)."""
         return self.proc.own if isinstance(self.proc, warmbox.WarmBox) else set()
+
+    def _not_students(self, table: dict[int, tuple[int, str, str]]) -> set[int]:
+        """Every process of the box that is not the student's: :meth:`_own`, and under bwrap
+        bwrap's own, known by pid (:func:`~gpsaccel.sandbox.procs.bwrap_own`), never by name."""
+        assert self.proc is not None
+        own = self._own()
+        return (own | bwrap_own(self.proc.pid, table)) if self.backend == "bwrap" else own
 
     def _runner_exited(self) -> bool:
         assert self.proc is not None
@@ -270,7 +279,8 @@ class _Supervisor:
             return self.proc.runner
         if self.backend != "bwrap":
             return self.proc.pid
-        return _runner_pid(set(box_processes(self.proc.pid, self.before)), _proc_table())
+        pids = set(box_processes(self.proc.pid, self.before))
+        return _runner_pid(pids - self._not_students(_proc_table()))
 
     def _box_cpu(self) -> float:
         """CPU seconds the box's live processes have used (with the children they waited for)."""
@@ -280,10 +290,7 @@ class _Supervisor:
         """Processes of the box besides the runner and the box's own (bwrap's, a warm box's
         keeper), while the runner waits to exit."""
         pids = set(box_processes(self._roots(), self.before)) | self.c.pids()
-        table = _proc_table()
-        runner, own = self._find_runner(), self._own()
-        return sum(1 for p in pids if p != runner and p not in own
-                   and table.get(p, (0, "", "bwrap"))[2] != "bwrap")
+        return len(pids - self._not_students(_proc_table()) - {self._find_runner()})
 
     def _read(self, timeout: float) -> None:
         assert self.sel is not None
@@ -342,7 +349,8 @@ class _Supervisor:
         runner)."""
         assert self.proc is not None
         runner_alive = self.proc.poll() is None
-        found = _kill_box(self.proc, self.before, self.c, self._roots(), self._own())
+        found = _kill_box(self.proc, self.before, self.c, self._roots(), self._own(),
+                          self.backend == "bwrap")
         if self.left is not None:
             self.result.killed = self.left
             return

@@ -197,6 +197,15 @@ def box_processes(first: int | Sequence[int], adopted_from: set[int] | None) -> 
     return [p for p in out if table.get(p, (0, "Z", ""))[1] not in ("Z", "X")]
 
 
+def bwrap_own(first: int, table: dict[int, tuple[int, str, str]]) -> set[int]:
+    """bwrap's own processes in a box whose first process ``first`` is bwrap: itself and its
+    child, the box's pid 1 (bwrap's init, or a warm box's reaper).  Known by pid, not by name:
+    a student's process may call itself ``bwrap`` (prctl PR_SET_NAME), but none can be a child
+    of ``first``: an orphan in the box goes to the box's pid 1, and a pid namespace's init may
+    not give its children away (CLONE_PARENT)."""
+    return {first} | {pid for pid, (ppid, _, _) in table.items() if ppid == first}
+
+
 class _FirstProcess(Protocol):
     """What a kill asks of a box's first process (a ``subprocess.Popen``, or a warm box's
     keeper: :class:`gpsaccel.sandbox.warmbox.WarmBox`)."""
@@ -209,10 +218,12 @@ class _FirstProcess(Protocol):
 
 
 def _kill_box(proc: _FirstProcess, before: set[int], confinement: _NamesPids | None = None,
-              roots: Sequence[int] = (), own: AbstractSet[int] = frozenset()) -> int:
+              roots: Sequence[int] = (), own: AbstractSet[int] = frozenset(),
+              bwrap: bool = False) -> int:
     """SIGKILL every process of the box (the process trees of ``roots``, or of ``proc``, its
     cgroup, its uid) until none is alive; reap them.  Returns how many processes were alive
-    when the kill began, besides bwrap's and the box's ``own`` (a basic warm box's keeper)."""
+    when the kill began, besides the box's ``own`` (a basic warm box's keeper) and, when
+    ``proc`` is bwrap (``bwrap``), bwrap's own (:func:`bwrap_own`)."""
     roots = list(roots) or [proc.pid]
     found: int | None = None
     for _ in range(200):
@@ -220,8 +231,8 @@ def _kill_box(proc: _FirstProcess, before: set[int], confinement: _NamesPids | N
         if confinement is not None:
             alive |= confinement.pids()
         if found is None:
-            table = _proc_table()
-            found = sum(table.get(p, (0, "", ""))[2] != "bwrap" and p not in own for p in alive)
+            boxes = (own | bwrap_own(proc.pid, _proc_table())) if bwrap else own
+            found = len(alive - boxes)
         if not alive:
             break
         for pid in alive:

@@ -39,7 +39,8 @@ class WarmBox:
     """A warm box's first process as the supervisor sees a cold box's ``Popen``: ``pid``,
     :meth:`poll` and :meth:`wait` (the runner's end), ``returncode`` (the runner's, as a cold box
     reports it), plus ``runner`` (its pid), ``roots`` (the process trees the box lives in) and
-    ``own`` (the box's processes that are not the student's, besides those named ``bwrap``).
+    ``own`` (the box's processes that are not the student's, besides bwrap's own:
+    :func:`gpsaccel.sandbox.procs.bwrap_own`).
 
     basic: the first process is the box's keeper, which reports the runner's end over ``conn``
     (a signal as a negative number, as Popen gives it).  bwrap: it is bwrap, whose pid 1 (the

@@ -10,6 +10,7 @@ starts processes asserts by PID that none is alive when the check returns.
 from __future__ import annotations
 
 import os
+import signal
 
 import pytest
 
@@ -70,6 +71,46 @@ def test_processes_left_behind_are_killed_and_reported(backend, hostile, watch):
     # PID namespace once it exits)
     assert report.details["processes_killed"] == 2
     assert "left-processes" in [f.code for f in report.findings]
+
+
+def _disguised(marker: str) -> set[int]:
+    """Live processes named ``bwrap`` with ``marker`` on their command line (named_bwrap.py's
+    child: its comm is the disguise, so the watcher's look for the marker's comm misses it)."""
+    out = set()
+    for name in os.listdir("/proc"):
+        try:
+            with open(f"/proc/{name}/comm", "rb") as f:
+                if f.read() != b"bwrap\n":
+                    continue
+            with open(f"/proc/{name}/cmdline", "rb") as f:
+                args = f.read().split(b"\0")
+            with open(f"/proc/{name}/stat", "rb") as f:
+                state = f.read().rsplit(b")", 1)[1].split()[0]
+        except (OSError, IndexError):
+            continue
+        if marker.encode() in args and state not in (b"Z", b"X"):
+            out.add(int(name))
+    return out
+
+
+def test_a_process_named_bwrap_is_counted_and_killed(backend, hostile, watch):
+    """A student's process may give itself any name (prctl PR_SET_NAME), ``bwrap`` too, the
+    name of the box's own processes (bwrap's two, a warm box's pid 1).  The count of what a
+    student left running skipped every process so named, so the child hid from it (0 counted,
+    no ``left-processes``); the box's own are now known by their pids (the process the
+    supervisor started and its child, the box's pid 1), which no student can choose."""
+    marker = f"{hostile.MARKER}-bwrap"
+    assert not _disguised(marker)
+    try:
+        report = check.submission(hostile.DIR / "named_bwrap.py", n_runs=3, sandbox=backend)
+        assert report.passed, report
+        assert report.details.get("processes_killed", 0) == 1, report.details
+        assert "left-processes" in [f.code for f in report.findings]
+        assert not _disguised(marker)  # killed: it sleeps 20 s otherwise
+        assert not hostile.alive(watch.seen)
+    finally:  # a failed test must not leave it to the next one
+        for pid in _disguised(marker):
+            os.kill(pid, signal.SIGKILL)
 
 
 def test_a_daemon_does_not_outlive_the_check(backend, hostile, watch):
