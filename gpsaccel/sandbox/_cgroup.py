@@ -13,6 +13,12 @@ is in, so a box never escapes the limits its checker runs under.  Where it is ma
              ``cpu`` hierarchy when there is one (``cpu.cfs_quota_us``: one CPU);
 ``None``     neither (not root, no delegation): the sandbox falls back on per-process rlimits.
 
+A box's cgroup v2 (Linux 5.14 or later) has ``cgroup.kill``: one write SIGKILLs every process of
+the cgroup at once, forks in flight included, which no chain of processes that fork and exit can
+outrun (a kill by pid can miss each link).  Under cgroup1 the box also has a cgroup of its own,
+with no controller, in the unified hierarchy when it is mounted beside the v1 ones (systemd's
+hybrid layout, ``/sys/fs/cgroup/unified``), for that write alone: :meth:`BoxCgroup.kill_at_once`.
+
 Memory in a cgroup is every page the box's processes are charged for: anonymous memory of every
 process, page cache, tmpfs files (bwrap's ``/box``, ``/tmp``) and memfds.  A box whose cgroup
 outlives its checker (a killed worker) is emptied and removed by the next box made below the same
@@ -121,6 +127,34 @@ def _v1_bases() -> dict[str, Path] | None:
     return found if {"memory", "pids"} <= set(found) else None
 
 
+def _v2_kill_base() -> Path | None:
+    """This process's cgroup in a cgroup v2 hierarchy, writable: where a box's cgroup made only
+    for ``cgroup.kill`` goes (under cgroup1, beside its v1 ones)."""
+    own = _own_paths().get("")
+    if own is None:
+        return None
+    for mount, kind, _ in _mounts():
+        base = Path(mount + own.rstrip("/")) if own != "/" else Path(mount)
+        if kind == "cgroup2" and base.is_dir() and os.access(base, os.W_OK):
+            return base
+    return None
+
+
+def _kill_only(base: Path, name: str) -> Path | None:
+    """A new cgroup ``name`` below ``base`` (cgroup v2), with no controller, for its
+    ``cgroup.kill``; None when it cannot be made or the kernel has no ``cgroup.kill``."""
+    sweep_stale(base)
+    d = base / name
+    try:
+        d.mkdir()
+    except OSError:
+        return None
+    if (d / "cgroup.kill").exists():
+        return d
+    d.rmdir()
+    return None
+
+
 def available() -> str | None:
     """``"cgroup2"``, ``"cgroup1"`` or None: which kind of box cgroup can be made here."""
     if _v2_base() is not None:
@@ -132,7 +166,9 @@ def available() -> str | None:
 
 @dataclass
 class BoxCgroup:
-    """The cgroup(s) of one box: ``kind`` and one folder per hierarchy (one under cgroup2)."""
+    """The cgroup(s) of one box: ``kind`` and one folder per hierarchy (one under cgroup2), by
+    controller, and ``"kill"``: the cgroup v2 whose ``cgroup.kill`` kills the box at once (the
+    box's own under cgroup2; under cgroup1 one in the unified hierarchy), where there is one."""
 
     kind: str
     dirs: dict[str, Path] = field(default_factory=dict)
@@ -172,13 +208,22 @@ class BoxCgroup:
         differ)."""
         _write(self.dirs["pids"] / "pids.max", str(processes))
 
+    def kill_at_once(self) -> bool:
+        """SIGKILL every process of the box in one step (``cgroup.kill``: the kernel's, forks in
+        flight included); False where the box has no cgroup with it."""
+        d = self.dirs.get("kill")
+        if d is None:
+            return False
+        try:
+            _write(d / "cgroup.kill", "1")
+        except OSError:
+            return False
+        return True
+
     def kill(self) -> int:
-        """SIGKILL every process of the box once; how many were signalled."""
-        if self.kind == "cgroup2":
-            try:
-                _write(self.dirs["memory"] / "cgroup.kill", "1")
-            except OSError:
-                pass
+        """SIGKILL every process of the box: at once where it can, then each that is left; how
+        many were signalled by pid."""
+        self.kill_at_once()
         pids = self.pids()
         for pid in pids:
             try:
@@ -224,7 +269,10 @@ def create(memory: int, processes: int) -> BoxCgroup | None:
         except OSError:
             BoxCgroup("cgroup2", {"memory": d}).remove()
             return None
-        return BoxCgroup("cgroup2", {"memory": d, "pids": d, "cpu": d})
+        box = BoxCgroup("cgroup2", {"memory": d, "pids": d, "cpu": d})
+        if (d / "cgroup.kill").exists():
+            box.dirs["kill"] = d
+        return box
     bases = _v1_bases()
     if bases is None:
         return None
@@ -248,6 +296,10 @@ def create(memory: int, processes: int) -> BoxCgroup | None:
         if "cpu" in box.dirs:
             _write(box.dirs["cpu"] / "cpu.cfs_period_us", str(CPU_PERIOD))
             _write(box.dirs["cpu"] / "cpu.cfs_quota_us", str(CPU_QUOTA))
+        unified = _v2_kill_base()
+        killer = _kill_only(unified, name) if unified is not None else None
+        if killer is not None:
+            box.dirs["kill"] = killer
     except OSError:
         box.remove()
         return None
@@ -277,5 +329,6 @@ def sweep_stale(base: Path) -> int:
             continue
         owner = d.name[len(PREFIX):].split("-", 1)[0]
         if owner.isdigit() and not _alive(int(owner)):
-            n += BoxCgroup("cgroup1", {"memory": d}).remove(wait=0.5)
+            dirs = {"memory": d, **({"kill": d} if (d / "cgroup.kill").exists() else {})}
+            n += BoxCgroup("cgroup1", dirs).remove(wait=0.5)
     return n

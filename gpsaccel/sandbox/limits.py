@@ -67,6 +67,11 @@ class _Confinement:
             out |= _boxuser.uid_pids(self.uid)
         return out
 
+    def kill_at_once(self) -> bool:
+        """SIGKILL every process of the box's cgroup in one step, where it has ``cgroup.kill``
+        (:meth:`._cgroup.BoxCgroup.kill_at_once`)."""
+        return self.cgroup is not None and self.cgroup.kill_at_once()
+
 
 def _confine(limits: Limits, backend: str, needed: list[str], extra: int) -> _Confinement:
     """A cgroup and (as root) a uid of its own for a new box; whatever an earlier box of the same

@@ -20,9 +20,11 @@ import psutil
 
 class _NamesPids(Protocol):
     """What a kill asks of a box's confinement (limits._Confinement, which imports this module):
-    every process it can name, by cgroup or uid."""
+    every process it can name, by cgroup or uid, and a kill of its cgroup at once."""
 
     def pids(self) -> set[int]: ...
+
+    def kill_at_once(self) -> bool: ...
 
 
 # psutil.process_iter keeps its Process objects between calls, each with a lock: a thread of the
@@ -223,7 +225,12 @@ def _kill_box(proc: _FirstProcess, before: set[int], confinement: _NamesPids | N
     """SIGKILL every process of the box (the process trees of ``roots``, or of ``proc``, its
     cgroup, its uid) until none is alive; reap them.  Returns how many processes were alive
     when the kill began, besides the box's ``own`` (a basic warm box's keeper) and, when
-    ``proc`` is bwrap (``bwrap``), bwrap's own (:func:`bwrap_own`)."""
+    ``proc`` is bwrap (``bwrap``), bwrap's own (:func:`bwrap_own`).
+
+    Once they are counted, the box's cgroup is killed at once where it can be (``cgroup.kill``:
+    no chain of processes that fork and exit outruns it); the scan and the kill by pid go on
+    as before, for what is outside the cgroup (a basic warm box's keeper) and where there is no
+    ``cgroup.kill``."""
     roots = list(roots) or [proc.pid]
     found: int | None = None
     for _ in range(200):
@@ -233,6 +240,8 @@ def _kill_box(proc: _FirstProcess, before: set[int], confinement: _NamesPids | N
         if found is None:
             boxes = (own | bwrap_own(proc.pid, _proc_table())) if bwrap else own
             found = len(alive - boxes)
+            if confinement is not None:
+                confinement.kill_at_once()
         if not alive:
             break
         for pid in alive:

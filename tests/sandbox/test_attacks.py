@@ -41,6 +41,15 @@ needs_cgroup = pytest.mark.skipif(CGROUP is None, reason="no writable cgroup: th
 needs_root = pytest.mark.skipif(os.geteuid() != 0, reason="a box user needs root")
 
 
+def _cgroup_bases() -> list:
+    """Where boxes' cgroups are made here: the cgroup2 base, or the v1 ones and (for
+    ``cgroup.kill``) the unified hierarchy's."""
+    if CGROUP == "cgroup2":
+        return [_cgroup._v2_base()]
+    unified = _cgroup._v2_kill_base()
+    return [*_cgroup._v1_bases().values(), *([unified] if unified is not None else [])]
+
+
 def _forged_files() -> list[str]:
     """Files the hostile submissions try to leave outside their box."""
     found = []
@@ -188,8 +197,8 @@ def test_the_report_says_which_limits_applied(tmp_path, backend):
     assert box.failure is None and box.limit_backend == CGROUP
     assert box.memory_peak is not None and 0 < box.memory_peak < LIMITS.memory
     assert (box.box_user is not None) == (os.geteuid() == 0)
-    # the cgroup is gone with the box
-    for d in _cgroup._v1_bases().values() if CGROUP == "cgroup1" else [_cgroup._v2_base()]:
+    # the cgroup is gone with the box (and under cgroup1 its cgroup for cgroup.kill)
+    for d in _cgroup_bases():
         assert not [p for p in os.listdir(d) if p.startswith(f"{_cgroup.PREFIX}{os.getpid()}-")]
 
 
@@ -257,8 +266,7 @@ def test_a_box_folder_of_a_killed_supervisor_is_removed(tmp_path, hostile):
         time.sleep(0.05)
     if CGROUP is not None:  # its cgroup is removed by the next box made
         _cgroup.create(1 << 30, 8).remove()
-        bases = (_cgroup._v1_bases().values() if CGROUP == "cgroup1" else [_cgroup._v2_base()])
-        for d in bases:
+        for d in _cgroup_bases():
             assert not [p for p in os.listdir(d) if p.startswith(f"{_cgroup.PREFIX}{proc.pid}-")]
 
 
