@@ -175,8 +175,20 @@ class BoxCgroup:
 
     @property
     def procs_files(self) -> list[str]:
-        """Where a process writes ``0`` to join the box (done in the child before exec)."""
-        return [str(d / "cgroup.procs") for d in dict.fromkeys(self.dirs.values())]
+        """Where a process writes ``0`` to join the box (done in the child before exec): the
+        cgroups of its limits."""
+        limits = [d for c, d in self.dirs.items() if c != "kill"]
+        return [str(d / "cgroup.procs") for d in dict.fromkeys(limits)]
+
+    @property
+    def kill_procs_files(self) -> list[str]:
+        """Where a process writes ``0`` to join the box's cgroup made for ``cgroup.kill`` alone
+        (under cgroup1), if any: a join that fails there costs the box only the kill at once
+        (the kill by pid remains), so it never stops a box from starting."""
+        kill = self.dirs.get("kill")
+        if kill is None or kill in [d for c, d in self.dirs.items() if c != "kill"]:
+            return []
+        return [str(kill / "cgroup.procs")]
 
     def pids(self) -> set[int]:
         """Every process of the box (in this PID namespace's numbers)."""

@@ -9,7 +9,8 @@ check must find no module of the package in ``sys.modules``).
 A *plan* (a dict of JSON types, made by :func:`gpsaccel.sandbox.limits._entry_plan`) says what to
 do, in this order (:func:`enter`):
 
-``cgroup``   the box's cgroup files to join (``cgroup.procs``);
+``cgroup``   the box's cgroup files to join (``cgroup.procs``), and ``cgroup_kill`` (optional)
+             those whose join may fail (a cgroup made only for ``cgroup.kill``);
 ``reveal``   the interpreter's folders made reachable to the box's uid (a private mount namespace:
              :func:`gpsaccel.sandbox._boxuser.reveal`);
 ``fence``    ``"mount"``: ``hidden`` folders covered by the empty folder ``empty``;
@@ -31,6 +32,7 @@ import ctypes
 import os
 import resource
 import signal
+from collections.abc import Sequence
 
 PR_SET_PDEATHSIG, PR_SET_DUMPABLE, PR_CAPBSET_DROP = 1, 4, 24
 PR_SET_CHILD_SUBREAPER, PR_SET_NO_NEW_PRIVS = 36, 38
@@ -59,14 +61,19 @@ def prctl(libc: ctypes.CDLL, option: int, arg: int = 0) -> int:
                       ctypes.c_ulong(0), ctypes.c_ulong(0))
 
 
-def join_cgroup(procs_files: list[str]) -> None:
-    """Move this process into the box's cgroup (its children follow)."""
-    for f in procs_files:
-        fd = os.open(f, os.O_WRONLY)
+def join_cgroup(procs_files: Sequence[str], optional: Sequence[str] = ()) -> None:
+    """Move this process into the box's cgroup (its children follow); into each of ``optional``
+    too where it can."""
+    for f in [*procs_files, *optional]:
         try:
-            os.write(fd, b"0")
-        finally:
-            os.close(fd)
+            fd = os.open(f, os.O_WRONLY)
+            try:
+                os.write(fd, b"0")
+            finally:
+                os.close(fd)
+        except OSError:
+            if f not in optional:
+                raise
 
 
 def reveal(libc: ctypes.CDLL, plan: list) -> None:
@@ -116,7 +123,7 @@ def enter(libc: ctypes.CDLL | None, plan: dict, ruleset: int | None = None,
     the box's cgroup already (a warm box's first process joined it).  Raises OSError when a step
     fails (the box then does not start)."""
     if cgroup:
-        join_cgroup(plan["cgroup"])
+        join_cgroup(plan["cgroup"], plan.get("cgroup_kill", []))
     if plan["reveal"]:  # before the rlimits: the parent's descriptors may still be open here
         # (Popen closes them after preexec_fn), so with RLIMIT_NOFILE set first a grader holding
         # more than open_files descriptors could not open the folders to reveal

@@ -233,7 +233,7 @@ class _Box:
         plan, enter, libc = req["plan"], self.enter, self.libc
         bwrap = req["backend"] == "bwrap"
         if bwrap:  # the box's cgroup, limits and uid as bwrap took them, then its namespaces
-            enter.join_cgroup(plan["cgroup"])
+            enter.join_cgroup(plan["cgroup"], plan.get("cgroup_kill", []))
             enter.enter(libc, dict(plan, reveal=[], fence=None), cgroup=False)
             enter.join_namespaces(libc, fds["owner"], [fds[n] for n in enter.NAMESPACES],
                                   fds["user"])

@@ -99,6 +99,7 @@ def _entry_plan(limits: Limits, nproc: int, drop_caps: bool, cap_last: int,
     fence = c.fence
     return {
         "cgroup": c.cgroup.procs_files if c.cgroup is not None else [],
+        "cgroup_kill": c.cgroup.kill_procs_files if c.cgroup is not None else [],
         "reveal": [[top, list(paths)] for top, paths in c.reveal],
         "fence": fence.kind if fence is not None else None,
         "hidden": list(fence.hidden) if fence is not None else [],

@@ -1,5 +1,6 @@
 """The checked kill that empties a box (gpsaccel.sandbox.procs._kill_box): every process of the
-box dies, however it moves."""
+box dies, however it moves; the box's cgroup killed at once where it can be, never at the cost of
+a box that does not start."""
 
 from __future__ import annotations
 
@@ -10,8 +11,10 @@ import signal
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
+from gpsaccel import sandbox as sb
 from gpsaccel.sandbox import _cgroup, _enter, procs
 from gpsaccel.sandbox.limits import _Confinement
 
@@ -44,7 +47,8 @@ def test_a_box_no_kill_by_pid_reaches_is_emptied_at_once(monkeypatch):
     assert cg is not None
     before = procs._my_children()
     sleeper = subprocess.Popen([sys.executable, "-I", "-S", "-c", "import time; time.sleep(60)"],
-                               preexec_fn=functools.partial(_enter.join_cgroup, cg.procs_files),
+                               preexec_fn=functools.partial(_enter.join_cgroup, cg.procs_files,
+                                                            cg.kill_procs_files),
                                start_new_session=True)
     misses: list[int] = []
     try:
@@ -63,3 +67,20 @@ def test_a_box_no_kill_by_pid_reaches_is_emptied_at_once(monkeypatch):
         sleeper.wait()
         assert cg.remove()
     assert not [d for d in cg.dirs.values() if d.exists()]  # the box's cgroups, each removed
+
+
+@pytest.mark.skipif(_cgroup.available() != "cgroup1" or _cgroup._v2_kill_base() is None,
+                    reason="a box cgroup made for cgroup.kill alone is made only under cgroup1, "
+                           "beside a mounted unified hierarchy")
+def test_a_box_starts_though_its_cgroup_for_the_kill_cannot_be_joined(backend, monkeypatch,
+                                                                      tmp_path):
+    """Under cgroup1 the box's cgroup made for ``cgroup.kill`` alone (in the unified hierarchy)
+    is a help, not a limit: where its process cannot join it (here it is not there at all), the
+    box starts, runs and is emptied as before, by pid."""
+    monkeypatch.setattr(_cgroup, "_kill_only", lambda base, name: tmp_path / "no-such-cgroup")
+    (tmp_path / "s.py").write_text("def f(z):\n    return z + 1.0\n")
+    box = sb.run(sb.load_submission(tmp_path / "s.py", "f"),
+                 [sb.Call("f", (np.zeros(2),), (sb.Output("a", (2,)),))],
+                 sb.Limits(memory=512 << 20, time=20), backend)
+    assert box.failure is None, (box.failure, box.detail)
+    np.testing.assert_array_equal(box.results[0]["a"], np.ones(2))
