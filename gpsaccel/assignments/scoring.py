@@ -37,7 +37,7 @@ from gpsaccel.assignments.questions import (
     question_seed,
     variant_number,
 )
-from gpsaccel.check.report import Report
+from gpsaccel.check.report import Report, first_line
 from gpsaccel.sandbox.outcomes import OUTCOMES, ours
 
 #: Time limit (s) of one notebook's box (every cell and every read; its own time, not its waits
@@ -410,7 +410,7 @@ def _feedback_text(g: Grade, notes: list[str], reports: dict[str, Report],
         for f in rep.for_student().findings if rep else []:
             if f.severity == "note" and f.code not in ("uses-own-jacobian",):
                 continue
-            text = f"{f.code}: {f.message.splitlines()[0]}"
+            text = f"{f.code}: {first_line(f.message)}"  # "ends with: SyntaxError."
             if text in seen:
                 continue  # each failure once
             seen.add(text)

@@ -242,9 +242,9 @@ class StudentReport:
 _TB_INTRO = "; the traceback ends with:"
 
 
-def _first_line(message: str) -> str:
-    """A finding's first line for the first look.  One that introduces the traceback below it
-    (which the first look does not show) names the exception's type instead (the traceback's
+def first_line(message: str) -> str:
+    """A finding's first line, for the first look and a graded notebook's feedback (one line a
+    finding).  One that introduces the traceback below it (which neither shows) names the exception's type instead (the traceback's
     last line up to its message: ``raise NotImplementedError`` has none), or drops the clause."""
     first, _, rest = message.partition("\n")
     if not first.endswith(_TB_INTRO):
@@ -265,7 +265,7 @@ def brief(result: Mapping) -> str:
     lines: list[str | tuple[str, str]] = []
     for f in result.get("findings", []):
         severity, code = str(f.get("severity", "error")), str(f.get("code", ""))
-        first = _first_line(str(f.get("message", "")))
+        first = first_line(str(f.get("message", "")))
         lines.append((f"[{severity}] {code}: {first}", see(code)))
     return render(str(result.get("subject", "")), result.get("passed") is True,
                   [str(c) for c in result.get("codes", [])], lines, [])

@@ -44,3 +44,27 @@ def test_a_grader_that_raises_costs_that_question_and_shows_the_student_only_its
         assert "ValueError: expected 4.25" in rep.instructor_text()
         student = str(rep.for_student())
         assert "ValueError" in student and "4.25" not in student
+
+
+def test_a_file_that_does_not_import_is_named_by_its_error_in_the_feedback():
+    """The feedback keeps one line a finding: the import-error's "the traceback ends with:" was
+    cut there and ended the student's line above nothing (a notebook whose ``%%writefile`` had a
+    syntax error read "...; the traceback ends with:"). It names the error's type, as
+    ``gpsaccel check``'s first look does."""
+    from gpsaccel import sandbox as sb
+    from gpsaccel.check import findings
+    from gpsaccel.check.report import Report
+
+    calls = [sb.Call("kalman_filter", (np.zeros((2, 2)),), (sb.Output("x_hat", (2, 3)),))]
+    box = sb.BoxResult("bwrap", failure="import-error", problem={
+        "kind": "import-error", "traceback": '  File "kalman_filter.py", line 30\n'
+                                             "    return xs Ps\n              ^^\n"
+                                             "SyntaxError: invalid syntax\n"})
+    report = Report("q2")
+    findings.box_findings(report, box, calls, sb.Limits(time=60))
+    assert report.codes == ["import-error"]
+    g = scoring.Grade("s", "s.ipynb", {"q2": 0.0}, {"q2": 4.0}, "graded")
+    line = next(ln for ln in scoring._feedback_text(g, [], {"q2": report}, {}).splitlines()
+                if "import-error" in ln)
+    assert line.endswith("(before kalman_filter is called); the traceback ends with "
+                         "SyntaxError."), line

@@ -65,7 +65,7 @@ def test_an_emptied_traceback_is_said_to_be_empty_never_left_blank(tmp_path):
 
     import numpy as np
 
-    from gpsaccel.check.report import Report, _first_line
+    from gpsaccel.check.report import Report, first_line
 
     (tmp_path / "s.py").write_text(
         "import traceback\n"
@@ -80,7 +80,7 @@ def test_an_emptied_traceback_is_said_to_be_empty_never_left_blank(tmp_path):
     findings.box_findings(report, box, calls, limits)
     text = report.findings[-1].for_student().message
     assert text.endswith("the traceback ends with:\n      " + findings.NO_TRACEBACK), text
-    assert _first_line(text) == "f(...) raised an exception on call 1 of 1.", _first_line(text)
+    assert first_line(text) == "f(...) raised an exception on call 1 of 1.", first_line(text)
 
     report = Report("p")
     findings.box_findings(report, dataclasses.replace(box, failure="memory-limit", problem=None),
