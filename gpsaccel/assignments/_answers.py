@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from gpsaccel.assignments.questions import StudentError
 from gpsaccel.check.report import Report, as_array
 
 
@@ -36,6 +37,10 @@ def call(report: Report, what: str, func: object, *args: object, part: str = "")
         return None
     try:
         out = func(*args)
+    except StudentError as exc:  # a replay: the box's account of the call, in words already
+        report.add("exception", text="{where} failed: {error}", where=what,
+                   observed={"error": str(exc)}, part=part)
+        return None
     except Exception as exc:  # noqa: BLE001 - the student's code may raise anything
         tb = traceback.format_exception_only(type(exc), exc)[-1].strip()
         report.add("exception", text="{where} raised {error}", where=what,
