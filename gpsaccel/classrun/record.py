@@ -113,6 +113,8 @@ class Record:
         self.bar = tqdm(total=len(entries) - len(self.reused), desc=info["assignment"],
                         unit="notebook", leave=False, disable=None if self.progress else True)
         self.entries, self.grades = entries, [None] * len(entries)
+        if self.student is not None:  # a regrade records the ids, however they were named
+            info["student"] = [e.student for e in entries]
         for i, g in self.reused.items():
             g.late = entries[i].late
             self.grades[i] = g
@@ -220,13 +222,17 @@ def resumed(record: Record, entries: list[Entry], wanted: Sequence[str] | None,
 
 
 def _chosen(entries: Sequence[Entry], wanted: Sequence[str], folder: Path) -> list[Entry]:
-    """The entries of the students ``wanted`` (each by the name as found, its id or as shown);
-    ValueError naming any that has no submission."""
-    missing = [w for w in wanted if not any(w in (e.student, e.id, e.shown) for e in entries)]
+    """The entries of the students ``wanted`` (each by the name as found, its id or as shown,
+    or the export's own name for it: Canvas's file, Moodle's folder); ValueError naming any that
+    has no submission."""
+    def names(e: Entry) -> tuple[str, ...]:
+        return e.student, e.id, e.shown, e.found
+
+    missing = [w for w in wanted if not any(w in names(e) for e in entries)]
     if missing:
         raise ValueError(f"student: no submission of {', '.join(map(repr, missing))} in "
                          f"{folder}")
-    return [e for e in entries if any(w in (e.student, e.id, e.shown) for w in wanted)]
+    return [e for e in entries if any(w in names(e) for w in wanted)]
 
 
 def _idle(record: dict, seed: int) -> bool:

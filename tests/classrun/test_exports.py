@@ -219,3 +219,32 @@ def test_canvas_and_moodle_exports_graded_as_downloaded_match_a_folder_per_roste
     assert books["canvas"] == books["moodle"] == books["ids"]
     totals = [books["ids"][uid] for uid in people]
     assert all(totals) and len(set(totals)) > 1  # filled, and each student's own
+
+
+def test_a_regrade_names_a_student_as_the_export_names_them(tmp_path, monkeypatch):
+    """``--student`` takes "the roster's id, the name as in the export, or the id grades.csv
+    shows" (docs/grading.md); a mapped export's names (Canvas's file, Moodle's folder) were
+    refused as "no submission of ..." (tried from the wheel). Each is taken, for that student
+    only; a name nobody handed in is still an error naming it."""
+    import json
+
+    monkeypatch.setattr(running, "run", _fake_run)
+    roster = tmp_path / "roster.csv"
+    roster.write_text(CANVAS, encoding="utf-8")
+    files = {"canvas": {"nguyenan_84500_784500_calibration.ipynb": "{ }",
+                        "doejane_LATE_84501_784501_calibration.ipynb": "{  }"},
+             "moodle": {"An Nguyen_1_assignsubmission_file_/calibration.ipynb": "{ }",
+                        "Jane Doe_2_assignsubmission_file_/calibration.ipynb": "{  }"}}
+    for layout, names in files.items():
+        _files(tmp_path / layout, names)
+        out = tmp_path / f"{layout}-out"
+        grade(tmp_path / layout, "calibration", out=out, seed=3, secret=SECRET, roster=roster,
+              similarity=False)
+        found = [n.split("/")[0] for n in names][1]
+        grade(tmp_path / layout, "calibration", out=out, secret=SECRET, roster=roster,
+              similarity=False, student=[found])
+        record = json.loads((out / "grading.json").read_text(encoding="utf-8"))
+        assert record["regrades"][-1]["student"] == ["84501"], record["regrades"]
+        with pytest.raises(ValueError, match="no submission of 'raybob_84502_1_calibration"):
+            grade(tmp_path / layout, "calibration", out=out, secret=SECRET, roster=roster,
+                  similarity=False, student=["raybob_84502_1_calibration.ipynb"])
