@@ -352,8 +352,10 @@ def _checked(folder: Path, out: str | os.PathLike | None, timeout: float,
              jobs: int | None) -> tuple[Path, int]:
     """The output folder and the jobs of :func:`grade_class`, its arguments checked."""
     if not folder.is_dir():
+        unzip = (f": unzip the LMS's download first (unzip -d {folder.with_suffix('')} {folder})"
+                 if folder.suffix.lower() == ".zip" else "")
         raise ValueError(f"submissions must be a folder (a student's folder or notebook per "
-                         f"student), got {folder}")
+                         f"student), got {folder}{unzip}")
     if not (isinstance(timeout, (int, float)) and 0 < timeout < math.inf):
         raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
     jobs = running.jobs_of(jobs, min(4, running.cpus()))

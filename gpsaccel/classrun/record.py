@@ -93,8 +93,7 @@ class Record:
         before = self.previous.get("reuse")
         if not self.previous.get("seed") or before != fingerprint(settings):
             return ("no earlier run in this folder" if not self.previous else
-                    "the earlier run's homework, secret, sandbox, time limit or gpsaccel "
-                    "differ")
+                    _changed(self.previous, settings))
         old = {g.id: g for g in self.old}
         recorded = self.previous.get("notebooks") or {}
         for i, e in enumerate(entries):
@@ -209,6 +208,9 @@ def resumed(record: Record, entries: list[Entry], wanted: Sequence[str] | None,
     if wanted is not None:  # by the name as found, its id or as it is shown
         entries = _chosen(entries, wanted, folder)
         seed = record.previous.get("seed") if seed is None else seed
+        if record.previous.get("reuse") not in (None, fingerprint(settings)):  # said, not refused
+            reuse = "regraded under other settings than the class: " + \
+                _changed(record.previous, settings)
     elif seed is None and not regrade:
         why = record.reusable(entries, settings)
         seed = record.previous.get("seed") if not why else None
@@ -241,6 +243,27 @@ def _idle(record: dict, seed: int) -> bool:
     rather than keeping it there once more."""
     return (record.get("graded") == 0 and record.get("seed") == seed
             and not record.get("regrades") and not record.get("interrupted"))
+
+
+def _changed(previous: dict, settings: dict) -> str:
+    """Why a recorded run's grades cannot be kept: the settings it records that differ now (the
+    flag that brings them back), else what it records only as a hash (the secret, the homework's
+    files, gpsaccel)."""
+    said = {"assignment": ("homework", "--assignment {}"), "sandbox": ("sandbox", "--sandbox {}"),
+            "timeout": ("time limit", "--timeout {:g}")}
+    now = {"assignment": settings["name"], "sandbox": settings["sandbox"],
+           "timeout": settings["timeout"]}
+    differ = [(what, flag.format(previous[k]), previous[k], now[k])
+              for k, (what, flag) in said.items() if k in previous and previous[k] != now[k]]
+
+    def shown(v: object) -> str:
+        return f"{v:g} s" if isinstance(v, (int, float)) else str(v)
+
+    if differ:
+        return "the earlier run's " + ", ".join(
+            f"{what} was {shown(was)}, now {shown(new)} (give {flag} to match it)"
+            for what, flag, was, new in differ)
+    return "the earlier run's secret, homework files or gpsaccel version differ"
 
 
 def _digest(path: Path) -> str:

@@ -194,3 +194,42 @@ def test_a_rerun_that_keeps_every_grade_prints_no_empty_table(tmp_path, monkeypa
     again = capsys.readouterr().out.splitlines()
     assert again[0].startswith("wrote ") and "" not in again
     assert any("2 unchanged notebook(s) not graded again" in ln for ln in again)
+
+
+def test_a_rerun_that_keeps_nothing_names_the_setting_that_changed(tmp_path, monkeypatch, capsys):
+    """A rerun of a class graded with ``--timeout 60`` and run again without it (the default,
+    120 s, as an instructor who forgot the flag does) said only "the earlier run's homework,
+    secret, sandbox, time limit or gpsaccel differ": which, and the flag that keeps the grades,
+    are in the record."""
+    from gpsaccel.cli import main
+
+    def fake(task, entries, jobs, executor, on_result, warm_boxes=False):
+        for i, e in enumerate(entries):
+            on_result(i, asdict(item.unusable(task.name, e.student, e.found, "graded", "", e.id)))
+        return [None] * len(entries)
+
+    monkeypatch.setattr(running, "run", fake)
+    sub = tmp_path / "class"
+    (sub / "ann").mkdir(parents=True)
+    (sub / "ann" / "calibration.ipynb").write_text("{}")
+    argv = ["grade", str(sub), "--assignment", "calibration", "--no-similarity"]
+    assert main([*argv, "--timeout", "60"]) == 0
+    capsys.readouterr()
+    assert main(argv) == 0
+    said = [ln for ln in capsys.readouterr().out.splitlines() if "nothing kept" in ln]
+    assert said == ["rerun: nothing kept: the earlier run's time limit was 60 s, now 120 s "
+                    "(give --timeout 60 to match it)"], said
+    # a regrade of one student under another limit than the class's is graded, and says so
+    assert main([*argv, "--timeout", "30", "--student", "ann"]) == 0
+    said = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("rerun:")]
+    assert said == ["rerun: regraded under other settings than the class: the earlier run's "
+                    "time limit was 120 s, now 30 s (give --timeout 120 to match it)"], said
+
+
+def test_an_exports_zip_is_refused_with_how_to_unzip_it(tmp_path):
+    """The LMS downloads a zip; the grader reads it unzipped (docs/grading.md). Given the zip,
+    it said only that submissions must be a folder."""
+    (tmp_path / "submissions.zip").write_bytes(b"PK\x05\x06" + bytes(18))
+    with pytest.raises(ValueError, match=r"got .*submissions\.zip: unzip the LMS's download "
+                                         r"first \(unzip -d .*submissions .*submissions\.zip\)"):
+        grade(tmp_path / "submissions.zip", "calibration", out=tmp_path / "out")
