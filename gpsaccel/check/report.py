@@ -244,8 +244,9 @@ _TB_INTRO = "; the traceback ends with:"
 
 def first_line(message: str) -> str:
     """A finding's first line, for the first look and a graded notebook's feedback (one line a
-    finding).  One that introduces the traceback below it (which neither shows) names the exception's type instead (the traceback's
-    last line up to its message: ``raise NotImplementedError`` has none), or drops the clause."""
+    finding).  One that introduces the traceback below it (which neither shows) names the
+    exception's type instead (the traceback's last line up to its message: ``raise
+    NotImplementedError`` has none), or drops the clause."""
     first, _, rest = message.partition("\n")
     if not first.endswith(_TB_INTRO):
         return first
