@@ -102,6 +102,12 @@ class Export:
             return Name(sid)
         return naming, "each name as a roster id"
 
+    def _how(self, ids: str, through: str) -> str:
+        """How the export was read, for the terminal: its ``ids`` mapped ``through`` the roster,
+        or taken as found where no roster was given."""
+        return f"{ids} through {through}" if self.roster is not None else \
+            f"{ids} as found (no roster given: each is the student's id)"
+
     def _canvas(self, _folder: Path) -> tuple[Naming, str]:
         if self.roster is None:
             column, by = None, {}
@@ -124,7 +130,7 @@ class Export:
                 return Name(m["uid"], late=late, attempt=attempt)
             return _looked_up(found, by.get(m["uid"], []), f"Canvas user id {m['uid']}",
                               late, attempt)
-        return naming, f"Canvas user ids through the roster's {column or 'nothing'}"
+        return naming, self._how("Canvas user ids", f"the roster's {column}")
 
     def _moodle(self, _folder: Path) -> tuple[Naming, str]:
         roster = self.roster
@@ -149,7 +155,8 @@ class Export:
             key = m["participant"] if column == "participant" else name_key(m["name"])
             return _looked_up(found, by.get(key, []), f"participant {m['participant']}"
                               if column == "participant" else f"the name {m['name']!r}")
-        return naming, f"Moodle's {column} through the roster"
+        return naming, self._how(f"Moodle's {'full name' if roster is None else column}",
+                                 "the roster")
 
     def _gradescope(self, folder: Path) -> tuple[Naming, str]:
         submitters = read_metadata(folder / METADATA)
@@ -179,7 +186,7 @@ class Export:
                 return _two(found, "a group submission of " + ", ".join(
                     repr(_untrusted.shown(s.id)) for s in matched))
             return _looked_up(found, matched, "its submitter's email or SID")
-        return naming, "Gradescope's submitters (email, else SID) through the roster"
+        return naming, self._how("Gradescope's submitters (email, else SID)", "the roster")
 
 
 _NAMINGS: dict[str, Callable[[Export, Path], tuple[Naming, str]]] = {

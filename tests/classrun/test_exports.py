@@ -248,3 +248,16 @@ def test_a_regrade_names_a_student_as_the_export_names_them(tmp_path, monkeypatc
         with pytest.raises(ValueError, match="no submission of 'raybob_84502_1_calibration"):
             grade(tmp_path / layout, "calibration", out=out, secret=SECRET, roster=roster,
                   similarity=False, student=["raybob_84502_1_calibration.ipynb"])
+
+
+def test_an_export_read_without_a_roster_says_so(tmp_path):
+    """Canvas's files graded without ``--roster`` printed "export read as canvas: Canvas user ids
+    through the roster's nothing" (tried from the wheel); each LMS's export says its ids are
+    taken as found."""
+    _files(tmp_path / "canvas", {"nguyenan_84500_678900_calibration.ipynb": "{}"})
+    _files(tmp_path / "moodle", {"An Nguyen_1_assignsubmission_file_/calibration.ipynb": "{}"})
+    for layout, ids in (("canvas", "Canvas user ids"), ("moodle", "Moodle's full name")):
+        got, _, found = _walk(tmp_path / layout, None)
+        assert found == [f"{layout}: {ids} as found (no roster given: each is the student's "
+                         f"id)"], found
+        assert [g[0] for g in got] == [{"canvas": "84500", "moodle": "An Nguyen"}[layout]]
