@@ -152,6 +152,7 @@ def write_summary(rows: list[dict], grades: Sequence, out: Path) -> None:
 
 def _figure(rows: list[dict], path: Path) -> None:
     import matplotlib
+    import matplotlib.ticker
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -168,6 +169,7 @@ def _figure(rows: list[dict], path: Path) -> None:
     if codes:
         b.barh([c for c, _ in codes][::-1], [n for _, n in codes][::-1])
         b.set_xlabel("students")
+        b.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))  # no 0.25 student
         b.set_title("mistake codes")
     else:
         b.axis("off")
