@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 
 from gpsaccel.assignments import fingerprint, hidden
+from gpsaccel.assignments.notebook import writefile_cell
 
 #: Characters of code one notebook may hold to be compared (cells and written files, read in
 #: order; what is past it is a finding, :func:`_bounded`): an honest notebook holds under
@@ -147,11 +148,10 @@ def written_files(sources: Iterable[str]) -> dict[str, str]:
     """File name -> text of every ``%%writefile [-a] NAME`` cell, as the box writes them."""
     out: dict[str, str] = {}
     for src in sources:
-        head, _, body = src.lstrip().partition("\n")
-        parts = head.split()
-        if len(parts) >= 2 and parts[0] == "%%writefile":
-            name = parts[-1]
-            out[name] = out.get(name, "") + body if "-a" in parts[1:-1] else body
+        written = writefile_cell(src)
+        if written is not None:
+            name, append, body = written
+            out[name] = out.get(name, "") + body if append else body
     return out
 
 

@@ -48,7 +48,7 @@ from gpsaccel.check.problem import BOX_HIDES
 
 __all__ = ["BOX_HIDES", "LOAD_CPU", "LOAD_MEMORY", "LOAD_WALL", "MAX_NDIM", "MAX_NOTEBOOK_BYTES",
            "MESSAGE_BYTES", "STATUSES", "STATUS_LENGTH", "Cell", "Notebook", "NotebookError",
-           "Read", "load", "module_source", "read", "transform"]
+           "Read", "load", "module_source", "read", "transform", "writefile_cell"]
 
 #: Largest notebook file read (bytes).
 MAX_NOTEBOOK_BYTES = 16 << 20
@@ -90,14 +90,31 @@ class Notebook:
     notes: list[str] = field(default_factory=list)
 
     def writefile(self, name: str) -> tuple[Cell, str] | None:
-        """The last cell that starts ``%%writefile NAME`` and its body (read as text, never run)."""
+        """The last cell that writes ``NAME`` with ``%%writefile`` and the file's text once every
+        such cell has run, in order (read as text, never run): a ``-a`` cell appends to it as
+        IPython's does, so a file written in parts is graded whole, as the student's Jupyter
+        ran it."""
         found = None
         for cell in self.cells:
-            head, _, body = cell.source.lstrip().partition("\n")
-            parts = head.split()
-            if len(parts) >= 2 and parts[0] == "%%writefile" and parts[-1] == name:
-                found = (cell, body)
+            written = writefile_cell(cell.source)
+            if written is not None and written[0] == name:
+                text = found[1] + written[2] if found is not None and written[1] else written[2]
+                found = (cell, text)
         return found
+
+
+#: The options of IPython's ``%%writefile`` that append instead of writing the file anew.
+APPEND = frozenset({"-a", "--append"})
+
+
+def writefile_cell(source: str) -> tuple[str, bool, str] | None:
+    """(file name, appends, text written) of a ``%%writefile [-a] NAME`` cell, else None: the
+    one reading of such a cell, for grading a file question and for the similarity record."""
+    head, _, body = source.lstrip().partition("\n")
+    parts = head.split()
+    if len(parts) < 2 or parts[0] != "%%writefile":
+        return None
+    return parts[-1], bool(APPEND.intersection(parts[1:-1])), body
 
 
 def read(path: str | Path) -> Notebook:

@@ -91,7 +91,8 @@ class Shell:
             exec(compile(cell, "<magic>", "exec"), self.namespace)  # noqa: S102
         elif name == "writefile" and line.split():
             args = line.split()
-            with open(args[-1], "a" if "-a" in args[:-1] else "w", encoding="utf-8") as f:
+            append = "-a" in args[:-1] or "--append" in args[:-1]  # IPython's two spellings
+            with open(args[-1], "a" if append else "w", encoding="utf-8") as f:
                 f.write(cell)
         else:
             self.skipped.append("%%" + name)

@@ -68,3 +68,33 @@ def test_a_file_that_does_not_import_is_named_by_its_error_in_the_feedback():
                 if "import-error" in ln)
     assert line.endswith("(before kalman_filter is called); the traceback ends with "
                          "SyntaxError."), line
+
+
+def test_a_file_written_in_parts_is_graded_whole_as_jupyter_wrote_it():
+    """``%%writefile -a`` (or ``--append``) appends, as IPython's magic does: a student who
+    writes the file question's file in two cells was graded on the last cell alone (an honest,
+    working calibration q2 scored 0 / 4: "kalman_filter is not defined"), while the similarity
+    record read the file whole; both now read it as the student's Jupyter wrote it."""
+    from gpsaccel.assignments.answercode import written_files
+    from gpsaccel.assignments.questions import Draw, Question
+
+    seen = []
+
+    def grade_file(path, draw, timeout):
+        seen.append(path.read_text(encoding="utf-8"))
+        return scoring.Report("q2")
+
+    q = Question("q2", 4.0, file="f.py", grade_file=grade_file)
+    cells = ["%%writefile f.py\nimport numpy as np\n", "x = 1",
+             "%%writefile -a f.py\ndef f(z):\n    return z\n",
+             "%%writefile --append  f.py\ndef g(z):\n    return 2 * z\n",
+             "%%writefile other.py\ny = 2\n"]
+    whole = "import numpy as np\ndef f(z):\n    return z\ndef g(z):\n    return 2 * z\n"
+    nb = nbm.Notebook([nbm.Cell(i + 1, c) for i, c in enumerate(cells)])
+    scoring._grade_file(q, nb, Draw(0), 5.0)
+    assert seen == [whole]
+    assert nb.writefile("f.py") == (nb.cells[3], whole)
+    assert written_files(cells) == {"f.py": whole, "other.py": "y = 2\n"}
+    # a later cell without -a writes the file anew
+    nb.cells.append(nbm.Cell(6, "%%writefile f.py\nh = 3\n"))
+    assert nb.writefile("f.py") == (nb.cells[5], "h = 3\n")

@@ -126,11 +126,12 @@ def test_the_shell_runs_time_and_writefile_and_lists_the_rest(tmp_path, monkeypa
     shell.run_cell_magic("capture", "", "w = z * 2")
     shell.run_cell_magic("writefile", "f.py", "A = 1\n")
     shell.run_cell_magic("writefile", "-a f.py", "B = 2\n")
+    shell.run_cell_magic("writefile", "--append f.py", "C = 3\n")  # IPython's long option
     shell.run_cell_magic("bash", "", "rm -rf /")
     assert shell.system("pip install x") == 0 and shell.getoutput("ls") == []
     shell.run_cell()
     assert shell.anything_else(1, 2) is None
-    assert (ns["z"], ns["w"]) == (5, 10) and (tmp_path / "f.py").read_text() == "A = 1\nB = 2\n"
+    assert (ns["z"], ns["w"]) == (5, 10) and (tmp_path / "f.py").read_text() == "A = 1\nB = 2\nC = 3\n"
     assert shell.skipped == ["%%bash", "!pip", "!ls", "run_cell"]
 
 
