@@ -13,7 +13,7 @@ interface of its own.
   but its own.
 * :func:`kill_uid`: everything the uid runs, wherever it is in the process tree (a daemon, a
   process a terminal multiplexer server started), is killed until a scan of ``/proc`` finds
-  none; :func:`remove_files` removes what the uid left in the shared temporary folders.
+  none; :func:`remove_files` removes what the uid left in the shared writable folders.
 * :func:`reveal`: the interpreter may live where that uid cannot reach it (``/root/.pyenv``, a
   venv in a 0700 home).  In the box's first process, before it drops root, a private mount
   namespace replaces each unreachable ancestor by a small read-only tmpfs holding read-only bind
@@ -42,8 +42,9 @@ UID_BASE = 2_013_265_920
 UID_SPAN = 1 << 22
 SLOTS = 512
 
-#: Shared writable folders where a box user could leave files (cleaned after each box).
-SHARED_TMP = ("/tmp", "/var/tmp", "/dev/shm")
+#: Shared writable folders where a box user could leave files (cleaned after each box): every
+#: folder of a Debian or Ubuntu machine any user may write, ``/run/lock`` (``/var/lock``) too.
+SHARED_TMP = ("/tmp", "/var/tmp", "/dev/shm", "/run/lock", "/var/lock")
 
 
 def box_uid() -> int | None:

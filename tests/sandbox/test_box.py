@@ -109,3 +109,32 @@ def test_results_before_a_stop_come_back(tmp_path, backend, stop):
     assert box.failure == stop, (box.failure, box.detail, box.output[-2000:])
     assert [float(r["y"]) for r in box.results] == [1.0, 2.0]
     assert left == []
+
+
+def test_nothing_the_box_wrote_outlives_it_in_the_machines_shared_folders(tmp_path, backend):
+    """Every folder any user may write (``/run/lock`` too, which ``/var/lock`` names on Debian):
+    a basic box's uid left a file in ``/run/lock`` that outlived the class run, for the next box
+    of that uid (the next student of the worker) to read."""
+    if backend == "basic" and os.geteuid() != 0:
+        pytest.skip("a box user needs root; without one the files are the checker's own")
+    tag = f"gpsacc-red3-left-{os.getpid()}"
+    dirs = ("/tmp", "/var/tmp", "/dev/shm", "/run/lock", "/var/lock")
+    (tmp_path / "student.py").write_text(
+        "import os\n\n"
+        "def f(x):\n"
+        f"    for d in {dirs!r}:\n"
+        "        try:\n"
+        f"            open(os.path.join(d, {tag!r} + str(abs(hash(d)))), 'w').write('x')\n"
+        "        except OSError:\n"
+        "            pass\n"
+        "    return x\n")
+    sub = sb.load_submission(tmp_path / "student.py", "f")
+    try:
+        box = sb.run(sub, [sb.Call("f", (np.array(1.0),), (sb.Output("y", ()),))], LIMITS, backend)
+    finally:
+        left = [os.path.join(d, n) for d in dirs if os.path.isdir(d)
+                for n in os.listdir(d) if n.startswith(tag)]
+        for p in left:
+            os.unlink(p)
+    assert box.failure is None, box.detail
+    assert left == []
