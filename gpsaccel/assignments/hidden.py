@@ -20,7 +20,8 @@ helper.py``), each way of running code the text does not show:
   ``read_pickle``), ``dill``, ``cloudpickle``, ``shelve``: data that becomes code or objects;
 * ``codecs`` (``rot13``, ``zlib`` and ``base64`` codecs of text);
 * a computed name looked up among the builtins or a module's globals (``getattr(builtins,
-  'ex' + 'ec')``, ``__builtins__[...]``, ``globals()[...]``, ``sys.modules[...]``);
+  'ex' + 'ec')``, ``__builtins__[...]``, ``globals()[...]``, ``sys.modules[...]``), the
+  builtins reached through a module (``sys.modules['builtins'].exec``, ``numpy.__builtins__``);
 * IPython's ``run_cell``/``run_cell_magic``/``run_line_magic`` with computed text (the input
   transformer writes only literals);
 * a written ``.py`` file that declares a source encoding other than UTF-8 or ASCII: Python
@@ -82,7 +83,9 @@ _PLAIN = frozenset({"utf-8", "utf8", "utf_8", "ascii", "us-ascii", "latin-1", "l
 
 
 def _dotted(node: ast.AST, aliases: dict[str, str]) -> str:
-    """``a.b.c`` of an attribute chain over a name, the name resolved through the imports."""
+    """``a.b.c`` of an attribute chain over a name, the name resolved through the imports;
+    ``sys.modules['m']`` is the module ``m`` (``sys.modules['builtins'].exec`` is
+    ``builtins.exec``)."""
     parts: list[str] = []
     while isinstance(node, ast.Attribute):
         parts.append(node.attr)
@@ -91,9 +94,19 @@ def _dotted(node: ast.AST, aliases: dict[str, str]) -> str:
         parts.append(aliases.get(node.id, node.id))
     elif isinstance(node, ast.Call):  # __import__("zlib").decompress
         parts.append("<call>")
+    elif isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant) \
+            and isinstance(node.slice.value, str) and node.slice.value \
+            and _dotted(node.value, aliases) == "sys.modules":
+        parts.append(node.slice.value)
     else:
         return ""
     return ".".join(reversed(parts))
+
+
+def _builtins(d: str) -> bool:
+    """Whether the dotted name ``d`` reaches the builtins: ``builtins``, ``__builtins__``,
+    or any module's ``__builtins__`` (``numpy.__builtins__`` is the builtins' namespace)."""
+    return any(p in _BUILTIN_HOLDERS for p in d.split(".")) if d else False
 
 
 def aliases(trees: Iterable[ast.AST]) -> dict[str, str]:
@@ -150,7 +163,7 @@ def _runner(n: ast.Call, d: str, names: dict[str, str]) -> str | None:
     """``exec``/``eval``/``compile`` (or through the builtins) of anything but a literal;
     ``__import__``."""
     last = d.rsplit(".", 1)[-1]
-    if last in _RUNNERS and (d == last or d.rsplit(".", 1)[0] in _BUILTIN_HOLDERS):
+    if last in _RUNNERS and (d == last or _builtins(d.rsplit(".", 1)[0])):
         first = n.args[0] if n.args else None
         return None if first is not None and _literal(first) else \
             f"{last} of computed text{_fed(n, names)}"
@@ -222,7 +235,7 @@ def _holder(node: ast.AST, names: dict[str, str]) -> str | None:
             return f"{f}()"
         return None
     d = _dotted(node, names)
-    if d.split(".")[0] in _BUILTIN_HOLDERS:
+    if _builtins(d):
         return "the builtins"
     if d == "sys.modules" or d.endswith(".__dict__"):
         return d
@@ -252,6 +265,8 @@ def _attribute(n: ast.Attribute, names: dict[str, str]) -> str | None:
     d = _dotted(n, names)
     if n.attr in _ATTRS or d and _module_use(d):
         return _module_use(d) or d
+    if n.attr in _BUILTIN_HOLDERS and isinstance(n.ctx, ast.Load):  # numpy.__builtins__
+        return f"{d or n.attr} used"
     return None
 
 

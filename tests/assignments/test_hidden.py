@@ -56,6 +56,12 @@ PACKINGS = [
     ("f = lambda: 0\nf.__code__ = f.__code__.replace(co_code=data)", "__code__"),
     ("import subprocess\nsubprocess.run([sys.executable, '-c', text])", "subprocess.run"),
     ("import os\nos.system('python -c ' + text)", "os.system"),
+    # the builtins reached through a module: each graded a copied filter 10 / 10 with no
+    # finding (bwrap, warm boxes), the report saying "0 with hidden code"
+    ("import sys\nsys.modules['builtins'].exec(s[::-1])", "exec of computed text"),
+    ("import sys\nsys.modules['builtins'].__dict__['ex' + 'ec'](s)", "the builtins[...]"),
+    ("import numpy as np\nnp.__builtins__['exec'](s[::-1])", "numpy.__builtins__ used"),
+    ("import numpy as np\nnp.__builtins__['ex' + 'ec'](s)", "the builtins[...]"),
 ]
 
 
