@@ -309,15 +309,21 @@ def _answer(stmts: Sequence[ast.stmt], names: set[str]) -> tuple[list[ast.stmt],
 
 def _file_answer(text: str | None, a: Asked, modules: Mapping[str, list[ast.stmt]]
                  ) -> tuple[list[ast.stmt], list[str]]:
-    """The statements of the file a question checks that answer it (the master's names and
-    what they use); none when the notebook writes no such file or Python cannot parse it."""
+    """(the statements of the file a question checks that answer it: the master's names and
+    what they use, the names undefined: every one of the master's names when the file's shown
+    code defines none of them, as :func:`_answer` counts, so that a file whose function only
+    hidden code defines is flagged once it scores); none when the notebook writes no such file
+    or Python cannot parse it."""
     stmts = _parsed(text) if text is not None else None
     if not stmts:
         return [], []
     assert a.file is not None  # a file question
     stmts = _expand(stmts, {k: v for k, v in modules.items() if k != a.file[:-3]}, 1, set())
     roots = set(a.roots) & set().union(*(binds(s) for s in stmts)) if stmts else set()
-    return (select(stmts, roots) if roots else list(stmts)), []
+    shown = set().union(*(binds(s) for s in stmts if not isinstance(
+        s, (ast.Import, ast.ImportFrom)))) if stmts else set()
+    undefined = [] if shown & set(a.roots) else sorted(a.roots)
+    return (select(stmts, roots) if roots else list(stmts)), undefined
 
 
 def _shown(keep: Sequence[ast.stmt]) -> str:

@@ -111,6 +111,23 @@ def test_tokens_are_packed_and_checked():
             ac.unpack(bad)
 
 
+def test_a_file_whose_function_no_shown_code_defines_is_undefined():
+    """The report's backstop for hidden code the scan does not name (a graded name that scored
+    although no shown code defines it) held for the questions that read the box only: a
+    ``kalman_filter.py`` defining its function by any unlisted way scored 4 / 4 unflagged."""
+    hidden = "import numpy as np\nglobals().update(make())\n"
+    assert answer(record(["%%writefile kalman_filter.py\n" + hidden], Q2), "q2")[
+        "undefined"] == ["kalman_filter"]
+    imported = "from filterpy_like import kalman_filter\n"
+    assert answer(record(["%%writefile kalman_filter.py\n" + imported], Q2), "q2")[
+        "undefined"] == ["kalman_filter"]
+    honest = "import numpy as np\n\ndef kalman_filter(z):\n    return z, z\n"
+    helper = ["%%writefile kf_core.py\n" + honest,
+              "%%writefile kalman_filter.py\nfrom kf_core import kalman_filter\n"]
+    for sources in (["%%writefile kalman_filter.py\n" + honest], helper):
+        assert answer(record(sources, Q2), "q2")["undefined"] == []
+
+
 def test_the_master_file_names_are_what_the_checker_calls():
     assert ac.master_file_names("calibration", "kalman_filter.py") == {"kalman_filter"}
     assert ac.master_file_names("calibration", "other.py") == frozenset()
