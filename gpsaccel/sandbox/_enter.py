@@ -16,6 +16,9 @@ do, in this order (:func:`enter`):
 ``fence``    ``"mount"``: ``hidden`` folders covered by the empty folder ``empty``;
              ``"landlock"``: the ruleset (a descriptor passed beside the plan) restricts the
              process last, once it cannot gain privileges (:mod:`gpsaccel.sandbox.fence`);
+``proc``     (basic, root) a ``/proc`` of the box's own that shows it no other uid's process
+             (``hidepid=2``): the box shares the machine's PID namespace, and every process's
+             command line (a grader's ``--seed``) was readable to it;
 ``rlimits``  [resource, value] pairs, set as soft and hard limit;
 ``drop_caps`` an empty capability bounding set (root: after exec the permitted set is the
              bounding set);
@@ -32,6 +35,7 @@ import ctypes
 import os
 import resource
 import signal
+import struct
 from collections.abc import Sequence
 
 PR_SET_PDEATHSIG, PR_SET_DUMPABLE, PR_CAPBSET_DROP = 1, 4, 24
@@ -39,11 +43,14 @@ PR_SET_CHILD_SUBREAPER, PR_SET_NO_NEW_PRIVS = 36, 38
 PR_CAP_AMBIENT, PR_CAP_AMBIENT_CLEAR_ALL = 47, 4
 
 CLONE_NEWNS = 0x00020000
-MS_RDONLY, MS_NOSUID, MS_NODEV, MS_REMOUNT, MS_BIND = 1, 2, 4, 32, 4096
+MS_RDONLY, MS_NOSUID, MS_NODEV, MS_NOEXEC, MS_REMOUNT, MS_BIND = 1, 2, 4, 8, 32, 4096
 MS_REC, MS_PRIVATE = 16384, 1 << 18
 
-#: landlock_restrict_self: one number on every Linux architecture
-_LANDLOCK_RESTRICT_SELF = 446
+#: landlock_add_rule and landlock_restrict_self: one number on every Linux architecture; a
+#: rule beneath a folder, and the access right to read a file
+_LANDLOCK_ADD_RULE, _LANDLOCK_RESTRICT_SELF = 445, 446
+RULE_PATH_BENEATH = 1
+READ_FILE = 1 << 2
 #: capset's header version 3: two 32-bit words per set
 _CAPS_V3 = 0x20080522
 
@@ -110,6 +117,32 @@ def mount_fence(libc: ctypes.CDLL, hidden: list[str], empty: str) -> None:
               f"read-only {h}")
 
 
+def private_proc(libc: ctypes.CDLL, ruleset: int | None = None) -> None:
+    """As root: a private mount namespace whose ``/proc`` is a procfs of its own mounted with
+    ``hidepid=2``, so that the box's uid sees its own processes only (a basic box has no PID
+    namespace: the machine's ``/proc`` gave it every process's command line).  ``ruleset``: the
+    box's Landlock ruleset, not yet in force, which gets the rule of the new ``/proc`` (Landlock
+    skips the rule of a covered mount: the machine's ``/proc`` rule no longer applies)."""
+    check(libc, libc.unshare(CLONE_NEWNS), "unshare(CLONE_NEWNS)")
+    check(libc, libc.mount(None, b"/", None, MS_REC | MS_PRIVATE, None), "mount --make-rprivate /")
+    check(libc, libc.mount(b"proc", b"/proc", b"proc", MS_NOSUID | MS_NODEV | MS_NOEXEC,
+                           b"hidepid=2"), "mount /proc hidepid=2")
+    if ruleset is not None:
+        fd = os.open("/proc", os.O_PATH | os.O_CLOEXEC)
+        try:
+            check(libc, add_rule(libc, ruleset, fd, READ_FILE), "landlock_add_rule /proc")
+        finally:
+            os.close(fd)
+
+
+def add_rule(libc: ctypes.CDLL, ruleset: int, fd: int, access: int) -> int:
+    """landlock_add_rule: ``access`` beneath the folder (or of the file) open as ``fd`` (an
+    ``O_PATH`` descriptor); the call's return value."""
+    rule = ctypes.create_string_buffer(struct.pack("=Qi", access, fd))
+    return libc.syscall(ctypes.c_long(_LANDLOCK_ADD_RULE), ctypes.c_int(ruleset),
+                        ctypes.c_int(RULE_PATH_BENEATH), rule, ctypes.c_uint32(0))
+
+
 def landlock(libc: ctypes.CDLL, ruleset: int) -> None:
     """Restrict this process (and everything it starts) by the Landlock ruleset ``ruleset``."""
     check(libc, libc.syscall(ctypes.c_long(_LANDLOCK_RESTRICT_SELF), ctypes.c_int(ruleset),
@@ -134,6 +167,10 @@ def enter(libc: ctypes.CDLL | None, plan: dict, ruleset: int | None = None,
         if libc is None:
             raise OSError("the box's fence needs Linux's libc")
         mount_fence(libc, plan["hidden"], plan["empty"])
+    if plan.get("proc"):  # as root, before the uid drop
+        if libc is None:
+            raise OSError("the box's own /proc needs Linux's libc")
+        private_proc(libc, ruleset if plan["fence"] == "landlock" else None)
     for res, value in plan["rlimits"]:
         resource.setrlimit(res, (value, value))
     if plan["drop_caps"] and libc is not None:

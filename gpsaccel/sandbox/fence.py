@@ -46,10 +46,9 @@ from gpsaccel.sandbox.procs import _libc
 
 # Landlock's system calls: one number on every Linux architecture (added after the tables were
 # unified), and its constants (include/uapi/linux/landlock.h)
-_CREATE_RULESET, _ADD_RULE = 444, 445
+_CREATE_RULESET = 444
 _CREATE_RULESET_VERSION = 1
-_RULE_PATH_BENEATH = 1
-READ_FILE, REFER = 1 << 2, 1 << 13
+READ_FILE, REFER = _enter.READ_FILE, 1 << 13
 
 
 KINDS = ("landlock", "mount", "permissions")
@@ -81,6 +80,25 @@ def mounts_allowed() -> bool:
     pid = os.fork()
     if pid == 0:  # pragma: no cover - the child
         os._exit(0 if libc.unshare(_enter.CLONE_NEWNS) == 0 else 1)
+    _, status = os.waitpid(pid, 0)
+    return os.waitstatus_to_exitcode(status) == 0
+
+
+@functools.lru_cache(maxsize=1)
+def private_proc_allowed() -> bool:
+    """Whether a box's first process may mount a ``/proc`` of its own that hides other uids'
+    processes (:func:`gpsaccel.sandbox._enter.private_proc`: root with ``CAP_SYS_ADMIN``, a
+    kernel that lets a mount namespace mount procfs): tried once, in a child."""
+    libc = _libc()
+    if libc is None or os.geteuid() != 0:
+        return False
+    pid = os.fork()
+    if pid == 0:  # pragma: no cover - the child
+        try:
+            _enter.private_proc(libc)
+        except BaseException:  # noqa: BLE001 - the child's answer is its exit status
+            os._exit(1)
+        os._exit(0)
     _, status = os.waitpid(pid, 0)
     return os.waitstatus_to_exitcode(status) == 0
 
@@ -168,10 +186,7 @@ def _landlock(hidden: list[str], abi: int, revealed: list[str]) -> Fence:
     try:
         for path, is_dir, pfd in _grants(hidden, revealed):
             try:
-                rule = ctypes.create_string_buffer(struct.pack(
-                    "=Qi", handled if is_dir else READ_FILE, pfd))
-                if libc.syscall(ctypes.c_long(_ADD_RULE), ctypes.c_int(fd),
-                                ctypes.c_int(_RULE_PATH_BENEATH), rule, ctypes.c_uint32(0)) == 0:
+                if _enter.add_rule(libc, fd, pfd, handled if is_dir else READ_FILE) == 0:
                     fence.granted.append(path)
             finally:
                 os.close(pfd)

@@ -13,7 +13,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from gpsaccel.sandbox import _boxuser, warmbox, zygote
+from gpsaccel.sandbox import _boxuser, fence, warmbox, zygote
 from gpsaccel.sandbox._removal import remove_tree
 from gpsaccel.sandbox.confinement import (
     _bwrap_command,
@@ -59,7 +59,9 @@ class Prepared:
 
     def plan(self, extra: int) -> dict:
         drop = self.c.uid is not None if self.backend == "bwrap" else os.geteuid() == 0
-        return _entry_plan(self.limits, self.nproc(extra), drop, _cap_last(), self.c)
+        own_proc = self.backend == "basic" and self.c.uid is not None and \
+            fence.private_proc_allowed()
+        return _entry_plan(self.limits, self.nproc(extra), drop, _cap_last(), self.c, own_proc)
 
     def _folder(self) -> Path:
         box = self.tmp / "box"

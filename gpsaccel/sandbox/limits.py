@@ -90,11 +90,12 @@ def _confine(limits: Limits, backend: str, needed: list[str], extra: int) -> _Co
 
 
 def _entry_plan(limits: Limits, nproc: int, drop_caps: bool, cap_last: int,
-                c: _Confinement) -> dict:
+                c: _Confinement, own_proc: bool = False) -> dict:
     """What the box's first process does before the student's code (:mod:`._enter`'s plan):
     join the box's cgroup, limits, no core files; as root also the mounts revealing the
     interpreter, an empty capability bounding set, the box's uid, no new privileges; last the
-    fence of a basic box's hidden folders."""
+    fence of a basic box's hidden folders.  ``own_proc``: a ``/proc`` that shows the box only its
+    own uid's processes (a basic box as root, where the kernel lets it mount one)."""
     cpu = int(limits.time) + 2
     fence = c.fence
     return {
@@ -107,7 +108,7 @@ def _entry_plan(limits: Limits, nproc: int, drop_caps: bool, cap_last: int,
         "rlimits": [[resource.RLIMIT_AS, limits.memory], [resource.RLIMIT_CPU, cpu],
                     [resource.RLIMIT_FSIZE, limits.file_size], [resource.RLIMIT_NPROC, nproc],
                     [resource.RLIMIT_NOFILE, limits.open_files], [resource.RLIMIT_CORE, 0]],
-        "drop_caps": drop_caps, "cap_last": cap_last, "uid": c.uid}
+        "proc": own_proc, "drop_caps": drop_caps, "cap_last": cap_last, "uid": c.uid}
 
 
 def _preexec(plan: dict, confinement: _Confinement) -> Callable[[], None]:

@@ -138,3 +138,36 @@ def test_nothing_the_box_wrote_outlives_it_in_the_machines_shared_folders(tmp_pa
             os.unlink(p)
     assert box.failure is None, box.detail
     assert left == []
+
+
+def test_the_box_sees_no_command_line_of_the_checker_nor_of_the_machine(tmp_path, backend):
+    """A basic box shares the machine's PID namespace: it read every process's command line
+    (``gpsaccel grade ... --seed 777`` gave a student the seed in their own feedback).  As root
+    its ``/proc`` shows its own uid's processes only; bwrap's has its PID namespace."""
+    if backend == "basic" and os.geteuid() != 0:
+        pytest.skip("a box user needs root; without one the box is the checker's own user")
+    import subprocess
+    import sys
+
+    marker = f"gpsacc-red3-seed-{os.getpid()}"
+    (tmp_path / "student.py").write_text(
+        "import os\n\n"
+        "def f(x):\n"
+        "    seen = 0\n"
+        "    for p in os.listdir('/proc'):\n"
+        "        try:\n"
+        f"            seen += {marker.encode()!r} in open(f'/proc/{{p}}/cmdline', 'rb').read()\n"
+        "        except OSError:\n"
+        "            pass\n"
+        "    own = 'Uid:' in open('/proc/self/status').read()  # its own, readable\n"
+        "    return 10.0 * seen + own\n")
+    sub = sb.load_submission(tmp_path / "student.py", "f")
+    other = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)", "--seed",
+                              marker])
+    try:
+        box = sb.run(sub, [sb.Call("f", (np.array(1.0),), (sb.Output("y", ()),))], LIMITS, backend)
+    finally:
+        other.kill()
+        other.wait()
+    assert box.failure is None, box.detail
+    assert float(box.results[0]["y"]) == 1.0  # its own processes, and none of the others

@@ -56,6 +56,14 @@ def _try(f):
         return exc.errno
 
 
+def _read(path):
+    try:
+        with open(path) as f:
+            return f.read().strip()
+    except OSError as exc:
+        return exc.errno
+
+
 def describe(args):
     zygote_pid, = (int(a) for a in args)
     a = np.ones((300, 300))
@@ -68,7 +76,7 @@ def describe(args):
         "ns": {n: os.readlink(f"/proc/self/ns/{n}") for n in (
             "user", "pid", "mnt", "net", "ipc", "uts", "cgroup")},
         "cgroup": open("/proc/self/cgroup").read(),
-        "pid1": open("/proc/1/comm").read().strip(),
+        "pid1": _read("/proc/1/comm"),  # basic as root: another uid's, not in its /proc
         "ppid_is_1": os.getppid() == 1,
         "sid_is_pid": os.getsid(0) == os.getpid(),
         "pgid_is_pid": os.getpgid(0) == os.getpid(),
