@@ -149,6 +149,26 @@ def landlock(libc: ctypes.CDLL, ruleset: int) -> None:
                              ctypes.c_uint32(0)), "landlock_restrict_self")
 
 
+def mounts(libc: ctypes.CDLL | None, plan: dict, ruleset: int | None) -> None:
+    """The plan's mounts, as root and in this order: ``reveal``, the ``mount`` fence over the
+    revealed folders, the box's own ``/proc``.  Before the rlimits: the parent's descriptors may
+    still be open here (Popen closes them after preexec_fn), so with RLIMIT_NOFILE set first a
+    grader holding more than open_files descriptors could not open the folders to reveal."""
+    steps = [("reveal", bool(plan["reveal"])), ("fence", plan["fence"] == "mount"),
+             ("own /proc", bool(plan.get("proc")))]
+    for what, wanted in steps:
+        if wanted and libc is None:
+            raise OSError(f"the box's {what} needs Linux's libc")
+    if libc is None:
+        return
+    if plan["reveal"]:
+        reveal(libc, plan["reveal"])
+    if plan["fence"] == "mount":
+        mount_fence(libc, plan["hidden"], plan["empty"])
+    if plan.get("proc"):
+        private_proc(libc, ruleset if plan["fence"] == "landlock" else None)
+
+
 def enter(libc: ctypes.CDLL | None, plan: dict, ruleset: int | None = None,
           cgroup: bool = True) -> None:
     """The steps of the module docstring, in its order.  ``ruleset``: the Landlock ruleset's
@@ -157,20 +177,7 @@ def enter(libc: ctypes.CDLL | None, plan: dict, ruleset: int | None = None,
     fails (the box then does not start)."""
     if cgroup:
         join_cgroup(plan["cgroup"], plan.get("cgroup_kill", []))
-    if plan["reveal"]:  # before the rlimits: the parent's descriptors may still be open here
-        # (Popen closes them after preexec_fn), so with RLIMIT_NOFILE set first a grader holding
-        # more than open_files descriptors could not open the folders to reveal
-        if libc is None:
-            raise OSError("the box's reveal needs Linux's libc")
-        reveal(libc, plan["reveal"])
-    if plan["fence"] == "mount":  # as root, over the revealed folders
-        if libc is None:
-            raise OSError("the box's fence needs Linux's libc")
-        mount_fence(libc, plan["hidden"], plan["empty"])
-    if plan.get("proc"):  # as root, before the uid drop
-        if libc is None:
-            raise OSError("the box's own /proc needs Linux's libc")
-        private_proc(libc, ruleset if plan["fence"] == "landlock" else None)
+    mounts(libc, plan, ruleset)
     for res, value in plan["rlimits"]:
         resource.setrlimit(res, (value, value))
     if plan["drop_caps"] and libc is not None:
