@@ -27,7 +27,10 @@ from .conftest import CHI2_SPECIAL, kill_pids, read_grades, write_variant
 from .test_attacks import BACKENDS, _procs_with
 
 MARK = f"gpsaccel-keep-{uuid.uuid4().hex[:12]}"
-TIMEOUT = 6
+#: The class's time limit: the stalls and hogs reach it; the memory bomb must reach its memory
+#: limit first (its children's pages and the runner's, under a cgroup at its limit, counted as
+#: the box's own time): it once took over 6 s of its own time at load 4 and was timed out.
+TIMEOUT = 10
 
 NO_Q2 = ("%%writefile kalman_filter.py", "# q2 left out of this notebook")
 STALL = "import time\ntime.sleep(300)"
