@@ -281,7 +281,8 @@ def rewrite_class(submissions: str | os.PathLike, name: str, out: str | os.PathL
         "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         "roster": students is not None, "similarity": similarity})
     info["missing"] = dict(outputs.missing)
-    outputs.write(["grading.json"], writing.dump_json, out / "grading.json", info, indent=2)
+    outputs.write(["grading.json"], writing.dump_json, out / "grading.json", info, indent=2,
+                  mode=writing.PRIVATE)
     return Graded([], rows, out, lines, dict(outputs.missing))
 
 

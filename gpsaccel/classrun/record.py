@@ -128,7 +128,7 @@ class Record:
             self.info.setdefault("regrades", []).append(
                 {k: info[k] for k in ("student", "seed", "started")})
         self.info.setdefault("notebooks", {}).update(self.notebooks)
-        writing.dump_json(self.record, self.info, indent=2)
+        writing.dump_json(self.record, self.info, indent=2, mode=writing.PRIVATE)  # the seed
         if self.student is None:  # a full run: the feedback of students no longer there is stale
             keep = {f"{e.id}.txt" for e in entries}
             for f in self.feedback.glob("*.txt"):
@@ -194,7 +194,7 @@ class Record:
         why; empty when every file is written)."""
         self.info["missing"] = dict(self.outputs.missing)
         self.outputs.write(["grading.json"], writing.dump_json, self.record, self.info,
-                           indent=2)
+                           indent=2, mode=writing.PRIVATE)
 
 
 def resumed(record: Record, entries: list[Entry], wanted: Sequence[str] | None,

@@ -60,9 +60,9 @@ def dump_json(path: str | os.PathLike, data: Any, indent: int | None = None,
     return write_text(path, json.dumps(data, indent=indent, ensure_ascii=ascii), mode=mode)
 
 
-#: The permissions of ``check --json``'s file and its log: the owner's alone.  Both hold the
-#: class's seed (drawn secret unless given) and every classmate's findings, and a box of
-#: ``--sandbox basic`` reads what other users may (the CLI also hides their folder).
+#: The permissions of ``check --json``'s file and its log, and of ``grade``'s ``grading.json``:
+#: the owner's alone.  Each holds the class's seed (drawn secret unless given), and a box of
+#: ``--sandbox basic`` reads what other users may (their folders are hidden from it too).
 PRIVATE = 0o600
 
 

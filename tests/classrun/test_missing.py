@@ -215,3 +215,17 @@ def test_a_refused_similarity_report_is_named_and_from_grades_writes_it(tmp_path
     summary = (out / "summary.csv").read_text(encoding="utf-8")
     assert summary.count("integrity report,similarity.html") == 1
     assert any(ln.startswith("similarity: 0 notebooks compared") for ln in again.classwide)
+
+
+def test_grading_json_holds_the_seed_and_is_the_owners_alone(tmp_path, monkeypatch):
+    """grading.json records the class's seed (drawn secret unless given): readable by its owner
+    only, as check --json's file is, on the first write, the record's end and a rewrite."""
+    sub = _class(tmp_path, monkeypatch)
+    graded = grade_class(sub, "calibration", out=tmp_path / "out", roster=ROSTER,
+                         similarity=False)
+    record = graded.out / "grading.json"
+    assert json.loads(record.read_text(encoding="utf-8"))["seed"] is not None
+    assert record.stat().st_mode & 0o777 == 0o600
+    record.chmod(0o644)
+    rewrite_class(sub, "calibration", graded.out, ROSTER, similarity=False)
+    assert record.stat().st_mode & 0o777 == 0o600
