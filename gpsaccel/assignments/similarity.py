@@ -50,6 +50,10 @@ SHARE = 0.8
 #: Fewest fingerprints (after the hand-out's are left out) an answer needs to be flagged.
 MIN_PRINTS = 120
 
+#: A student whose matched classmates fall into this many groups or more, none of which matches
+#: another, is a hub: named with what it matches, and never joins anyone into a group.
+HUB_PARTS = 2
+
 
 @dataclass(frozen=True)
 class Group:
@@ -70,6 +74,18 @@ class Group:
 
 
 @dataclass(frozen=True)
+class Hub:
+    """A student whose answer matches classmates that do not match one another (``parts``
+    groups of them): one answer holding many others, or held in many; a group is never joined
+    through it."""
+
+    question: str
+    student: str
+    matches: tuple[str, ...]
+    parts: int
+
+
+@dataclass(frozen=True)
 class Match:
     """One student's answer found in (or holding) a published or earlier text."""
 
@@ -86,6 +102,7 @@ class Report:
     title: str
     compared: int = 0
     groups: list[Group] = field(default_factory=list)
+    hubs: list[Hub] = field(default_factory=list)
     published: list[Match] = field(default_factory=list)
     earlier: list[Match] = field(default_factory=list)
     earlier_read: list[str] = field(default_factory=list)
@@ -116,16 +133,10 @@ def shared_prints(rows: Sequence[frozenset[int]], cols: Sequence[frozenset[int]]
     return (matrix(rows) @ matrix(cols).T).toarray()
 
 
-def _groups(question: str, names: Sequence[str], prints: Sequence[frozenset[int]]
-            ) -> list[Group]:
-    """The connected groups of pairs sharing :data:`SHARE` of the smaller answer."""
-    if len(names) < 2:
-        return []
-    import numpy as np
-
-    size = np.array([len(p) for p in prints], dtype=float)
-    share = shared_prints(prints, prints) / np.minimum.outer(size, size)
-    parent = list(range(len(names)))
+def _components(nodes: Sequence[int], edges: Sequence[tuple[int, int, float]]
+                ) -> list[list[int]]:
+    """The connected groups (singletons too) that ``edges`` make among ``nodes``."""
+    parent = {i: i for i in nodes}
 
     def root(i: int) -> int:
         while parent[i] != i:
@@ -133,21 +144,44 @@ def _groups(question: str, names: Sequence[str], prints: Sequence[frozenset[int]
             i = parent[i]
         return i
 
+    for i, j, _ in edges:
+        if i in parent and j in parent:
+            parent[root(i)] = root(j)
+    members: dict[int, list[int]] = {}
+    for i in nodes:
+        members.setdefault(root(i), []).append(i)
+    return list(members.values())
+
+
+def _groups(question: str, names: Sequence[str], prints: Sequence[frozenset[int]]
+            ) -> tuple[list[Group], list[Hub]]:
+    """The connected groups of pairs sharing :data:`SHARE` of the smaller answer, joined
+    through no hub, and the hubs: students whose matched classmates fall into
+    :data:`HUB_PARTS` or more groups that share nothing with one another."""
+    if len(names) < 2:
+        return [], []
+    import numpy as np
+
+    size = np.array([len(p) for p in prints], dtype=float)
+    share = shared_prints(prints, prints) / np.minimum.outer(size, size)
     edges = [(int(i), int(j), float(share[i, j]))
              for i, j in zip(*np.nonzero(np.triu(share >= SHARE, 1)), strict=True)]
+    matched: dict[int, list[int]] = {}
     for i, j, _ in edges:
-        parent[root(i)] = root(j)
-    members: dict[int, list[int]] = {}
-    for i in range(len(names)):
-        members.setdefault(root(i), []).append(i)
+        matched.setdefault(i, []).append(j)
+        matched.setdefault(j, []).append(i)
+    parts = {i: len(_components(m, edges)) for i, m in matched.items()}
+    hubs = {i for i, n in parts.items() if n >= HUB_PARTS}
+    kept = [e for e in edges if e[0] not in hubs and e[1] not in hubs]
     out = []
-    for group in members.values():
-        if len(group) < 2:
-            continue
+    for group in (g for g in _components(range(len(names)), kept) if len(g) > 1):
         inside = set(group)
-        pairs = tuple((names[i], names[j], s) for i, j, s in edges if i in inside)
+        pairs = tuple((names[i], names[j], s) for i, j, s in kept if i in inside)
         out.append(Group(question, tuple(sorted(names[i] for i in group)), pairs))
-    return sorted(out, key=lambda g: (-g.size, g.students))
+    found = [Hub(question, names[i], tuple(sorted(names[j] for j in matched[i])), parts[i])
+             for i in hubs]
+    return (sorted(out, key=lambda g: (-g.size, g.students)),
+            sorted(found, key=lambda h: (-len(h.matches), h.student)))
 
 
 def _matches(question: str, names: Sequence[str], prints: Sequence[frozenset[int]],
@@ -174,15 +208,15 @@ def _matches(question: str, names: Sequence[str], prints: Sequence[frozenset[int
 
 def compare(question: str, answers: Mapping[str, Sequence[int]],
             boilerplate: frozenset[int] = frozenset(), refs: Sequence[Reference] = (),
-            earlier: Sequence[Reference] = ()) -> tuple[list[Group], list[Match], list[Match],
-                                                         int]:
-    """One question: (groups, published matches, earlier matches, answers too short to judge)
-    among ``answers`` (student -> tokens)."""
+            earlier: Sequence[Reference] = ()
+            ) -> tuple[list[Group], list[Hub], list[Match], list[Match], int]:
+    """One question: (groups, hubs, published matches, earlier matches, answers too short to
+    judge) among ``answers`` (student -> tokens)."""
     prints = {s: fingerprint.kgrams(t) - boilerplate for s, t in answers.items() if t}
     names = sorted(s for s, p in prints.items() if len(p) >= MIN_PRINTS)
     short = sum(1 for s, p in prints.items() if len(p) < MIN_PRINTS)
     sets = [prints[s] for s in names]
-    return (_groups(question, names, sets), _matches(question, names, sets, refs),
+    return (*_groups(question, names, sets), _matches(question, names, sets, refs),
             _matches(question, names, sets, earlier), short)
 
 
@@ -215,11 +249,12 @@ def report(records: Mapping[str, dict], title: str,
     rep.compared = len(tokens)
     questions = sorted({q for t in tokens.values() for q in t})
     for q in questions:
-        groups, pub, old, short = compare(
+        groups, hubs, pub, old, short = compare(
             q, {s: t.get(q, []) for s, t in tokens.items()},
             (boilerplate or {}).get(q, frozenset()), refs,
             [r for r in earlier if r.question == q])
         rep.groups += groups
+        rep.hubs += hubs
         rep.published += pub
         rep.earlier += old
         rep.short[q] = short
@@ -354,6 +389,10 @@ def rows(rep: Report) -> list[list[str]]:
     for m in rep.earlier:
         out.append(["earlier submission", m.question, m.student, "1", f"{m.share:.2f}",
                     m.source])
+    for h in rep.hubs:
+        out.append(["hub", h.question, h.student, "1", "",
+                    f"matches {len(h.matches)} classmates in {h.parts} groups that do not match "
+                    f"one another: {'; '.join(h.matches)}"])
     for g in rep.groups:
         out.append(["group", g.question, "; ".join(g.students), str(g.size), f"{g.share:.2f}",
                     f"{len(g.pairs)} flagged pair(s)"])
@@ -381,11 +420,16 @@ def summary_rows(rep: Report) -> list[list[str]]:
     """The report's counts as rows of the class's ``summary.csv`` (its columns: question,
     possible, mean, full marks, students, code, count)."""
     rows = []
-    for q in sorted({g.question for g in rep.groups} | {m.question for m in rep.published}):
+    for q in sorted({g.question for g in rep.groups} | {m.question for m in rep.published}
+                    | {h.question for h in rep.hubs}):
         copied = {s for g in rep.groups if g.question == q for s in g.students}
         pasted = [m for m in rep.published if m.question == q]
+        hubs = [h for h in rep.hubs if h.question == q]
         if copied:
             rows.append([q, "", "", "", "", "integrity: in a group of copies", str(len(copied))])
+        if hubs:
+            rows.append([q, "", "", "", "", "integrity: a hub (matches classmates that do not "
+                         "match one another)", str(len(hubs))])
         if pasted:
             rows.append([q, "", "", "", "", "integrity: matches the published solution",
                          str(len(pasted))])
@@ -399,8 +443,13 @@ def summary_lines(rep: Report, out: Path | None = None) -> list[str]:
     where = f" ({out / 'similarity.html'}; grades unchanged)" if out else " (grades unchanged)"
     head = (f"similarity: {rep.compared} notebooks compared; {len(rep.groups)} group(s) of "
             f"copies, {len(rep.published)} answer(s) matching the published solution, "
-            f"{len(rep.hidden)} with hidden code, {len(rep.not_compared)} not compared{where}")
+            f"{len(rep.hidden)} with hidden code, {len(rep.not_compared)} not compared"
+            f"{f', {len(rep.hubs)} hub(s)' if rep.hubs else ''}{where}")
     lines = [head]
+    for h in rep.hubs:
+        lines.append(f"  {h.question}: hub: {_shown(h.student)} matches {len(h.matches)} "
+                     f"classmates in {h.parts} groups that do not match one another (look at "
+                     f"it; no group is joined through it)")
     for g in rep.groups:
         lines.append(f"  {g.question}: group of {g.size}: "
                      f"{', '.join(_shown(s) for s in g.students[:8])}"

@@ -45,6 +45,17 @@ def _groups(rep) -> str:
     return "".join(parts)
 
 
+def _hubs(rep) -> str:
+    if not rep.hubs:
+        return "<p>No answer matches classmates that do not match one another.</p>"
+    return "".join(
+        f"<h3>{_e(h.question)}: {_e(h.student)} matches {len(h.matches)} classmates</h3>"
+        f"<p>in {h.parts} groups that do not match one another: one answer holding (or held "
+        f"in) many others. Look at it; no group is joined through it, and its matches are not "
+        f"flagged for it: {', '.join(_e(s) for s in h.matches)}</p>"
+        f"<div class=row>{_code(rep, h.student, h.question)}</div>" for h in rep.hubs)
+
+
 def _matches(rep, matches, none: str) -> str:
     if not matches:
         return f"<p>{none}</p>"
@@ -73,6 +84,7 @@ def page(rep, share: float, min_prints: int) -> str:
         "answer as graded, comments and layout removed.</p>"
         f"<p>{rep.compared} notebooks compared; {len(rep.groups)} group(s) of copies; "
         f"{len(rep.published)} answer(s) matching the published solution; "
+        f"{len(rep.hubs)} hub(s); "
         f"{len(rep.hidden)} notebook(s) with hidden code; {len(rep.not_compared)} not compared."
         f" A group or a match needs {share:.0%} of the smaller answer's fingerprints in the "
         f"other; answers with fewer than {min_prints} fingerprints are too short to judge"
@@ -80,6 +92,7 @@ def page(rep, share: float, min_prints: int) -> str:
         "<h2 class=flag>Hidden code</h2>"
         + _table(rep.hidden, "No notebook runs code it does not show.")
         + "<h2>Groups of copies</h2>" + _groups(rep)
+        + "<h2 class=flag>Hubs</h2>" + _hubs(rep)
         + "<h2>Matches the published solution</h2>"
         + _matches(rep, rep.published, "No answer matches a published solution.")
         + ("<h2>Matches an earlier submission</h2>"

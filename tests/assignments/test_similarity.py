@@ -149,6 +149,74 @@ def test_the_report_files_hold_student_text_as_data(hw, tmp_path):
     assert "two\\x0alines\\u202e" in "".join(similarity.summary_lines(rep))
 
 
+def _hub(codes: list[str], rng: np.random.Generator) -> dict[str, str]:
+    """A student whose kalman_filter calls every filter in ``codes`` (red team, hub.py): each
+    classmate's answer it holds passes the share, in the direction of the smaller answer."""
+    import textwrap
+
+    parts = ["import numpy as np", ""]
+    for i, code in enumerate(codes):
+        parts.append(f"def _make_{i}():\n" + textwrap.indent(code, "    ")
+                     + "    return kalman_filter\n")
+    calls = ", ".join(f"_make_{i}()(z)" for i in range(len(codes)))
+    parts.append(f"def kalman_filter(z):\n    outs = [{calls}]\n    return outs[0]\n")
+    answers = {q: g(rng) for q, g in sc.GENERATORS.items()}
+    answers["q2"] = "\n".join(parts)
+    return answers
+
+
+def test_a_hub_of_generated_filters_joins_nobody_and_is_named(hw, tmp_path):
+    """40 honest-style filters from the hub's own seed hold three honest classmates' answers
+    (hub.py: before, the three were one group of four with the hub)."""
+    c = honest_class(50, 3)
+    rng = np.random.default_rng(99)
+    c.answers["mallory"] = _hub([sc.q2(rng) for _ in range(40)], rng)
+    rep = hw.report(c)
+    assert not [g for g in rep.groups if g.question == "q2"], rep.groups
+    (hub,) = rep.hubs
+    assert (hub.question, hub.student, hub.parts) == ("q2", "mallory", 3)
+    assert len(hub.matches) == 3 and "mallory" not in hub.matches
+    assert not _bench().flagged(rep, "q2")  # the benchmark's false flags: none
+    lines = similarity.summary_lines(rep)
+    assert lines[0].endswith("0 not compared, 1 hub(s) (grades unchanged)"), lines[0]
+    assert "  q2: hub: mallory matches 3 classmates in 3 groups that do not match one " \
+        "another (look at it; no group is joined through it)" in lines
+    similarity.write_report(rep, tmp_path)
+    with open(tmp_path / "similarity.csv", newline="", encoding="utf-8") as f:
+        rows = [r for r in csv.DictReader(f) if r["kind"] == "hub"]
+    assert [(r["question"], r["students"]) for r in rows] == [("q2", "mallory")]
+    assert rows[0]["detail"].endswith("; ".join(hub.matches))
+    page = (tmp_path / "similarity.html").read_text(encoding="utf-8")
+    assert "q2: mallory matches 3 classmates" in page
+    assert ["q2", "", "", "", "", "integrity: a hub (matches classmates that do not match one "
+            "another)", "1"] in similarity.summary_rows(rep)
+
+
+def test_a_hub_of_classmates_code_leaves_a_real_ring_its_own_group(hw):
+    """The hub holds ten classmates' real answers and a ring's: the class is not one group;
+    the ring of four is found without the hub, and the hub names all it matches."""
+    rng = np.random.default_rng(14)
+    c = honest_class(10, 14)
+    ring = sc.plant(c, "q2", "mixed", 4, rng)
+    held = [a["q2"] for a in c.answers.values()]
+    c.answers["mallory"] = _hub(held, rng)
+    rep = hw.report(c)
+    assert [set(g.students) for g in rep.groups if g.question == "q2"] == [set(ring)]
+    (hub,) = rep.hubs
+    assert hub.student == "mallory" and hub.parts == 11
+    assert set(hub.matches) == set(c.answers) - {"mallory"}
+
+
+def test_a_source_copied_twice_is_no_hub(hw):
+    """An answer copied by two classmates whose copies match each other: one group of three,
+    no hub (what the rule must not break)."""
+    rng = np.random.default_rng(15)
+    c = honest_class(10, 15)
+    ring = sc.plant(c, "q2", "all three", 3, rng)
+    rep = hw.report(c)
+    assert [set(g.students) for g in rep.groups] == [set(ring)] and not rep.hubs
+
+
 # ------------------------------------------------------------------------ published figures
 @pytest.mark.slow
 def test_the_table_in_the_docs_is_what_the_benchmark_measures(hw):
