@@ -15,6 +15,11 @@ What it flags, per question (thresholds chosen by ``benchmarks/similarity.py``, 
 * a **group**: students whose answers share at least :data:`SHARE` of the smaller answer's
   fingerprints (containment, not a mutual share: a small answer inside a padded one counts), as
   connected groups: k students handing in one answer are one group of size k, however big;
+* a **hub**: a student whose matched classmates fall into :data:`HUB_PARTS` or more groups that
+  do not match one another (one answer holding, or held in, many).  Containment lets one long
+  answer hold many short ones; a hub's pairs join nobody, and it is named with what it matches,
+  so one notebook cannot chain honest students into a group (at most one classmate with itself,
+  as a real copy does);
 * a **match of the published solution**: an answer inside a published text (a packaged master,
   a lesson's solution), or the master's answer to the question inside the answer
   (:func:`gpsaccel.assignments.published.references`); likewise an earlier year's submission
