@@ -158,6 +158,18 @@ def _components(nodes: Sequence[int], edges: Sequence[tuple[int, int, float]]
     return list(members.values())
 
 
+def _hubs(edges: Sequence[tuple[int, int, float]]
+          ) -> tuple[dict[int, list[int]], dict[int, int]]:
+    """(student -> the classmates it matches, hub -> how many groups those fall into by their
+    own pairs): a hub is a student whose matches fall into :data:`HUB_PARTS` or more."""
+    matched: dict[int, list[int]] = {}
+    for i, j, _ in edges:
+        matched.setdefault(i, []).append(j)
+        matched.setdefault(j, []).append(i)
+    parts = {i: len(_components(m, edges)) for i, m in matched.items()}
+    return matched, {i: n for i, n in parts.items() if n >= HUB_PARTS}
+
+
 def _groups(question: str, names: Sequence[str], prints: Sequence[frozenset[int]]
             ) -> tuple[list[Group], list[Hub]]:
     """The connected groups of pairs sharing :data:`SHARE` of the smaller answer, joined
@@ -171,20 +183,15 @@ def _groups(question: str, names: Sequence[str], prints: Sequence[frozenset[int]
     share = shared_prints(prints, prints) / np.minimum.outer(size, size)
     edges = [(int(i), int(j), float(share[i, j]))
              for i, j in zip(*np.nonzero(np.triu(share >= SHARE, 1)), strict=True)]
-    matched: dict[int, list[int]] = {}
-    for i, j, _ in edges:
-        matched.setdefault(i, []).append(j)
-        matched.setdefault(j, []).append(i)
-    parts = {i: len(_components(m, edges)) for i, m in matched.items()}
-    hubs = {i for i, n in parts.items() if n >= HUB_PARTS}
+    matched, hubs = _hubs(edges)
     kept = [e for e in edges if e[0] not in hubs and e[1] not in hubs]
     out = []
     for group in (g for g in _components(range(len(names)), kept) if len(g) > 1):
         inside = set(group)
         pairs = tuple((names[i], names[j], s) for i, j, s in kept if i in inside)
         out.append(Group(question, tuple(sorted(names[i] for i in group)), pairs))
-    found = [Hub(question, names[i], tuple(sorted(names[j] for j in matched[i])), parts[i])
-             for i in hubs]
+    found = [Hub(question, names[i], tuple(sorted(names[j] for j in matched[i])), n)
+             for i, n in hubs.items()]
     return (sorted(out, key=lambda g: (-g.size, g.students)),
             sorted(found, key=lambda h: (-len(h.matches), h.student)))
 
