@@ -207,6 +207,22 @@ def test_a_hub_of_classmates_code_leaves_a_real_ring_its_own_group(hw):
     assert set(hub.matches) == set(c.answers) - {"mallory"}
 
 
+def test_the_hub_rule_at_its_line():
+    """Exact fingerprint sets: holding two answers that do not match each other makes a hub
+    (HUB_PARTS = 2), and the pair those two make if they do match is still a group."""
+    a, b = frozenset(range(200)), frozenset(range(1000, 1200))
+    hub = a | b
+    groups, hubs = similarity._groups("q2", ["a", "b", "hub"], [a, b, hub])
+    assert groups == [] and hubs == [similarity.Hub("q2", "hub", ("a", "b"), 2)]
+    copy = frozenset(range(5, 205))  # a's copy: 195 of 200 shared
+    groups, hubs = similarity._groups("q2", ["a", "b", "copy", "hub"], [a, b, copy, hub])
+    assert [(g.students, g.pairs) for g in groups] == [(("a", "copy"), (("a", "copy", 0.975),))]
+    assert hubs == [similarity.Hub("q2", "hub", ("a", "b", "copy"), 2)]
+    # one answer held in one other: a pair, as a real copy is (no hub)
+    groups, hubs = similarity._groups("q2", ["a", "hub"], [a, hub])
+    assert [g.students for g in groups] == [("a", "hub")] and hubs == []
+
+
 def test_a_source_copied_twice_is_no_hub(hw):
     """An answer copied by two classmates whose copies match each other: one group of three,
     no hub (what the rule must not break)."""
