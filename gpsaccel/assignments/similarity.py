@@ -174,7 +174,7 @@ def _groups(question: str, names: Sequence[str], prints: Sequence[frozenset[int]
             ) -> tuple[list[Group], list[Hub]]:
     """The connected groups of pairs sharing :data:`SHARE` of the smaller answer, joined
     through no hub, and the hubs: students whose matched classmates fall into
-    :data:`HUB_PARTS` or more groups that share nothing with one another."""
+    :data:`HUB_PARTS` or more groups, none of which matches another."""
     if len(names) < 2:
         return [], []
     import numpy as np
