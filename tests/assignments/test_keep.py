@@ -24,7 +24,7 @@ from gpsaccel.classrun import grade, writing
 from gpsaccel.sandbox.confinement import ZYGOTE_PREFIX
 
 from .conftest import CHI2_SPECIAL, kill_pids, read_grades, write_variant
-from .test_attacks import BACKENDS, _procs_with
+from .test_attacks import BACKENDS, outliving
 
 MARK = f"gpsaccel-keep-{uuid.uuid4().hex[:12]}"
 #: The class's time limit: the stalls and hogs reach it; the memory bomb must reach its memory
@@ -93,7 +93,7 @@ def kept(request, tmp_path_factory):
         grades = grade(sub, "calibration", out=out, jobs=2, timeout=TIMEOUT, seed=5,
                        sandbox=backend, warm_boxes=warm)
     finally:  # every case's process, and this run's zygotes (their folder names this process)
-        left = _procs_with(MARK) + _procs_with(f"{ZYGOTE_PREFIX}{os.getpid()}-")
+        left = outliving(MARK, f"{ZYGOTE_PREFIX}{os.getpid()}-")
         kill_pids(left)
     return {"grades": {g.student: g for g in grades}, "paths": paths, "left": left,
             "csv": read_grades(out / "grades.csv")}
