@@ -294,12 +294,11 @@ def _gpsaccel_probe(k, *args):
 ON_HONEST = {"environ", "memory flood"}
 
 
-#: How long a process the run killed may still show its command line: a SIGKILLed process runs
-#: no more code of its own, but on a loaded machine the kernel's teardown of it (and of a bwrap
-#: box's PID namespace, zapped when its init dies) waits for a CPU like everything else; seen
-#: twice at load 6-9 as two hog children still listed when grade() had returned.  Every process
+#: How long a process the run killed may still show its command line (a SIGKILLed process runs
+#: no more code of its own, but its teardown waits for a CPU on a loaded machine).  Every process
 #: an attack leaves running, were it not killed, lives well beyond it (the daemon 30 s, the
-#: victim's writer 21 s, the hog's children and the bomb's 120 s or for ever).
+#: victim's writer 21 s, the hog's children and the bomb's 120 s or for ever).  The cold bwrap
+#: leftovers seen this stop outlived this wait too (test_keep.py): they are not dying ones.
 DYING = 5.0
 
 

@@ -104,7 +104,7 @@ def test_no_process_of_the_hog_outlives_the_run(kept, request):
     if kept["left"] and request.node.callspec.id == "bwrap":
         # open (issue 43's closing note, this stop): in 2 of 4 whole-suite runs at 96edc71 two
         # hog children of a cold bwrap box were still running 5 s after grade() returned; never
-        # alone (0 of 4) and never before this stop; the cause is not found.  Reported, not hidden:
+        # alone (0 of 7) and never before this stop; the cause is not found.  Reported, not hidden:
         # the test shows as xfail with the pids, and kills them.
         pytest.xfail(f"known, open: a cold bwrap box's hog children outlived the run: "
                      f"{kept['seen']}")
