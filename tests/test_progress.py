@@ -45,7 +45,11 @@ def test_coop_summary_shows_a_bar_on_a_terminal_only(monkeypatch):
             _replayed(mp, modules[name], name, calls)
         table = summary(n_runs=2, n_sets=1, seed=0, progress=True)
     shown = terminal.getvalue()
-    assert "coop" in shown and "6/6" in shown  # 1 set simulated + 5 filters tested on it
+    # The bar opens at 0 of its total: 1 set simulated + 5 filters tested on it.  Its last step is
+    # not asserted: tqdm draws a step only 0.1 s (mininterval) after the one before, and leave=False
+    # clears the bar on close without drawing it, so "6/6" appears only when the UKF is slow (CI at
+    # 2b85b4b failed on it).
+    assert "coop" in shown and "0/6 [" in shown
     assert "coop" not in table  # the bar went to stderr, not into the table
     piped = io.StringIO()
     monkeypatch.setattr("sys.stderr", piped)
