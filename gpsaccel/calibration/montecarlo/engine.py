@@ -9,8 +9,8 @@ depend on the executor or the number of workers, and memory not on ``n_runs``.
 
 from __future__ import annotations
 
+import collections
 import sys
-from collections import deque
 from collections.abc import Iterable, Iterator
 
 import numpy as np
@@ -118,7 +118,9 @@ def _run_ordered(ex, pl: EnsemblePlan, seed: int, n_runs: int, chunk_size: int, 
     """Submit chunks with at most ``window`` in flight; merge results in chunk order.  Ctrl-C
     stops it where it lands, and at the latest at the next chunk (:mod:`gpsaccel._interrupt`:
     an interrupt dropped inside a finaliser would otherwise let every chunk run)."""
-    pending: deque = deque()
+    # collections.deque, not a name of this module: Sphinx 9.2's autodoc (Python >= 3.12) loads
+    # an imported class as a member and fails on deque's signature (sphinx-doc/sphinx#14576)
+    pending: collections.deque = collections.deque()
     chunks = _chunks(n_runs, chunk_size)
     acc = None
     try:
