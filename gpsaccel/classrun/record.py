@@ -14,6 +14,7 @@ after every notebook, and what a rerun into the same output keeps.
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import time
@@ -263,7 +264,7 @@ def _changed(previous: dict, settings: dict) -> str:
         return "the earlier run's " + ", ".join(
             f"{what} was {shown(was)}, now {shown(new)} (give {flag} to match it)"
             for what, flag, was, new in differ)
-    return "the earlier run's secret, homework files or gpsaccel version differ"
+    return "the earlier run's secret, homework files or gpsaccel (its version or its files) differ"
 
 
 def _digest(path: Path) -> str:
@@ -276,15 +277,34 @@ def _digest(path: Path) -> str:
 
 def fingerprint(settings: dict) -> str:
     """What a recorded grade depends on besides the notebook and the seed: the homework (its
-    questions), the secret, the sandbox, the time limit, gpsaccel's version; hashed (the record
-    holds no secret)."""
+    questions), the secret, the sandbox, the time limit, gpsaccel (its version and
+    :func:`package_digest`); hashed (the record holds no secret)."""
     import hashlib
 
     from gpsaccel._version import __version__
 
     text = json.dumps([settings["name"], (settings["secret"] or b"").hex(), settings["sandbox"],
-                       settings["timeout"], __version__, possible_names(settings["name"])])
+                       settings["timeout"], __version__, package_digest(),
+                       possible_names(settings["name"])])
     return hashlib.sha256(text.encode()).hexdigest()
+
+
+@functools.lru_cache(maxsize=1)
+def package_digest() -> str:
+    """The SHA-256 of the grader itself: every file of the installed package (its code, and the
+    homework and checks it grades with), ``__pycache__`` aside.  A wheel rebuilt under the same
+    version string with other code grades otherwise, so a rerun under it grades again rather
+    than keep the old code's grades (the version alone let it keep them)."""
+    import hashlib
+
+    import gpsaccel
+
+    root = Path(gpsaccel.__file__).parent
+    h = hashlib.sha256()
+    for path in sorted(root.rglob("*")):
+        if path.is_file() and "__pycache__" not in path.parts:
+            h.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes())
+    return h.hexdigest()
 
 
 def possible_names(name: str) -> list[str]:

@@ -226,6 +226,39 @@ def test_a_rerun_that_keeps_nothing_names_the_setting_that_changed(tmp_path, mon
                     "time limit was 120 s, now 30 s (give --timeout 120 to match it)"], said
 
 
+def test_a_rerun_under_other_code_of_the_same_version_grades_again(tmp_path, monkeypatch,
+                                                                     capsys):
+    """A wheel rebuilt under the same version string with a fix to the grader kept every old
+    grade on rerun (the record held the version alone); the package's files are in it now."""
+    from gpsaccel.classrun import record
+    from gpsaccel.cli import main
+
+    sent: list = []
+
+    def fake(task, entries, jobs, executor, on_result, warm_boxes=False):
+        sent.append([e.student for e in entries])
+        for i, e in enumerate(entries):
+            on_result(i, asdict(item.unusable(task.name, e.student, e.found, "graded", "", e.id)))
+        return [None] * len(entries)
+
+    monkeypatch.setattr(running, "run", fake)
+    sub = tmp_path / "class"
+    (sub / "ann").mkdir(parents=True)
+    (sub / "ann" / "calibration.ipynb").write_text("{}")
+    argv = ["grade", str(sub), "--assignment", "calibration", "--no-similarity"]
+    assert main(argv) == 0 and main(argv) == 0
+    assert sent == [["ann"]]  # the same code: kept
+    digest = record.package_digest()
+    assert len(digest) == 64 and digest == record.package_digest()
+    monkeypatch.setattr(record, "package_digest", lambda: "0" * 64)  # one file of it changed
+    capsys.readouterr()
+    assert main(argv) == 0
+    assert sent == [["ann"], ["ann"]]
+    said = [ln for ln in capsys.readouterr().out.splitlines() if "nothing kept" in ln]
+    assert said == ["rerun: nothing kept: the earlier run's secret, homework files or gpsaccel "
+                    "(its version or its files) differ"], said
+
+
 def test_an_exports_zip_is_refused_with_how_to_unzip_it(tmp_path):
     """The LMS downloads a zip; the grader reads it unzipped (docs/grading.md). Given the zip,
     it said only that submissions must be a folder."""
