@@ -49,7 +49,7 @@ class WarmBox:
 
     def __init__(self, backend: str, first: dict, conn: socket.socket | None = None,
                  bwrap: subprocess.Popen | None = None, reaper: int | None = None,
-                 runner: int | None = None) -> None:
+                 runner: int | None = None, buffered: bytes = b"") -> None:
         self.backend, self.conn, self.bwrap, self.reaper = backend, conn, bwrap, reaper
         self.keeper: int = first["first"]
         self.pid = bwrap.pid if bwrap is not None else self.keeper
@@ -58,7 +58,9 @@ class WarmBox:
         self.runner: int = first["runner"] if runner is None else runner
         self.returncode: int | None = None
         self.exited = False  # the runner's end was seen
-        self.buffer = b""
+        # what came with the first word (basic: the keeper's report of a runner that ended at
+        # once, sent before the supervisor read the first word)
+        self.buffer = buffered
         self.gone = False  # the reporting end closed: nothing more will come
 
     @property
@@ -183,12 +185,12 @@ def request(z: Zygote, backend: str, req: dict, fds: dict[str, int], wait: float
         if start_r is not None:
             os.close(start_r)
             start_r = None
-        first = _first_word(conn, wait)
+        first, rest = _first_word(conn, wait)
         if "error" in first:
             raise subprocess.SubprocessError(f"the warm box did not start: {first['error']}")
         SERVED[0] += 1
         if bwrap is None:
-            return WarmBox(backend, first, conn=conn)
+            return WarmBox(backend, first, conn=conn, buffered=rest)
         conn.close()  # the keeper leaves: the box's pid 1 reports from here on
         pidns = os.readlink(f"/proc/self/fd/{fds['pid']}")
         runner = outside_pid(int(first["runner"]), pidns, box_pids() if box_pids else ())
@@ -224,7 +226,11 @@ def _gone(pid: int, wait: float) -> None:
         delay = min(2 * delay, 0.02)
 
 
-def _first_word(conn: socket.socket, wait: float) -> dict:
+def _first_word(conn: socket.socket, wait: float) -> tuple[dict, bytes]:
+    """The keeper's first line, and what came after it in the same reads: under basic the
+    keeper's next line, the runner's end, follows at once when the runner ends at once (a
+    supervisor that read late had it dropped here, and its box ran to its deadline: "timeout"
+    instead of how the runner ended)."""
     data = b""
     give_up = time.monotonic() + wait
     while b"\n" not in data:
@@ -236,7 +242,8 @@ def _first_word(conn: socket.socket, wait: float) -> dict:
         if not chunk:
             raise NotServed("the zygote's keeper ended before the box started")
         data += chunk
-    return json.loads(data.split(b"\n", 1)[0])
+    line, rest = data.split(b"\n", 1)
+    return json.loads(line), rest
 
 
 def start_reaper(cmd: list[str], cwd: str, env: dict, pass_fds: Sequence[int],

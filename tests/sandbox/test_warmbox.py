@@ -7,9 +7,13 @@ from __future__ import annotations
 
 import os
 import signal
+import socket
 import threading
+import time
 
-from gpsaccel.sandbox import warmbox
+import pytest
+
+from gpsaccel.sandbox import warmbox, zygote
 
 
 class _Bwrap:
@@ -71,3 +75,47 @@ def test_the_runner_end_is_read_among_other_reports():
     finally:
         os.close(r)
         writer.join(timeout=10)
+
+
+def test_a_runner_end_that_came_with_the_first_word_is_not_lost():
+    """Under basic the keeper says the runner is ready, then how it ended: a runner that ends at
+    once (a student's code that kills itself in its first call) has both lines sent before a
+    supervisor on a busy machine reads the first.  The second was dropped with the rest of that
+    read, and the box ran to its deadline ("timeout" at load 6 in a whole-suite run, for a box
+    that crashed)."""
+    a, b = socket.socketpair()
+    try:
+        b.sendall(b'{"first": 10, "runner": 11}\n{"exit": 9}\n')  # SIGKILL's wait status: 9
+        first, rest = warmbox._first_word(a, 1.0)
+        box = warmbox.WarmBox("basic", first, conn=a, buffered=rest)
+        assert (box.keeper, box.runner) == (10, 11)
+        assert box.poll() == -signal.SIGKILL
+    finally:
+        a.close()
+        b.close()
+
+
+@pytest.mark.skipif(not zygote.usable(), reason="boxes start warm only as root on Linux")
+def test_a_warm_box_read_late_says_how_its_runner_ended(tmp_path, monkeypatch):
+    """The same end to end: the first word read 1 s late (as on a busy machine), a runner that
+    SIGKILLs itself in its first call: the box says "crashed", as a cold one does."""
+    import numpy as np
+
+    from gpsaccel import sandbox as sb
+
+    real = warmbox._first_word
+
+    def late(conn, wait):
+        time.sleep(1.0)
+        return real(conn, wait)
+
+    (tmp_path / "student.py").write_text(
+        "import os, signal\n\ndef f(x):\n    os.kill(os.getpid(), signal.SIGKILL)\n")
+    sub = sb.load_submission(tmp_path / "student.py", "f")
+    calls = [sb.Call("f", (np.array(1.0),), (sb.Output("y", ()),))]
+    monkeypatch.setattr(warmbox, "_first_word", late)
+    with zygote.warm_boxes(zygote.Warm(("numpy",))) as started:
+        assert started
+        box = sb.run(sub, calls, sb.Limits(memory=512 << 20, processes=8, time=20), "basic")
+    assert box.started == "warm"
+    assert box.failure == "crashed", (box.failure, box.detail)
