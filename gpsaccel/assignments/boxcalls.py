@@ -23,7 +23,7 @@ from gpsaccel.assignments import notebook as nbm
 from gpsaccel.assignments import snapshots
 
 __all__ = ["BATCH", "SKIP_MARK", "VARIANT_MARK", "box_calls", "calls", "checked_question",
-           "is_otter_cell", "per_call", "prepare"]
+           "is_otter_cell", "is_variant_cell", "per_call", "prepare"]
 
 #: The first line of a master's cell that only makes data to look at: not run when graded.
 SKIP_MARK = "# not run when graded"
@@ -32,6 +32,16 @@ SKIP_MARK = "# not run when graded"
 VARIANT_MARK = "# your variant"
 
 _CELL_STATUS = nbm.STATUS_LENGTH
+
+
+def _first_line(source: str) -> str:
+    return source.lstrip().split("\n", 1)[0].strip().lower()
+
+
+def is_variant_cell(source: str) -> bool:
+    """The cell that holds the student's numbers (its first line :data:`VARIANT_MARK`, any
+    case): replaced when graded, and what a hand-out notebook declares its variant in."""
+    return _first_line(source).startswith(VARIANT_MARK)
 
 
 #: The longest cell read as a candidate otter cell (its init, ``grader.check``: one line each).
@@ -89,10 +99,9 @@ def prepare(nb: nbm.Notebook, variant: dict) -> nbm.Notebook:
     own cells (:func:`is_otter_cell`) left out."""
     cells = [nbm.Cell(0, f"VARIANT = {variant!r}")]
     for cell in nb.cells:
-        first = cell.source.lstrip().split("\n", 1)[0].strip().lower()
-        if first.startswith(SKIP_MARK) or is_otter_cell(cell.source):
+        if _first_line(cell.source).startswith(SKIP_MARK) or is_otter_cell(cell.source):
             continue
-        if first.startswith(VARIANT_MARK):
+        if is_variant_cell(cell.source):
             cells.append(nbm.Cell(cell.number, f"VARIANT = {variant!r}"))
             continue
         cells.append(cell)

@@ -125,13 +125,12 @@ def personalize(name: str, student_notebook: Path | str, students: list[str], se
     student.  Returns ``out``."""
     import nbformat
 
-    from gpsaccel.assignments.boxcalls import VARIANT_MARK
+    from gpsaccel.assignments.boxcalls import is_variant_cell
     from gpsaccel.assignments.scoring import student_variant
 
     out = Path(out)
     nb0 = nbformat.read(str(student_notebook), as_version=4)
-    marked = [c for c in nb0.cells if c.cell_type == "code"
-              and c.source.lstrip().lower().startswith(VARIANT_MARK)]
+    marked = [c for c in nb0.cells if c.cell_type == "code" and is_variant_cell(c.source)]
     others = [p for p in Path(student_notebook).parent.iterdir() if p.name != f"{name}.ipynb"]
     if len(students) != len(set(students)):
         raise ValueError("students: the roster lists a student id twice")

@@ -19,19 +19,22 @@ Grading one notebook is :mod:`gpsaccel.assignments.scoring` (:func:`grade_notebo
 :class:`Grade`, the feedback); this module is what a class's run asks of it for one student
 (:func:`grade_item`, the grade of a submission that could not be run, :func:`grader_error`),
 what every notebook's process needs imported first (:func:`warm`), how long one may take
-(:func:`deadline`), and the instructor's secret (:func:`read_secret`).  The class run itself
+(:func:`deadline`), the instructor's secret (:func:`read_secret`), and whether a notebook
+declares a variant of its own (:func:`declares_variant`).  The class run itself
 (the walk of the export, the seed, the pool, ``grades.csv``, feedback, the gradebooks and the
 similarity report) is :mod:`gpsaccel.classrun`.  Scoring's public names stay reachable here.
 """
 
 from __future__ import annotations
 
+import ast
 import os
 from dataclasses import asdict
 from pathlib import Path
 
 from gpsaccel import _untrusted
 from gpsaccel.assignments import notebook as nbm
+from gpsaccel.assignments.boxcalls import is_variant_cell
 from gpsaccel.assignments.scoring import BOX_MEMORY as BOX_MEMORY
 from gpsaccel.assignments.scoring import BOX_PROCESSES as BOX_PROCESSES
 from gpsaccel.assignments.scoring import SKIP_MARK as SKIP_MARK
@@ -150,3 +153,47 @@ def read_secret(secret_file: str | os.PathLike | None) -> bytes | None:
         return data
     env = os.environ.get(SECRET_ENV, "").encode()
     return env or None
+
+
+def declares_variant(path: str | os.PathLike, name: str) -> bool | None:
+    """Whether the notebook at ``path`` declares numbers of its own: a variant cell
+    (:func:`~gpsaccel.assignments.boxcalls.is_variant_cell`) assigning ``VARIANT`` a literal
+    dict other than the public notebook's (``DEFAULT_VARIANT``), as every notebook
+    :func:`gpsaccel.assignments.generate.personalize` writes does.  What tells a class handed
+    per-student variants (:func:`gpsaccel.classrun.grading.grade_class`); a grade never depends
+    on it (the grader computes each student's variant from the secret).  The student's bytes are
+    read as text, never run, in a child under :func:`~gpsaccel.assignments.notebook.load`'s
+    limits; None where they cannot be read within them (not a notebook, too large, too deep)."""
+    from gpsaccel import sandbox as sb
+
+    public = dict(assignment_module(name).DEFAULT_VARIANT)
+    out = sb.in_child(_declares, Path(path), public, cpu=nbm.LOAD_CPU, memory=nbm.LOAD_MEMORY,
+                      wall=nbm.LOAD_WALL, max_bytes=4096)
+    return out.value if out.ok and isinstance(out.value, bool) else None
+
+
+def _declares(path: Path, public: dict) -> bool | None:
+    """In the child: :func:`declares_variant`'s answer."""
+    try:
+        cells = nbm.read(path).cells
+    except nbm.NotebookError:
+        return None
+    declared = [_assigned_variant(c.source) for c in cells if is_variant_cell(c.source)]
+    return any(v is not None and v != public for v in declared)
+
+
+def _assigned_variant(source: str) -> dict | None:
+    """The literal dict a cell's last top-level ``VARIANT = ...`` assigns, else None."""
+    try:
+        body = ast.parse(source).body
+    except (SyntaxError, ValueError, RecursionError, MemoryError):
+        return None
+    value = None
+    for node in body:
+        if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "VARIANT"
+                                                for t in node.targets):
+            try:
+                value = ast.literal_eval(node.value)
+            except (ValueError, TypeError, SyntaxError, RecursionError, MemoryError):
+                value = None
+    return value if isinstance(value, dict) else None

@@ -38,7 +38,15 @@ inside the checker's sandbox, every score computed outside, every file written b
   a run that starts a new record keeps the earlier ones in its ``earlier``, but for a run that
   graded nothing on the same seed (:mod:`gpsaccel.classrun.record`);
 * ``dask=...`` sends each notebook to a Dask cluster (same function, same seed: same grades)
-  with the same deadline.
+  with the same deadline;
+* a class handed per-student variants is never graded without the secret: with no secret, a
+  run is refused before any box starts when the earlier run in the same output graded variants
+  (the instructor's own record) or when at least :data:`DECLARING` notebooks, and more than half
+  of them, declare numbers of their own (:func:`gpsaccel.assignments.grading.declares_variant`);
+  the notebooks are the students', so one student can neither stop a class graded on the public
+  numbers by adding a variant nor, by deleting theirs, gain anything in a class handed variants
+  (graded with the secret, every student's numbers come from it).  ``no_variants=True``
+  (``--no-variants``) grades on the public numbers all the same.
 """
 
 from __future__ import annotations
@@ -149,7 +157,8 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
                 compare_with: str | os.PathLike | None = None,
                 canvas_column: str | None = None,
                 warm_boxes: bool | None = None,
-                secret_file: str | os.PathLike | None = None) -> Graded:
+                secret_file: str | os.PathLike | None = None,
+                no_variants: bool = False) -> Graded:
     """Grade every student of ``submissions`` for homework ``name`` and write every file
     (module docstring); :func:`grade` is this with the grades alone.
 
@@ -174,11 +183,18 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
     (:mod:`gpsaccel.sandbox.zygote`; as root on Linux, without ``dask``), confined as a cold box
     (the same grades: a rerun reuses them either way); None (the default) where boxes can start
     warm, False every box cold, True an error where they cannot.
+    no_variants : grade every notebook on the public notebook's numbers although they declare
+    variants of their own (without it, and without a secret, such a class is refused: module
+    docstring); an error with a secret.
     """
     folder = Path(submissions)
     out, jobs = _checked(folder, out, timeout, jobs)
     backend = running.backend_of(sandbox)  # a class is not graded where basic cannot isolate it
     secret = running.secret_of(secret, secret_file, backend)
+    if no_variants and secret:
+        raise ValueError("no_variants (--no-variants) grades on the public notebook's numbers: "
+                         "leave out the secret (secret_file, --secret-file, "
+                         "$GPSACCEL_GRADING_SECRET)")
     running.warm_of(warm_boxes, dask or "processes")  # asked where it cannot be: refused here
     earlier = _earlier(compare_with, similarity)
     students = read_roster(roster) if isinstance(roster, (str, os.PathLike)) else roster
@@ -190,6 +206,7 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
     if not entries:
         raise ValueError(f"submissions: no student's folder or notebook in {folder}")
     _check_mapped(entries, students, layout)
+    declared = [] if secret or no_variants else _check_variants(entries, name, out)
     out.mkdir(parents=True, exist_ok=True)
     wanted = _wanted(student)
     record = Record(out, possible, wanted, progress)
@@ -202,7 +219,8 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
                            sum(entries[i].path is not None for i in todo))
     record.start(entries, {
         "assignment": name, "seed": seed, "sandbox": backend, "timeout": timeout,
-        "variants": _variants(secret), "boxes": "warm" if warm else "cold", "questions": possible,
+        "variants": _variants(secret, no_variants), "boxes": "warm" if warm else "cold",
+        "questions": possible,
         "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         "student": wanted,
         "export": layout.found, "skipped": notes, "reuse": fingerprint(settings)})
@@ -219,15 +237,59 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
     rows = record.finish(False, classwide.files(students is not None, similarity))
     lines = classwide.write(folder, out, name, rows, possible, students, similarity,
                             record.outputs, earlier, canvas_column)
-    lines += _closing(students, layout, reuse, notes)
+    lines += declared + _closing(students, layout, reuse, notes)
     record.save()
     return Graded([g for i, g in enumerate(record.grades) if g is not None
                    and i not in record.reused], rows, out, lines, dict(record.outputs.missing))
 
 
-def _variants(secret: bytes | None) -> str:
+def _variants(secret: bytes | None, no_variants: bool = False) -> str:
     return ("per student (HMAC of the id under the instructor's secret)" if secret
-            else "none (no secret given: every student has the public notebook's numbers)")
+            else "none (--no-variants: every student graded on the public notebook's numbers)"
+            if no_variants else
+            "none (no secret given: every student has the public notebook's numbers)")
+
+
+#: Fewest notebooks declaring a variant of their own that tell a class handed variants (with
+#: more than half of the class's notebooks): a single student never stops a class.
+DECLARING = 2
+
+
+def _check_variants(entries: Sequence[Entry], name: str, out: Path) -> list[str]:
+    """Refuse to grade without the secret a class handed per-student variants (module
+    docstring), before any box starts; else the line that says how many notebooks declare a
+    variant all the same (none: nothing to say).  Homework without variants: nothing read."""
+    if not item.assignment_module(name).DEFAULT_VARIANT:
+        return []
+    papers = [e.path for e in entries if e.path is not None]
+    declared = sum(item.declares_variant(p, name) is True for p in papers)
+    recorded = _recorded_variants(out, name)
+    if recorded or (declared >= DECLARING and 2 * declared > len(papers)):
+        why = (f"the earlier run in {out} graded per-student variants (its grading.json)"
+               + (f", and {declared} of the {len(papers)} notebooks declare one of their own"
+                  if declared else "") if recorded else
+               f"{declared} of the {len(papers)} notebooks declare a variant of their own "
+               f"(handed out by `gpsaccel assignment --roster --secret-file`)")
+        raise ValueError(f"secret_file (--secret-file): {why}, and no secret was given: every "
+                         f"notebook would be graded on the public notebook's numbers. Give the "
+                         f"secret they were handed out with (--secret-file FILE or "
+                         f"$GPSACCEL_GRADING_SECRET), or no_variants=True (--no-variants) to "
+                         f"grade on the public numbers all the same")
+    return [f"variants: {declared} of the {len(papers)} notebooks declare numbers of their "
+            f"own, too few to tell a class handed variants (at least {DECLARING} and more than "
+            f"half); all graded on the public notebook's numbers (handed out with variants? "
+            f"grade again with --secret-file)"] if declared else []
+
+
+def _recorded_variants(out: Path, name: str) -> bool:
+    """Whether the run recorded in ``out`` (the instructor's folder) graded ``name`` with
+    per-student variants."""
+    try:
+        info = read_json(out / "grading.json", None)
+    except (OSError, ValueError):  # unreadable: the record's own reading says so
+        return False
+    return (isinstance(info, dict) and info.get("assignment") == name
+            and str(info.get("variants", "")).startswith("per student"))
 
 
 def _closing(students: Sequence[Student] | None, layout: Export, reuse: str,
@@ -304,14 +366,16 @@ def grade(submissions: str | os.PathLike, name: str, out: str | os.PathLike | No
           roster: Sequence[Student] | str | os.PathLike | None = None,
           similarity: bool = True, naming: Naming | None = None, export: str = "auto",
           regrade: bool = False, warm_boxes: bool | None = None,
-          secret_file: str | os.PathLike | None = None) -> list[Grade]:
+          secret_file: str | os.PathLike | None = None, no_variants: bool = False
+          ) -> list[Grade]:
     """Grade a class (:func:`grade_class`: the same files as ``gpsaccel grade`` writes); this
     run's grades, one per student graded, in the class's order.  OSError when a file could not
     be written (every other one is; ``grading.json`` names them, :func:`rewrite_class` writes
     the class-wide ones once there is room)."""
     graded = grade_class(submissions, name, out, jobs, timeout, seed, secret, student, dask,
                          sandbox, progress, roster, similarity, naming, export, regrade,
-                         warm_boxes=warm_boxes, secret_file=secret_file)
+                         warm_boxes=warm_boxes, secret_file=secret_file,
+                         no_variants=no_variants)
     if graded.missing:
         raise OSError(f"not written in {graded.out}: " + ", ".join(
             f"{f} ({why})" for f, why in graded.missing.items()))

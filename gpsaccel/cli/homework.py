@@ -166,14 +166,16 @@ def _cmd_grade(args: argparse.Namespace) -> int:
         else:
             graded = grade_class(args.submissions, name, out=out, jobs=args.jobs,
                                  timeout=args.timeout or TIMEOUT, seed=args.seed,
-                                 secret=read_secret(None) if args.secret_file is None else None,
+                                 secret=None if args.secret_file is not None
+                                 or args.no_variants else read_secret(None),
                                  secret_file=args.secret_file, student=args.student,
                                  dask=args.dask, sandbox=args.sandbox, progress=True,
                                  roster=roster, similarity=not args.no_similarity,
                                  export=args.export, regrade=args.regrade,
                                  compare_with=args.compare_with,
                                  canvas_column=args.canvas_column,
-                                 warm_boxes=BOXES[args.boxes])
+                                 warm_boxes=BOXES[args.boxes],
+                                 no_variants=args.no_variants)
             if graded.grades:  # a rerun that kept every grade has no table (its line says so)
                 term.out(grades_table(graded.grades))
             for line in grade_mistakes(graded.grades):
@@ -237,7 +239,8 @@ def _wrote(term: Terminal, args: argparse.Namespace, out: Path, graded: Graded) 
 #: defaults.
 _GRADING_ONLY = {"student": None, "seed": None, "jobs": None, "timeout": None,
                  "secret_file": None, "dask": None, "sandbox": "auto", "export": "auto",
-                 "regrade": False, "compare_with": None, "boxes": "auto"}
+                 "regrade": False, "compare_with": None, "boxes": "auto",
+                 "no_variants": False}
 
 
 def _only_class_wide(args: argparse.Namespace) -> None:
@@ -316,7 +319,11 @@ def add_grade(sub: argparse._SubParsersAction) -> None:
                    help="seed of the fresh data (default: random; recorded in grading.json)")
     p.add_argument("--secret-file", type=Path, default=None,
                    help="the instructor's secret for per-student variants (default "
-                        "$GPSACCEL_GRADING_SECRET; none: no variants)")
+                        "$GPSACCEL_GRADING_SECRET; none: no variants, refused where the "
+                        "notebooks declare variants: docs/grading.md)")
+    p.add_argument("--no-variants", action="store_true",
+                   help="grade every notebook on the public notebook's numbers, although they "
+                        "declare variants of their own (no secret read)")
     p.add_argument("--student", nargs="+", default=None, metavar="ID",
                    help="regrade these students only (the roster's id, the name as found, or "
                         "the id grades.csv shows), with the recorded seed")
