@@ -50,7 +50,10 @@ class Name:
         reported with that status (under its name as found) and never run (nothing is graded on a
         guessed variant);
     skip : why the entry is no one's submission at all (an LMS's other files: Moodle's online
-        text folder): it is noted and left out.
+        text folder): it is noted and left out;
+    label : the export's own number for the submission where its name carries one beside the
+        student's name (``participant 1001``: Moodle's), which tells apart two submissions
+        that show one name (a display name copied from a classmate's).
     """
 
     student: str
@@ -58,6 +61,7 @@ class Name:
     attempt: int = 0
     problem: tuple[str, str] | None = None
     skip: str = ""
+    label: str = ""
 
 
 #: ``naming(found, is_file) -> Name``: who the top-level entry named ``found`` is.
@@ -79,7 +83,7 @@ class Entry:
         found under the path given; None: why not in ``problem`` (``(status, message)``);
     id : unique, printable and file-safe (:func:`gpsaccel._untrusted.student_id`): it names
         the student's files (feedback);
-    found : the top-level name as found; late, attempt : as the naming read them.
+    found : the top-level name as found; late, attempt, label : as the naming read them.
     """
 
     student: str
@@ -89,6 +93,7 @@ class Entry:
     found: str = ""
     late: bool = False
     attempt: int = 0
+    label: str = ""
 
     @property
     def shown(self) -> str:
@@ -238,7 +243,8 @@ def _named(naming: Naming, entry: Entry, is_file: bool, notes: list[str], where:
         return None
     problem = name.problem or entry.problem
     return replace(entry, student=name.student or entry.found, late=name.late,
-                   attempt=name.attempt, problem=problem, path=None if problem else entry.path)
+                   attempt=name.attempt, problem=problem, path=None if problem else entry.path,
+                   label=name.label)
 
 
 # ------------------------------------------------------------------- who is who, and their ids
@@ -269,6 +275,18 @@ def _latest(entries: list[Entry], notes: list[str]) -> list[Entry]:
     return kept
 
 
+class Collision(str):
+    """The note of submissions that show one name but carry different numbers of the export
+    (:attr:`Name.label`: Moodle's participant numbers), with what the instructor can do: a
+    note of its own type, so the run prints it."""
+
+
+#: What the instructor can do about a :class:`Collision` (the numbers are Moodle's alone).
+_BY_NUMBER = ("give --roster Moodle's grading worksheet (the assignment's View all submissions "
+              "> Download grading worksheet: its Identifier column holds the participant "
+              "numbers) and grade again: each is then graded as its own participant")
+
+
 def _with_ids(entries: list[Entry], kind: Kind, notes: list[str],
               known: frozenset[str] = frozenset()) -> list[Entry]:
     """Each entry with its id (module docstring): the found names tell apart what collides; of
@@ -286,13 +304,37 @@ def _with_ids(entries: list[Entry], kind: Kind, notes: list[str],
         if not kind.refuse_collisions:
             out.append(replace(x, id=sid))
             continue
-        others = ", ".join(repr(_untrusted.shown(entries[j].found)) for j in sorted(clash[i]))
-        notes.append(f"{_untrusted.shown(x.found)}: id-collision with {others}")
-        message = (f"Your submission {_untrusted.shown(x.found)!r} cannot be told apart from "
-                   f"{others} (the same name or id once case and punctuation are set aside); "
-                   f"your instructor must rename one. Nothing was graded.")
+        group = [entries[j] for j in sorted(clash[i])]
+        if x.label and all(e.label and e.label != x.label for e in group):
+            message = _numbered_collision(x, group, notes)
+        else:
+            others = ", ".join(repr(_untrusted.shown(e.found)) for e in group)
+            notes.append(f"{_untrusted.shown(x.found)}: id-collision with {others}")
+            message = (f"Your submission {_untrusted.shown(x.found)!r} cannot be told apart "
+                       f"from {others} (the same name or id once case and punctuation are set "
+                       f"aside); your instructor must rename one. Nothing was graded.")
         out.append(replace(x, path=None, problem=("id-collision", message), id=sid))
     return _numbered(out)
+
+
+def _numbered_collision(x: Entry, group: list[Entry], notes: list[str]) -> str:
+    """The student's message for submissions that show one name under different numbers of the
+    export (each its :attr:`Entry.label`), and once per group the instructor's
+    :class:`Collision` note naming the numbers and what to do."""
+    def named(e: Entry) -> str:
+        return f"{_untrusted.shown(e.found)!r} ({_untrusted.shown(e.label)})"
+
+    members = sorted([x, *group], key=lambda e: e.found)
+    if x is members[0]:
+        notes.append(Collision(
+            f"{' and '.join(named(e) for e in members)} show one name, "
+            f"{_untrusted.shown(x.student)!r} (a display name copied from a classmate's, or "
+            f"two students of one name), so neither can be graded as that student: "
+            f"{_BY_NUMBER}"))
+    return (f"Your submission {named(x)} shows the same name as "
+            f"{', '.join(named(e) for e in group)}, so it cannot be told which one is "
+            f"{_untrusted.shown(x.student)!r}; your instructor can tell them apart by their "
+            f"numbers. Nothing was graded.")
 
 
 def _clashes(ids: list[str], shown: list[str]) -> dict[int, set[int]]:

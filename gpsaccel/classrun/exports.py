@@ -32,6 +32,7 @@ import os
 import re
 import unicodedata
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from pathlib import Path
 
 from gpsaccel import _untrusted
@@ -150,11 +151,12 @@ class Export:
             if not is_file and m["file"]:
                 return _unrecognised(found, "Moodle", "a folder ending in _assignsubmission_"
                                                       "file_")
+            label = f"participant {m['participant']}"
             if roster is None:
-                return Name(m["name"].replace("_", " "))
+                return Name(m["name"].replace("_", " "), label=label)
             key = m["participant"] if column == "participant" else name_key(m["name"])
-            return _looked_up(found, by.get(key, []), f"participant {m['participant']}"
-                              if column == "participant" else f"the name {m['name']!r}")
+            return replace(_looked_up(found, by.get(key, []), label if column == "participant"
+                                      else f"the name {m['name']!r}"), label=label)
         return naming, self._how(f"Moodle's {'full name' if roster is None else column}",
                                  "the roster")
 

@@ -65,7 +65,7 @@ from gpsaccel.assignments.roster import Student, read_roster
 from gpsaccel.assignments.scoring import TIMEOUT, Grade
 from gpsaccel.classrun import classwide, running, writing
 from gpsaccel.classrun.classwide import UNMAPPED
-from gpsaccel.classrun.entries import Entry, Naming, Superseded, notebooks, walk
+from gpsaccel.classrun.entries import Collision, Entry, Naming, Superseded, notebooks, walk
 from gpsaccel.classrun.exports import Export
 from gpsaccel.classrun.record import (  # noqa: F401 - possible_names: re-exported
     SUMMARY,
@@ -295,10 +295,12 @@ def _recorded_variants(out: Path, name: str) -> bool:
 def _closing(students: Sequence[Student] | None, layout: Export, reuse: str,
              notes: Sequence[object]) -> list[str]:
     """The run's last lines: roster rows no submission matched, what a rerun reused, the
-    superseded submissions left out."""
+    superseded submissions left out, the submissions that show one name under different
+    numbers of the export."""
     return (_unmapped(students, layout) + ([f"rerun: {reuse}"] if reuse else [])
             + [f"not graded: {n} (grading.json's skipped)" for n in notes
-               if isinstance(n, Superseded)])
+               if isinstance(n, Superseded)]
+            + [f"id-collision: {n}" for n in notes if isinstance(n, Collision)])
 
 
 def rewrite_class(submissions: str | os.PathLike, name: str, out: str | os.PathLike | None = None,

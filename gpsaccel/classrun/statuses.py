@@ -60,10 +60,13 @@ STATUSES: dict[str, Status] = {
     "no-notebook": Status(True, _NOTHING, "the student's folder holds no .ipynb file"),
     "ambiguous": Status(True, _NOTHING, "several notebooks, none named after the homework"),
     "id-collision": Status(False, EMPTY, "two entries whose names differ only in case or "
-                                         "punctuation: neither graded",
+                                         "punctuation, or show one name under two numbers of "
+                                         "the export (Moodle's participant numbers: the "
+                                         "id-collision lines below name them): neither graded",
                            "rename one folder (or give the roster, as the student's id, the "
-                           "exact name of one folder: that one is graded) and grade the class "
-                           "again"),
+                           "exact name of one folder: that one is graded; for Moodle, its "
+                           "grading worksheet: each is graded as its own participant) and "
+                           "grade the class again"),
     "grader-error": Status(False, EMPTY, "the grader or the machine failed on this notebook "
                                          "(a process lost, a box on a machine too busy to give "
                                          "it its time)", _REGRADE),
