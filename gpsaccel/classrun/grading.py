@@ -190,11 +190,7 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
     folder = Path(submissions)
     out, jobs = _checked(folder, out, timeout, jobs)
     backend = running.backend_of(sandbox)  # a class is not graded where basic cannot isolate it
-    secret = running.secret_of(secret, secret_file, backend)
-    if no_variants and secret:
-        raise ValueError("no_variants (--no-variants) grades on the public notebook's numbers: "
-                         "leave out the secret (secret_file, --secret-file, "
-                         "$GPSACCEL_GRADING_SECRET)")
+    secret = _secret(secret, secret_file, backend, no_variants)
     running.warm_of(warm_boxes, dask or "processes")  # asked where it cannot be: refused here
     earlier = _earlier(compare_with, similarity)
     students = read_roster(roster) if isinstance(roster, (str, os.PathLike)) else roster
@@ -206,7 +202,7 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
     if not entries:
         raise ValueError(f"submissions: no student's folder or notebook in {folder}")
     _check_mapped(entries, students, layout)
-    declared = [] if secret or no_variants else _check_variants(entries, name, out)
+    declared = _check_variants(entries, name, out, bool(secret) or no_variants)
     out.mkdir(parents=True, exist_ok=True)
     wanted = _wanted(student)
     record = Record(out, possible, wanted, progress)
@@ -255,11 +251,24 @@ def _variants(secret: bytes | None, no_variants: bool = False) -> str:
 DECLARING = 2
 
 
-def _check_variants(entries: Sequence[Entry], name: str, out: Path) -> list[str]:
+def _secret(secret: bytes | None, secret_file: str | os.PathLike | None, backend: str,
+            no_variants: bool) -> bytes | None:
+    """The instructor's secret (:func:`gpsaccel.classrun.running.secret_of`); an error beside
+    ``no_variants``, which grades without one."""
+    secret = running.secret_of(secret, secret_file, backend)
+    if no_variants and secret:
+        raise ValueError("no_variants (--no-variants) grades on the public notebook's numbers: "
+                         "leave out the secret (secret_file, --secret-file, "
+                         "$GPSACCEL_GRADING_SECRET)")
+    return secret
+
+
+def _check_variants(entries: Sequence[Entry], name: str, out: Path, told: bool) -> list[str]:
     """Refuse to grade without the secret a class handed per-student variants (module
     docstring), before any box starts; else the line that says how many notebooks declare a
-    variant all the same (none: nothing to say).  Homework without variants: nothing read."""
-    if not item.assignment_module(name).DEFAULT_VARIANT:
+    variant all the same (none: nothing to say).  Nothing read where the instructor ``told``
+    (a secret, or ``no_variants``) or the homework has no variants."""
+    if told or not item.assignment_module(name).DEFAULT_VARIANT:
         return []
     papers = [e.path for e in entries if e.path is not None]
     declared = sum(item.declares_variant(p, name) is True for p in papers)
