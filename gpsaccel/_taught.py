@@ -174,7 +174,7 @@ TAUGHT: dict[str, Section] = {
             "aliased-output", "state-between-calls", "low-precision", "runner", "no-function",
             "no-kalman-filter", "no-file", "import-error", "return-value", "wrong-shape",
             "not-numeric", "returns-list", "returns-matrix", "filterpy-column", "prints-a-lot",
-            "left-processes", "timeout", "memory-limit", "output-limit", "file-limit",
+            "left-processes", "forked", "timeout", "memory-limit", "output-limit", "file-limit",
             "process-limit", "crashed", "uses-checker", "result-refused", "machine-busy",
             "not-found", "link-refused", "ambiguous-entry", "not-run", "grader-error",
             "checker-error"),

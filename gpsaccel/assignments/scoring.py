@@ -37,7 +37,7 @@ from gpsaccel.assignments.questions import (
     question_seed,
     variant_number,
 )
-from gpsaccel.check.report import Report, first_line
+from gpsaccel.check.report import Report, first_line, see
 from gpsaccel.sandbox.outcomes import OUTCOMES, ours
 
 #: Time limit (s) of one notebook's box (every cell and every read; its own time, not its waits
@@ -246,8 +246,8 @@ def _returned(p: snapshots.Plan, box, covers: list[range], cells: Sequence,
               ) -> tuple[dict[str, list[Answer]], dict[str, str], list[str], list[str]]:
     """What the box returned (its calls made ``covers`` of the plan's, :func:`~.boxcalls.box_calls`),
     read as the one group that grades (:func:`.snapshots.kept`): the answers of each question
-    in it, the failure of the question whose read stopped, the note on where the notebook
-    stopped and what counts, the notes on its cells."""
+    in it, the failure of the question whose read stopped, the notes on where the notebook
+    stopped and what counts and on where it forked its process, the notes on its cells."""
     results = per_call(p, box.results, covers)
     received = len(results)
     results += [None] * (len(p.calls) - received)
@@ -263,6 +263,8 @@ def _returned(p: snapshots.Plan, box, covers: list[range], cells: Sequence,
         state = "" if kept.group is None else _after(cells, p.groups[kept.group].after)
         notes.append(_stop_message(box.failure, _where_stopped(p, kept.stopped, cells, reads),
                                    limits, graded, state))
+    if box.forked is not None:
+        notes.append(_fork_note(p, box.forked, covers, cells, reads))
     return answers, stops, notes, _cell_notes(cells, [results[i] for i in p.cell_calls])
 
 
@@ -377,6 +379,24 @@ MAX_FEEDBACK = 16 << 10
 
 #: The longest line of feedback (characters): a finding or a note quoting the student's text.
 MAX_LINE = 1000
+
+
+#: The note on a notebook that forked its process (``{where}``: where, :func:`_where_stopped`'s
+#: words) and the lesson section under it.
+FORK_NOTE = ("Your notebook forked its process {where} (os.fork(), or multiprocessing, which calls "
+             "it). Only the notebook's own process is graded: the copy a fork makes was stopped "
+             "where it would have handed back an answer, so nothing it computed counts, for or "
+             "against you. A notebook computes in one process: remove os.fork() from it.\n{see}")
+
+
+def _fork_note(p: snapshots.Plan, forked: int, covers: Sequence[range], cells: Sequence,
+               reads: Sequence[nbm.Read]) -> str:
+    """The note on a fork during the box's call ``forked`` (:attr:`gpsaccel.sandbox.BoxResult
+    .forked`; -1, the module's import, runs none of the student's code but is named all the
+    same)."""
+    where = (_where_stopped(p, covers[forked].start, cells, reads) if 0 <= forked < len(covers)
+             else "before its first cell")
+    return FORK_NOTE.format(where=where, see=see("forked"))
 
 
 #: What replaces a run of findings (1) or of notes on cells (2) left out of the feedback.

@@ -41,6 +41,11 @@ MESSAGES: dict[str, str] = {
     "left-processes": "Your code left {killed} process(es) running after it returned; the "
                       "checker killed them. {function} should not start processes (os.fork, "
                       "subprocess, multiprocessing).",
+    "forked": "Your code forked its process {forked_where} (os.fork, or multiprocessing, which "
+              "calls it). Only the process the checker started hands back results: the copy was "
+              "stopped where it would have returned one, so nothing it computed counts, for or "
+              "against you. {function} should compute its result in its own process: remove "
+              "os.fork.",
     "timeout.never": "It never returned once: look for a loop whose condition never changes "
                      "(e.g. while k < n without k += 1) or input() waiting for a keyboard.",
     "timeout.slow": "It is too slow: {work}.",
@@ -158,6 +163,9 @@ def box_findings(report: Report, box: sb.BoxResult, calls: Sequence[sb.Call],
     if box.killed:
         report.details["processes_killed"] = box.killed
         _add(report, "left-processes", text["left-processes"], f, "warning")
+    if box.forked is not None:
+        _add(report, "forked", text["forked"],
+             {**f, "forked_where": _call_label(box.forked, calls, labels)}, "warning")
     if box.failure is None:
         returned_notes(report, box.returned or {}, text)
         return True
@@ -167,6 +175,13 @@ def box_findings(report: Report, box: sb.BoxResult, calls: Sequence[sb.Call],
     _add(report, (renames or {}).get(failure, failure if key != "runner" else "runner"),
          text[key], f)
     return False
+
+
+def _call_label(i: int, calls: Sequence[sb.Call], labels: Sequence[str] | None) -> str:
+    """Where call ``i`` (-1: the import of the file) was, in the student's words."""
+    if i < 0:
+        return "while your file was imported"
+    return f"on {labels[i]}" if labels and i < len(labels) else f"in call {i + 1} of {len(calls)}"
 
 
 def _add(report: Report, code: str, template: str, fields: Mapping[str, object],

@@ -28,8 +28,22 @@ declared dtype).  The parent reads them against the shapes it declared itself an
 anything else (:class:`gpsaccel.sandbox.FrameReader`), so nothing the student's code does
 to this process (patching numpy, writing to the pipe) can hand back more than an answer of the
 declared size.  Frames: ``uses-checker`` (an import of a blocked package was attempted),
-``imported``, ``result`` (one per call), ``problem`` (the first problem; the runner stops) and
-``done``.
+``imported``, ``forked`` (the student's code forked this process: the call it was in, sent once,
+before that call's own frame), ``result`` (one per call), ``problem`` (the first problem; the
+runner stops) and ``done``.
+
+Only the runner's own process speaks (:func:`_send`).  A process the student's code forked
+(``os.fork()`` in a notebook's cell, a ``multiprocessing`` worker) is a copy of the runner in the
+middle of a call: left alone it would go on with the plan and send that call's frames, and the
+following ones, a second time, interleaved with the runner's, and the parent would refuse the
+channel and with it the answers still to come (issue 43: 4/10 for ``import os; os.fork()``).  So
+the copy's channel is /dev/null from the fork on (``os.register_at_fork``: a frame the runner was
+writing when a signal handler forked is not finished by the copy), and the copy ends
+(``os._exit(0)``) where it would send its first frame, so it never runs the rest of the plan.
+The runner itself says once that a fork happened (``forked``), so the feedback can tell the
+student.  This guards an honest student's accident, not against a hostile one: the student's code
+runs in the runner's process and can write any bytes to the channel itself, fork or no fork, which
+the parent reads as untrusted (:class:`gpsaccel.sandbox.FrameReader` says why that is safe).
 
 Nothing here trusts the student's code: every call into it is wrapped, ``SystemExit`` included.
 The limits (time, memory, processes, files, output) are the sandbox's.
@@ -52,6 +66,14 @@ from pathlib import Path
 TRACEBACK_LINES = 12
 
 _FD = -1
+#: The runner's pid (:func:`main`), and ``os.getpid`` as it was before the student's code ran
+_PID = -1
+_getpid = os.getpid
+#: The call the runner is making (-1: importing the student's file), and the call during which
+#: the student's code first forked the runner (None: it has not), not yet said when ``_TOLD``.
+_AT = -1
+_FORKED: int | None = None
+_TOLD = False
 
 
 #: Longest text field sent (the parent refuses longer ones: sandbox.MAX_TEXT).
@@ -71,12 +93,46 @@ def _cut(value: object) -> object:
 
 
 def _send(header: dict, payload: bytes = b"") -> None:
+    """One frame down the channel, from the runner's process only: a process the student's code
+    forked ends here instead (module docstring).  A fork the runner has not said yet is said
+    first."""
+    global _TOLD
+    if _getpid() != _PID:
+        os._exit(0)
+    if _FORKED is not None and not _TOLD:
+        _TOLD = True
+        _send({"t": "forked"} if _FORKED < 0 else {"t": "forked", "call": _FORKED})
     data = json.dumps(_cut(header)).encode()
     blob = struct.pack(">I", len(data)) + data + payload
     view = memoryview(blob)
     while view:
+        if _getpid() != _PID:  # a signal handler of the student's forked mid-frame
+            os._exit(0)
         n = os.write(_FD, view)
         view = view[n:]
+
+
+def _forked_parent() -> None:
+    """After a fork, in the runner: remember the first call that forked."""
+    global _FORKED
+    if _FORKED is None and _getpid() == _PID:
+        _FORKED = _AT
+
+
+def _forked_child() -> None:
+    """After a fork, in the copy: its channel is /dev/null (closed where /dev/null cannot be
+    opened), so not even a frame the runner was writing is finished by it."""
+    if _getpid() == _PID or _FD < 0:
+        return
+    try:
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, _FD, inheritable=False)
+        os.close(null)
+    except OSError:
+        try:
+            os.close(_FD)
+        except OSError:
+            pass
 
 
 class _Blocker(importlib.abc.MetaPathFinder):
@@ -268,6 +324,8 @@ def _import_student(path: Path, root: Path):  # noqa: ANN202 - a module, or None
 
 def _call(i: int, call: dict, module, inputs: dict, root: Path) -> bool:  # noqa: ANN001
     """Call ``i`` of the plan; send its result, or its problem (False: the runner stops)."""
+    global _AT
+    _AT = i
     name = call["function"]
     f = getattr(module, name, None)
     if f is None or not callable(f):
@@ -351,11 +409,12 @@ def _wait(go: int | None) -> None:
 
 
 def main(argv: list[str]) -> int:
-    global _FD
+    global _FD, _PID
     _not_dumpable()
     control, root, fd = Path(argv[0]), Path(argv[1]).resolve(), int(argv[2])
     go = int(argv[3]) if len(argv) > 3 else None
-    _FD = fd
+    _FD, _PID = fd, _getpid()
+    os.register_at_fork(after_in_parent=_forked_parent, after_in_child=_forked_child)
     os.set_inheritable(fd, False)  # a subprocess of the student's does not get the channel
     if go is not None:
         os.set_inheritable(go, False)

@@ -393,6 +393,7 @@ class _Supervisor:
         result.output = self.tail.decode("utf-8", errors="replace")
         result.results = reader.results
         result.problem = reader.problem
+        result.forked = reader.forked
         result.seconds = time.perf_counter() - self.t0
         for ev in reader.events:
             if ev.get("t") == "uses-checker":

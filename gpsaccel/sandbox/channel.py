@@ -74,9 +74,10 @@ FRAME_FIELDS: dict[str, dict[str, Callable[[object], bool]]] = {
                 "shapes": lambda v: isinstance(v, dict) and len(v) <= 64 and all(
                     _is_text(k) and (s is None or _is_shape(s)) for k, s in v.items())},
     "done": {"import_seconds": _is_seconds, "run_seconds": _is_seconds},
+    "forked": {"call": lambda v: _is_int(v) and v >= 0},
 }
 #: How many frames of each kind a box may send ("result": one per call, counted apart).
-FRAME_COUNTS = {"uses-checker": 2, "imported": 1, "problem": 1, "done": 1}
+FRAME_COUNTS = {"uses-checker": 2, "imported": 1, "problem": 1, "done": 1, "forked": 1}
 #: Fields a problem frame must have.
 PROBLEM_NEEDS = ("kind",)
 
@@ -97,6 +98,17 @@ class FrameReader:
     numbers, and the checker judges them as its result); a breach is a frame that is not what
     was declared (its kind, size, shape or dtype, its header), never a number.  The parent holds
     at most one header plus one declared result of undecoded bytes at a time.
+
+    A result is taken only as the answer to the call expected next, in order, and what was taken
+    stays when a later frame is refused (:attr:`results`: the box's failure is then
+    ``result-refused``, and a notebook's grade keeps the answers complete before it).  This is
+    safe whoever wrote the frames: the student's code runs in the runner's process and could
+    write any frame itself, but a frame it forges for call i only says what its own function
+    could have returned on call i, it cannot be taken for another call, and nothing on this
+    channel reaches a classmate's box or the grader's answers (no verdict is read from it).  A
+    process the student's code forked never speaks for the runner (the runner's
+    ``_send``); ``forked`` is the runner's word that one was made, during call :attr:`forked`
+    (-1: while the student's file was imported), for the feedback only.
     """
 
     def __init__(self, calls: Sequence[Call]) -> None:
@@ -106,6 +118,7 @@ class FrameReader:
         self.events: list[dict] = []
         self.done = False
         self.problem: dict | None = None
+        self.forked: int | None = None
         self.received = 0
         self.counts: dict[str, int] = {}
         self.budget = (sum(o.nbytes for c in calls for o in c.outputs)
@@ -154,13 +167,24 @@ class FrameReader:
                 self.events.append(header)  # what the first call returned, for notes
         else:
             self.events.append(header)
-        if kind == "problem":
+        if kind == "forked":
+            self.forked = self._forked_call(header)
+        elif kind == "problem":
             self.problem = header
         elif kind == "done":
             if len(self.results) != len(self.calls):
                 raise Refused(f"'done' after {len(self.results)} of {len(self.calls)} "
                               f"results")
             self.done = True
+
+    def _forked_call(self, header: dict) -> int:
+        """The call a ``forked`` frame names: the one in progress (its results not yet sent),
+        or none while the file was imported (-1), before its ``imported`` frame."""
+        call = header.get("call", -1)
+        if call == -1 and "imported" in self.counts or call >= 0 and call != len(self.results):
+            raise Refused(f"a 'forked' frame for call {call} while call {len(self.results)} "
+                          f"was in progress")
+        return call
 
     def _header(self, raw: bytes) -> dict:
         """The header, checked field by field against :data:`FRAME_FIELDS`."""

@@ -110,6 +110,10 @@ class BoxResult:
     seconds : wall-clock time of the box; import_seconds, run_seconds as the runner measured.
     killed : processes the student's code had started and left alive (besides the runner),
         killed at the end.
+    forked : the call during which the student's code first forked the runner (``os.fork()``,
+        ``multiprocessing``; -1: while its file was imported), or None.  The copy a fork makes
+        never sends a frame (it ends where it would: :mod:`gpsaccel.sandbox._runner`), so the
+        results are the runner's own; this is for the feedback.
     limit_backend : what enforced the box's memory and process limits: ``"cgroup2"`` or
         ``"cgroup1"`` (one cgroup for the whole box: every process, tmpfs file and memfd counted
         together) or ``"rlimit"`` (per process only; see :mod:`gpsaccel.sandbox._cgroup`).
@@ -136,6 +140,7 @@ class BoxResult:
     import_seconds: float | None = None
     run_seconds: float | None = None
     killed: int = 0
+    forked: int | None = None
     limit_backend: str = "rlimit"
     box_user: int | None = None
     memory_peak: int | None = None
