@@ -31,8 +31,8 @@ json_values = st.recursive(
     lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=10), inner,
                                                                 max_size=4),
     max_leaves=20)
-kinds = st.sampled_from(["uses-checker", "imported", "result", "problem", "done", "verdict", 3,
-                         None])
+kinds = st.sampled_from(["uses-checker", "imported", "result", "problem", "done", "forked",
+                         "verdict", 3, None])
 fields = st.sampled_from(["module", "seconds", "call", "returned", "kind", "exception", "limit",
                           "traceback", "function", "name", "error", "callables", "found",
                           "length", "expected", "got", "shapes", "import_seconds",
@@ -165,3 +165,34 @@ def test_bytes_after_the_last_frame_are_refused_and_memory_stays_bounded():
     assert reader.results == [] and len(reader.buf) < len(payload) + 64
     with pytest.raises(sb.Refused):
         reader.feed(b"\0" * 65536)
+
+
+# ------------------------------------------------------------------ the runner's word on a fork
+def test_a_fork_is_named_by_the_call_in_progress_or_the_import():
+    a, b = np.arange(2.0).tobytes(), np.eye(2).tobytes()
+    for forked, at in (([_frame({"t": "forked"})], -1), ([], 1)):
+        reader = sb.FrameReader(_calls(2))
+        reader.feed(b"".join([*forked, _frame({"t": "imported"}),
+                              _frame({"t": "result", "call": 0}, a + b),
+                              *([_frame({"t": "forked", "call": 1})] if at == 1 else []),
+                              _frame({"t": "result", "call": 1}, a + b), _frame({"t": "done"})]))
+        assert (reader.done, reader.forked) == (True, at)
+
+
+@pytest.mark.parametrize("frames, words", [
+    # a call already answered, one not yet made, the import once it is over, twice
+    ([{"t": "forked", "call": 0}], "'forked' frame for call 0 while call 1"),
+    ([{"t": "forked", "call": 2}], "'forked' frame for call 2 while call 1"),
+    ([{"t": "forked"}], "'forked' frame for call -1 while call 1"),
+    ([{"t": "forked", "call": 1}, {"t": "forked", "call": 1}], "more than 1 'forked'"),
+    ([{"t": "forked", "call": -1}], "field 'call'"),
+])
+def test_a_fork_frame_that_names_another_call_is_refused(frames, words):
+    """The frame is the runner's word, for the feedback only; a forged one still names only the
+    call in progress, once (the results taken before it stay)."""
+    reader = sb.FrameReader(_calls(2))
+    head = _frame({"t": "imported"}) + _frame({"t": "result", "call": 0},
+                                              np.arange(2.0).tobytes() + np.eye(2).tobytes())
+    with pytest.raises(sb.Refused, match=words):
+        reader.feed(head + b"".join(_frame(f) for f in frames))
+    assert len(reader.results) == 1
