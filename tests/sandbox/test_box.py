@@ -70,8 +70,10 @@ STOPS = {
     "crashed": "os.kill(os.getpid(), signal.SIGKILL)",
 }
 #: The name (comm) of those processes: this module's own, not the hostile tests' marker, whose
-#: watchers (in other runs on the machine) kill what carries it.
-COMM = "gpsacc-stops"
+#: watchers (in other runs on the machine) kill what carries it; and this process's own (at most
+#: 15 bytes, a comm's room): two pytest-xdist workers, or two suites, each killed the other's
+#: boxes by that name (14 of 16 cases failed under -n 2, 'crashed' for the stop).
+COMM = f"gpsst-{os.getpid()}"
 
 
 def _named(comm: str) -> list[int]:
