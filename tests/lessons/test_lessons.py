@@ -44,7 +44,9 @@ _WORDS = ("zero", "one", "two", "three", "four", "five", "six", "seven", "eight"
           "eleven", "twelve", "thirteen", "fourteen", "fifteen", "sixteen", "seventeen", "eighteen",
           "nineteen", "twenty")
 #: "sixteen Jupyter lessons", "the seventeen lessons", "Seventeen Jupyter notebooks", "16 lessons"
-_COUNT = re.compile(rf"\b({'|'.join(_WORDS)}|\d+)\s+(?:jupyter\s+)?(?:lessons|notebooks)\b", re.I)
+#: but not a share of them ("1 of the 4 notebooks declare a variant": the grader's words)
+_COUNT = re.compile(rf"(?<!\d of the )\b({'|'.join(_WORDS)}|\d+)\s+(?:jupyter\s+)?"
+                    r"(?:lessons|notebooks)\b", re.I)
 
 
 def _stated_counts(text):
@@ -54,6 +56,7 @@ def _stated_counts(text):
 def test_the_count_reader_reads_words_and_digits():
     assert _stated_counts("teaches them in Sixteen\nJupyter lessons; the 12 lessons; two notebooks") \
         == [16, 12, 2]
+    assert _stated_counts("says `1 of the 4 notebooks`: a copy of the eighteen lessons") == [18]
 
 
 def test_every_page_counts_the_lessons_as_there_are_masters():
