@@ -196,14 +196,13 @@ def test_a_rerun_that_keeps_every_grade_prints_no_empty_table(tmp_path, monkeypa
     assert any("2 unchanged notebook(s) not graded again" in ln for ln in again)
 
 
-def test_a_rerun_that_keeps_nothing_names_the_setting_that_changed(tmp_path, monkeypatch, capsys):
-    """A rerun of a class graded with ``--timeout 60`` and run again without it (the default,
-    120 s, as an instructor who forgot the flag does) said only "the earlier run's homework,
-    secret, sandbox, time limit or gpsaccel differ": which, and the flag that keeps the grades,
-    are in the record."""
-    from gpsaccel.cli import main
+def _ann_graded_by_a_fake_run(tmp_path, monkeypatch) -> tuple[list, list[str]]:
+    """A class of one notebook (ann's) whose runs grade without a box (every grade "graded");
+    (the students each run sent, the command's argv)."""
+    sent: list = []
 
     def fake(task, entries, jobs, executor, on_result, warm_boxes=False):
+        sent.append([e.student for e in entries])
         for i, e in enumerate(entries):
             on_result(i, asdict(item.unusable(task.name, e.student, e.found, "graded", "", e.id)))
         return [None] * len(entries)
@@ -212,7 +211,17 @@ def test_a_rerun_that_keeps_nothing_names_the_setting_that_changed(tmp_path, mon
     sub = tmp_path / "class"
     (sub / "ann").mkdir(parents=True)
     (sub / "ann" / "calibration.ipynb").write_text("{}")
-    argv = ["grade", str(sub), "--assignment", "calibration", "--no-similarity"]
+    return sent, ["grade", str(sub), "--assignment", "calibration", "--no-similarity"]
+
+
+def test_a_rerun_that_keeps_nothing_names_the_setting_that_changed(tmp_path, monkeypatch, capsys):
+    """A rerun of a class graded with ``--timeout 60`` and run again without it (the default,
+    120 s, as an instructor who forgot the flag does) said only "the earlier run's homework,
+    secret, sandbox, time limit or gpsaccel differ": which, and the flag that keeps the grades,
+    are in the record."""
+    from gpsaccel.cli import main
+
+    _, argv = _ann_graded_by_a_fake_run(tmp_path, monkeypatch)
     assert main([*argv, "--timeout", "60"]) == 0
     capsys.readouterr()
     assert main(argv) == 0
@@ -233,19 +242,7 @@ def test_a_rerun_under_other_code_of_the_same_version_grades_again(tmp_path, mon
     from gpsaccel.classrun import record
     from gpsaccel.cli import main
 
-    sent: list = []
-
-    def fake(task, entries, jobs, executor, on_result, warm_boxes=False):
-        sent.append([e.student for e in entries])
-        for i, e in enumerate(entries):
-            on_result(i, asdict(item.unusable(task.name, e.student, e.found, "graded", "", e.id)))
-        return [None] * len(entries)
-
-    monkeypatch.setattr(running, "run", fake)
-    sub = tmp_path / "class"
-    (sub / "ann").mkdir(parents=True)
-    (sub / "ann" / "calibration.ipynb").write_text("{}")
-    argv = ["grade", str(sub), "--assignment", "calibration", "--no-similarity"]
+    sent, argv = _ann_graded_by_a_fake_run(tmp_path, monkeypatch)
     assert main(argv) == 0 and main(argv) == 0
     assert sent == [["ann"]]  # the same code: kept
     digest = record.package_digest()
