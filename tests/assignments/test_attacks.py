@@ -331,7 +331,8 @@ def running_before() -> set[int]:
 
 def described(pids: list[int]) -> list[str]:
     """What /proc says of each of ``pids`` (state, parent, uid, pid namespaces, pending signals,
-    cgroups): what the open leftover case needs to be understood."""
+    cgroups), shown when the test fails: which mechanism missed them (it showed last stop's
+    "leftover" to be a zygote of the session's, not a box's process)."""
     out = []
     for pid in pids:
         try:
