@@ -239,8 +239,13 @@ def grade_class(submissions: str | os.PathLike, name: str, out: str | os.PathLik
                    and i not in record.reused], rows, out, lines, dict(record.outputs.missing))
 
 
+#: grading.json's ``variants`` of a run graded with the secret: what a later run reads back
+#: (:func:`_recorded_variants`), one string for both
+PER_STUDENT = "per student (HMAC of the id under the instructor's secret)"
+
+
 def _variants(secret: bytes | None, no_variants: bool = False) -> str:
-    return ("per student (HMAC of the id under the instructor's secret)" if secret
+    return (PER_STUDENT if secret
             else "none (--no-variants: every student graded on the public notebook's numbers)"
             if no_variants else
             "none (no secret given: every student has the public notebook's numbers)")
@@ -298,7 +303,7 @@ def _recorded_variants(out: Path, name: str) -> bool:
     except (OSError, ValueError):  # unreadable: the record's own reading says so
         return False
     return (isinstance(info, dict) and info.get("assignment") == name
-            and str(info.get("variants", "")).startswith("per student"))
+            and info.get("variants") == PER_STUDENT)
 
 
 def _closing(students: Sequence[Student] | None, layout: Export, reuse: str,
